@@ -13,7 +13,11 @@ use std::time::Instant;
 fn cpu_name() -> String {
     std::fs::read_to_string("/proc/cpuinfo")
         .ok()
-        .and_then(|s| s.lines().find(|l| l.starts_with("model name")).map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string()))
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .map(|l| l.split(':').nth(1).unwrap_or("").trim().to_string())
+        })
         .unwrap_or_else(|| "unknown CPU".into())
 }
 
@@ -39,7 +43,12 @@ fn points_per_second(sampler: &AnySampler, dim: u32, pixels: u32, spp: u32, runs
 fn main() {
     let quick = std::env::args().any(|a| a == "--quick");
     let (pixels, spp, runs) = if quick { (256, 256, 1) } else { (1024, 1024, 7) };
-    println!("furnace-sampling throughput, one thread, {} ({} pixels × {} spp per run, median of {runs})\n", cpu_name(), pixels, spp);
+    println!(
+        "furnace-sampling throughput, one thread, {} ({} pixels × {} spp per run, median of {runs})\n",
+        cpu_name(),
+        pixels,
+        spp
+    );
     println!("| sampler | Mpoints/s dims (0,1) | Mpoints/s dims (6,7) | ns/point (0,1) |");
     println!("|---|---|---|---|");
     for kind in SamplerKind::ALL {

@@ -1,8 +1,8 @@
 //! Correlated multi-jittered sampling (Kensler 2013).
 
 use crate::fixed::{div_frac, isqrt};
-use crate::hash::{hash3, kensler_hash, kensler_permute};
 use crate::hammersley::MAX_SAMPLE_COUNT;
+use crate::hash::{hash3, kensler_hash, kensler_permute};
 use crate::{Sampler, SamplerError};
 
 /// Sample `s` of Kensler's N-point correlated multi-jittered pattern `p`, in 0.32 fixed point

@@ -52,7 +52,11 @@ impl Hammersley {
             return Err(SamplerError::MissingSampleCount { sampler: "hammersley", got: "0".into() });
         }
         if n > MAX_SAMPLE_COUNT {
-            return Err(SamplerError::SampleCountTooLarge { sampler: "hammersley", got: n, max: MAX_SAMPLE_COUNT });
+            return Err(SamplerError::SampleCountTooLarge {
+                sampler: "hammersley",
+                got: n,
+                max: MAX_SAMPLE_COUNT,
+            });
         }
         Ok(Self { n, seed })
     }

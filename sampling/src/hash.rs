@@ -193,11 +193,7 @@ mod tests {
                 let m = x % 33;
                 let mask = if m == 0 { 0 } else { u32::MAX << (32 - m) };
                 let y = (x & mask) | (x.rotate_left(7) & !mask);
-                assert_eq!(
-                    owen_scramble(x, seed) & mask,
-                    owen_scramble(y, seed) & mask,
-                    "m={m}"
-                );
+                assert_eq!(owen_scramble(x, seed) & mask, owen_scramble(y, seed) & mask, "m={m}");
             }
         }
     }

@@ -31,8 +31,7 @@ pub enum SamplerKind {
 
 impl SamplerKind {
     /// Every kind, in documentation order.
-    pub const ALL: [SamplerKind; 5] =
-        [Self::Random, Self::Hammersley, Self::Cmj, Self::Pmj02, Self::Sobol];
+    pub const ALL: [SamplerKind; 5] = [Self::Random, Self::Hammersley, Self::Cmj, Self::Pmj02, Self::Sobol];
 
     /// The CLI name (`random`, `hammersley`, `cmj`, `pmj02`, `sobol`).
     pub fn name(self) -> &'static str {
@@ -172,10 +171,7 @@ mod tests {
     #[test]
     fn fixed_n_kinds_demand_n() {
         for k in [SamplerKind::Hammersley, SamplerKind::Cmj] {
-            assert!(matches!(
-                AnySampler::new(k, 0, None),
-                Err(SamplerError::MissingSampleCount { .. })
-            ));
+            assert!(matches!(AnySampler::new(k, 0, None), Err(SamplerError::MissingSampleCount { .. })));
             assert!(AnySampler::new(k, 0, Some(0)).is_err());
             assert!(AnySampler::new(k, 0, Some(16)).is_ok());
         }

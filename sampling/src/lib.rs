@@ -94,10 +94,7 @@ pub trait Sampler: Send + Sync {
     /// Integer-only (`u32`, wrapping). Samplers built from 2-D patterns override this to compute
     /// the pair at once; the result always equals two calls to [`Sampler::bits`].
     fn bits_2d(&self, pixel: u32, index: u32, dimension: u32) -> [u32; 2] {
-        [
-            self.bits(pixel, index, dimension),
-            self.bits(pixel, index, dimension.wrapping_add(1)),
-        ]
+        [self.bits(pixel, index, dimension), self.bits(pixel, index, dimension.wrapping_add(1))]
     }
 
     /// The sample in `[0, 1)`: [`to_unit_f32`] of [`Sampler::bits`] (integer arithmetic, then

@@ -44,10 +44,8 @@ fn convergence_slopes() {
     let xs: Vec<f64> = counts.iter().map(|&n| n as f64).collect();
     // Dimensions (0,1) and (4,5): the first pair, and one that exercises each sampler's
     // decorrelation of higher dimensions (Owen-Sobol's second group, PMJ02's third pair).
-    let curves: Vec<Curve> = SamplerKind::ALL
-        .iter()
-        .flat_map(|&k| [0, 4].map(|dim| measure(k, dim, &counts)))
-        .collect();
+    let curves: Vec<Curve> =
+        SamplerKind::ALL.iter().flat_map(|&k| [0, 4].map(|dim| measure(k, dim, &counts))).collect();
 
     let mut header = vec!["sampler", "dims", "integrand"];
     let labels: Vec<String> = counts.iter().map(|n| format!("N={n}")).collect();

@@ -47,7 +47,15 @@ fn prefix_of_a_fixed_n_pattern() {
         }
     }
     let text = table(
-        &["sampler", "k of N=1024", "RMSE prefix", "RMSE pattern of k", "RMSE random k", "prefix/random", "mean bias"],
+        &[
+            "sampler",
+            "k of N=1024",
+            "RMSE prefix",
+            "RMSE pattern of k",
+            "RMSE random k",
+            "prefix/random",
+            "mean bias",
+        ],
         &rows,
     );
     let path = write_output("edges.md", &text);

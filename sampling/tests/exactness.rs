@@ -140,10 +140,8 @@ mod cmj {
     fn single_sample_pattern_is_the_jitter() {
         // N = 1: m = n = 1, s = sx = sy = 0, so the point is (jx, jy) exactly.
         let p = 0x1234_5678u32;
-        let want = [
-            kensler_hash(0, p.wrapping_mul(0x967a_889b)),
-            kensler_hash(0, p.wrapping_mul(0x368c_c8b7)),
-        ];
+        let want =
+            [kensler_hash(0, p.wrapping_mul(0x967a_889b)), kensler_hash(0, p.wrapping_mul(0x368c_c8b7))];
         assert_eq!(cmj_point(0, 1, p), want);
     }
 }
@@ -173,11 +171,11 @@ mod pmj02 {
 
     #[test]
     fn direct_evaluation_equals_sequential_construction() {
-        for axis in 0..2 {
+        for (axis, xors) in PMJ02_XORS.iter().enumerate() {
             for seed in [0u32, 7, 0xFEED_BEEF] {
-                let seq = sequential(1 << 13, &PMJ02_XORS[axis], seed);
+                let seq = sequential(1 << 13, xors, seed);
                 for (k, &want) in seq.iter().enumerate() {
-                    let got = pmj02_coordinate(k as u32, &PMJ02_XORS[axis], seed);
+                    let got = pmj02_coordinate(k as u32, xors, seed);
                     assert_eq!(got, want, "axis {axis} seed {seed} point {k}");
                 }
             }
@@ -198,9 +196,8 @@ mod pmj02 {
 /// threads gives identical bits: samplers are addressable.
 #[test]
 fn order_independence() {
-    let triples: Vec<(u32, u32, u32)> = (0..4000u32)
-        .map(|k| (hash2(k, 1) % 1000, hash2(k, 2) % 64, hash2(k, 3) % 12))
-        .collect();
+    let triples: Vec<(u32, u32, u32)> =
+        (0..4000u32).map(|k| (hash2(k, 1) % 1000, hash2(k, 2) % 64, hash2(k, 3) % 12)).collect();
     for sampler in all_samplers(11) {
         let eval = |t: &(u32, u32, u32)| (sampler.bits(t.0, t.1, t.2), sampler.bits_2d(t.0, t.1, t.2));
         let forward: Vec<_> = triples.iter().map(eval).collect();
