@@ -1,7 +1,7 @@
 //! Progressive multi-jittered (0,2) sequences, evaluated directly per index.
 
 use crate::Sampler;
-use crate::hash::{hash2, hash3, owen_shuffle_index};
+use crate::hash::{hash2, hash3, owen_shuffle_index, pcg_hash};
 
 /// For each level `L` (points `2^L … 2^(L+1) − 1`), the XOR that pairs new point `2^L + i`
 /// with the old point `i ^ xor` whose stratum it complements, for x (`[0]`) and y (`[1]`).
@@ -61,16 +61,18 @@ pub fn pmj02_coordinate(index: u32, xors: &[u32; 32], seed: u32) -> u32 {
     let mut acc = 0u32; // the random bits, placed
     let mut flips = 0u32; // the stratum flips along the chain
     let mut k = index;
+    // hash2(k, seed) = pcg_hash(k ^ pcg_hash(seed)): hoist the seed's half out of the loop.
+    let seed = pcg_hash(seed);
     while k != 0 {
         let level = 31 - k.leading_zeros(); // k ∈ [2^L, 2^(L+1))
         // Bits below the (L+1)-bit stratum (none at L = 31: a shift by 32 is not defined).
         let below = u32::MAX.checked_shr(level + 1).unwrap_or(0);
-        acc |= hash2(k, seed) & undetermined & below;
+        acc |= pcg_hash(k ^ seed) & undetermined & below;
         undetermined &= !below;
         flips ^= 0x8000_0000 >> level;
         k = (k ^ (1 << level)) ^ xors[level as usize];
     }
-    acc |= hash2(0, seed) & undetermined;
+    acc |= pcg_hash(seed) & undetermined;
     acc ^ flips
 }
 
