@@ -1,9 +1,9 @@
 //! Correlated multi-jittered sampling (Kensler 2013).
 
+use crate::SamplerError;
 use crate::fixed::{div_frac, isqrt};
-use crate::hammersley::MAX_SAMPLE_COUNT;
 use crate::hash::{hash3, kensler_hash, kensler_permute};
-use crate::{Sampler, SamplerError};
+use crate::pairs::{check_index, impl_sampler_by_pairs, validate_count};
 
 /// Sample `s` of Kensler's N-point correlated multi-jittered pattern `p`, in 0.32 fixed point
 /// (Kensler 2013, final listing, aspect ratio 1):
@@ -60,13 +60,7 @@ impl Cmj {
     /// [`SamplerError::MissingSampleCount`] if `n == 0`, [`SamplerError::SampleCountTooLarge`]
     /// if `n > 2^30` (CMJ's grid of m·n ≥ N cells must fit in a `u32`).
     pub fn new(n: u32, seed: u32) -> Result<Self, SamplerError> {
-        if n == 0 {
-            return Err(SamplerError::MissingSampleCount { sampler: "cmj", got: "0".into() });
-        }
-        if n > MAX_SAMPLE_COUNT {
-            return Err(SamplerError::SampleCountTooLarge { sampler: "cmj", got: n, max: MAX_SAMPLE_COUNT });
-        }
-        Ok(Self { n, seed })
+        Ok(Self { n: validate_count("cmj", n)?, seed })
     }
 
     /// The pattern size N.
@@ -76,7 +70,7 @@ impl Cmj {
 
     /// `Ok` if `index < N`; otherwise [`SamplerError::IndexOutOfRange`].
     pub fn check_index(&self, index: u32) -> Result<(), SamplerError> {
-        crate::hammersley::check_index("cmj", index, self.n)
+        check_index("cmj", index, self.n)
     }
 
     #[inline]
@@ -85,18 +79,4 @@ impl Cmj {
     }
 }
 
-impl Sampler for Cmj {
-    #[inline]
-    fn bits(&self, pixel: u32, index: u32, dimension: u32) -> u32 {
-        self.pair(pixel, index, dimension / 2)[(dimension & 1) as usize]
-    }
-
-    #[inline]
-    fn bits_2d(&self, pixel: u32, index: u32, dimension: u32) -> [u32; 2] {
-        if dimension & 1 == 0 {
-            self.pair(pixel, index, dimension / 2)
-        } else {
-            [self.bits(pixel, index, dimension), self.bits(pixel, index, dimension + 1)]
-        }
-    }
-}
+impl_sampler_by_pairs!(Cmj);

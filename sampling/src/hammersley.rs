@@ -1,8 +1,9 @@
 //! Hammersley points with a per-pixel Cranley–Patterson rotation (the thesis, listing 6.2).
 
+use crate::SamplerError;
 use crate::fixed::div_frac;
 use crate::hash::{hash3, kensler_permute};
-use crate::{Sampler, SamplerError};
+use crate::pairs::{check_index, impl_sampler_by_pairs, validate_count};
 
 /// The `i`-th of `n` Hammersley points, rotated: the thesis's listing 6.2,
 /// `frac((i/N, reversebits(i)/2^32) + (random & 0xffff)/2^16)`, in 0.32 fixed point.
@@ -48,17 +49,7 @@ impl Hammersley {
     /// [`SamplerError::MissingSampleCount`] if `n == 0`, [`SamplerError::SampleCountTooLarge`]
     /// if `n > 2^30` (CMJ's grid of m·n ≥ N cells must fit in a `u32`).
     pub fn new(n: u32, seed: u32) -> Result<Self, SamplerError> {
-        if n == 0 {
-            return Err(SamplerError::MissingSampleCount { sampler: "hammersley", got: "0".into() });
-        }
-        if n > MAX_SAMPLE_COUNT {
-            return Err(SamplerError::SampleCountTooLarge {
-                sampler: "hammersley",
-                got: n,
-                max: MAX_SAMPLE_COUNT,
-            });
-        }
-        Ok(Self { n, seed })
+        Ok(Self { n: validate_count("hammersley", n)?, seed })
     }
 
     /// The pattern size N.
@@ -83,25 +74,4 @@ impl Hammersley {
     }
 }
 
-/// The largest N of the fixed-N samplers (2^30): CMJ's m·n grid must fit in a `u32`.
-pub const MAX_SAMPLE_COUNT: u32 = 1 << 30;
-
-pub(crate) fn check_index(sampler: &'static str, index: u32, count: u32) -> Result<(), SamplerError> {
-    if index < count { Ok(()) } else { Err(SamplerError::IndexOutOfRange { sampler, index, count }) }
-}
-
-impl Sampler for Hammersley {
-    #[inline]
-    fn bits(&self, pixel: u32, index: u32, dimension: u32) -> u32 {
-        self.pair(pixel, index, dimension / 2)[(dimension & 1) as usize]
-    }
-
-    #[inline]
-    fn bits_2d(&self, pixel: u32, index: u32, dimension: u32) -> [u32; 2] {
-        if dimension & 1 == 0 {
-            self.pair(pixel, index, dimension / 2)
-        } else {
-            [self.bits(pixel, index, dimension), self.bits(pixel, index, dimension + 1)]
-        }
-    }
-}
+impl_sampler_by_pairs!(Hammersley);

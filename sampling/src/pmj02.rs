@@ -1,7 +1,7 @@
 //! Progressive multi-jittered (0,2) sequences, evaluated directly per index.
 
-use crate::Sampler;
 use crate::hash::{hash2, hash3, owen_shuffle_index, pcg_hash};
+use crate::pairs::impl_sampler_by_pairs;
 
 /// For each level `L` (points `2^L … 2^(L+1) − 1`), the XOR that pairs new point `2^L + i`
 /// with the old point `i ^ xor` whose stratum it complements, for x (`[0]`) and y (`[1]`).
@@ -113,18 +113,4 @@ impl Pmj02 {
     }
 }
 
-impl Sampler for Pmj02 {
-    #[inline]
-    fn bits(&self, pixel: u32, index: u32, dimension: u32) -> u32 {
-        self.pair(pixel, index, dimension / 2)[(dimension & 1) as usize]
-    }
-
-    #[inline]
-    fn bits_2d(&self, pixel: u32, index: u32, dimension: u32) -> [u32; 2] {
-        if dimension & 1 == 0 {
-            self.pair(pixel, index, dimension / 2)
-        } else {
-            [self.bits(pixel, index, dimension), self.bits(pixel, index, dimension + 1)]
-        }
-    }
-}
+impl_sampler_by_pairs!(Pmj02);

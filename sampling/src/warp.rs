@@ -249,24 +249,6 @@ mod tests {
     use super::*;
     use std::f64::consts::PI;
 
-    /// SplitMix64 (Steele, Lea & Flood 2014): a fixed-seed source of test points.
-    struct SplitMix64(u64);
-
-    impl SplitMix64 {
-        fn next_u64(&mut self) -> u64 {
-            self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-            let mut z = self.0;
-            z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-            z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-            z ^ (z >> 31)
-        }
-
-        /// A uniform `f32` in `[0, 1)` with 24 random bits.
-        fn next_f32(&mut self) -> f32 {
-            (self.next_u64() >> 40) as f32 / 16_777_216.0
-        }
-    }
-
     /// Coordinates that stress the edges: zero, the smallest steps away from it, the middle, and
     /// the values just below one (`1 − 2⁻²⁴` is the largest `f32` below one).
     const EDGES: [f32; 12] = [
@@ -299,7 +281,7 @@ mod tests {
                 points.push(Vec2::new(g(i), g(j)));
             }
         }
-        let mut rng = SplitMix64(0x5EED_0001);
+        let mut rng = crate::RandomStream::new(0, 0, 0x5EED_0001);
         for _ in 0..100_000 {
             points.push(Vec2::new(rng.next_f32(), rng.next_f32()));
         }

@@ -17,7 +17,7 @@ use std::path::PathBuf;
 const TESTS: usize = 4;
 
 /// The harness as every test here uses it; only the seed differs.
-fn harness(seed: u64) -> ChiSquareTest {
+fn harness(seed: u32) -> ChiSquareTest {
     ChiSquareTest {
         sample_count: 1_000_000,
         significance: 0.01,
