@@ -6,15 +6,16 @@ use core::str::FromStr;
 
 /// The samplers, by the names the CLI uses.
 ///
-/// | name | progressive | needs N | converges (smooth 2-D integrand) |
+/// | name | progressive | needs N | RMSE slope, disk / smooth 2-D integrand (measured) |
 /// |---|---|---|---|
-/// | `random` | yes | no | N^-0.5 |
-/// | `hammersley` | no | yes | ≈ N^-1 at the full N only |
-/// | `cmj` | no | yes | ≈ N^-1 (N^-0.75 on edges) at the full N |
-/// | `pmj02` | yes | no | ≈ N^-1.5 at powers of two |
-/// | `sobol` | yes | no | ≈ N^-1.5 at powers of two |
+/// | `random` | yes | no | −0.50 / −0.49 |
+/// | `hammersley` | no | yes | −0.79 / −0.97 (at the full N only) |
+/// | `cmj` | no | yes | −0.76 / −0.79 (at the full N; non-square N is weaker) |
+/// | `pmj02` | yes | no | −0.76 / −1.43 |
+/// | `sobol` | yes | no | −0.77 / −1.44 |
 ///
-/// (Measured slopes are in `tests/convergence.rs` and the crate's README.)
+/// (Dimensions 0–1, 256 pixels, N = 4…4096 in powers of two: `tests/convergence.rs`, which
+/// writes the full table to `target/test-output/sampling/convergence.md`.)
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum SamplerKind {
     /// [`RandomSampler`].
