@@ -88,9 +88,11 @@ pub fn pmj02_coordinate(index: u32, xors: &[u32; 32], seed: u32) -> u32 {
 /// onto itself), which decorrelates the pairs and keeps each prefix a (0,2) net. Needs no N.
 /// Integer-only (`u32`, wrapping).
 ///
-/// Helmer et al. 2021 show these stochastic sequences are distributed as Owen-scrambled (0,2)
-/// sequences, i.e. like the first two dimensions of [`crate::OwenSobol`]; the samplers differ
-/// in how they pad higher dimensions (pairs here, groups of four there) and in cost.
+/// Its dimension pairs have the same (0,2) stratification as the first two dimensions of
+/// [`crate::OwenSobol`] (Helmer et al. 2021 relate the two constructions), and the convergence
+/// test measures the same rates for both; the samplers differ in how they pad higher dimensions
+/// (independent pairs here, 4-D Sobol groups there, which also stratify dimensions 4k…4k+3
+/// jointly) and in cost.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Pmj02 {
     seed: u32,
