@@ -1,0 +1,2 @@
+//! Placeholder: the BRDF benchmark is being written.
+fn main() {}

@@ -1,0 +1,166 @@
+//! The glTF 2.0 metallic-roughness material (with KHR_materials_specular): a Lambertian base
+//! under a GGX specular layer, mixed with a GGX conductor by `metallic`.
+
+use crate::fresnel::schlick;
+use crate::lambert::Lambert;
+use crate::specular::{GgxSpecular, SpecularOptions};
+use crate::{Bsdf, Lobe, Rgb, Sample};
+use glam::{Vec2, Vec3};
+use std::f32::consts::FRAC_1_PI;
+
+/// Parameters of a glTF metallic-roughness material at one shading point (after texture
+/// lookups). Out-of-range and NaN inputs are clamped/replaced when the BSDF is built.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MetallicRoughnessParams {
+    /// `baseColorFactor × baseColorTexture`, linear RGB in `[0, 1]`.
+    pub base_color: Rgb,
+    /// `metallicFactor × texture.b`, in `[0, 1]`.
+    pub metallic: f32,
+    /// Perceptual roughness `roughnessFactor × texture.g`, in `[0, 1]`; α = roughness².
+    pub roughness: f32,
+    /// KHR_materials_specular `specularFactor` (default 1).
+    pub specular_factor: f32,
+    /// KHR_materials_specular `specularColorFactor` (default 1, may exceed 1).
+    pub specular_color: Rgb,
+}
+
+impl Default for MetallicRoughnessParams {
+    /// glTF's defaults: white, fully metallic, fully rough, default specular.
+    fn default() -> Self {
+        Self {
+            base_color: Rgb::ONE,
+            metallic: 1.0,
+            roughness: 1.0,
+            specular_factor: 1.0,
+            specular_color: Rgb::ONE,
+        }
+    }
+}
+
+/// The glTF metallic-roughness BSDF, as the glTF 2.0 specification (Appendix B) and
+/// KHR_materials_specular define it, with the two layers merged into one GGX lobe:
+///
+/// ```text
+/// dielectric = (1 − sF·max(fr))·diffuse + sF·fr·specular,  fr = Schlick(f0d, 1, ωo·ωm),
+///              f0d = min(0.04·specularColor, 1)
+/// metal      = Schlick(baseColor, 1, ωo·ωm)·specular
+/// material   = mix(dielectric, metal, metallic)
+///   ⇒ specular lobe F0 = mix(0.04·sF·sC, baseColor, metallic), F90 = mix(sF, 1, metallic);
+///     diffuse albedo = baseColor·(1 − metallic), scaled by (1 − sF·max(fr)) at the half vector.
+/// ```
+///
+/// `eval` includes the cosine. `sample` picks the specular lobe with probability
+/// `p = Fs/(Fs + Fd)` from Fresnel-weighted albedo estimates at `μo` (specular `lum(F(μo))`,
+/// times `E_ss` without compensation; diffuse `lum(albedo)·(1 − sF·max(fr(μo)))`), clamped to
+/// `[0.05, 0.95]` when both lobes are present so neither is starved; the returned pdf is the
+/// mixture `p·pdf_spec + (1 − p)·pdf_diffuse` (one-sample MIS, also what [`Bsdf::pdf`]
+/// returns) and the weight `eval/pdf`. A lobe that is exactly zero is never sampled.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MetallicRoughness {
+    /// The Lambertian base, albedo `baseColor·(1 − metallic)` (before the Fresnel weighting).
+    pub diffuse: Lambert,
+    /// The merged specular lobe.
+    pub specular: GgxSpecular,
+    /// `sF`: scales the dielectric layer's Fresnel, and so the diffuse attenuation.
+    specular_factor: f32,
+    /// `min(0.04·specularColor, 1)`: the dielectric F0 before `sF`.
+    f0_dielectric: Rgb,
+}
+
+fn sanitize(x: f32, lo: f32, hi: f32, default: f32) -> f32 {
+    if x.is_nan() { default } else { x.clamp(lo, hi) }
+}
+
+fn sanitize_rgb(c: Rgb, hi: f32) -> Rgb {
+    Rgb::new(sanitize(c.x, 0.0, hi, 0.0), sanitize(c.y, 0.0, hi, 0.0), sanitize(c.z, 0.0, hi, 0.0))
+}
+
+/// Rec. 709 luminance.
+#[inline]
+pub fn luminance(c: Rgb) -> f32 {
+    c.dot(Rgb::new(0.2126, 0.7152, 0.0722))
+}
+
+impl MetallicRoughness {
+    /// Builds the BSDF from glTF parameters and model switches.
+    pub fn new(params: MetallicRoughnessParams, options: SpecularOptions) -> Self {
+        let base = sanitize_rgb(params.base_color, 1.0);
+        let metallic = sanitize(params.metallic, 0.0, 1.0, 1.0);
+        let roughness = sanitize(params.roughness, 0.0, 1.0, 1.0);
+        let sf = sanitize(params.specular_factor, 0.0, 1.0, 1.0);
+        let sc = sanitize_rgb(params.specular_color, f32::MAX);
+        let f0_dielectric = (0.04 * sc).min(Rgb::ONE);
+        let f0 = (f0_dielectric * sf).lerp(base, metallic);
+        let f90 = Rgb::splat(sf + (1.0 - sf) * metallic);
+        let mut specular = GgxSpecular::new(roughness * roughness, f0, options);
+        specular.f90 = f90;
+        Self { diffuse: Lambert::new(base * (1.0 - metallic)), specular, specular_factor: sf, f0_dielectric }
+    }
+
+    /// The diffuse attenuation `1 − sF·max(fr(cos θd))` of the dielectric layer.
+    #[inline]
+    fn diffuse_scale(&self, cos_theta_d: f32) -> f32 {
+        let fr = schlick(self.f0_dielectric, Rgb::ONE, cos_theta_d);
+        1.0 - self.specular_factor * fr.max_element()
+    }
+
+    /// The probability of sampling the specular lobe for view direction `wo`.
+    pub fn specular_probability(&self, wo: Vec3) -> f32 {
+        let mu = wo.z.clamp(0.0, 1.0);
+        let mut spec = luminance(schlick(self.specular.f0, self.specular.f90, mu));
+        if !self.specular.options.compensation {
+            spec *= crate::turquin::e_ss(mu, self.specular.ggx.alpha(), self.specular.options.masking);
+        }
+        let diff = luminance(self.diffuse.albedo) * self.diffuse_scale(mu);
+        if !(diff > 0.0) {
+            return 1.0;
+        }
+        if !(spec > 0.0) {
+            return 0.0;
+        }
+        (spec / (spec + diff)).clamp(0.05, 0.95)
+    }
+
+    fn eval_diffuse(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if self.diffuse.albedo == Rgb::ZERO || !(wo.z > 0.0 && wi.z > 0.0) {
+            return Rgb::ZERO;
+        }
+        let wm = (wo + wi).normalize_or(Vec3::Z);
+        self.diffuse.albedo * (FRAC_1_PI * wi.z * self.diffuse_scale(wo.dot(wm)))
+    }
+}
+
+impl Bsdf for MetallicRoughness {
+    /// `(diffuse + specular)·cos θi`.
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        self.eval_diffuse(wo, wi) + self.specular.eval(wo, wi)
+    }
+
+    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<Sample> {
+        if !(wo.z > 0.0) {
+            return None;
+        }
+        let p = self.specular_probability(wo);
+        if p >= 1.0 {
+            return self.specular.sample(wo, uc, u);
+        }
+        let (wi, lobe) = if uc < p {
+            (self.specular.sample(wo, uc, u)?.wi, Lobe::Specular)
+        } else {
+            (self.diffuse.sample(wo, uc, u)?.wi, Lobe::Diffuse)
+        };
+        let pdf = p * self.specular.pdf(wo, wi) + (1.0 - p) * self.diffuse.pdf(wo, wi);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        Some(Sample { wi, weight: self.eval(wo, wi) / pdf, pdf, lobe })
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let p = self.specular_probability(wo);
+        if p >= 1.0 {
+            return self.specular.pdf(wo, wi);
+        }
+        p * self.specular.pdf(wo, wi) + (1.0 - p) * self.diffuse.pdf(wo, wi)
+    }
+}

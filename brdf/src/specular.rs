@@ -1,0 +1,121 @@
+//! The GGX specular reflection lobe with Schlick Fresnel and optional Turquin compensation.
+
+use crate::fresnel::schlick;
+use crate::ggx::{Ggx, Masking, SpecularSampling, reflect};
+use crate::{Bsdf, Lobe, Rgb, Sample, turquin};
+use glam::{Vec2, Vec3};
+
+/// Model switches of the specular lobe: masking form, sampling method, energy compensation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct SpecularOptions {
+    /// Separable or height-correlated G2 (default height-correlated, as glTF specifies).
+    pub masking: Masking,
+    /// NDF, VNDF or spherical-cap VNDF sampling (default spherical caps).
+    pub sampling: SpecularSampling,
+    /// Turquin 2019 energy compensation (default on).
+    pub compensation: bool,
+}
+
+impl Default for SpecularOptions {
+    fn default() -> Self {
+        Self { masking: Masking::default(), sampling: SpecularSampling::default(), compensation: true }
+    }
+}
+
+impl SpecularOptions {
+    /// Mitsuba 3's `roughconductor` model: separable masking, no compensation (what the
+    /// independent references in `shared/references` were rendered with).
+    pub fn mitsuba() -> Self {
+        Self { masking: Masking::Separable, compensation: false, ..Self::default() }
+    }
+}
+
+/// GGX microfacet reflection (Walter et al. 2007) with Schlick's Fresnel
+/// `F = F0 + (F90 − F0)(1 − ωo·ωm)^5` and, when enabled, Turquin's compensation factor
+/// `1 + F0·(1/E_ss(μo, α) − 1)`.
+///
+/// `eval` includes the cosine: `F·D·G2/(4 cos θo)` (times the compensation factor).
+/// The sample weight is `eval/pdf` in the closed forms that never divide by D:
+/// NDF `F·G2·(ωo·ωm)/(cos θo·cos θm)`, VNDF `F·G2/G1(ωo)` (the thesis §3.2; Heitz 2018).
+/// The pdf is in solid angle: `pdf_wm/(4 ωo·ωm)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GgxSpecular {
+    /// The microfacet distribution.
+    pub ggx: Ggx,
+    /// Fresnel reflectance at normal incidence, per channel.
+    pub f0: Rgb,
+    /// Fresnel reflectance at grazing incidence (1 for a plain Schlick model).
+    pub f90: Rgb,
+    /// Model switches.
+    pub options: SpecularOptions,
+}
+
+impl GgxSpecular {
+    /// A specular lobe of roughness α (clamped, see [`crate::ggx::ALPHA_MIN`]) with F90 = 1.
+    pub fn new(alpha: f32, f0: Rgb, options: SpecularOptions) -> Self {
+        Self { ggx: Ggx::new(alpha), f0, f90: Rgb::ONE, options }
+    }
+
+    /// The Turquin factor for view cosine `mu_o` (1 when compensation is off).
+    #[inline]
+    pub fn compensation(&self, mu_o: f32) -> Rgb {
+        if self.options.compensation {
+            turquin::compensation(self.f0, mu_o, self.ggx.alpha(), self.options.masking)
+        } else {
+            Rgb::ONE
+        }
+    }
+}
+
+impl Bsdf for GgxSpecular {
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if !(wo.z > 0.0 && wi.z > 0.0) {
+            return Rgb::ZERO;
+        }
+        let wm = (wo + wi).normalize_or_zero();
+        if wm == Vec3::ZERO {
+            return Rgb::ZERO;
+        }
+        let f = schlick(self.f0, self.f90, wo.dot(wm));
+        f * self.ggx.eval_cos(wo, wi, wm, self.options.masking) * self.compensation(wo.z)
+    }
+
+    fn sample(&self, wo: Vec3, _uc: f32, u: Vec2) -> Option<Sample> {
+        if !(wo.z > 0.0) {
+            return None;
+        }
+        let method = self.options.sampling;
+        let wm = self.ggx.sample_wm(wo, u, method);
+        let cos_om = wo.dot(wm);
+        if !(cos_om > 0.0) {
+            return None; // NDF sampled a back-facing microfacet
+        }
+        let wi = reflect(wo, wm);
+        if !(wi.z > 0.0) {
+            return None; // reflected below the horizon
+        }
+        let pdf = self.ggx.pdf_wm(wo, wm, method) / (4.0 * cos_om);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        let g2 = self.ggx.g2(wo, wi, self.options.masking);
+        let throughput = match method {
+            SpecularSampling::Ndf => g2 * cos_om / (wo.z * wm.z),
+            SpecularSampling::Vndf | SpecularSampling::SphericalCaps => g2 / self.ggx.g1(wo),
+        };
+        let weight = schlick(self.f0, self.f90, cos_om) * throughput * self.compensation(wo.z);
+        Some(Sample { wi, weight, pdf, lobe: Lobe::Specular })
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if !(wo.z > 0.0 && wi.z > 0.0) {
+            return 0.0;
+        }
+        let wm = (wo + wi).normalize_or_zero();
+        let cos_om = wo.dot(wm);
+        if !(cos_om > 0.0) {
+            return 0.0;
+        }
+        self.ggx.pdf_wm(wo, wm, self.options.sampling) / (4.0 * cos_om)
+    }
+}
