@@ -13,6 +13,7 @@
 //! stay finite at grazing angles: with `a(ω) = √(z² + α²(x² + y²))`,
 //! `Λ(ω) = (a/|z| − 1)/2` and `G1(ω) = 2|z|/(|z| + a)`, which tends to 0 (not NaN) as z → 0.
 
+use crate::above;
 use glam::{Vec2, Vec3};
 use std::f32::consts::{PI, TAU};
 
@@ -103,7 +104,7 @@ impl Ggx {
     /// the horizon; 0 otherwise).
     #[inline]
     pub fn g2(&self, wo: Vec3, wi: Vec3, masking: Masking) -> f32 {
-        if !(wo.z > 0.0 && wi.z > 0.0) {
+        if !(above(wo) && above(wi)) {
             return 0.0;
         }
         match masking {
@@ -123,7 +124,7 @@ impl Ggx {
     /// * height-correlated: `D·zi / (2(ao·zi + ai·zo))`.
     #[inline]
     pub fn eval_cos(&self, wo: Vec3, wi: Vec3, wm: Vec3, masking: Masking) -> f32 {
-        if !(wo.z > 0.0 && wi.z > 0.0) {
+        if !(above(wo) && above(wi)) {
             return 0.0;
         }
         let (ao, ai) = (self.a(wo), self.a(wi));
@@ -152,11 +153,30 @@ impl Ggx {
         match method {
             SpecularSampling::Ndf => self.d(wm) * wm.z.max(0.0),
             SpecularSampling::Vndf | SpecularSampling::SphericalCaps => {
-                if !(wo.z > 0.0) {
+                if !above(wo) {
                     return 0.0;
                 }
                 // G1(wo)/zo = 2/(zo + ao): no division by a grazing zo.
                 2.0 / (wo.z + self.a(wo)) * wo.dot(wm).max(0.0) * self.d(wm)
+            }
+        }
+    }
+
+    /// The solid-angle density of the reflected direction `ωi = reflect(ωo, ωm)` when `ωm` is
+    /// sampled by `method`: `pdf_wm/(4 ωo·ωm)`, with `cos_om = ωo·ωm > 0` given by the caller.
+    ///
+    /// For VNDF the `ωo·ωm` factors cancel analytically: `D(ωm)·G1(ωo)/(4 cos θo) =
+    /// D(ωm)/(2(cos θo + a(ωo)))`, so no rounded dot product can zero it; NDF is
+    /// `D(ωm)·cos θm/(4 cos_om)`.
+    #[inline]
+    pub fn pdf_reflected(&self, wo: Vec3, wm: Vec3, cos_om: f32, method: SpecularSampling) -> f32 {
+        if !(above(wo) && cos_om > 0.0) {
+            return 0.0;
+        }
+        match method {
+            SpecularSampling::Ndf => self.d(wm) * wm.z.max(0.0) / (4.0 * cos_om),
+            SpecularSampling::Vndf | SpecularSampling::SphericalCaps => {
+                self.d(wm) / (2.0 * (wo.z + self.a(wo)))
             }
         }
     }

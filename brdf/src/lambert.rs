@@ -1,6 +1,6 @@
 //! The Lambertian diffuse BRDF.
 
-use crate::{Bsdf, Lobe, Rgb, Sample};
+use crate::{Bsdf, Lobe, Rgb, Sample, above};
 use furnace_sampling::warp::{cosine_hemisphere_pdf, square_to_cosine_hemisphere};
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
@@ -14,16 +14,16 @@ pub struct Lambert {
 }
 
 impl Lambert {
-    /// A Lambertian surface of the given albedo.
+    /// A Lambertian surface of the given albedo (each channel clamped to `[0, 1]`, NaN → 0).
     pub fn new(albedo: Rgb) -> Self {
-        Self { albedo }
+        Self { albedo: crate::clamp_rgb(albedo, 1.0) }
     }
 }
 
 impl Bsdf for Lambert {
     /// `albedo/π · cos θi`; 0 unless both directions are above the horizon.
     fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
-        if !(wo.z > 0.0 && wi.z > 0.0) {
+        if !(above(wo) && above(wi)) {
             return Rgb::ZERO;
         }
         self.albedo * (FRAC_1_PI * wi.z)
@@ -31,7 +31,7 @@ impl Bsdf for Lambert {
 
     /// Cosine-weighted hemisphere sample; `weight = albedo`, `pdf = cos θi/π`. `uc` is unused.
     fn sample(&self, wo: Vec3, _uc: f32, u: Vec2) -> Option<Sample> {
-        if !(wo.z > 0.0) {
+        if !above(wo) {
             return None;
         }
         let wi = square_to_cosine_hemisphere(u);
@@ -44,7 +44,7 @@ impl Bsdf for Lambert {
 
     /// `cos θi/π` above the horizon (for `wo` above it too), else 0.
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if !(wo.z > 0.0) {
+        if !above(wo) {
             return 0.0;
         }
         cosine_hemisphere_pdf(wi)

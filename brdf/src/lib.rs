@@ -15,16 +15,19 @@
 //! ## Conventions ([`Bsdf`])
 //!
 //! * Directions `wo` (towards the viewer) and `wi` (towards the light) are unit vectors
-//!   pointing away from the surface; reflection only, so both must have `z > 0`, otherwise
-//!   `eval` and `pdf` return 0 and `sample` returns `None`.
+//!   pointing away from the surface; reflection only, so both must be above the horizon
+//!   (`z > MIN_COS` = 1e-15, see [`above`]), otherwise `eval` and `pdf` return 0 and `sample`
+//!   returns `None`.
 //! * [`Bsdf::eval`] returns the BRDF **times** `cos θi` (Mitsuba's convention).
 //! * [`Bsdf::sample`] returns `wi`, `weight = eval(wo, wi)/pdf` and `pdf`.
 //! * [`Bsdf::pdf`] is the solid-angle density of `sample` (equal to what `sample` reports).
 //! * Colours are linear RGB ([`Rgb`] = `glam::Vec3`).
 //!
 //! No input produces NaN, infinity or a negative value: roughness is clamped to
-//! `[ALPHA_MIN, 1]` (`ggx::ALPHA_MIN` = 1e-4, see its docs), every division is guarded, and
-//! grazing angles use forms that tend to 0 rather than 0/0 (tested in `tests/stability.rs`).
+//! `[ALPHA_MIN, 1]` (`ggx::ALPHA_MIN` = 1e-4, see its docs), colours given to the constructors
+//! are clamped to be finite and non-negative (NaN → 0), directions within [`MIN_COS`] of the
+//! horizon count as below it, and grazing angles use forms that tend to 0 rather than 0/0
+//! (tested in `tests/stability.rs`). Fields set directly bypass the constructors' clamping.
 //!
 //! ## Example
 //!
@@ -68,6 +71,26 @@ use glam::{Vec2, Vec3};
 
 /// Linear RGB.
 pub type Rgb = Vec3;
+
+/// Directions closer to the horizon than this cosine count as below it.
+///
+/// Their contribution is below `f32` resolution (G1 ≤ 2·10⁻¹⁵/α), and the cutoff keeps every
+/// product of two cosines a normal `f32` (≥ 10⁻³⁰): below ~10⁻³⁰ half vectors, G2 and the NDF
+/// weight underflow to 0/0 or overflow to ∞ (found by `tests/stability.rs`).
+pub const MIN_COS: f32 = 1e-15;
+
+/// Clamps each channel to `[0, hi]`, NaN to 0: what the constructors do to colours.
+#[inline]
+pub(crate) fn clamp_rgb(c: Rgb, hi: f32) -> Rgb {
+    let f = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, hi) };
+    Rgb::new(f(c.x), f(c.y), f(c.z))
+}
+
+/// Whether `w` is above the horizon by more than [`MIN_COS`] (false for NaN).
+#[inline]
+pub fn above(w: Vec3) -> bool {
+    w.z > MIN_COS
+}
 
 /// Which lobe produced a sample.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

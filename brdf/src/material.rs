@@ -4,7 +4,7 @@
 use crate::fresnel::schlick;
 use crate::lambert::Lambert;
 use crate::specular::{GgxSpecular, SpecularOptions};
-use crate::{Bsdf, Lobe, Rgb, Sample};
+use crate::{Bsdf, Lobe, Rgb, Sample, above, clamp_rgb};
 use glam::{Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -71,10 +71,6 @@ fn sanitize(x: f32, lo: f32, hi: f32, default: f32) -> f32 {
     if x.is_nan() { default } else { x.clamp(lo, hi) }
 }
 
-fn sanitize_rgb(c: Rgb, hi: f32) -> Rgb {
-    Rgb::new(sanitize(c.x, 0.0, hi, 0.0), sanitize(c.y, 0.0, hi, 0.0), sanitize(c.z, 0.0, hi, 0.0))
-}
-
 /// Rec. 709 luminance.
 #[inline]
 pub fn luminance(c: Rgb) -> f32 {
@@ -84,11 +80,11 @@ pub fn luminance(c: Rgb) -> f32 {
 impl MetallicRoughness {
     /// Builds the BSDF from glTF parameters and model switches.
     pub fn new(params: MetallicRoughnessParams, options: SpecularOptions) -> Self {
-        let base = sanitize_rgb(params.base_color, 1.0);
+        let base = clamp_rgb(params.base_color, 1.0);
         let metallic = sanitize(params.metallic, 0.0, 1.0, 1.0);
         let roughness = sanitize(params.roughness, 0.0, 1.0, 1.0);
         let sf = sanitize(params.specular_factor, 0.0, 1.0, 1.0);
-        let sc = sanitize_rgb(params.specular_color, f32::MAX);
+        let sc = clamp_rgb(params.specular_color, f32::MAX);
         let f0_dielectric = (0.04 * sc).min(Rgb::ONE);
         let f0 = (f0_dielectric * sf).lerp(base, metallic);
         let f90 = Rgb::splat(sf + (1.0 - sf) * metallic);
@@ -122,7 +118,7 @@ impl MetallicRoughness {
     }
 
     fn eval_diffuse(&self, wo: Vec3, wi: Vec3) -> Rgb {
-        if self.diffuse.albedo == Rgb::ZERO || !(wo.z > 0.0 && wi.z > 0.0) {
+        if self.diffuse.albedo == Rgb::ZERO || !(above(wo) && above(wi)) {
             return Rgb::ZERO;
         }
         let wm = (wo + wi).normalize_or(Vec3::Z);
@@ -137,7 +133,7 @@ impl Bsdf for MetallicRoughness {
     }
 
     fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<Sample> {
-        if !(wo.z > 0.0) {
+        if !above(wo) {
             return None;
         }
         let p = self.specular_probability(wo);

@@ -2,7 +2,7 @@
 
 use crate::fresnel::schlick;
 use crate::ggx::{Ggx, Masking, SpecularSampling, reflect};
-use crate::{Bsdf, Lobe, Rgb, Sample, turquin};
+use crate::{Bsdf, Lobe, Rgb, Sample, above, turquin};
 use glam::{Vec2, Vec3};
 
 /// Model switches of the specular lobe: masking form, sampling method, energy compensation.
@@ -51,9 +51,10 @@ pub struct GgxSpecular {
 }
 
 impl GgxSpecular {
-    /// A specular lobe of roughness α (clamped, see [`crate::ggx::ALPHA_MIN`]) with F90 = 1.
+    /// A specular lobe of roughness α (clamped, see [`crate::ggx::ALPHA_MIN`]) with F90 = 1;
+    /// F0 is clamped to `[0, 1]` per channel (NaN → 0).
     pub fn new(alpha: f32, f0: Rgb, options: SpecularOptions) -> Self {
-        Self { ggx: Ggx::new(alpha), f0, f90: Rgb::ONE, options }
+        Self { ggx: Ggx::new(alpha), f0: crate::clamp_rgb(f0, 1.0), f90: Rgb::ONE, options }
     }
 
     /// The Turquin factor for view cosine `mu_o` (1 when compensation is off).
@@ -67,21 +68,36 @@ impl GgxSpecular {
     }
 }
 
+/// The half vector `ωm = (ωo + ωi)/|ωo + ωi|` and `ωo·ωm`, or `None` when the sum vanishes.
+///
+/// `ωo·ωm` is computed as `|ωo + ωi|/2` (equal for unit vectors), never negative: the dot
+/// product with the rounded half vector of a back-scattering pair `ωi ≈ −ωo` at grazing views
+/// can come out ≤ 0, which made `pdf` return 0 for directions `sample` had just produced
+/// (found by `tests/consistency.rs`).
+#[inline]
+fn half_vector(wo: Vec3, wi: Vec3) -> Option<(Vec3, f32)> {
+    let h = wo + wi;
+    let len = h.length();
+    if !(len > 0.0) {
+        return None;
+    }
+    Some((h / len, 0.5 * len))
+}
+
 impl Bsdf for GgxSpecular {
     fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
-        if !(wo.z > 0.0 && wi.z > 0.0) {
+        if !(above(wo) && above(wi)) {
             return Rgb::ZERO;
         }
-        let wm = (wo + wi).normalize_or_zero();
-        if wm == Vec3::ZERO {
+        let Some((wm, cos_om)) = half_vector(wo, wi) else {
             return Rgb::ZERO;
-        }
-        let f = schlick(self.f0, self.f90, wo.dot(wm));
+        };
+        let f = schlick(self.f0, self.f90, cos_om);
         f * self.ggx.eval_cos(wo, wi, wm, self.options.masking) * self.compensation(wo.z)
     }
 
     fn sample(&self, wo: Vec3, _uc: f32, u: Vec2) -> Option<Sample> {
-        if !(wo.z > 0.0) {
+        if !above(wo) {
             return None;
         }
         let method = self.options.sampling;
@@ -91,10 +107,10 @@ impl Bsdf for GgxSpecular {
             return None; // NDF sampled a back-facing microfacet
         }
         let wi = reflect(wo, wm);
-        if !(wi.z > 0.0) {
+        if !above(wi) {
             return None; // reflected below the horizon
         }
-        let pdf = self.ggx.pdf_wm(wo, wm, method) / (4.0 * cos_om);
+        let pdf = self.ggx.pdf_reflected(wo, wm, cos_om, method);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
@@ -108,14 +124,12 @@ impl Bsdf for GgxSpecular {
     }
 
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        if !(wo.z > 0.0 && wi.z > 0.0) {
+        if !(above(wo) && above(wi)) {
             return 0.0;
         }
-        let wm = (wo + wi).normalize_or_zero();
-        let cos_om = wo.dot(wm);
-        if !(cos_om > 0.0) {
+        let Some((wm, cos_om)) = half_vector(wo, wi) else {
             return 0.0;
-        }
-        self.ggx.pdf_wm(wo, wm, self.options.sampling) / (4.0 * cos_om)
+        };
+        self.ggx.pdf_reflected(wo, wm, cos_om, self.options.sampling)
     }
 }

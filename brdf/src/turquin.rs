@@ -48,7 +48,10 @@ pub fn table_alpha(j: usize) -> f32 {
 /// quadrature in the visible-normal parameterisation:
 /// `E = ∫∫_{[0,1]²} G2(ωo, ωi(u))/G1(ωo) du`, with `ωi(u)` the reflection of the VNDF sample
 /// (the integrand is the VNDF throughput; it is 0 below the horizon and continuous there since
-/// G2 → 0). Product Gauss–Legendre of `order` points per axis, accumulated in f64.
+/// G2 → 0). Product Gauss–Legendre of `order` points per axis in `(t, u₁)` with
+/// `u₀ = 1 − t²` (Jacobian 2t), accumulated in f64: Heitz's map has `r = √u₀`, and the
+/// substitution removes the square-root singularity at the disk rim, where the reflections
+/// that leave the hemisphere are (it cut the worst quadrature error at order 96 several-fold).
 ///
 /// μ is clamped to `[1e-4, 1]` (the limit μ → 0 is finite).
 pub fn directional_albedo(mu: f32, alpha: f32, masking: Masking, order: usize) -> f64 {
@@ -58,13 +61,14 @@ pub fn directional_albedo(mu: f32, alpha: f32, masking: Masking, order: usize) -
     let g1o = ggx.g1(wo) as f64;
     let (nodes, weights) = gauss_legendre(order);
     let mut sum = 0.0f64;
-    for (x, wx) in nodes.iter().zip(&weights) {
+    for (t, wt) in nodes.iter().zip(&weights) {
+        let u0 = 1.0 - t * t;
         for (y, wy) in nodes.iter().zip(&weights) {
-            let u = Vec2::new(*x as f32, *y as f32);
+            let u = Vec2::new(u0 as f32, *y as f32);
             let wm = ggx.sample_wm(wo, u, SpecularSampling::Vndf);
             let wi = reflect(wo, wm);
-            if wi.z > 0.0 {
-                sum += wx * wy * ggx.g2(wo, wi, masking) as f64;
+            if crate::above(wi) {
+                sum += 2.0 * t * wt * wy * ggx.g2(wo, wi, masking) as f64;
             }
         }
     }
