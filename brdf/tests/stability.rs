@@ -30,6 +30,8 @@
 //! sanitises them. On failure the violations are written to
 //! `target/test-output/brdf/stability_*.txt`.
 
+mod common;
+use common::write_output;
 use furnace_brdf::ggx::{ALPHA_MIN, reflect};
 use furnace_brdf::{
     Bsdf, Ggx, GgxSpecular, Lambert, Masking, MetallicRoughness, MetallicRoughnessParams, Rgb,
@@ -38,15 +40,6 @@ use furnace_brdf::{
 use glam::{Vec2, Vec3};
 use std::fmt::Write as _;
 use std::path::PathBuf;
-
-fn write_output(name: &str, text: &str) -> PathBuf {
-    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let dir = manifest.parent().unwrap_or(&manifest).join("target/test-output/brdf");
-    std::fs::create_dir_all(&dir).expect("create target/test-output/brdf");
-    let path = dir.join(name);
-    std::fs::write(&path, text).expect("write test output");
-    path
-}
 
 /// The largest f32 below 1.
 const ONE_MINUS: f32 = 1.0 - 1.0 / (1u32 << 24) as f32;

@@ -22,6 +22,8 @@
 //!
 //! Tables that explain a failure go to `target/test-output/brdf/turquin_tables*.md`.
 
+mod common;
+use common::write_output;
 use furnace_brdf::Masking;
 use furnace_brdf::turquin::{
     self, E_SS_HEIGHT_CORRELATED, E_SS_SEPARABLE, TABLE_QUADRATURE_ORDER, TABLE_SIZE, directional_albedo,
@@ -31,16 +33,6 @@ use std::fmt::Write as _;
 use std::path::PathBuf;
 
 const REGENERATE: &str = "run `cargo run --release -p furnace-brdf --example generate_tables`";
-
-/// Writes `text` to `<workspace>/target/test-output/brdf/<name>` and returns the path.
-fn write_output(name: &str, text: &str) -> PathBuf {
-    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let dir = manifest.parent().unwrap_or(&manifest).join("target/test-output/brdf");
-    std::fs::create_dir_all(&dir).expect("create target/test-output/brdf");
-    let path = dir.join(name);
-    std::fs::write(&path, text).expect("write test output");
-    path
-}
 
 #[test]
 fn tables_match_generator() {

@@ -27,28 +27,20 @@
 //!
 //! The table is printed and written to `target/test-output/brdf/where_methods_fail.md`.
 
+mod common;
+use common::write_output;
 use furnace_brdf::ggx::reflect;
 use furnace_brdf::turquin::directional_albedo;
 use furnace_brdf::{Bsdf, GgxSpecular, Masking, Rgb, SpecularOptions, SpecularSampling};
 use furnace_sampling::{OwenSobol, Sampler};
 use glam::{Vec2, Vec3};
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 const N: u32 = 1 << 16;
 const THETAS_DEG: [f64; 7] = [0.0, 30.0, 60.0, 80.0, 85.0, 89.0, 89.9];
 const ALPHAS: [f32; 4] = [0.02, 0.1, 0.3, 1.0];
 const METHODS: [SpecularSampling; 3] =
     [SpecularSampling::Ndf, SpecularSampling::Vndf, SpecularSampling::SphericalCaps];
-
-fn write_output(name: &str, text: &str) -> PathBuf {
-    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let dir = manifest.parent().unwrap_or(&manifest).join("target/test-output/brdf");
-    std::fs::create_dir_all(&dir).expect("create target/test-output/brdf");
-    let path = dir.join(name);
-    std::fs::write(&path, text).expect("write test output");
-    path
-}
 
 /// What one method did on one configuration.
 #[derive(Debug, Default, Clone, Copy)]

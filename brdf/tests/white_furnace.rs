@@ -18,6 +18,8 @@
 //! Owen-scrambled Sobol points with independent scrambles per replicate, so the spread of the
 //! replicate means is an honest standard error (RQMC).
 
+mod common;
+use common::write_output;
 use furnace_brdf::turquin::{self, directional_albedo};
 use furnace_brdf::{
     Bsdf, GgxSpecular, Lambert, Masking, MetallicRoughness, MetallicRoughnessParams, Rgb, SpecularOptions,
@@ -26,7 +28,6 @@ use furnace_brdf::{
 use furnace_sampling::{OwenSobol, Sampler};
 use glam::{DVec3, Vec2, Vec3};
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 /// The figures of `shared/references/furnace/furnace_ggx_a1_cuda_ad_rgb_4096spp.json`.
 mod reference {
@@ -44,15 +45,6 @@ mod reference {
     pub const SPHERE_MITSUBA: f64 = 0.372_815_838_970_069_8;
     /// `mask_pixels`.
     pub const MASK_PIXELS: usize = 37_984;
-}
-
-fn write_output(name: &str, text: &str) -> PathBuf {
-    let manifest = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let dir = manifest.parent().unwrap_or(&manifest).join("target/test-output/brdf");
-    std::fs::create_dir_all(&dir).expect("create target/test-output/brdf");
-    let path = dir.join(name);
-    std::fs::write(&path, text).expect("write test output");
-    path
 }
 
 /// The view direction of cosine μ in the xz-plane.
