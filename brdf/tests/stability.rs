@@ -39,7 +39,6 @@ use furnace_brdf::{
 };
 use glam::{Vec2, Vec3};
 use std::fmt::Write as _;
-use std::path::PathBuf;
 
 /// The largest f32 below 1.
 const ONE_MINUS: f32 = 1.0 - 1.0 / (1u32 << 24) as f32;
