@@ -1,0 +1,99 @@
+//! Typed errors and warnings. Every error names the file (or the built-in scene) and, where
+//! there is one, the place in it as a glTF JSON path (`accessors[2].bufferView`).
+
+use std::fmt;
+
+/// Why a scene could not be loaded. `Display` gives one line: `FILE: PLACE: what went wrong`.
+#[derive(Debug, thiserror::Error)]
+pub enum SceneError {
+    /// A file (the scene itself, or a buffer or image it references) could not be read.
+    #[error("{file}: cannot read {what}: {source}")]
+    Io {
+        /// The scene file.
+        file: String,
+        /// What was being read: the scene itself or `buffers[0] 'x.bin'` and the like.
+        what: String,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+    /// The bytes are not glTF: bad JSON, a bad GLB container.
+    #[error("{file}: not a glTF 2.0 file: {message}")]
+    Parse {
+        /// The scene file.
+        file: String,
+        /// The parser's message.
+        message: String,
+    },
+    /// The glTF is structurally invalid at `path` (validation, bounds, counts).
+    #[error("{file}: {path}: {message}")]
+    Invalid {
+        /// The scene file.
+        file: String,
+        /// The glTF JSON path of the offending item.
+        path: String,
+        /// What is wrong with it.
+        message: String,
+    },
+    /// The file requires an extension furnace cannot honour (e.g. Draco compression).
+    #[error("{file}: {path}: requires unsupported extension {extension}")]
+    UnsupportedExtension {
+        /// The scene file.
+        file: String,
+        /// Where it is required (`extensionsRequired[0]`).
+        path: String,
+        /// The extension's name.
+        extension: String,
+    },
+    /// An image could not be decoded.
+    #[error("{file}: {path}: cannot decode image: {message}")]
+    Image {
+        /// The scene file.
+        file: String,
+        /// The glTF JSON path of the image (`images[3]`).
+        path: String,
+        /// The decoder's message.
+        message: String,
+    },
+    /// The file is valid but yields no renderable triangle.
+    #[error("{file}: nothing to render: {reason}")]
+    NothingToRender {
+        /// The scene file.
+        file: String,
+        /// Why (no scene, no mesh, every triangle degenerate...).
+        reason: String,
+    },
+}
+
+impl SceneError {
+    /// A short name of the error's kind, for summaries (`io`, `parse`, `invalid`, ...).
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Self::Io { .. } => "io",
+            Self::Parse { .. } => "parse",
+            Self::Invalid { .. } => "invalid",
+            Self::UnsupportedExtension { .. } => "unsupported-extension",
+            Self::Image { .. } => "image",
+            Self::NothingToRender { .. } => "nothing-to-render",
+        }
+    }
+}
+
+/// Something the loader ignored or repaired; the scene still loads. Identical warnings are
+/// reported once (see [`crate::Scene::warnings`]).
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub struct Warning {
+    /// The glTF JSON path it concerns (`meshes[0].primitives[1]`), or `""` for the whole file.
+    pub path: String,
+    /// What was ignored or repaired.
+    pub message: String,
+}
+
+impl fmt::Display for Warning {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.path.is_empty() {
+            f.write_str(&self.message)
+        } else {
+            write!(f, "{}: {}", self.path, self.message)
+        }
+    }
+}

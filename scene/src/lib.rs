@@ -1,0 +1,160 @@
+//! furnace-scene: glTF 2.0 scenes flattened for a path tracer.
+//!
+//! * **Loading** ([`Scene::load`], [`Scene::from_slice`]): glTF 2.0 JSON and GLB (Khronos glTF
+//!   2.0 specification) through the `gltf` crate's parser and validator; buffers, images and
+//!   accessors are read here, with every offset, stride, count and index checked, so that no
+//!   input panics and every error names the file and the glTF JSON path ([`SceneError`]).
+//!   The default scene's node hierarchy is flattened into world-space indexed triangles
+//!   ([`Geometry`]): instanced meshes expanded, shading normals transformed by the
+//!   inverse-transpose and octahedral-encoded (Cigolle et al. 2014), per-face normals when a
+//!   primitive has none, degenerate or non-finite triangles dropped and counted.
+//! * **Materials** ([`Material`]): metallic-roughness with KHR_materials_specular and
+//!   KHR_materials_emissive_strength, alpha MASK, double-sided; textures stored as 8-bit RGBA and
+//!   decoded (sRGB → linear, IEC 61966-2-1) when sampled bilinearly with glTF wrap modes and
+//!   KHR_texture_transform ([`TextureRef::sample_bilinear`]).
+//! * **Camera, sun and sky** ([`Camera`], [`Sun`]) with the reference renders' conventions
+//!   (`shared/references/README.md`): camera looks down −Z, pixel `(i, j)` covers
+//!   `[i, i+1] × [j, j+1]` with row 0 at the top; the sun is a KHR_lights_punctual directional
+//!   light whose irradiance is `color × intensity` W/m² travelling along the node's −Z; the sky is
+//!   `scenes[i].extras.background_radiance_rgb`.
+//! * **Built-in scenes** ([`builtin`]): the reference Cornell box and a white-furnace sphere.
+//!
+//! Unsupported features (transmission, point lights, BLEND...) give one [`Warning`] each, never a
+//! failure; a *required* unsupported extension (e.g. `KHR_draco_mesh_compression`) is an error.
+//!
+//! ```
+//! use furnace_scene::{Scene, builtin};
+//! let scene: Scene = builtin::cornell_box()?;
+//! assert_eq!(scene.geometry.triangle_count(), 20_516);
+//! let camera = scene.default_camera();
+//! let ray = camera.generate_ray(glam::Vec2::new(128.0, 128.0), 256, 256);
+//! assert!(ray.direction.is_normalized());
+//! assert!(scene.sun.is_some());
+//! # Ok::<(), furnace_scene::SceneError>(())
+//! ```
+
+mod accessor;
+pub mod builtin;
+mod camera;
+mod error;
+mod geometry;
+mod load;
+mod material;
+mod texture;
+
+pub use camera::{Camera, DEFAULT_YFOV, Projection, Ray};
+pub use error::{SceneError, Warning};
+pub use geometry::{Geometry, oct_decode, oct_encode};
+pub use load::SUPPORTED_EXTENSIONS;
+pub use material::{AlphaMode, Material, MaterialSample};
+pub use texture::{ColorSpace, Image, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear};
+
+use glam::Vec3;
+use std::path::Path;
+
+/// A directional light ("sun"): parallel light of constant irradiance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sun {
+    /// Unit direction the light **travels** (the light node's −Z in world space). The
+    /// direction towards the sun is `-direction`.
+    pub direction: Vec3,
+    /// Irradiance on a surface facing the sun, W/m² per channel (`color × intensity`, no
+    /// photometric conversion).
+    pub irradiance: Vec3,
+}
+
+/// A scene ready to render: world-space triangles, materials, textures, cameras, sun and sky.
+/// All fields are public: override the sun, sky or camera by assigning them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// The file it came from, or `<built-in NAME>`.
+    pub name: String,
+    /// The triangles.
+    pub geometry: Geometry,
+    /// Materials; the last one is glTF's default material, used by primitives without one.
+    pub materials: Vec<Material>,
+    /// Textures (glTF `textures`, same indices).
+    pub textures: Vec<Texture>,
+    /// Images (glTF `images`, same indices; images no material uses are 1×1 white).
+    pub images: Vec<Image>,
+    /// Cameras in node traversal order (depth-first, children in file order).
+    pub cameras: Vec<Camera>,
+    /// The first KHR_lights_punctual directional light, if any.
+    pub sun: Option<Sun>,
+    /// Constant radiance of every ray that leaves the scene (linear RGB); black by default.
+    pub sky: Vec3,
+    /// What the loader ignored or repaired, each reported once.
+    pub warnings: Vec<Warning>,
+    /// Degenerate (zero-area) or non-finite triangles dropped while loading.
+    pub dropped_triangles: usize,
+}
+
+/// Sizes of a scene, for logs and benchmarks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SceneStats {
+    /// Triangles kept.
+    pub triangles: usize,
+    /// Vertices stored.
+    pub vertices: usize,
+    /// Materials (including the default one).
+    pub materials: usize,
+    /// Whether per-vertex UVs are stored (some material uses a texture).
+    pub stores_uvs: bool,
+    /// Bytes of [`Geometry`] arrays.
+    pub geometry_bytes: usize,
+    /// Bytes of texels.
+    pub texture_bytes: usize,
+    /// `geometry_bytes / triangles`.
+    pub bytes_per_triangle: f64,
+    /// Degenerate or non-finite triangles dropped.
+    pub dropped_triangles: usize,
+}
+
+impl Scene {
+    /// Loads a `.gltf` or `.glb` file; buffers and images are resolved relative to it.
+    pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        let path = path.as_ref();
+        let file = path.display().to_string();
+        let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
+            file: file.clone(),
+            what: "the scene file".into(),
+            source,
+        })?;
+        load::load(&bytes, &file, Some(path.parent().unwrap_or(Path::new("."))))
+    }
+
+    /// Loads glTF or GLB bytes named `name` (for messages). External URIs are an error; data
+    /// URIs and the GLB `BIN` chunk work.
+    pub fn from_slice(bytes: &[u8], name: &str) -> Result<Self, SceneError> {
+        load::load(bytes, name, None)
+    }
+
+    /// Camera `index` of [`Scene::cameras`], if there is one.
+    pub fn camera(&self, index: usize) -> Option<Camera> {
+        self.cameras.get(index).copied()
+    }
+
+    /// The first camera, or without one [`Camera::frame_bounds`] of the geometry.
+    pub fn default_camera(&self) -> Camera {
+        self.camera(0).unwrap_or_else(|| {
+            let (lo, hi) = self.geometry.bounds();
+            Camera::frame_bounds(lo, hi)
+        })
+    }
+
+    /// Sizes and bytes per triangle.
+    pub fn stats(&self) -> SceneStats {
+        let g = &self.geometry;
+        let geometry_bytes = g.bytes();
+        SceneStats {
+            triangles: g.triangle_count(),
+            vertices: g.positions.len(),
+            materials: self.materials.len(),
+            stores_uvs: !g.uvs.is_empty(),
+            geometry_bytes,
+            texture_bytes: self.images.iter().map(|i| i.texels.len() * 4).sum(),
+            bytes_per_triangle: geometry_bytes as f64 / g.triangle_count().max(1) as f64,
+            dropped_triangles: self.dropped_triangles,
+        }
+    }
+}

@@ -1,0 +1,134 @@
+//! Materials: glTF 2.0 metallic-roughness with KHR_materials_specular and
+//! KHR_materials_emissive_strength, as factors and texture references. Textures are sampled by
+//! [`Material::evaluate`] into the per-shading-point values the integrator feeds to
+//! `furnace_brdf::MetallicRoughnessParams`.
+
+use crate::texture::{Image, Texture, TextureRef};
+use glam::{Vec2, Vec3, Vec4};
+
+/// How alpha is interpreted (glTF `alphaMode`).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum AlphaMode {
+    /// Alpha ignored (glTF's default).
+    #[default]
+    Opaque,
+    /// Alpha-tested: the surface exists where `alpha ≥ cutoff` (glTF default cutoff 0.5).
+    Mask {
+        /// `alphaCutoff`.
+        cutoff: f32,
+    },
+    /// Alpha-blended. A path tracer can treat it as stochastic transparency; furnace renders
+    /// it opaque for now (a warning is issued when loading).
+    Blend,
+}
+
+/// A glTF metallic-roughness material. Factor defaults are glTF's.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Material {
+    /// `name`, when the file gives one.
+    pub name: Option<String>,
+    /// `baseColorFactor`, linear RGBA.
+    pub base_color_factor: Vec4,
+    /// `baseColorTexture` (sRGB).
+    pub base_color_texture: Option<TextureRef>,
+    /// `metallicFactor`.
+    pub metallic_factor: f32,
+    /// `roughnessFactor` (perceptual; α = roughness²).
+    pub roughness_factor: f32,
+    /// `metallicRoughnessTexture` (linear; roughness in G, metallic in B).
+    pub metallic_roughness_texture: Option<TextureRef>,
+    /// `normalTexture` (linear, tangent space).
+    pub normal_texture: Option<TextureRef>,
+    /// `normalTexture.scale`.
+    pub normal_scale: f32,
+    /// `emissiveFactor × KHR_materials_emissive_strength.emissiveStrength` (linear RGB radiance).
+    pub emissive: Vec3,
+    /// `emissiveTexture` (sRGB), multiplied with [`Material::emissive`].
+    pub emissive_texture: Option<TextureRef>,
+    /// `alphaMode` and `alphaCutoff`.
+    pub alpha_mode: AlphaMode,
+    /// `doubleSided`.
+    pub double_sided: bool,
+    /// KHR_materials_specular `specularFactor` (default 1).
+    pub specular_factor: f32,
+    /// KHR_materials_specular `specularColorFactor` (default 1; may exceed 1).
+    pub specular_color_factor: Vec3,
+}
+
+impl Default for Material {
+    /// glTF's default material: white, metallic 1, roughness 1, single-sided.
+    fn default() -> Self {
+        Self {
+            name: None,
+            base_color_factor: Vec4::ONE,
+            base_color_texture: None,
+            metallic_factor: 1.0,
+            roughness_factor: 1.0,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+            emissive: Vec3::ZERO,
+            emissive_texture: None,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+            specular_factor: 1.0,
+            specular_color_factor: Vec3::ONE,
+        }
+    }
+}
+
+/// A material evaluated at one shading point: every factor multiplied by its texture.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MaterialSample {
+    /// Linear base colour (RGB).
+    pub base_color: Vec3,
+    /// Alpha (base colour factor × texture alpha).
+    pub alpha: f32,
+    /// `metallicFactor × texture.b`.
+    pub metallic: f32,
+    /// `roughnessFactor × texture.g`.
+    pub roughness: f32,
+    /// Emitted radiance, linear RGB.
+    pub emission: Vec3,
+    /// KHR_materials_specular `specularFactor`.
+    pub specular_factor: f32,
+    /// KHR_materials_specular `specularColorFactor`.
+    pub specular_color: Vec3,
+}
+
+impl Material {
+    /// True when any slot uses a texture (the scene then stores UVs).
+    pub fn uses_textures(&self) -> bool {
+        self.base_color_texture.is_some()
+            || self.metallic_roughness_texture.is_some()
+            || self.normal_texture.is_some()
+            || self.emissive_texture.is_some()
+    }
+
+    /// Evaluates factors × textures at `uv` (UV0; ignored without textures).
+    pub fn evaluate(&self, uv: Vec2, textures: &[Texture], images: &[Image]) -> MaterialSample {
+        let sample = |t: &Option<TextureRef>| {
+            t.as_ref().map_or(Vec4::ONE, |t| t.sample_bilinear(uv, textures, images))
+        };
+        let base = self.base_color_factor * sample(&self.base_color_texture);
+        let mr = sample(&self.metallic_roughness_texture);
+        let emission = self.emissive * sample(&self.emissive_texture).truncate();
+        MaterialSample {
+            base_color: base.truncate(),
+            alpha: base.w,
+            metallic: self.metallic_factor * mr.z,
+            roughness: self.roughness_factor * mr.y,
+            emission,
+            specular_factor: self.specular_factor,
+            specular_color: self.specular_color_factor,
+        }
+    }
+
+    /// Whether the alpha test keeps a hit with this `alpha` (always true unless `Mask`).
+    pub fn alpha_test(&self, alpha: f32) -> bool {
+        match self.alpha_mode {
+            AlphaMode::Mask { cutoff } => alpha >= cutoff,
+            _ => true,
+        }
+    }
+}

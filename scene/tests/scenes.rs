@@ -1,0 +1,164 @@
+//! Loading real scenes: the reference Cornell box (values checked against the file), textured
+//! and PBR-textured models, Draco and missing-file errors, and the built-in scenes.
+
+use furnace_scene::{AlphaMode, ColorSpace, Projection, Scene, SceneError, builtin};
+use glam::{Vec2, Vec3};
+use std::path::{Path, PathBuf};
+
+fn data(p: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(p)
+}
+
+/// Scenes too large to copy into the crate are read from the shared folder when present.
+fn shared(p: &str) -> Option<PathBuf> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes").join(p);
+    if path.exists() {
+        Some(path)
+    } else {
+        println!("SKIPPED: {} is absent", path.display());
+        None
+    }
+}
+
+#[test]
+fn cbox_matches_the_file() {
+    let s = Scene::load(data("cbox/cbox.gltf")).expect("cbox loads");
+    assert_eq!(s.geometry.triangle_count(), 20_516);
+    assert_eq!(s.dropped_triangles, 0);
+    // Sky: scenes[0].extras.background_radiance_rgb, exactly.
+    assert_eq!(s.sky, Vec3::new(0.35, 0.5, 0.8));
+    // Sun: irradiance colour × intensity = (1, 0.95, 0.85) × 3; direction of travel as the
+    // file's extras record it (tolerance: f32 quaternion rotation, ~1e-7 per component).
+    let sun = s.sun.expect("a sun");
+    assert!((sun.irradiance - Vec3::new(3.0, 2.85, 2.55)).abs().max_element() < 1e-6);
+    let travel = Vec3::new(-0.240_007_68, -0.960_030_7, -0.144_004_6);
+    assert!((sun.direction - travel).length() < 1e-5, "{:?}", sun.direction);
+    // Camera at (0, 1, 3.8) looking at (0, 1, 0), yfov π/4.
+    let cam = s.default_camera();
+    let Projection::Perspective { yfov, aspect_ratio } = cam.projection else {
+        panic!("perspective expected");
+    };
+    assert_eq!(yfov, std::f32::consts::FRAC_PI_4);
+    assert_eq!(aspect_ratio, Some(1.0));
+    let centre = cam.generate_ray(Vec2::new(128.0, 128.0), 256, 256);
+    assert!((centre.origin - Vec3::new(0.0, 1.0, 3.8)).length() < 1e-6);
+    assert!((centre.direction - Vec3::NEG_Z).length() < 1e-6);
+    // Row 0 is the top: the ray through the top-centre pixel edge goes up by yfov/2.
+    let top = cam.generate_ray(Vec2::new(128.0, 0.0), 256, 256);
+    assert!((top.direction.y / -top.direction.z - (yfov / 2.0).tan()).abs() < 1e-6);
+    // Materials: Lambert walls (metallic 0, specular 0, two-sided), metal sphere.
+    let white = &s.materials[0];
+    assert_eq!(white.metallic_factor, 0.0);
+    assert_eq!(white.specular_factor, 0.0);
+    assert!(white.double_sided);
+    assert!(s.materials.iter().any(|m| m.metallic_factor == 1.0));
+    assert!(s.geometry.uvs.is_empty(), "no texture: no UVs stored");
+    // The embedded GLB is the same scene.
+    let b = builtin::cornell_box().expect("built-in cbox");
+    assert_eq!(b.geometry, s.geometry);
+    assert_eq!((b.sun, b.sky, b.cameras.clone()), (s.sun, s.sky, s.cameras.clone()));
+    println!("cbox: {:?}", s.stats());
+}
+
+#[test]
+fn box_textured_samples_linear_srgb() {
+    for f in ["BoxTextured/glTF/BoxTextured.gltf", "BoxTextured/glTF-Binary/BoxTextured.glb"] {
+        let s = Scene::load(data(f)).expect("BoxTextured loads");
+        assert_eq!(s.geometry.triangle_count(), 12);
+        assert_eq!(s.geometry.uvs.len(), s.geometry.positions.len());
+        let m = &s.materials[0];
+        let t = m.base_color_texture.expect("base colour texture");
+        assert_eq!(t.color_space, ColorSpace::Srgb);
+        let img = &s.images[s.textures[t.texture as usize].image as usize];
+        // At a texel centre the bilinear lookup is that texel, sRGB-decoded.
+        let (x, y) = (img.width / 3, img.height / 2);
+        let uv = Vec2::new((x as f32 + 0.5) / img.width as f32, (y as f32 + 0.5) / img.height as f32);
+        let raw = img.texels[(y * img.width + x) as usize];
+        let got = t.sample_bilinear(uv, &s.textures, &s.images);
+        let want = furnace_scene::srgb_to_linear(raw[0] as f32 / 255.0);
+        // Tolerance: the lerp weights at a texel centre are exact up to f32 rounding of uv.
+        assert!((got.x - want).abs() < 1e-4, "{got} vs {want}");
+        let ms = m.evaluate(uv, &s.textures, &s.images);
+        assert!(ms.base_color.is_finite());
+    }
+}
+
+#[test]
+fn draco_and_missing_files_give_clear_errors() {
+    let e = Scene::load(data("Box/glTF-Draco/Box.gltf")).unwrap_err();
+    assert!(
+        matches!(&e, SceneError::UnsupportedExtension { extension, .. } if extension == "KHR_draco_mesh_compression"),
+        "{e}"
+    );
+    // A .gltf whose buffer file is missing names that file.
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("missing-buffer");
+    std::fs::create_dir_all(&dir).expect("tmp dir");
+    let json = std::fs::read_to_string(data("Box/glTF/Box.gltf")).expect("Box.gltf");
+    std::fs::write(dir.join("Box.gltf"), json).expect("write");
+    let e = Scene::load(dir.join("Box.gltf")).unwrap_err();
+    assert!(matches!(e, SceneError::Io { .. }) && e.to_string().contains("Box0.bin"), "{e}");
+    let e = Scene::load(dir.join("nope.gltf")).unwrap_err();
+    assert!(e.to_string().contains("nope.gltf"), "{e}");
+}
+
+#[test]
+fn cameras_file_has_perspective_and_orthographic() {
+    let s = Scene::load(data("Cameras/glTF/Cameras.gltf")).expect("Cameras loads");
+    assert_eq!(s.cameras.len(), 2);
+    assert!(matches!(s.cameras[0].projection, Projection::Perspective { .. }));
+    assert!(matches!(s.cameras[1].projection, Projection::Orthographic { .. }));
+    let r = s.cameras[1].generate_ray(Vec2::new(0.5, 0.5), 4, 4);
+    assert!(r.direction.is_normalized());
+}
+
+#[test]
+fn damaged_helmet_has_every_texture() {
+    let Some(p) = shared("DamagedHelmet/glTF-Binary/DamagedHelmet.glb") else {
+        return;
+    };
+    let s = Scene::load(p).expect("DamagedHelmet loads");
+    assert_eq!(s.geometry.triangle_count(), 15_452);
+    let m = &s.materials[0];
+    assert!(m.base_color_texture.is_some() && m.metallic_roughness_texture.is_some());
+    assert!(m.normal_texture.is_some() && m.emissive_texture.is_some());
+    assert_eq!(m.alpha_mode, AlphaMode::Opaque);
+    println!("DamagedHelmet: {:?}", s.stats());
+    for w in &s.warnings {
+        println!("  warning: {w}");
+    }
+}
+
+#[test]
+fn large_and_lenient_scenes() {
+    if let Some(p) = shared("MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb")
+        .or_else(|| shared("MetalRoughSpheresNoTextures/glTF/MetalRoughSpheresNoTextures.gltf"))
+    {
+        let s = Scene::load(p).expect("MetalRoughSpheresNoTextures loads");
+        println!("MetalRoughSpheresNoTextures: {:?}", s.stats());
+        assert!(s.geometry.triangle_count() + s.dropped_triangles >= 1_000_000);
+    }
+    if let Some(p) = shared("CornellBox-nvpro/cornellBox.gltf") {
+        let s = Scene::load(p).expect("nvpro loads (emissive 10 warns, does not fail)");
+        assert!(!s.warnings.is_empty());
+        println!("CornellBox-nvpro: {:?}", s.stats());
+    }
+}
+
+#[test]
+fn furnace_sphere_is_a_closed_unit_sphere() {
+    let s = builtin::furnace_sphere(builtin::lambert(Vec3::ONE), 32);
+    assert_eq!(s.sky, Vec3::ONE);
+    assert!(s.sun.is_none());
+    assert_eq!(s.geometry.triangle_count(), 64 * 62);
+    for (i, p) in s.geometry.positions.iter().enumerate() {
+        // Tolerance: f32 sin/cos products.
+        assert!((p.length() - 1.0).abs() < 1e-6);
+        let n = furnace_scene::oct_decode(s.geometry.normals[i]);
+        assert!(n.dot(*p) > 0.9999);
+    }
+    // Outward winding: every geometric normal points away from the centre.
+    for t in 0..s.geometry.triangle_count() {
+        let [a, b, c] = s.geometry.triangle(t).expect("in range");
+        assert!((b - a).cross(c - a).dot(a + b + c) > 0.0, "triangle {t} winds inwards");
+    }
+}
