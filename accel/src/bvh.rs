@@ -1,0 +1,434 @@
+//! Building the BVH over a triangle soup and tracing rays through it.
+
+use std::time::Duration;
+
+use glam::{Vec2, Vec3, Vec3A};
+use obvhs::{
+    BvhBuildParams,
+    bvh2::{Bvh2, builder::build_bvh2_from_tris},
+    cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
+    ray::{Ray, RayHit},
+    triangle::Triangle,
+};
+
+use crate::gpu::{GpuCwbvhNode, GpuTriangle};
+use crate::triangle::{TriangleHit, intersect_triangle};
+
+/// Which tree obvhs builds.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Layout {
+    /// Compressed wide BVH8 (Ylitie et al. 2017): 80-byte nodes, 8 quantised child boxes each,
+    /// ≤ 3 triangles per leaf. The GPU layout, and on the CPU the faster one for incoherent
+    /// rays (obvhs tests 4 children per SSE instruction; 1.2–2× BVH2 in `BENCHMARKS.md`).
+    #[default]
+    Cwbvh,
+    /// Binary BVH with collapsed leaves (≤ 8 triangles). CPU only: [`Bvh::gpu_nodes`] is empty.
+    /// Measured within ±20% of CWBVH for coherent camera rays, slower for incoherent ones.
+    Bvh2,
+}
+
+/// The build presets of obvhs ([`BvhBuildParams`]), from fastest build to best tree.
+///
+/// All run PLOC (Meister & Bittner 2018) over Morton-sorted boxes, then reinsertion
+/// (Meister & Bittner 2017) on a fraction of the nodes; `Slow` and `VerySlow` also pre-split large
+/// triangles into several boxes (a triangle may then sit in several leaves).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum BuildQuality {
+    /// PLOC search radius 1, no reinsertion.
+    Fastest,
+    /// Radius 1, reinsertion on 1% of nodes.
+    VeryFast,
+    /// Radius 6, reinsertion on 2%.
+    Fast,
+    /// Radius 14, reinsertion on 5% ("around Embree's build time", obvhs says).
+    Medium,
+    /// Radius 24, reinsertion on 20%, spatial pre-splits, 128-bit Morton codes.
+    Slow,
+    /// Radius 14, reinsertion on 100%, spatial pre-splits, 128-bit Morton codes.
+    VerySlow,
+}
+
+impl BuildQuality {
+    /// Every preset, fastest build first.
+    pub const ALL: [BuildQuality; 6] = [
+        BuildQuality::Fastest,
+        BuildQuality::VeryFast,
+        BuildQuality::Fast,
+        BuildQuality::Medium,
+        BuildQuality::Slow,
+        BuildQuality::VerySlow,
+    ];
+
+    /// The preset chosen when none is given, by triangle count `n`:
+    ///
+    /// * `n ≤ 300 000` → [`Slow`](Self::Slow): the best-traversing preset whose build stays
+    ///   a small fraction of a second; at these sizes the first frame dominates the build.
+    /// * `n ≤ 3 000 000` → [`Medium`](Self::Medium): builds 1.04 M triangles in 0.9 s on one
+    ///   core (`BENCHMARKS.md`); `Slow` adds spatial splits and 128-bit Morton codes on top, a
+    ///   cost that grows with the scene while the first frame does not.
+    /// * larger → [`Fast`](Self::Fast).
+    ///
+    /// The thresholds come from `cargo bench -p furnace-accel` (build time against Mrays/s,
+    /// quoted in `BENCHMARKS.md`).
+    pub fn for_triangle_count(n: usize) -> Self {
+        if n <= 300_000 {
+            BuildQuality::Slow
+        } else if n <= 3_000_000 {
+            BuildQuality::Medium
+        } else {
+            BuildQuality::Fast
+        }
+    }
+
+    /// The obvhs parameters of this preset.
+    pub fn params(self) -> BvhBuildParams {
+        match self {
+            BuildQuality::Fastest => BvhBuildParams::fastest_build(),
+            BuildQuality::VeryFast => BvhBuildParams::very_fast_build(),
+            BuildQuality::Fast => BvhBuildParams::fast_build(),
+            BuildQuality::Medium => BvhBuildParams::medium_build(),
+            BuildQuality::Slow => BvhBuildParams::slow_build(),
+            BuildQuality::VerySlow => BvhBuildParams::very_slow_build(),
+        }
+    }
+}
+
+/// How to build a [`Bvh`]; `Default` is a CWBVH with the preset picked by
+/// [`BuildQuality::for_triangle_count`].
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct BuildOptions {
+    /// Tree layout.
+    pub layout: Layout,
+    /// Build preset; `None` chooses by triangle count.
+    pub quality: Option<BuildQuality>,
+}
+
+/// The closest intersection found by [`Bvh::closest_hit`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Index of the triangle in the builder's input.
+    pub triangle: u32,
+    /// Ray parameter: the hit point is `origin + t · dir`.
+    pub t: f32,
+    /// Barycentrics `(u, v)`: the point is `(1 − u − v)·v0 + u·v1 + v·v2`.
+    pub barycentrics: Vec2,
+}
+
+enum Tree {
+    Empty,
+    Cwbvh(CwBvh),
+    Bvh2(Bvh2),
+}
+
+/// A bounding volume hierarchy over a triangle soup, with closest-hit and any-hit queries.
+///
+/// Triangles keep the index they had in the input. Triangles with a non-finite vertex or an
+/// exactly zero cross product (zero area in `f32`) are left out of the tree, so no ray hits
+/// them; [`Bvh::skipped_count`] says how many.
+pub struct Bvh {
+    tree: Tree,
+    /// Triangles in leaf order (direct layout).
+    triangles: Vec<GpuTriangle>,
+    /// `triangles[i].id`, as its own buffer.
+    ids: Vec<u32>,
+    /// `2^-m`: obvhs traverses with `dir · dir_scale`, see [`Bvh::obvhs_ray`].
+    dir_scale: f32,
+    input_count: usize,
+    skipped: usize,
+    quality: Option<BuildQuality>,
+    layout: Layout,
+}
+
+impl Bvh {
+    /// Builds a CWBVH over `triangles` with the preset chosen by triangle count.
+    pub fn build(triangles: &[[Vec3; 3]]) -> Self {
+        Self::build_with(triangles, BuildOptions::default())
+    }
+
+    /// Builds over an indexed mesh: triangle `i` is `positions[indices[i][k]]`. A triangle with an
+    /// index out of range is skipped like a degenerate one (it keeps its id `i`).
+    pub fn from_indexed(positions: &[Vec3], indices: &[[u32; 3]], options: BuildOptions) -> Self {
+        let nan = Vec3::splat(f32::NAN);
+        let soup: Vec<[Vec3; 3]> = indices
+            .iter()
+            .map(|tri| tri.map(|i| positions.get(i as usize).copied().unwrap_or(nan)))
+            .collect();
+        Self::build_with(&soup, options)
+    }
+
+    /// Builds over `triangles` with explicit options.
+    ///
+    /// # Panics
+    ///
+    /// If there are 2^32 triangles or more (ids are `u32`).
+    pub fn build_with(triangles: &[[Vec3; 3]], options: BuildOptions) -> Self {
+        assert!(u32::try_from(triangles.len()).is_ok(), "furnace-accel: at most 2^32 - 1 triangles");
+        let mut valid_ids = Vec::with_capacity(triangles.len());
+        let mut valid = Vec::with_capacity(triangles.len());
+        let mut max_abs = 0.0f32;
+        for (i, t) in triangles.iter().enumerate() {
+            let finite = t.iter().all(|v| v.is_finite());
+            if !finite || (t[1] - t[0]).cross(t[2] - t[0]) == Vec3::ZERO {
+                continue;
+            }
+            for v in t {
+                max_abs = max_abs.max(v.abs().max_element());
+            }
+            valid_ids.push(i as u32);
+            valid.push(Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) });
+        }
+        let skipped = triangles.len() - valid.len();
+        let quality = options.quality.unwrap_or_else(|| BuildQuality::for_triangle_count(valid.len()));
+        let mut unused = Duration::ZERO;
+        let tree = if valid.is_empty() {
+            Tree::Empty
+        } else {
+            match options.layout {
+                Layout::Cwbvh => Tree::Cwbvh(build_cwbvh_from_tris(&valid, quality.params(), &mut unused)),
+                Layout::Bvh2 => Tree::Bvh2(build_bvh2_from_tris(&valid, quality.params(), &mut unused)),
+            }
+        };
+        let primitive_indices: &[u32] = match &tree {
+            Tree::Empty => &[],
+            Tree::Cwbvh(b) => &b.primitive_indices,
+            Tree::Bvh2(b) => &b.primitive_indices,
+        };
+        let gpu: Vec<GpuTriangle> = primitive_indices
+            .iter()
+            .map(|&k| {
+                let id = valid_ids[k as usize];
+                let [v0, v1, v2] = triangles[id as usize];
+                GpuTriangle {
+                    v0: v0.to_array(),
+                    id,
+                    v1: v1.to_array(),
+                    reserved1: 0,
+                    v2: v2.to_array(),
+                    reserved2: 0,
+                }
+            })
+            .collect();
+        let ids = gpu.iter().map(|t| t.id).collect();
+        Bvh {
+            tree,
+            triangles: gpu,
+            ids,
+            dir_scale: direction_scale(max_abs),
+            input_count: triangles.len(),
+            skipped,
+            quality: if valid.is_empty() { None } else { Some(quality) },
+            layout: options.layout,
+        }
+    }
+
+    /// Number of triangles given to the builder (including skipped ones).
+    pub fn input_count(&self) -> usize {
+        self.input_count
+    }
+
+    /// Number of input triangles left out as degenerate or non-finite.
+    pub fn skipped_count(&self) -> usize {
+        self.skipped
+    }
+
+    /// The preset the tree was built with (`None` when no triangle was valid).
+    pub fn quality(&self) -> Option<BuildQuality> {
+        self.quality
+    }
+
+    /// The tree layout.
+    pub fn layout(&self) -> Layout {
+        self.layout
+    }
+
+    /// CWBVH nodes for the GPU, root first ([`GpuCwbvhNode`]); empty for [`Layout::Bvh2`] and
+    /// for an empty tree.
+    pub fn gpu_nodes(&self) -> &[GpuCwbvhNode] {
+        match &self.tree {
+            Tree::Cwbvh(b) => bytemuck::cast_slice(&b.nodes),
+            _ => &[],
+        }
+    }
+
+    /// Triangles in leaf order ([`GpuTriangle`]): leaf slots index this slice directly.
+    pub fn gpu_triangles(&self) -> &[GpuTriangle] {
+        &self.triangles
+    }
+
+    /// The input id of each leaf slot (`gpu_triangles()[i].id`, as its own `u32` buffer).
+    pub fn triangle_ids(&self) -> &[u32] {
+        &self.ids
+    }
+
+    /// The closest triangle hit by the ray `origin + t · dir`, `0 < t < t_max`.
+    ///
+    /// `dir` need not be normalised (`t` is in units of its length). A non-finite origin or
+    /// direction, or a zero direction, hits nothing. To start a ray on a surface, move its origin
+    /// with [`crate::offset_ray_origin`] rather than raising a minimum `t`.
+    #[inline]
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Hit> {
+        self.closest_hit_masked(origin, dir, t_max, |_, _| true)
+    }
+
+    /// [`closest_hit`](Self::closest_hit) where a candidate counts only if
+    /// `mask(triangle, barycentrics)` returns `true` (alpha-masked materials: look up the
+    /// texture at the interpolated UV and compare with the cutoff).
+    ///
+    /// The mask is called only for candidates closer than the closest accepted hit so far, in
+    /// no particular order, possibly more than once per triangle.
+    pub fn closest_hit_masked(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_max: f32,
+        mut mask: impl FnMut(u32, Vec2) -> bool,
+    ) -> Option<Hit> {
+        let ray = self.obvhs_ray(origin, dir, t_max)?;
+        let mut best: Option<(u32, TriangleHit)> = None;
+        let mut current = t_max;
+        let cull_scale = CULL_SLACK / self.dir_scale;
+        let mut visit = |_: &Ray, slot: usize| -> f32 {
+            let tri = &self.triangles[slot];
+            match intersect_triangle(origin, dir, tri.vertices(), current) {
+                Some(h) if mask(tri.id, h.barycentrics) => {
+                    best = Some((tri.id, h));
+                    current = h.t;
+                    // obvhs culls boxes entered beyond this: slightly beyond the hit, see
+                    // CULL_SLACK.
+                    h.t * cull_scale
+                }
+                _ => f32::INFINITY,
+            }
+        };
+        let mut hit = RayHit::none();
+        match &self.tree {
+            Tree::Empty => {}
+            Tree::Cwbvh(b) => {
+                b.ray_traverse(ray, &mut hit, &mut visit);
+            }
+            Tree::Bvh2(b) => {
+                b.ray_traverse(ray, &mut hit, &mut visit);
+            }
+        }
+        best.map(|(triangle, h)| Hit { triangle, t: h.t, barycentrics: h.barycentrics })
+    }
+
+    /// Whether any triangle intersects the ray `origin + t · dir` at `0 < t < t_max` (a shadow
+    /// ray: pass the distance to the light, in units of `dir`, as `t_max`). Stops at the first
+    /// hit found.
+    #[inline]
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        self.occluded_masked(origin, dir, t_max, |_, _| true)
+    }
+
+    /// [`occluded`](Self::occluded) where a hit counts only if `mask(triangle, barycentrics)`
+    /// returns `true`.
+    pub fn occluded_masked(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_max: f32,
+        mut mask: impl FnMut(u32, Vec2) -> bool,
+    ) -> bool {
+        let Some(ray) = self.obvhs_ray(origin, dir, t_max) else {
+            return false;
+        };
+        let visit = |_: &Ray, slot: usize| -> f32 {
+            let tri = &self.triangles[slot];
+            match intersect_triangle(origin, dir, tri.vertices(), t_max) {
+                // Any finite t below the scaled t_max stops traversal; 0 always is.
+                Some(h) if mask(tri.id, h.barycentrics) => 0.0,
+                _ => f32::INFINITY,
+            }
+        };
+        match &self.tree {
+            Tree::Empty => false,
+            Tree::Cwbvh(b) => !b.ray_traverse_miss(ray, visit),
+            Tree::Bvh2(b) => !b.ray_traverse_miss(ray, visit),
+        }
+    }
+
+    /// The ray obvhs traverses: the direction scaled by `dir_scale = 2^-m`, so that obvhs's
+    /// ray parameter is `t' = t · 2^m`, and `tmax` loosened by [`CULL_SLACK`].
+    ///
+    /// obvhs's CWBVH node test clamps the entry distance to an absolute `1e-4`
+    /// (`cwbvh::node::EPSILON`) and ignores `Ray::tmin`, so a child box the ray leaves before
+    /// `t = 1e-4` is skipped — every hit closer than 1e-4 is lost, which in a millimetre-sized
+    /// scene is most of them. Scaling the direction by a power of two is exact, changes no
+    /// box decision except that cut-off, and moves the cut-off to `t = 1e-4 · 2^-m`, below
+    /// `2^-40` of the scene's largest coordinate. Triangles are still intersected with the
+    /// caller's unscaled ray, so results do not depend on `m`.
+    ///
+    /// obvhs's `Ray::new` also clamps `1/d` to `±1/f32::EPSILON` (≈ 8.4e6) for tiny
+    /// components; that would be wrong for the scaled direction, so the inverse is formed here
+    /// with a clamp at `2^100`.
+    #[inline(always)]
+    fn obvhs_ray(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Ray> {
+        if !(origin.is_finite() && dir.is_finite() && dir != Vec3::ZERO && t_max > 0.0) {
+            return None;
+        }
+        let d = Vec3A::from(dir * self.dir_scale);
+        Some(Ray {
+            origin: origin.into(),
+            direction: d,
+            inv_direction: Vec3A::new(safe_recip(d.x), safe_recip(d.y), safe_recip(d.z)),
+            tmin: 0.0,
+            tmax: t_max * (CULL_SLACK / self.dir_scale),
+        })
+    }
+}
+
+/// Factor on the distance beyond which obvhs may cull a box (`1 + 2^-12`).
+///
+/// obvhs's box tests round `(min − o) · (1/d)` like any slab test, and the `f32` triangle test
+/// rounds its `t` too, so a triangle whose computed `t` is a few ULPs below the best hit so far
+/// can sit in a box whose computed entry is a few ULPs *above* it: with `tmax = t_best` that box
+/// is culled and a near-tie (two faces meeting at an edge) resolved to the wrong, farther face.
+/// BVH2 did this on ~0.3% of rays into a room with boxes standing on the floor; CWBVH's
+/// outward-rounded 8-bit boxes hid it. Culling only beyond `t_best · (1 + 2^-12)` covers both
+/// roundings (the triangle test's `t` is good to ~1e-5 relative even near grazing angles,
+/// `tests/queries.rs`) and visits a negligible number of extra boxes; the hit itself is still
+/// decided by exact comparisons of the triangle test's `t`.
+const CULL_SLACK: f32 = 1.0 + 1.0 / 4096.0;
+
+/// `1/x`, with `|x| < 2^-100` (including ±0) mapped to `±2^100`, so that slab tests never see
+/// `0 · ∞ = NaN`. `2^100` times any box extent and quantisation step stays finite in `f32`.
+#[inline(always)]
+fn safe_recip(x: f32) -> f32 {
+    const TINY: f32 = 7.888_609e-31; // 2^-100
+    const HUGE: f32 = 1.267_650_6e30; // 2^100
+    if x.abs() < TINY { HUGE.copysign(x) } else { 1.0 / x }
+}
+
+/// `2^-m` with `m ∈ [0, 64]` the smallest integer such that obvhs's `1e-4` cut-off becomes
+/// `1e-4 · 2^-m ≤ 2^-40 · max_abs` (see [`Bvh::obvhs_ray`]).
+fn direction_scale(max_abs: f32) -> f32 {
+    let extent = max_abs.max(f32::MIN_POSITIVE);
+    let need = 1e-4 * (2.0f64).powi(40) / extent as f64;
+    let m = need.log2().ceil().clamp(0.0, 64.0) as i32;
+    (2.0f32).powi(-m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn direction_scale_is_a_power_of_two_in_range() {
+        for &e in &[0.0f32, 1e-30, 1e-3, 1.0, 1e5, 1e30] {
+            let s = direction_scale(e);
+            assert!(s > 0.0 && s <= 1.0, "{e}: {s}");
+            assert_eq!(s.to_bits() & 0x007f_ffff, 0, "{e}: {s} not a power of two");
+            if e > 1e-20 && e < 1e10 {
+                assert!(1e-4 * s <= e * (2.0f32).powi(-40), "{e}: {s}");
+            }
+        }
+    }
+
+    #[test]
+    fn safe_recip_is_finite_and_signed() {
+        assert_eq!(safe_recip(0.0), 1.267_650_6e30);
+        assert_eq!(safe_recip(-0.0), -1.267_650_6e30);
+        assert_eq!(safe_recip(0.5), 2.0);
+    }
+}
