@@ -162,3 +162,68 @@ fn furnace_sphere_is_a_closed_unit_sphere() {
         assert!((b - a).cross(c - a).dot(a + b + c) > 0.0, "triangle {t} winds inwards");
     }
 }
+
+/// Möller–Trumbore, two-sided: the distance to the triangle along the ray, if it is hit.
+fn ray_triangle(o: Vec3, d: Vec3, [a, b, c]: [Vec3; 3]) -> Option<f32> {
+    let (e1, e2) = (b - a, c - a);
+    let p = d.cross(e2);
+    let det = e1.dot(p);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let s = o - a;
+    let u = s.dot(p) / det;
+    let q = s.cross(e1);
+    let v = d.dot(q) / det;
+    let t = e2.dot(q) / det;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 1e-4).then_some(t)
+}
+
+#[test]
+fn sunlit_interior_has_the_requested_size_and_lets_the_sun_in_only_through_windows() {
+    let shell = builtin::sunlit_interior(0);
+    let shell_tris = shell.geometry.triangle_count();
+    for target in [10_000u32, 100_000, 1_000_000] {
+        let s = builtin::sunlit_interior(target);
+        let n = s.geometry.triangle_count();
+        // Tolerance 5%: sphere tessellation is rounded to whole rings.
+        assert!((n as f64 / target as f64 - 1.0).abs() < 0.05, "target {target}: {n} triangles");
+        let half = builtin::INTERIOR_ROOM * glam::Vec3::new(0.5, 1.0, 0.5);
+        for t in 0..n {
+            let [a, b, c] = s.geometry.triangle(t).expect("in range");
+            assert!((b - a).cross(c - a).length() > 0.0, "target {target}: triangle {t} is degenerate");
+            for p in [a, b, c] {
+                // 1e-4 m: f32 rounding of the wall positions.
+                assert!(p.abs().cmple(half + 1e-4).all() && p.y >= -1e-4, "{p} outside the room");
+            }
+        }
+        assert!(s.stats().bytes_per_triangle < 40.0, "compact storage");
+    }
+    // Light enters only through the windows: from a grid of floor points, look towards the sun
+    // through the room shell (brute force). Some floor must be sunlit, most must not, and every
+    // escaping ray must leave through a window opening in the +x wall.
+    let sun = shell.sun.expect("a sun");
+    let to_sun = -sun.direction;
+    let walls: Vec<[Vec3; 3]> = (0..shell_tris).filter_map(|t| shell.geometry.triangle(t)).collect();
+    let (mut lit, mut total) = (0, 0);
+    for i in 0..48 {
+        for j in 0..40 {
+            let p = Vec3::new(-5.875 + i as f32 * 0.25, 1e-3, -4.875 + j as f32 * 0.25);
+            total += 1;
+            if walls.iter().all(|&tri| ray_triangle(p, to_sun, tri).is_none()) {
+                lit += 1;
+                // Where it crosses x = +6, it must be inside a window.
+                let t = (6.0 - p.x) / to_sun.x;
+                let q = p + t * to_sun;
+                assert!(
+                    builtin::INTERIOR_WINDOWS
+                        .iter()
+                        .any(|([za, zb], [ya, yb])| q.z > *za && q.z < *zb && q.y > *ya && q.y < *yb),
+                    "light leak at {q}"
+                );
+            }
+        }
+    }
+    let fraction = lit as f64 / total as f64;
+    assert!(fraction > 0.02 && fraction < 0.5, "sunlit floor fraction {fraction}");
+}
