@@ -1,6 +1,6 @@
 //! Flat world-space triangle storage and octahedral normal encoding.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 /// Encodes a unit vector as two 16-bit snorm octahedral coordinates (Cigolle et al. 2014,
 /// "A Survey of Efficient Representations for Independent Unit Vectors", JCGT 3(2)):
@@ -31,6 +31,68 @@ pub fn oct_decode(e: u32) -> Vec3 {
     Vec3::new(x, y, z).normalize()
 }
 
+/// Packs a unit tangent with handedness into four snorm16 values.
+pub fn encode_tangent(t: Vec4) -> [i16; 4] {
+    let q = |x: f32| if x.is_finite() { (x.clamp(-1.0, 1.0) * 32767.0).round() as i16 } else { 0 };
+    [q(t.x), q(t.y), q(t.z), if t.w < 0.0 { -32767 } else { 32767 }]
+}
+
+/// Unpacks [`encode_tangent`].
+pub fn decode_tangent(e: [i16; 4]) -> Vec4 {
+    Vec4::new(e[0] as f32, e[1] as f32, e[2] as f32, e[3] as f32) / 32767.0
+}
+
+/// Per-vertex tangents from UV derivatives (Lengyel, "Computing Tangent Space Basis Vectors
+/// for an Arbitrary Mesh", 2001): each triangle's `∂p/∂u` and `∂p/∂v` are accumulated on its
+/// vertices, then the tangent is Gram–Schmidt-orthogonalised against the normal and the
+/// handedness is the sign of `dot(cross(n, t), ∂p/∂v)`. Triangles with degenerate UVs add
+/// nothing; a vertex left without a tangent gets an arbitrary one orthogonal to its normal.
+/// (MikkTSpace, which glTF recommends, differs in how it splits and weights; the results agree
+/// on smooth, consistently mapped meshes.)
+pub fn generate_tangents(
+    positions: &[Vec3],
+    normals: &[Vec3],
+    uvs: &[Vec2],
+    triangles: &[[u32; 3]],
+) -> Vec<Vec4> {
+    let mut t = vec![Vec3::ZERO; positions.len()];
+    let mut b = vec![Vec3::ZERO; positions.len()];
+    for tri in triangles {
+        let [i0, i1, i2] = tri.map(|i| i as usize);
+        let (Some(&p0), Some(&p1), Some(&p2)) = (positions.get(i0), positions.get(i1), positions.get(i2))
+        else {
+            continue;
+        };
+        let uv = |i: usize| uvs.get(i).copied().unwrap_or(Vec2::ZERO);
+        let (e1, e2) = (p1 - p0, p2 - p0);
+        let (d1, d2) = (uv(i1) - uv(i0), uv(i2) - uv(i0));
+        let det = d1.x * d2.y - d2.x * d1.y;
+        if !(det.abs() > 1e-20) || !det.is_finite() {
+            continue;
+        }
+        let r = 1.0 / det;
+        let (du, dv) = ((e1 * d2.y - e2 * d1.y) * r, (e2 * d1.x - e1 * d2.x) * r);
+        if !(du.is_finite() && dv.is_finite()) {
+            continue;
+        }
+        for i in [i0, i1, i2] {
+            t[i] += du;
+            b[i] += dv;
+        }
+    }
+    (0..positions.len())
+        .map(|i| {
+            let n = normals.get(i).copied().unwrap_or(Vec3::Z).normalize_or(Vec3::Z);
+            let ortho = (t[i] - n * n.dot(t[i])).normalize_or_zero();
+            if ortho == Vec3::ZERO {
+                return n.any_orthonormal_vector().extend(1.0);
+            }
+            let w = if n.cross(ortho).dot(b[i]) < 0.0 { -1.0 } else { 1.0 };
+            ortho.extend(w)
+        })
+        .collect()
+}
+
 /// Indexed world-space triangles. Vertices are not shared between primitives or instances, so
 /// every vertex has one world position, one shading normal and (optionally) one UV.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -42,6 +104,11 @@ pub struct Geometry {
     /// `TEXCOORD_0` per vertex, **empty** when no material uses a texture; `(0, 0)` for
     /// vertices of primitives without UVs.
     pub uvs: Vec<Vec2>,
+    /// World-space unit tangents with handedness `w = ±1` (glTF `TANGENT`: bitangent =
+    /// `w·cross(normal, tangent)`), as snorm16 ([`encode_tangent`]); **empty** unless some
+    /// material has a normal map. From the file's `TANGENT` attribute when present, otherwise
+    /// generated from UV derivatives ([`generate_tangents`]).
+    pub tangents: Vec<[i16; 4]>,
     /// Vertex indices of each triangle, counter-clockwise seen from the front (winding is flipped
     /// for instances with a mirroring transform, so that this stays true in world space).
     pub triangles: Vec<[u32; 3]>,
@@ -86,11 +153,23 @@ impl Geometry {
             .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| (lo.min(p), hi.max(p)))
     }
 
+    /// The interpolated tangent `(xyz, handedness)` at barycentrics `(b1, b2)`, if the scene has
+    /// tangents; xyz re-normalised.
+    pub fn tangent(&self, t: usize, b1: f32, b2: f32) -> Option<Vec4> {
+        let [a, b, c] = *self.triangles.get(t)?;
+        let v = |i: u32| self.tangents.get(i as usize).map(|&e| decode_tangent(e));
+        let (ta, tb, tc) = (v(a)?, v(b)?, v(c)?);
+        let xyz =
+            ((1.0 - b1 - b2) * ta.truncate() + b1 * tb.truncate() + b2 * tc.truncate()).normalize_or_zero();
+        Some(xyz.extend(if ta.w < 0.0 { -1.0 } else { 1.0 }))
+    }
+
     /// Bytes held by the geometry arrays (lengths, not capacities).
     pub fn bytes(&self) -> usize {
         self.positions.len() * 12
             + self.normals.len() * 4
             + self.uvs.len() * 8
+            + self.tangents.len() * 8
             + self.triangles.len() * 12
             + self.triangle_materials.len() * 4
     }
@@ -99,6 +178,34 @@ impl Geometry {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn tangents_follow_u_and_detect_mirrored_uvs() {
+        // A unit quad in the xy-plane facing +z, u along +x, v along +y: tangent +x, w = +1.
+        let p = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
+        let n = [Vec3::Z; 4];
+        let uv = [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
+        let tris = [[0, 1, 2], [0, 2, 3]];
+        for t in generate_tangents(&p, &n, &uv, &tris) {
+            assert!((t - Vec4::new(1.0, 0.0, 0.0, 1.0)).abs().max_element() < 1e-6, "{t}");
+        }
+        // v mirrored (v along −y): same tangent, handedness −1.
+        let uv_m = uv.map(|c| Vec2::new(c.x, 1.0 - c.y));
+        for t in generate_tangents(&p, &n, &uv_m, &tris) {
+            assert!((t - Vec4::new(1.0, 0.0, 0.0, -1.0)).abs().max_element() < 1e-6, "{t}");
+        }
+        // Degenerate UVs: a unit tangent orthogonal to the normal, no NaN.
+        for t in generate_tangents(&p, &n, &[Vec2::ZERO; 4], &tris) {
+            assert!(
+                t.is_finite()
+                    && (t.truncate().length() - 1.0).abs() < 1e-6
+                    && t.truncate().dot(Vec3::Z).abs() < 1e-6
+            );
+        }
+        // snorm16 round trip within 1/32767 per component.
+        let e = decode_tangent(encode_tangent(Vec4::new(0.6, -0.8, 0.0, -1.0)));
+        assert!((e - Vec4::new(0.6, -0.8, 0.0, -1.0)).abs().max_element() < 1.0 / 32767.0 + 1e-7);
+    }
 
     #[test]
     fn octahedral_round_trip() {

@@ -44,7 +44,7 @@ mod texture;
 
 pub use camera::{Camera, DEFAULT_YFOV, Projection, Ray};
 pub use error::{SceneError, Warning};
-pub use geometry::{Geometry, oct_decode, oct_encode};
+pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, oct_decode, oct_encode};
 pub use load::SUPPORTED_EXTENSIONS;
 pub use material::{AlphaMode, Material, MaterialSample};
 pub use texture::{ColorSpace, Image, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear};

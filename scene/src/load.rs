@@ -4,7 +4,7 @@
 use crate::accessor::{Located, read_floats, read_indices};
 use crate::camera::{Camera, Projection};
 use crate::error::{SceneError, Warning};
-use crate::geometry::{Geometry, oct_encode};
+use crate::geometry::{Geometry, encode_tangent, generate_tangents, oct_encode};
 use crate::material::{AlphaMode, Material};
 use crate::texture::{ColorSpace, Image, Texture, TextureRef, TextureTransform, WrapMode};
 use crate::{Scene, Sun};
@@ -291,6 +291,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
     let default_material = materials.len() as u32;
     materials.push(Material::default());
     let needs_uv = materials.iter().any(Material::uses_textures);
+    let needs_tangent = materials.iter().any(|m| m.normal_texture.is_some());
 
     // Images used by some material: decode; others stay empty 1×1 white placeholders.
     let mut used_images = vec![false; doc.images().len()];
@@ -395,6 +396,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
                     world,
                     &buffers,
                     needs_uv,
+                    needs_tangent,
                     default_material,
                     &mut geo,
                     &mut dropped,
@@ -415,6 +417,9 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
     }
     if !needs_uv {
         geo.uvs = Vec::new();
+    }
+    if !needs_tangent {
+        geo.tangents = Vec::new();
     }
     Ok(Scene {
         name: file.to_string(),
@@ -612,6 +617,7 @@ fn add_primitive(
     world: Mat4,
     buffers: &[Vec<u8>],
     needs_uv: bool,
+    needs_tangent: bool,
     default_material: u32,
     geo: &mut Geometry,
     dropped: &mut usize,
@@ -651,6 +657,14 @@ fn add_primitive(
         Some(acc) if needs_uv => {
             let (t, _) = read_floats(&acc, buffers, &[Dimensions::Vec2]).map_err(|e| ctx.invalid(e))?;
             check_count(ctx, "TEXCOORD_0", t.len() / 2)?;
+            Some(t)
+        }
+        _ => None,
+    };
+    let tangents = match prim.get(&gltf::Semantic::Tangents) {
+        Some(acc) if needs_tangent => {
+            let (t, _) = read_floats(&acc, buffers, &[Dimensions::Vec4]).map_err(|e| ctx.invalid(e))?;
+            check_count(ctx, "TANGENT", t.len() / 4)?;
             Some(t)
         }
         _ => None,
@@ -704,6 +718,26 @@ fn add_primitive(
         geo.positions.extend_from_slice(&wp);
         if let Some(wn) = &wn {
             geo.normals.extend(wn.iter().map(|&n| oct_encode(n)));
+            if needs_tangent {
+                // The file's tangents transform as directions (not by the inverse transpose);
+                // a mirroring transform flips the handedness. Otherwise generate them.
+                let world3 = Mat3::from_mat4(world);
+                let from_file: Option<Vec<Vec4>> = tangents.as_ref().map(|t| {
+                    t.chunks_exact(4)
+                        .map(|c| {
+                            let w = if (c[3] < 0.0) != flip { -1.0 } else { 1.0 };
+                            (world3 * Vec3::new(c[0], c[1], c[2])).normalize_or_zero().extend(w)
+                        })
+                        .collect()
+                });
+                let usable = from_file.filter(|v| v.iter().all(|t| t.truncate() != Vec3::ZERO));
+                let generated = usable.unwrap_or_else(|| {
+                    let local: Vec<[u32; 3]> = indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+                    let uv: Vec<Vec2> = (0..nverts).map(uv_at).collect();
+                    generate_tangents(&wp, wn, &uv, &local)
+                });
+                geo.tangents.extend(generated.into_iter().map(encode_tangent));
+            }
         }
         if needs_uv {
             geo.uvs.extend((0..nverts).map(uv_at));
@@ -729,12 +763,20 @@ fn add_primitive(
             if v0 + 3 > u32::MAX as usize {
                 return Err(ctx.invalid((ppath.to_string(), "more than 2^32 vertices".into())));
             }
-            let n = oct_encode(cross / area2);
+            let face_normal = cross / area2;
+            let n = oct_encode(face_normal);
+            let face_tangent = needs_tangent.then(|| {
+                let uv = [uv_at(a), uv_at(b), uv_at(c)];
+                generate_tangents(&[pa, pb, pc], &[face_normal; 3], &uv, &[[0, 1, 2]])[0]
+            });
             for &i in &[a, b, c] {
                 geo.positions.push(wp[i]);
                 geo.normals.push(n);
                 if needs_uv {
                     geo.uvs.push(uv_at(i));
+                }
+                if let Some(t) = face_tangent {
+                    geo.tangents.push(encode_tangent(t));
                 }
             }
             geo.triangles.push([v0 as u32, v0 as u32 + 1, v0 as u32 + 2]);

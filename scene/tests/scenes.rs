@@ -122,6 +122,16 @@ fn damaged_helmet_has_every_texture() {
     assert!(m.base_color_texture.is_some() && m.metallic_roughness_texture.is_some());
     assert!(m.normal_texture.is_some() && m.emissive_texture.is_some());
     assert_eq!(m.alpha_mode, AlphaMode::Opaque);
+    // A normal map needs tangents: one per vertex, unit length, orthogonal to the shading normal
+    // (tolerance 2e-3: snorm16 and octahedral quantisation plus f32 Gram–Schmidt).
+    let g = &s.geometry;
+    assert_eq!(g.tangents.len(), g.positions.len());
+    for t in (0..g.triangle_count()).step_by(97) {
+        let tangent = g.tangent(t, 0.3, 0.3).expect("tangents present");
+        let normal = g.shading_normal(t, 0.3, 0.3).expect("normals present");
+        assert!((tangent.truncate().length() - 1.0).abs() < 2e-3 && tangent.w.abs() == 1.0, "{tangent}");
+        assert!(tangent.truncate().dot(normal).abs() < 0.05, "triangle {t}: {tangent} vs {normal}");
+    }
     println!("DamagedHelmet: {:?}", s.stats());
     for w in &s.warnings {
         println!("  warning: {w}");
