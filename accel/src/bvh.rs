@@ -12,6 +12,7 @@ use obvhs::{
 };
 
 use crate::gpu::{GpuCwbvhNode, GpuTriangle};
+use crate::traverse::{self, WideNode};
 use crate::triangle::{TriangleHit, intersect_triangle};
 
 /// Which tree obvhs builds.
@@ -116,7 +117,10 @@ pub struct Hit {
 
 enum Tree {
     Empty,
-    Cwbvh(CwBvh),
+    /// obvhs's tree (its nodes are the GPU buffer) and the same nodes decoded for the CPU
+    /// traversal, or no decoded nodes (traverse with obvhs's own node test) above
+    /// [`WIDE_NODE_LIMIT`] nodes.
+    Cwbvh(CwBvh, Vec<WideNode>),
     Bvh2(Bvh2),
 }
 
@@ -184,13 +188,21 @@ impl Bvh {
             Tree::Empty
         } else {
             match options.layout {
-                Layout::Cwbvh => Tree::Cwbvh(build_cwbvh_from_tris(&valid, quality.params(), &mut unused)),
+                Layout::Cwbvh => {
+                    let b = build_cwbvh_from_tris(&valid, quality.params(), &mut unused);
+                    let wide = if b.nodes.len() <= WIDE_NODE_LIMIT {
+                        b.nodes.iter().map(WideNode::from_cwbvh).collect()
+                    } else {
+                        Vec::new()
+                    };
+                    Tree::Cwbvh(b, wide)
+                }
                 Layout::Bvh2 => Tree::Bvh2(build_bvh2_from_tris(&valid, quality.params(), &mut unused)),
             }
         };
         let primitive_indices: &[u32] = match &tree {
             Tree::Empty => &[],
-            Tree::Cwbvh(b) => &b.primitive_indices,
+            Tree::Cwbvh(b, _) => &b.primitive_indices,
             Tree::Bvh2(b) => &b.primitive_indices,
         };
         let gpu: Vec<GpuTriangle> = primitive_indices
@@ -245,7 +257,7 @@ impl Bvh {
     /// for an empty tree.
     pub fn gpu_nodes(&self) -> &[GpuCwbvhNode] {
         match &self.tree {
-            Tree::Cwbvh(b) => bytemuck::cast_slice(&b.nodes),
+            Tree::Cwbvh(b, _) => bytemuck::cast_slice(&b.nodes),
             _ => &[],
         }
     }
@@ -300,14 +312,14 @@ impl Bvh {
                 _ => f32::INFINITY,
             }
         };
-        let mut hit = RayHit::none();
         match &self.tree {
             Tree::Empty => {}
-            Tree::Cwbvh(b) => {
-                b.ray_traverse(ray, &mut hit, &mut visit);
+            Tree::Cwbvh(b, wide) if wide.is_empty() => {
+                b.ray_traverse(ray, &mut RayHit::none(), &mut visit);
             }
+            Tree::Cwbvh(_, wide) => traverse::closest(wide, &ray, |slot| visit(&ray, slot)),
             Tree::Bvh2(b) => {
-                b.ray_traverse(ray, &mut hit, &mut visit);
+                b.ray_traverse(ray, &mut RayHit::none(), &mut visit);
             }
         }
         best.map(|(triangle, h)| Hit { triangle, t: h.t, barycentrics: h.barycentrics })
@@ -333,7 +345,7 @@ impl Bvh {
         let Some(ray) = self.obvhs_ray(origin, dir, t_max) else {
             return false;
         };
-        let visit = |_: &Ray, slot: usize| -> f32 {
+        let mut visit = |_: &Ray, slot: usize| -> f32 {
             let tri = &self.triangles[slot];
             match intersect_triangle(origin, dir, tri.vertices(), t_max) {
                 // Any finite t below the scaled t_max stops traversal; 0 always is.
@@ -343,7 +355,8 @@ impl Bvh {
         };
         match &self.tree {
             Tree::Empty => false,
-            Tree::Cwbvh(b) => !b.ray_traverse_miss(ray, visit),
+            Tree::Cwbvh(b, wide) if wide.is_empty() => !b.ray_traverse_miss(ray, visit),
+            Tree::Cwbvh(_, wide) => traverse::any(wide, &ray, |slot| visit(&ray, slot) == 0.0),
             Tree::Bvh2(b) => !b.ray_traverse_miss(ray, visit),
         }
     }
@@ -377,6 +390,13 @@ impl Bvh {
         })
     }
 }
+
+/// Largest CWBVH (in nodes) traversed with decoded [`WideNode`]s (256 bytes each, so 4 MiB
+/// here); larger trees keep obvhs's 80-byte nodes and node test. Decoding cuts the node test's
+/// instructions ~3x, but triples the bytes a ray touches: 10–25% faster on 15–20 k-triangle
+/// scenes (~2 k nodes), ~10% *slower* on the 1 M-triangle MetalRoughSpheres (107 k nodes,
+/// 27 MB decoded; `BENCHMARKS.md`). The limit sits between those two measurements.
+const WIDE_NODE_LIMIT: usize = 16_384;
 
 /// Factor on the distance beyond which obvhs may cull a box (`1 + 2^-12`).
 ///

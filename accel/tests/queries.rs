@@ -216,3 +216,35 @@ fn f32_triangle_test_agrees_with_f64() {
     assert!(within as f64 >= 0.999 * n as f64, "only {within} of {n} hits within 1e-6");
     assert!(worst <= 1e-5, "worst relative t error {worst:.2e}");
 }
+
+/// Trees of more than 16,384 CWBVH nodes keep obvhs's compact nodes and its own box test (the
+/// small-tree path converts them to float boxes, see `WIDE_NODE_LIMIT`); the meshes above are
+/// all below that. This covers the large path with one 200k-triangle soup, fewer rays (brute
+/// force costs 2·10⁵ tests a ray), the same bit-exact criterion.
+#[test]
+fn large_trees_match_brute_force() {
+    let tris = random_soup(200_000, 0.02, 7);
+    let bvh = Bvh::build(&tris);
+    assert!(bvh.gpu_nodes().len() > 16_384, "only {} nodes: not the large-tree path", bvh.gpu_nodes().len());
+    let (lo, hi) = bounds(&tris);
+    let mut mismatches = Vec::new();
+    for (k, (o, d)) in random_rays(lo, hi, 300, 11).into_iter().enumerate() {
+        let reference = brute_f32(&tris, o, d, f32::INFINITY, |_, _| true);
+        let got = bvh.closest_hit(o, d, f32::INFINITY);
+        if !same(&tris, o, d, got, reference) {
+            mismatches.push(format!("ray {k}: closest {got:?} vs {reference:?}"));
+        }
+        let masked_ref = brute_f32(&tris, o, d, f32::INFINITY, mask_by_id);
+        let masked = bvh.closest_hit_masked(o, d, f32::INFINITY, mask_by_id);
+        if !same(&tris, o, d, masked, masked_ref) {
+            mismatches.push(format!("ray {k}: masked {masked:?} vs {masked_ref:?}"));
+        }
+        if let Some(r) = reference {
+            // A shadow ray just short of and just past the closest hit.
+            if bvh.occluded(o, d, r.t * 0.999) || !bvh.occluded(o, d, r.t * 1.001) {
+                mismatches.push(format!("ray {k}: occlusion disagrees around t = {}", r.t));
+            }
+        }
+    }
+    assert!(mismatches.is_empty(), "{} mismatches:\n{}", mismatches.len(), mismatches.join("\n"));
+}

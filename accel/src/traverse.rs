@@ -1,0 +1,204 @@
+//! CPU traversal of obvhs's CWBVH: obvhs's traversal order (its `traverse!` macro) over nodes
+//! whose child boxes are decoded once at build time.
+//!
+//! obvhs 0.4's `CwBvhNode::intersect_ray` widens the 48 quantised child-box bytes to `f32` on
+//! every visit, one byte at a time (48 scalar loads and int-to-float conversions per node), then
+//! walks the 8 children with a branch each; under callgrind that was ~60% of the instructions of
+//! an incoherent closest-hit query on the Cornell box (`BENCHMARKS.md`). [`WideNode`] keeps the
+//! same quantised planes as exact `f32` (224 bytes per node instead of 80) and builds the hit
+//! mask without branches. The arithmetic per child and axis is obvhs's, in the same order
+//! (`q · (extent / d) + (p − o) / d`, then max/min), so box decisions are the same except for
+//! the entry cut-off: obvhs clamps entry distances to an absolute `1e-4`, this test to `0` (it
+//! visits a superset of obvhs's boxes).
+
+use std::ops::ControlFlow;
+
+use glam::{Vec3A, Vec4};
+use obvhs::{cwbvh::node::CwBvhNode, ray::Ray};
+
+/// A CWBVH node for CPU traversal: obvhs's [`CwBvhNode`] with the 48 quantised child planes
+/// widened to `f32` once at build time (exactly: they are integers 0..=255), so that the node
+/// test is 4-wide `f32` arithmetic with no per-node decoding.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct WideNode {
+    // 256 bytes: 192 of planes, 2 x 16 of `Vec3A`, 8 + 3 x 4, padded to 16-byte alignment.
+    /// `[axis][lo, hi][children 0-3, 4-7]`, in the node's quantised grid units.
+    planes: [[[Vec4; 2]; 2]; 3],
+    /// Node grid origin `p` and cell size `2^e` per axis.
+    origin: Vec3A,
+    extent: Vec3A,
+    child_meta: u64,
+    imask: u32,
+    child_base: u32,
+    primitive_base: u32,
+}
+
+impl WideNode {
+    pub(crate) fn from_cwbvh(node: &CwBvhNode) -> Self {
+        let f = |q: [u8; 8]| {
+            [
+                Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32),
+                Vec4::new(q[4] as f32, q[5] as f32, q[6] as f32, q[7] as f32),
+            ]
+        };
+        WideNode {
+            planes: [
+                [f(node.child_min_x), f(node.child_max_x)],
+                [f(node.child_min_y), f(node.child_max_y)],
+                [f(node.child_min_z), f(node.child_max_z)],
+            ],
+            origin: Vec3A::from(node.p),
+            extent: node.compute_extent(),
+            child_meta: u64::from_le_bytes(node.child_meta),
+            imask: node.imask as u32,
+            child_base: node.child_base_idx,
+            primitive_base: node.primitive_base_idx,
+        }
+    }
+
+    /// obvhs's `CwBvhNode::get_child_and_index_bits`, on the stored `child_meta`.
+    #[inline(always)]
+    fn child_and_index_bits(&self, oct_inv4: u32) -> (u64, u64) {
+        let mut oct_inv8 = oct_inv4 as u64;
+        oct_inv8 |= oct_inv8 << 32;
+        let meta8 = self.child_meta;
+        let is_inner8 = (meta8 & (meta8 << 1)) & 0x1010_1010_1010_1010;
+        let inner_mask8 = (is_inner8 >> 4) * 0xff;
+        let bit_index8 = (meta8 ^ (oct_inv8 & inner_mask8)) & 0x1f1f_1f1f_1f1f_1f1f;
+        let child_bits8 = (meta8 >> 5) & 0x0707_0707_0707_0707;
+        (child_bits8, bit_index8)
+    }
+
+    /// obvhs's per-node hit mask (`CwBvhNode::intersect_ray`'s result: inner children hit in
+    /// the top byte, in traversal order; leaf triangles hit in the low 24 bits) for children
+    /// entered at some `t ∈ [0, t_max]`. Same arithmetic, in the same order, as obvhs's SSE
+    /// test: `q · (extent / d) + (p − o) / d`, then `maxps`/`minps` (glam's `Vec4::max`/`min`
+    /// are those instructions), `cmpleps`.
+    #[inline(always)]
+    fn intersect(&self, ray: &NodeRay, t_max: f32, oct_inv4: u32) -> u32 {
+        let scale = self.extent * ray.inv_direction;
+        let offset = (self.origin - ray.origin) * ray.inv_direction;
+        let (s, o) = (scale.to_array(), offset.to_array());
+        let mut hit8 = 0u32;
+        for half in 0..2 {
+            let t = |axis: usize, far: bool| {
+                let side = ray.negative[axis] != far;
+                self.planes[axis][side as usize][half] * s[axis] + Vec4::splat(o[axis])
+            };
+            let enter = t(0, false).max(t(1, false).max(t(2, false))).max(Vec4::ZERO);
+            let leave = t(0, true).min(t(1, true).min(t(2, true))).min(Vec4::splat(t_max));
+            hit8 |= enter.cmple(leave).bitmask() << (4 * half);
+        }
+        let (child_bits8, bit_index8) = self.child_and_index_bits(oct_inv4);
+        let mut mask = 0u32;
+        while hit8 != 0 {
+            let shift = 8 * hit8.trailing_zeros();
+            hit8 &= hit8 - 1;
+            let bits = (child_bits8 >> shift) as u32 & 0xff;
+            let index = (bit_index8 >> shift) as u32 & 31;
+            mask |= bits << index;
+        }
+        mask
+    }
+}
+
+/// The per-ray constants of the node test.
+pub(crate) struct NodeRay {
+    origin: Vec3A,
+    inv_direction: Vec3A,
+    negative: [bool; 3],
+    /// obvhs's `ray_get_octant_inv4`.
+    oct_inv4: u32,
+}
+
+impl NodeRay {
+    #[inline(always)]
+    pub(crate) fn new(ray: &Ray) -> Self {
+        let d = ray.direction;
+        NodeRay {
+            origin: ray.origin,
+            inv_direction: ray.inv_direction,
+            negative: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
+            oct_inv4: (if d.x < 0.0 { 0 } else { 0x0404_0404 })
+                | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
+                | (if d.z < 0.0 { 0 } else { 0x0101_0101 }),
+        }
+    }
+}
+
+/// The CWBVH traversal of Ylitie et al. 2017 as obvhs's `traverse!` macro does it (node groups
+/// and triangle groups as `(base, mask)` pairs, a fixed 32-entry stack), over [`WideNode`]s.
+/// `leaf(slot, t_max)` tests leaf slot `slot`; it returns `Break` to stop, or the new box cull
+/// distance (`Continue(t)`, `t < t_max` lowers it).
+#[inline(always)]
+fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> ControlFlow<(), f32>) {
+    const STACK: usize = 32;
+    if nodes.is_empty() {
+        return;
+    }
+    let r = NodeRay::new(ray);
+    let mut t_max = ray.tmax;
+    let mut stack = [(0u32, 0u32); STACK];
+    let mut depth = 0usize;
+    let mut current = (0u32, 0x8000_0000u32);
+    loop {
+        if current.1 & 0xff00_0000 != 0 {
+            let hits_imask = current.1;
+            let child_index_offset = 31 - hits_imask.leading_zeros();
+            current.1 &= !(1u32 << child_index_offset);
+            if current.1 & 0xff00_0000 != 0 {
+                stack[depth] = current;
+                depth = (depth + 1).min(STACK - 1);
+            }
+            let slot_index = (child_index_offset - 24) ^ (r.oct_inv4 & 0xff);
+            let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
+            let node = &nodes[(current.0 + relative_index) as usize];
+            let hitmask = node.intersect(&r, t_max, r.oct_inv4);
+            current = (node.child_base, (hitmask & 0xff00_0000) | node.imask);
+            let mut primitives = hitmask & 0x00ff_ffff;
+            while primitives != 0 {
+                let local = 31 - primitives.leading_zeros();
+                primitives &= !(1u32 << local);
+                match leaf((node.primitive_base + local) as usize) {
+                    ControlFlow::Break(()) => return,
+                    ControlFlow::Continue(t) => {
+                        if t < t_max {
+                            t_max = t;
+                        }
+                    }
+                }
+            }
+        }
+        if current.1 & 0xff00_0000 == 0 {
+            if depth == 0 {
+                return;
+            }
+            depth -= 1;
+            current = stack[depth];
+        }
+    }
+}
+
+/// Closest-hit traversal: `visit(slot)` tests leaf slot `slot` and returns the distance (in the
+/// traversal ray's units) beyond which boxes may be culled from now on, or `+∞` for no change.
+#[inline(always)]
+pub(crate) fn closest(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize) -> f32) {
+    traverse(nodes, ray, |slot| ControlFlow::Continue(visit(slot)));
+}
+
+/// Any-hit traversal: stops as soon as `visit(slot)` returns `true`; returns whether it did.
+#[inline(always)]
+pub(crate) fn any(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize) -> bool) -> bool {
+    let mut found = false;
+    traverse(nodes, ray, |slot| {
+        if visit(slot) {
+            found = true;
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(f32::INFINITY)
+        }
+    });
+    found
+}
+
+const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
