@@ -2,7 +2,7 @@
 //!
 //! `cargo bench -p furnace-accel` prints a Markdown table (quoted in `BENCHMARKS.md`). Scenes:
 //! the built-in reference Cornell box (`furnace_scene::builtin::cornell_box()`, always), and,
-//! when the files exist, `/work/shared/scenes/{DamagedHelmet, MetalRoughSpheresNoTextures}`
+//! when the files exist, `<repo>/../shared/scenes/{DamagedHelmet, MetalRoughSpheresNoTextures}`
 //! loaded with `furnace_scene::Scene::load`. For each layout (CWBVH, BVH2; preset chosen by
 //! triangle count): build time (median of 3), then Mrays/s for
 //!
@@ -226,7 +226,8 @@ fn main() {
         Ok(s) => scenes.push(("cbox (builtin)".into(), s)),
         Err(e) => eprintln!("skipping the built-in Cornell box: {e}"),
     }
-    let shared = Path::new("/work/shared/scenes");
+    // The project's shared folder sits beside the repository (`<repo>/../shared`).
+    let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes");
     for (name, file) in [
         ("DamagedHelmet", "DamagedHelmet/glTF/DamagedHelmet.gltf"),
         ("MetalRoughSpheresNoTextures", "MetalRoughSpheresNoTextures/glTF/MetalRoughSpheresNoTextures.gltf"),
