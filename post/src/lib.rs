@@ -1,0 +1,63 @@
+//! # furnace-post
+//!
+//! From linear radiance to files: exposure, tone mapping, the exact sRGB transfer function,
+//! 8-bit quantisation, and atomic OpenEXR / PNG output (the thesis, §4.1–4.3).
+//!
+//! ## The display pipeline ([`to_srgb8`])
+//!
+//! 1. **Exposure** — multiply by [`exposure_scale`]`(ev) = 2^ev` (the thesis §4.1, without its
+//!    FP16 scale factor: EV 0 leaves radiance unchanged).
+//! 2. **Tone map** — [`Tonemap`]: `aces` (Narkowicz 2015, "ACES Filmic Tone Mapping Curve", the
+//!    thesis listing 4.1), `pbr-neutral` (Khronos PBR Neutral, 2024), or `clamp`.
+//!    Non-finite input is defined: NaN → 0, +∞ → 1, negatives → 0.
+//! 3. **Encode** — the exact sRGB OETF of IEC 61966-2-1 ([`linear_to_srgb`], the thesis §4.3;
+//!    not the `x^(1/2.2)` approximation), inverse [`srgb_to_linear`].
+//! 4. **Quantise** — round to nearest 8-bit code ([`quantize_unorm8`]); every code survives
+//!    code → linear → code.
+//!
+//! ## Files
+//!
+//! [`write_exr`] stores the *linear* image as 32-bit float RGB with the render's [`Metadata`]
+//! as text attributes; [`read_exr`] reads it back bit-identically and also reads other
+//! renderers' EXRs (e.g. Mitsuba 3's `B,G,R` float references). [`write_png`] stores the 8-bit
+//! sRGB image. Both writers are **atomic**: they write a temporary file in the target's
+//! directory and rename it into place, so an interrupted write never leaves a truncated image,
+//! and a failed write removes its temporary file. Errors are [`PostError`]s naming the file.
+//!
+//! ## Example
+//!
+//! ```
+//! use furnace_post::{Metadata, Tonemap, read_exr, to_srgb8, write_exr, write_png};
+//! use glam::Vec3;
+//!
+//! let (w, h) = (2, 1);
+//! let radiance = vec![Vec3::new(0.18, 0.18, 0.18), Vec3::new(4.0, 1.0, 0.25)];
+//! let dir = std::env::temp_dir().join(format!("furnace-post-doc-{}", std::process::id()));
+//! std::fs::create_dir_all(&dir)?;
+//!
+//! let meta = Metadata { spp: Some(64), sampler: Some("sobol".into()), ..Metadata::default() };
+//! write_exr(dir.join("render.exr"), w, h, &radiance, &meta)?;
+//! let (rw, rh, back, back_meta) = read_exr(dir.join("render.exr"))?;
+//! assert_eq!((rw, rh), (w, h));
+//! assert_eq!(back, radiance); // 32-bit float: bit-identical
+//! assert_eq!(back_meta, meta);
+//!
+//! let srgb = to_srgb8(&radiance, 0.0, Tonemap::Aces);
+//! assert_eq!(srgb[0], [141, 141, 141]); // ACES(0.18) = 0.2669 → sRGB 0.5534 → 141
+//! write_png(dir.join("render.png"), w, h, &srgb)?;
+//! # std::fs::remove_dir_all(&dir)?;
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+mod atomic;
+mod error;
+mod exr_io;
+mod png_io;
+mod srgb;
+mod tonemap;
+
+pub use error::PostError;
+pub use exr_io::{Metadata, read_exr, write_exr};
+pub use png_io::write_png;
+pub use srgb::{linear_to_srgb, pixel_to_srgb8, quantize_unorm8, srgb_to_linear, srgb8_to_linear, to_srgb8};
+pub use tonemap::{Tonemap, aces_filmic, exposure_scale, pbr_neutral};
