@@ -1,0 +1,335 @@
+//! [`Renderer`]: the path tracer.
+
+use crate::film::Film;
+use crate::settings::RenderSettings;
+use furnace_accel::{BuildOptions, Bvh, Hit, offset_ray_origin};
+use furnace_brdf::{Bsdf, MetallicRoughness, MetallicRoughnessParams};
+use furnace_sampling::{AnySampler, Sampler, SamplerError};
+use furnace_scene::{AlphaMode, Camera, Material, Scene};
+use glam::{Vec2, Vec3};
+use rayon::prelude::*;
+
+/// Sampler dimensions of the camera ray: the position inside the pixel.
+pub const DIM_PIXEL: u32 = 0;
+/// First sampler dimension of the first scattering event.
+pub const DIM_FIRST_BOUNCE: u32 = 2;
+/// Sampler dimensions used per scattering event: BSDF direction (2), lobe choice (1), Russian
+/// roulette (1).
+pub const DIMS_PER_BOUNCE: u32 = 4;
+
+/// A scene prepared for rendering: its BVH, per-triangle material indices, camera and sampler.
+///
+/// See the [crate docs](crate) for the algorithm and the sampler dimension layout.
+pub struct Renderer {
+    scene: Scene,
+    settings: RenderSettings,
+    bvh: Bvh,
+    sampler: AnySampler,
+    camera: Camera,
+    /// Material index of each triangle, clamped into `scene.materials`.
+    triangle_materials: Vec<u32>,
+    /// Whether any material is alpha-masked (otherwise rays skip the mask callback).
+    any_masked: bool,
+}
+
+impl std::fmt::Debug for Renderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Renderer")
+            .field("scene", &self.scene.name)
+            .field("triangles", &self.triangle_materials.len())
+            .field("settings", &self.settings)
+            .finish_non_exhaustive()
+    }
+}
+
+/// Where a ray hit a surface, in world space, with normals oriented towards the incoming ray.
+struct SurfacePoint {
+    position: Vec3,
+    /// Geometric normal (for ray offsets and the geometric side test).
+    geometric: Vec3,
+    /// Shading normal (interpolated, normal-mapped): the z axis of the BSDF frame.
+    shading: Vec3,
+}
+
+impl Renderer {
+    /// Builds the BVH over the scene's triangles and the sampler of `settings`. The camera is
+    /// the scene's [`Scene::default_camera`].
+    ///
+    /// # Errors
+    /// The sampler's: a fixed-N sampler without [`RenderSettings::sample_count`].
+    pub fn new(scene: Scene, settings: RenderSettings) -> Result<Self, SamplerError> {
+        let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
+        let g = &scene.geometry;
+        let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
+        let last = scene.materials.len().saturating_sub(1) as u32;
+        let triangle_materials = (0..g.triangle_count())
+            .map(|t| g.triangle_materials.get(t).copied().unwrap_or(last).min(last))
+            .collect();
+        let any_masked = scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }));
+        let camera = scene.default_camera();
+        Ok(Self { scene, settings, bvh, sampler, camera, triangle_materials, any_masked })
+    }
+
+    /// The scene being rendered.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The settings it was built with.
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    /// An empty film of the settings' size.
+    pub fn new_film(&self) -> Film {
+        Film::new(self.settings.width, self.settings.height)
+    }
+
+    /// Adds samples `first_sample .. first_sample + samples_per_pixel` of every pixel to `film`,
+    /// rows in parallel on the current rayon pool. Each pixel's samples are added in index
+    /// order by one task, so the film is bit-identical for any number of threads. Non-finite
+    /// samples are rejected and counted ([`Film::rejected`]).
+    ///
+    /// # Errors
+    /// For a fixed-N sampler, [`SamplerError`] when the pass would run past N (the pattern
+    /// would repeat); nothing is rendered then.
+    ///
+    /// # Panics
+    /// If `film` is not `settings.width × settings.height`.
+    pub fn render_pass(
+        &self,
+        film: &mut Film,
+        first_sample: u32,
+        samples_per_pixel: u32,
+    ) -> Result<(), SamplerError> {
+        let (w, h) = (self.settings.width, self.settings.height);
+        assert!(
+            film.width() == w && film.height() == h,
+            "film is {}×{}, settings {w}×{h}",
+            film.width(),
+            film.height()
+        );
+        if samples_per_pixel == 0 || w == 0 || h == 0 {
+            return Ok(());
+        }
+        self.sampler.check_index(first_sample.saturating_add(samples_per_pixel - 1))?;
+        // Sample indices stop at u32::MAX (4·10⁹ samples per pixel).
+        let end = first_sample.saturating_add(samples_per_pixel);
+        let rejected: u64 = film
+            .rows_mut()
+            .enumerate()
+            .map(|(y, mut row)| {
+                let mut rejected = 0;
+                for x in 0..w {
+                    for index in first_sample..end {
+                        let value = self.sample(x, y as u32, index);
+                        rejected += u64::from(!row.add_sample(x as usize, value));
+                    }
+                }
+                rejected
+            })
+            .sum();
+        film.add_rejected(rejected);
+        Ok(())
+    }
+
+    /// One path sample of pixel `(x, y)`, sample number `index`: the radiance carried by the
+    /// camera ray through the sampler-chosen point of the pixel.
+    pub fn sample(&self, x: u32, y: u32, index: u32) -> Vec3 {
+        let pixel = y.wrapping_mul(self.settings.width).wrapping_add(x);
+        let [ux, uy] = self.sampler.value_2d(pixel, index, DIM_PIXEL);
+        let film_point = Vec2::new(x as f32 + ux, y as f32 + uy);
+        let ray = self.camera.generate_ray(film_point, self.settings.width, self.settings.height);
+        self.trace(pixel, index, ray.origin, ray.direction)
+    }
+
+    /// The path tracing loop: radiance arriving at `origin` from direction `-direction`.
+    fn trace(&self, pixel: u32, index: u32, mut origin: Vec3, mut direction: Vec3) -> Vec3 {
+        let scene = &self.scene;
+        let mut radiance = Vec3::ZERO;
+        let mut throughput = Vec3::ONE;
+        // `event` counts the scattering events so far; the loop body handles one ray.
+        let mut event = 0;
+        loop {
+            let Some(hit) = self.closest_hit(origin, direction) else {
+                // The ray leaves the scene: the sky is gathered here and only here.
+                radiance += throughput * scene.sky;
+                break;
+            };
+            let material = &scene.materials[self.triangle_materials[hit.triangle as usize] as usize];
+            let uv = scene.geometry.uv(hit.triangle as usize, hit.barycentrics.x, hit.barycentrics.y);
+            let params = material.evaluate(uv, &scene.textures, &scene.images);
+            let Some(surface) = self.surface_point(&hit, material, uv, direction) else {
+                // The back of a single-sided surface: black, like a one-sided BSDF.
+                break;
+            };
+            radiance += throughput * params.emission;
+            if event == self.settings.bounces {
+                break;
+            }
+            let bsdf = MetallicRoughness::new(
+                MetallicRoughnessParams {
+                    base_color: params.base_color,
+                    metallic: params.metallic,
+                    roughness: params.roughness,
+                    specular_factor: params.specular_factor,
+                    specular_color: params.specular_color,
+                },
+                self.settings.specular,
+            );
+            let frame = Frame::new(surface.shading);
+            let wo = frame.to_local(-direction);
+            let leave = offset_ray_origin(surface.position, surface.geometric);
+
+            // The sun, a delta light: gathered by a shadow ray only.
+            if let Some(sun) = scene.sun {
+                let to_sun = -sun.direction;
+                if to_sun.dot(surface.geometric) > 0.0 {
+                    let f = bsdf.eval(wo, frame.to_local(to_sun));
+                    if f != Vec3::ZERO && !self.occluded(leave, to_sun) {
+                        radiance += throughput * f * sun.irradiance;
+                    }
+                }
+            }
+
+            // Continue the path by sampling the BSDF.
+            let dim = DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE * event;
+            let [u1, u2] = self.sampler.value_2d(pixel, index, dim);
+            let uc = self.sampler.value(pixel, index, dim + 2);
+            let Some(s) = bsdf.sample(wo, uc, Vec2::new(u1, u2)) else { break };
+            let wi = frame.to_world(s.wi);
+            if !(wi.dot(surface.geometric) > 0.0) {
+                // Above the shading normal's horizon but below the surface: the path ends
+                // (continuing would enter the surface from its own side).
+                break;
+            }
+            throughput *= s.weight;
+            event += 1;
+            if self.settings.russian_roulette && event >= 3 {
+                let survive = throughput.max_element().min(1.0);
+                if !(self.sampler.value(pixel, index, dim + 3) < survive) {
+                    break;
+                }
+                throughput /= survive;
+            }
+            origin = leave;
+            direction = wi;
+        }
+        radiance
+    }
+
+    /// The surface at a hit: position from the barycentrics, geometric and (normal-mapped)
+    /// shading normals turned towards the incoming ray for double-sided materials; `None` on
+    /// the back of a single-sided one.
+    fn surface_point(
+        &self,
+        hit: &Hit,
+        material: &Material,
+        uv: Vec2,
+        direction: Vec3,
+    ) -> Option<SurfacePoint> {
+        let g = &self.scene.geometry;
+        let t = hit.triangle as usize;
+        let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
+        let [v0, v1, v2] = g.triangle(t)?;
+        let position = (1.0 - b1 - b2) * v0 + b1 * v1 + b2 * v2;
+        let mut geometric = (v1 - v0).cross(v2 - v0).normalize_or_zero();
+        let mut shading = g.shading_normal(t, b1, b2).filter(|n| *n != Vec3::ZERO).unwrap_or(geometric);
+        if let (Some(normal_map), Some(tangent)) = (&material.normal_texture, g.tangent(t, b1, b2)) {
+            // glTF normal map: tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame
+            // (T, B = w·N×T, N), with T made orthogonal to the shading normal N.
+            let m = normal_map.sample_bilinear(uv, &self.scene.textures, &self.scene.images).truncate();
+            let m = (2.0 * m - Vec3::ONE) * Vec3::new(material.normal_scale, material.normal_scale, 1.0);
+            let tn = (tangent.truncate() - shading * shading.dot(tangent.truncate())).normalize_or_zero();
+            if tn != Vec3::ZERO {
+                let bn = tangent.w * shading.cross(tn);
+                shading = (m.x * tn + m.y * bn + m.z * shading).normalize_or(shading);
+            }
+        }
+        if geometric.dot(direction) > 0.0 {
+            if !material.double_sided {
+                return None;
+            }
+            geometric = -geometric;
+            shading = -shading;
+        }
+        Some(SurfacePoint { position, geometric, shading })
+    }
+
+    fn alpha_passes(&self, triangle: u32, barycentrics: Vec2) -> bool {
+        let material = &self.scene.materials[self.triangle_materials[triangle as usize] as usize];
+        if !matches!(material.alpha_mode, AlphaMode::Mask { .. }) {
+            return true;
+        }
+        let uv = self.scene.geometry.uv(triangle as usize, barycentrics.x, barycentrics.y);
+        let texture = material.base_color_texture.as_ref();
+        let alpha = material.base_color_factor.w
+            * texture.map_or(1.0, |t| t.sample_bilinear(uv, &self.scene.textures, &self.scene.images).w);
+        material.alpha_test(alpha)
+    }
+
+    fn closest_hit(&self, origin: Vec3, direction: Vec3) -> Option<Hit> {
+        if self.any_masked {
+            self.bvh.closest_hit_masked(origin, direction, f32::INFINITY, |t, b| self.alpha_passes(t, b))
+        } else {
+            self.bvh.closest_hit(origin, direction, f32::INFINITY)
+        }
+    }
+
+    fn occluded(&self, origin: Vec3, direction: Vec3) -> bool {
+        if self.any_masked {
+            self.bvh.occluded_masked(origin, direction, f32::INFINITY, |t, b| self.alpha_passes(t, b))
+        } else {
+            self.bvh.occluded(origin, direction, f32::INFINITY)
+        }
+    }
+}
+
+/// An orthonormal frame around a unit normal (Duff et al., "Building an Orthonormal Basis,
+/// Revisited", JCGT 2017): the BSDF's local frame, z = normal.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    x: Vec3,
+    y: Vec3,
+    z: Vec3,
+}
+
+impl Frame {
+    fn new(n: Vec3) -> Self {
+        let sign = 1.0f32.copysign(n.z);
+        let a = -1.0 / (sign + n.z);
+        let b = n.x * n.y * a;
+        let x = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let y = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+        Self { x, y, z: n }
+    }
+
+    fn to_local(self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.x), v.dot(self.y), v.dot(self.z))
+    }
+
+    fn to_world(self, v: Vec3) -> Vec3 {
+        v.x * self.x + v.y * self.y + v.z * self.z
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_is_orthonormal_and_round_trips() {
+        // Tolerance: a few f32 ulps of unit-length arithmetic.
+        for n in
+            [Vec3::Z, Vec3::NEG_Z, Vec3::X, Vec3::new(0.3, -0.5, 0.2).normalize(), Vec3::new(1e-8, 0.0, -1.0)]
+        {
+            let n = n.normalize();
+            let f = Frame::new(n);
+            assert!((f.x.length() - 1.0).abs() < 1e-5 && (f.y.length() - 1.0).abs() < 1e-5);
+            assert!(f.x.dot(f.y).abs() < 1e-5 && f.x.dot(n).abs() < 1e-5 && f.y.dot(n).abs() < 1e-5);
+            assert!(f.x.cross(f.y).dot(n) > 0.99, "right-handed");
+            let v = Vec3::new(0.1, 0.7, -0.2);
+            assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
+        }
+    }
+}

@@ -1,0 +1,96 @@
+//! # furnace-cpu
+//!
+//! The reference CPU integrator of furnace: a unidirectional path tracer (Kajiya, "The
+//! Rendering Equation", SIGGRAPH 1986) with next-event estimation of the sun, BSDF sampling of
+//! the glTF metallic-roughness material (`furnace_brdf`), rows rendered in parallel with rayon
+//! and accumulated in `f64` ([`Film`]). It is meant to be read: the GPU integrator is its twin.
+//!
+//! ## The algorithm ([`Renderer::sample`])
+//!
+//! For sample `index` of pixel `(x, y)`:
+//!
+//! 1. **Camera ray** through the film point `(x + u₀, y + u₁)` (a one-pixel box filter; row 0 at
+//!    the top), `(u₀, u₁)` = sampler dimensions 0–1.
+//! 2. **Closest hit** in the BVH (`furnace_accel`; alpha-masked materials are tested in the
+//!    traversal). A ray that leaves the scene adds `throughput · sky` and ends the path.
+//! 3. At a hit: the position from the barycentrics, the geometric normal `Ng`, and the
+//!    interpolated shading normal `Ns` (with the material's normal map applied through the
+//!    vertex tangents when it has one). For a double-sided material both normals are turned to
+//!    the side the ray came from; the back of a single-sided material is black and ends the
+//!    path. The material is evaluated at the hit's UV (`Material::evaluate`) into a
+//!    `MetallicRoughness` BSDF with [`RenderSettings::specular`].
+//! 4. **Emission**: `throughput · emissive` is added.
+//! 5. If the path already has [`RenderSettings::bounces`] scattering events, it ends here.
+//!    Otherwise this hit is a scattering event:
+//!    * **Sun** (a delta light, gathered *only* here): if `-sun.direction` is above `Ng` and a
+//!      shadow ray from the offset point (`offset_ray_origin(p, Ng)`) reaches infinity, add
+//!      `throughput · f(wo, wi)·cos θi · E_sun` (`Bsdf::eval` includes the cosine).
+//!    * **BSDF sample** `wi` from three sampler dimensions; `throughput *= eval/pdf`. A
+//!      direction above `Ns`'s horizon but below `Ng`'s ends the path. The sky is gathered only
+//!      by such sampled rays escaping (step 2), so neither light is counted twice and no MIS
+//!      is needed.
+//!    * **Russian roulette** (if enabled), from the third event on: survive with probability
+//!      `q = min(1, max(throughput))`, and divide by `q` (unbiased).
+//!
+//! With `bounces = B`, light is gathered at up to `B` scattering events (Mitsuba's
+//! `max_depth = B + 1`): `B = 0` shows only what the camera sees directly (sky, emitters),
+//! `B = 1` is direct lighting.
+//!
+//! ## Sampler dimensions
+//!
+//! | dimensions | use |
+//! |---|---|
+//! | 0, 1 | position in the pixel ([`DIM_PIXEL`]) |
+//! | `2 + 4k`, `3 + 4k` | BSDF direction `u` of scattering event `k = 0, 1, …` |
+//! | `4 + 4k` | BSDF lobe choice `uc` of event `k` |
+//! | `5 + 4k` | Russian roulette of event `k` (unused without it) |
+//!
+//! Pairs start on even dimensions, so the 2-D samplers (Hammersley, CMJ, PMJ02) stratify
+//! the pixel position and each BSDF direction jointly; Owen-Sobol's groups of four put the
+//! first BSDF direction with the pixel position.
+//!
+//! ## Determinism
+//!
+//! A sample depends only on `(pixel, index, dimension, seed)` and each pixel's samples are added
+//! in index order by one task, so a [`Film`] is bit-identical for any thread count
+//! (`tests/determinism.rs`).
+//!
+//! ## Tests
+//!
+//! * `tests/furnace.rs` — white furnaces (Lambert albedo 1 → 1; GGX α = 1 → the quadrature of
+//!   its directional albedo; with Turquin compensation → 1), an emissive sphere seen from inside
+//!   (`1 − 2^−(B+1)` exactly: the bounce convention; Russian roulette unbiased), a sunlit floor.
+//! * `tests/reference.rs` — the Cornell box, direct and 4 bounces, against Mitsuba 3 references
+//!   (per-pixel z-test and image means).
+//! * `tests/film.rs` — no drift over 10⁶ frames; non-finite samples rejected.
+//! * `tests/determinism.rs` — bit-identical films with 1 and 2 threads.
+//! * `tests/samplers.rs` — every sampler kind; fixed-N kinds stop at N.
+//!
+//! `cargo bench -p furnace-cpu` prints Msamples/s on the Cornell box.
+//!
+//! ## Example
+//!
+//! ```
+//! use furnace_cpu::{RenderSettings, Renderer};
+//! use furnace_scene::builtin;
+//! use glam::Vec3;
+//!
+//! // A white furnace: a Lambert sphere of albedo 1 under a sky of radiance 1 looks like the sky.
+//! let scene = builtin::furnace_sphere(builtin::lambert(Vec3::ONE), 16);
+//! let settings = RenderSettings { width: 16, height: 16, ..Default::default() };
+//! let renderer = Renderer::new(scene, settings)?;
+//! let mut film = renderer.new_film();
+//! renderer.render_pass(&mut film, 0, 4)?;
+//! let centre = film.pixel(8, 8);
+//! assert!((centre - glam::DVec3::ONE).abs().max_element() < 1e-3);
+//! assert_eq!(film.rejected(), 0);
+//! # Ok::<(), furnace_sampling::SamplerError>(())
+//! ```
+
+mod film;
+mod integrator;
+mod settings;
+
+pub use film::Film;
+pub use integrator::{DIM_FIRST_BOUNCE, DIM_PIXEL, DIMS_PER_BOUNCE, Renderer};
+pub use settings::RenderSettings;
