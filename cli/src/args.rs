@@ -1,0 +1,186 @@
+//! Command-line arguments (clap derive) and their value parsers.
+
+use clap::{Args, Parser, Subcommand, ValueEnum};
+use furnace_brdf::{Masking, SpecularSampling};
+use furnace_post::Tonemap;
+use furnace_sampling::SamplerKind;
+use std::path::PathBuf;
+
+/// furnace: a progressive path tracer.
+#[derive(Debug, Parser)]
+#[command(name = "furnace", version, about, propagate_version = true)]
+pub struct Cli {
+    /// What to do.
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Render a glTF/GLB scene (the built-in reference Cornell box without one) to PATH.exr
+    /// (linear, with metadata) and PATH.png (tone-mapped sRGB).
+    Render(RenderArgs),
+    /// Print a scene's triangles, materials, textures, lights, camera and loader warnings.
+    Info(InfoArgs),
+}
+
+/// `furnace render`.
+#[derive(Debug, Args)]
+pub struct RenderArgs {
+    /// The .gltf or .glb scene; without it, the built-in reference Cornell box.
+    pub scene: Option<PathBuf>,
+    /// Samples per pixel (the total; also N of the fixed-N samplers hammersley and cmj).
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: u32,
+    /// Scattering events per path (0: only what the camera sees directly; 1: direct lighting).
+    #[arg(long, default_value_t = 4)]
+    pub bounces: u32,
+    /// Sampler: random, hammersley, cmj, pmj02, sobol.
+    #[arg(long, default_value_t = furnace_cpu::RenderSettings::default().sampler)]
+    pub sampler: SamplerKind,
+    /// Seed of the sampler's scrambling.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u32,
+    /// Image width in pixels [default: 512, or from --height and the camera's aspect ratio].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIDE as i64))]
+    pub width: Option<u32>,
+    /// Image height in pixels [default: from the width and the camera's aspect ratio; 512 for
+    /// the built-in Cornell box].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIDE as i64))]
+    pub height: Option<u32>,
+    /// Exposure in stops (EV) applied before tone mapping the PNG (the EXR stays unscaled).
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true, value_parser = parse_exposure)]
+    pub exposure: f32,
+    /// Tone map of the PNG: aces, pbr-neutral, clamp.
+    #[arg(long, default_value_t = Tonemap::default())]
+    pub tonemap: Tonemap,
+    /// Smith masking-shadowing of the GGX lobes.
+    #[arg(long, value_enum, default_value_t = MaskingArg::HeightCorrelated)]
+    pub masking: MaskingArg,
+    /// Turquin energy compensation of the GGX lobes.
+    #[arg(long, value_enum, default_value_t = Switch::On)]
+    pub compensation: Switch,
+    /// How the GGX lobes sample microfacet normals.
+    #[arg(long, value_enum, default_value_t = SamplingArg::Caps)]
+    pub specular_sampling: SamplingArg,
+    /// Output path: writes PATH.png and PATH.exr (a .png or .exr extension is replaced).
+    #[arg(long, default_value = "furnace")]
+    pub out: PathBuf,
+    /// No progress bar and no summary (warnings and errors are still printed).
+    #[arg(long, short)]
+    pub quiet: bool,
+    /// Stop after this many seconds (at a whole number of passes; at least one pass is done).
+    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    pub time_limit: Option<f64>,
+}
+
+/// `furnace info`.
+#[derive(Debug, Args)]
+pub struct InfoArgs {
+    /// The .gltf or .glb scene.
+    pub scene: PathBuf,
+}
+
+/// The largest image side accepted.
+pub const MAX_SIDE: u32 = 16_384;
+
+/// `--masking`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum MaskingArg {
+    /// G1(ωo)·G1(ωi) (the thesis, Mitsuba 3).
+    Separable,
+    /// 1/(1 + Λ(ωo) + Λ(ωi)) (glTF, pbrt-v4).
+    HeightCorrelated,
+}
+
+impl From<MaskingArg> for Masking {
+    fn from(m: MaskingArg) -> Self {
+        match m {
+            MaskingArg::Separable => Masking::Separable,
+            MaskingArg::HeightCorrelated => Masking::HeightCorrelated,
+        }
+    }
+}
+
+/// `--specular-sampling`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum SamplingArg {
+    /// The distribution of normals (the thesis).
+    Ndf,
+    /// Visible normals (Heitz 2018).
+    Vndf,
+    /// Visible normals by spherical caps (Dupuy & Benyoub 2023).
+    Caps,
+}
+
+impl From<SamplingArg> for SpecularSampling {
+    fn from(s: SamplingArg) -> Self {
+        match s {
+            SamplingArg::Ndf => SpecularSampling::Ndf,
+            SamplingArg::Vndf => SpecularSampling::Vndf,
+            SamplingArg::Caps => SpecularSampling::SphericalCaps,
+        }
+    }
+}
+
+/// An on/off switch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Switch {
+    /// Enabled.
+    On,
+    /// Disabled.
+    Off,
+}
+
+fn parse_exposure(s: &str) -> Result<f32, String> {
+    let ev: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of stops"))?;
+    if ev.is_finite() && ev.abs() <= 64.0 {
+        Ok(ev)
+    } else {
+        Err(format!("exposure must be between -64 and 64 stops (got {s})"))
+    }
+}
+
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    let t: f64 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    if t.is_finite() && t > 0.0 {
+        Ok(t)
+    } else {
+        Err(format!("the time limit must be a positive number of seconds (got {s})"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn clap_definition_is_consistent() {
+        Cli::command().debug_assert();
+    }
+
+    #[test]
+    fn defaults_match_the_library_defaults() {
+        let cli = Cli::try_parse_from(["furnace", "render"]).unwrap();
+        let Command::Render(a) = cli.command else { panic!("not render") };
+        let spec = furnace_brdf::SpecularOptions::default();
+        assert_eq!(Masking::from(a.masking), spec.masking);
+        assert_eq!(SpecularSampling::from(a.specular_sampling), spec.sampling);
+        assert_eq!(a.compensation == Switch::On, spec.compensation);
+        assert_eq!(a.sampler, furnace_cpu::RenderSettings::default().sampler);
+        assert_eq!(a.tonemap, Tonemap::Aces);
+        assert_eq!((a.spp, a.bounces, a.exposure), (64, 4, 0.0));
+    }
+
+    #[test]
+    fn negative_exposure_parses() {
+        let cli = Cli::try_parse_from(["furnace", "render", "--exposure", "-1.5"]).unwrap();
+        let Command::Render(a) = cli.command else { panic!("not render") };
+        assert_eq!(a.exposure, -1.5);
+        assert!(Cli::try_parse_from(["furnace", "render", "--exposure", "nan"]).is_err());
+        assert!(Cli::try_parse_from(["furnace", "render", "--time-limit", "0"]).is_err());
+        assert!(Cli::try_parse_from(["furnace", "render", "--spp", "0"]).is_err());
+    }
+}

@@ -1,0 +1,86 @@
+//! `furnace info`: what a scene holds, as the loader sees it.
+
+use crate::args::InfoArgs;
+use furnace_scene::{Projection, Scene};
+use glam::Vec3;
+
+pub fn run(a: &InfoArgs) -> Result<(), String> {
+    let scene = Scene::load(&a.scene).map_err(|e| e.to_string())?;
+    print!("{}", describe(&scene));
+    Ok(())
+}
+
+fn v3(v: Vec3) -> String {
+    format!("({:.4}, {:.4}, {:.4})", v.x, v.y, v.z)
+}
+
+/// The report, one `key: value` line per item, then the warnings.
+fn describe(scene: &Scene) -> String {
+    let s = scene.stats();
+    let mut out = String::new();
+    let mut line = |k: &str, v: String| out.push_str(&format!("{k:<16}{v}\n"));
+    line("scene", scene.name.clone());
+    line("triangles", s.triangles.to_string());
+    line("vertices", s.vertices.to_string());
+    line("dropped", format!("{} degenerate or non-finite triangles", s.dropped_triangles));
+    line("materials", format!("{} (including glTF's default material)", s.materials));
+    line(
+        "textures",
+        format!(
+            "{} ({} images, {} bytes of texels)",
+            scene.textures.len(),
+            scene.images.len(),
+            s.texture_bytes
+        ),
+    );
+    line(
+        "sun",
+        match scene.sun {
+            Some(sun) => format!("travelling {}, irradiance {} W/m²", v3(sun.direction), v3(sun.irradiance)),
+            None => "none".into(),
+        },
+    );
+    line("sky", format!("radiance {}", v3(scene.sky)));
+    let camera = scene.default_camera();
+    let projection = match camera.projection {
+        Projection::Perspective { yfov, aspect_ratio } => {
+            let aspect = aspect_ratio.map_or_else(|| "not given".into(), |r| format!("{r:.4}"));
+            format!("perspective, yfov {:.2}°, aspect ratio {aspect}", yfov.to_degrees())
+        }
+        Projection::Orthographic { xmag, ymag } => format!("orthographic, xmag {xmag}, ymag {ymag}"),
+    };
+    let origin = Vec3::from(camera.world_from_camera.translation);
+    let source = if scene.cameras.is_empty() {
+        "none in the file; framed around the geometry".to_string()
+    } else {
+        format!("1 of {}", scene.cameras.len())
+    };
+    line("camera", format!("{source}: {projection}, at {}", v3(origin)));
+    line(
+        "bytes/triangle",
+        format!(
+            "{:.1} ({} bytes of geometry{})",
+            s.bytes_per_triangle,
+            s.geometry_bytes,
+            if s.stores_uvs { ", UVs stored" } else { "" }
+        ),
+    );
+    line("warnings", scene.warnings.len().to_string());
+    for w in &scene.warnings {
+        out.push_str(&format!("  warning: {w}\n"));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn describes_the_cornell_box() {
+        let text = describe(&furnace_scene::builtin::cornell_box().unwrap());
+        assert!(text.contains("triangles       20516"), "{text}");
+        assert!(text.contains("sun             travelling"), "{text}");
+        assert!(text.contains("perspective, yfov 45.00°"), "{text}");
+    }
+}
