@@ -23,6 +23,9 @@ pub enum Command {
     Render(RenderArgs),
     /// Print a scene's triangles, materials, textures, lights, camera and loader warnings.
     Info(InfoArgs),
+    /// Score a candidate EXR against a reference EXR (as shared/oracle/compare.py): RMSE,
+    /// relative MSE, per-channel mean ratio and, with --stderr, per-pixel z-score statistics.
+    Compare(CompareArgs),
 }
 
 /// `furnace render`.
@@ -80,6 +83,24 @@ pub struct RenderArgs {
 pub struct InfoArgs {
     /// The .gltf or .glb scene.
     pub scene: PathBuf,
+}
+
+/// `furnace compare`.
+#[derive(Debug, Args)]
+pub struct CompareArgs {
+    /// The candidate render (.exr).
+    pub candidate: PathBuf,
+    /// The reference render (.exr), of the same size.
+    pub reference: PathBuf,
+    /// The reference's per-pixel standard error (.exr): enables the z-score statistics.
+    #[arg(long, value_name = "REF_STDERR.exr")]
+    pub stderr: Option<PathBuf>,
+    /// The candidate's per-pixel standard error (.exr), added in quadrature to the reference's.
+    #[arg(long, value_name = "C_STDERR.exr", requires = "stderr")]
+    pub candidate_stderr: Option<PathBuf>,
+    /// Write a PNG of |candidate − reference| per pixel, its 99th percentile mapped to white.
+    #[arg(long, value_name = "PATH.png")]
+    pub error_map: Option<PathBuf>,
 }
 
 /// The largest image side accepted.

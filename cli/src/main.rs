@@ -8,11 +8,14 @@
 //!   linear image as OpenEXR (with the render's metadata) and the tone-mapped sRGB image as PNG
 //!   (`furnace_post`).
 //! * `furnace info SCENE` prints a scene's sizes, lights, camera and loader warnings.
+//! * `furnace compare CANDIDATE.exr REFERENCE.exr [--stderr …]` scores a render against a
+//!   reference as `shared/oracle/compare.py` does (RMSE, relative MSE, mean ratio, z-scores).
 //!
 //! Every error is one line on stderr, `error: …`, naming the file where there is one, and the
 //! exit code is 1; no user input panics.
 
 mod args;
+mod compare;
 mod info;
 mod render;
 
@@ -39,6 +42,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         args::Command::Render(a) => render::run(&a),
         args::Command::Info(a) => info::run(&a),
+        args::Command::Compare(a) => compare::run(&a),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -211,3 +211,53 @@ fn unwritable_output_names_the_file() {
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("z.exr"), "{}", stderr(&o));
 }
+
+/// Renders the built-in Cornell box at `size`² and 4 spp with `seed` to `dir/name.exr`.
+fn render_cbox(dir: &Path, name: &str, size: u32, seed: u32) -> String {
+    let out = dir.join(name);
+    let (size, seed) = (size.to_string(), seed.to_string());
+    let o = furnace(&[
+        "render",
+        "--width",
+        &size,
+        "--height",
+        &size,
+        "--spp",
+        "4",
+        "--seed",
+        &seed,
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    dir.join(format!("{name}.exr")).display().to_string()
+}
+
+#[test]
+fn compare_two_seeds_of_the_cornell_box() {
+    let dir = temp_dir("compare");
+    let a = render_cbox(&dir, "a", 16, 1);
+    let b = render_cbox(&dir, "b", 16, 2);
+    let map = dir.join("err.png");
+    let o = furnace(&["compare", &a, &b, "--stderr", &b, "--error-map", map.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    for key in ["RMSE", "relative MSE", "mean ratio", "z std", "|z| > 3"] {
+        assert!(text.contains(key), "{key}: {text}");
+    }
+    let png = image::open(&map).unwrap();
+    assert_eq!((png.width(), png.height()), (16, 16));
+}
+
+#[test]
+fn compare_size_mismatch_names_both_files() {
+    let dir = temp_dir("compare_mismatch");
+    let a = render_cbox(&dir, "a", 16, 0);
+    let b = render_cbox(&dir, "b", 8, 0);
+    let o = furnace(&["compare", &a, &b]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.starts_with("error: ") && err.contains("a.exr") && err.contains("b.exr"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+}
