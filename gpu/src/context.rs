@@ -1,0 +1,227 @@
+//! [`GpuContext`]: an adapter chosen on purpose, a device with the limits it offers, and errors
+//! that say what went wrong.
+
+use std::sync::{Arc, Mutex};
+
+/// Errors of the GPU backend: each says what failed and, where it can, what to do.
+#[derive(Debug, thiserror::Error)]
+pub enum GpuError {
+    /// No adapter at all (no Vulkan/Metal/DX12 driver, or none matching `--adapter`).
+    #[error("no GPU adapter found{0}")]
+    NoAdapter(String),
+    /// The adapter refused the device (missing feature, limits).
+    #[error("could not open a device on {adapter}: {reason}")]
+    RequestDevice {
+        /// The adapter's name.
+        adapter: String,
+        /// What wgpu said.
+        reason: String,
+    },
+    /// A validation or out-of-memory error raised by wgpu.
+    #[error("GPU error: {0}")]
+    Wgpu(String),
+    /// The device was lost (driver reset, watchdog, unplugged).
+    #[error("the GPU device was lost: {0}")]
+    DeviceLost(String),
+    /// A buffer larger than the adapter allows.
+    #[error("{what} needs {bytes} bytes, more than this adapter's limit of {limit} bytes per buffer")]
+    TooLarge {
+        /// What the buffer holds.
+        what: String,
+        /// Bytes needed.
+        bytes: u64,
+        /// The adapter's limit.
+        limit: u64,
+    },
+}
+
+/// Which adapter to use.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub enum AdapterChoice {
+    /// The best one: a discrete GPU, else integrated, else virtual, else a software one
+    /// (lavapipe, WARP, llvmpipe).
+    #[default]
+    Best,
+    /// Only a hardware adapter (discrete, integrated or virtual); `None` is an error.
+    Hardware,
+    /// The first adapter whose name contains this text (case-insensitive), or whose index in
+    /// [`GpuContext::adapters`] it is.
+    Named(String),
+}
+
+/// An open device and what it can do.
+#[derive(Debug)]
+pub struct GpuContext {
+    /// The adapter the device was opened on.
+    pub adapter: wgpu::Adapter,
+    /// The device.
+    pub device: wgpu::Device,
+    /// Its queue.
+    pub queue: wgpu::Queue,
+    /// Name, backend, driver, device type.
+    pub info: wgpu::AdapterInfo,
+    /// Whether shaders may use `f64` ([`wgpu::Features::SHADER_F64`]).
+    pub shader_f64: bool,
+    /// Errors raised asynchronously (uncaptured validation / OOM errors, device loss), drained by
+    /// [`GpuContext::check`].
+    errors: Arc<Mutex<Vec<GpuError>>>,
+}
+
+/// All adapters of all backends wgpu was built with (`WGPU_BACKEND` narrows them).
+fn instance() -> wgpu::Instance {
+    wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+}
+
+/// Preference order of device types (lower is better).
+fn rank(t: wgpu::DeviceType) -> u8 {
+    match t {
+        wgpu::DeviceType::DiscreteGpu => 0,
+        wgpu::DeviceType::IntegratedGpu => 1,
+        wgpu::DeviceType::VirtualGpu => 2,
+        wgpu::DeviceType::Cpu => 3,
+        wgpu::DeviceType::Other => 4,
+    }
+}
+
+/// Whether an adapter runs on real GPU hardware.
+pub fn is_hardware(info: &wgpu::AdapterInfo) -> bool {
+    matches!(
+        info.device_type,
+        wgpu::DeviceType::DiscreteGpu | wgpu::DeviceType::IntegratedGpu | wgpu::DeviceType::VirtualGpu
+    )
+}
+
+impl GpuContext {
+    /// The adapters present, best first (see [`AdapterChoice::Best`]).
+    pub fn adapters() -> Vec<wgpu::AdapterInfo> {
+        let mut v: Vec<_> = pollster::block_on(instance().enumerate_adapters(wgpu::Backends::all()))
+            .iter()
+            .map(|a| a.get_info())
+            .collect();
+        v.sort_by_key(|i| rank(i.device_type));
+        v
+    }
+
+    /// Picks an adapter and opens a device with every limit the adapter offers and
+    /// `SHADER_F64` / `TIMESTAMP_QUERY` when available.
+    pub fn new(choice: &AdapterChoice) -> Result<Self, GpuError> {
+        let instance = instance();
+        let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
+        adapters.sort_by_key(|a| rank(a.get_info().device_type));
+        let listing = || {
+            let names: Vec<String> = adapters
+                .iter()
+                .enumerate()
+                .map(|(i, a)| {
+                    let i2 = a.get_info();
+                    format!("{i}: {} ({:?}, {:?})", i2.name, i2.device_type, i2.backend)
+                })
+                .collect();
+            if names.is_empty() { String::new() } else { format!("; adapters present: {}", names.join(", ")) }
+        };
+        let picked = match choice {
+            AdapterChoice::Best => adapters.first(),
+            AdapterChoice::Hardware => adapters.iter().find(|a| is_hardware(&a.get_info())),
+            AdapterChoice::Named(name) => match name.parse::<usize>() {
+                Ok(i) => adapters.get(i),
+                Err(_) => {
+                    let n = name.to_lowercase();
+                    adapters.iter().find(|a| a.get_info().name.to_lowercase().contains(&n))
+                }
+            },
+        };
+        let Some(adapter) = picked.cloned() else {
+            let what = match choice {
+                AdapterChoice::Best => String::new(),
+                AdapterChoice::Hardware => {
+                    " (hardware only: software adapters such as lavapipe excluded)".into()
+                }
+                AdapterChoice::Named(n) => format!(" matching \"{n}\""),
+            };
+            let hint = if adapters.is_empty() {
+                "; install a Vulkan driver (e.g. Mesa's mesa-vulkan-drivers for the lavapipe software device)"
+                    .to_string()
+            } else {
+                listing()
+            };
+            return Err(GpuError::NoAdapter(format!("{what}{hint}")));
+        };
+        let info = adapter.get_info();
+        let offered = adapter.features();
+        let wanted = wgpu::Features::SHADER_F64 | wgpu::Features::TIMESTAMP_QUERY;
+        let required_features = offered & wanted;
+        let desc = wgpu::DeviceDescriptor {
+            label: Some("furnace"),
+            required_features,
+            required_limits: adapter.limits(),
+            ..Default::default()
+        };
+        let (device, queue) = pollster::block_on(adapter.request_device(&desc))
+            .map_err(|e| GpuError::RequestDevice { adapter: info.name.clone(), reason: e.to_string() })?;
+        let errors: Arc<Mutex<Vec<GpuError>>> = Arc::default();
+        let sink = errors.clone();
+        device.on_uncaptured_error(Arc::new(move |e: wgpu::Error| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(GpuError::Wgpu(e.to_string()));
+            }
+        }));
+        let sink = errors.clone();
+        device.set_device_lost_callback(move |reason, message| {
+            if let Ok(mut v) = sink.lock() {
+                v.push(GpuError::DeviceLost(format!("{reason:?}: {message}")));
+            }
+        });
+        Ok(Self {
+            shader_f64: required_features.contains(wgpu::Features::SHADER_F64),
+            adapter,
+            device,
+            queue,
+            info,
+            errors,
+        })
+    }
+
+    /// Returns the first error raised since the last call (validation, out of memory, device
+    /// lost), if any.
+    pub fn check(&self) -> Result<(), GpuError> {
+        let mut v = self.errors.lock().unwrap_or_else(|p| p.into_inner());
+        if v.is_empty() { Ok(()) } else { Err(v.remove(0)) }
+    }
+
+    /// Blocks until the queue is idle, then reports any error raised meanwhile.
+    pub fn wait(&self) -> Result<(), GpuError> {
+        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        self.check()
+    }
+
+    /// One line: adapter name, type, backend, driver.
+    pub fn describe(&self) -> String {
+        let i = &self.info;
+        format!("{} ({:?}, {:?}, driver {} {})", i.name, i.device_type, i.backend, i.driver, i.driver_info)
+    }
+
+    /// The largest storage buffer binding this device accepts, in bytes.
+    pub fn max_storage_binding(&self) -> u64 {
+        self.device.limits().max_storage_buffer_binding_size
+    }
+}
+
+/// The context a GPU test runs on: [`AdapterChoice::Best`].
+///
+/// Returns `None` (the test should return early and pass) only when the environment variable
+/// `FURNACE_SKIP_GPU_TESTS=1` is set; it prints that it skipped. Otherwise a missing adapter
+/// **panics** with the reason, so that CI, which installs lavapipe, fails rather than silently
+/// skipping the GPU tests.
+pub fn test_context() -> Option<GpuContext> {
+    if std::env::var("FURNACE_SKIP_GPU_TESTS").is_ok_and(|v| v == "1") {
+        eprintln!("FURNACE_SKIP_GPU_TESTS=1: skipping a GPU test");
+        return None;
+    }
+    match GpuContext::new(&AdapterChoice::Best) {
+        Ok(ctx) => Some(ctx),
+        Err(e) => panic!(
+            "GPU test needs an adapter: {e}. Install Mesa's lavapipe (apt-get install mesa-vulkan-drivers) \
+             or set FURNACE_SKIP_GPU_TESTS=1 to skip GPU tests on purpose"
+        ),
+    }
+}

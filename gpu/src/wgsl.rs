@@ -1,0 +1,26 @@
+//! The WGSL sources, twins of the Rust code of the CPU crates.
+//!
+//! WGSL has no `#include`: a shader is the concatenation of the modules it needs, in dependency
+//! order, done by [`compose`]. Each module documents what it requires before it.
+
+/// `furnace-sampling`'s samplers (random, Hammersley, CMJ, PMJ02, Owen-Sobol) and warps,
+/// bit-identical to the Rust (all `u32` arithmetic, 0.32 fixed point).
+pub const SAMPLING: &str = include_str!("wgsl/sampling.wgsl");
+
+/// `furnace-brdf`'s BSDFs: Lambert, GGX (NDF / VNDF / spherical-cap sampling, separable and
+/// height-correlated Smith masking, Schlick Fresnel), Turquin compensation, glTF
+/// metallic-roughness. Needs [`SAMPLING`] (warps).
+pub const BRDF: &str = include_str!("wgsl/brdf.wgsl");
+
+/// CWBVH traversal of `furnace-accel`'s GPU buffers: closest hit and any hit (shadow rays).
+pub const TRAVERSE: &str = include_str!("wgsl/traverse.wgsl");
+
+/// Concatenates WGSL modules (in the order given) into one shader source.
+pub fn compose(parts: &[&str]) -> String {
+    let mut s = String::with_capacity(parts.iter().map(|p| p.len() + 1).sum());
+    for p in parts {
+        s.push_str(p);
+        s.push('\n');
+    }
+    s
+}

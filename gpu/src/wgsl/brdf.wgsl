@@ -1,0 +1,1 @@
+// furnace-gpu: brdf module (see src/wgsl.rs).

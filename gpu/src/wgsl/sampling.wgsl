@@ -1,0 +1,1 @@
+// furnace-gpu: sampling module (see src/wgsl.rs).

@@ -1,0 +1,1 @@
+// furnace-gpu: traverse module (see src/wgsl.rs).
