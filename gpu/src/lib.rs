@@ -14,8 +14,11 @@
 //! `FURNACE_SKIP_GPU_TESTS=1` is set, in which case it prints why and passes (see
 //! [`test_context`]).
 
+pub mod brdf;
 pub mod context;
 pub mod kernel;
+pub mod sampling;
+pub mod traverse;
 pub mod wgsl;
 
 pub use context::{AdapterChoice, GpuContext, GpuError, test_context};

@@ -44,3 +44,18 @@ fn invalid_wgsl_is_an_error_not_a_panic() {
     eprintln!("{err}");
     assert!(err.to_string().contains("GPU error"), "{err}");
 }
+
+mod common;
+
+/// The layout checker itself: WGSL's vec3 alignment rule (16) shows in the offsets.
+#[test]
+fn naga_reflection_reports_wgsl_offsets() {
+    let src = "struct S { a: f32, b: vec3<f32>, c: u32 }";
+    let layout = common::wgsl_struct(src, "S");
+    assert_eq!(layout.size, 32);
+    assert_eq!(layout.members, vec![("a".into(), 0), ("b".into(), 16), ("c".into(), 28)]);
+    common::assert_layout(src, "S", 32, &[("a", 0), ("b", 16), ("c", 28)]);
+    let mismatch =
+        std::panic::catch_unwind(|| common::assert_layout(src, "S", 32, &[("a", 0), ("b", 4), ("c", 16)]));
+    assert!(mismatch.is_err(), "a wrong offset must fail");
+}
