@@ -1,70 +1,89 @@
-//! The Cornell box against Mitsuba 3 (`tests/data/cbox/`, an independent renderer): bias test.
+//! The Cornell box against Mitsuba 3 (`tests/data/cbox/`, an independent renderer): a bias test
+//! at the references' full resolution, 256×256, to the bar of issue 5:
 //!
-//! The 256×256 references are averaged over 4×4 blocks to 64×64; with a one-pixel box filter
-//! that is exactly what a 64×64 render converges to (a block's mean is the mean over its area),
-//! so the comparison needs no resampling assumptions. We render with Mitsuba's material model
-//! (`SpecularOptions::mitsuba()`: separable masking, no compensation) and the random sampler in
-//! `PASSES` independent passes, estimate each pixel's standard error from the passes, and
-//! compute per-pixel `z = (ours − ref)/√(se_ours² + se_ref²)`.
+//! * per-channel image-mean ratio ours/Mitsuba within ±0.5%;
+//! * per-pixel z-scores `z = (ours − ref)/√(se_ours² + se_ref²)` (over every pixel and channel
+//!   whose denominator is not 0) with standard deviation in [0.9, 1.15].
 //!
-//! An unbiased renderer gives z of mean ≈ 0 and, with 8 passes, standard deviation ≈ 1.18
-//! (Student's t with 7 degrees of freedom; see the references' README). Tolerances: |mean z|
-//! < 0.1 (the standard error of the mean of 4096 z-values is ~0.02; a bias of 1% in a pixel
-//! of 5% relative noise shifts z by 0.2), std z < 1.35, and per-channel image means within
-//! 4 of their standard errors of the reference's. 256 samples per pixel per pass: with 32, rare
-//! bright paths (the metal sphere's GGX tail reaching the sky) are missing from all 8 passes of
-//! some pixels, whose estimated error is then 0 and z meaningless. On failure the candidate,
-//! reference and z images are written to `target/test-output/furnace-cpu/`.
+//! We render with Mitsuba's material model (`SpecularOptions::mitsuba()`: separable masking, no
+//! compensation), direct light (1 bounce, against `cbox_ref_direct`) and 4 bounces (against
+//! `cbox_ref_bounces4`).
+//!
+//! ## How the candidate gets its own standard error
+//!
+//! `n` independent passes, each pixel's standard error from the spread of its `n` pass means
+//! (`support/cbox.rs`, `render_passes`). With few passes the estimated error is itself noisy
+//! and z follows Student's t with `n − 1` degrees of freedom, whose standard deviation is
+//! `√((n−1)/(n−3))`: 1.18 for the old test's 8 passes, above the bar before any bias. So each
+//! pass here is **one sample per pixel** of the random sampler (whose samples are independent):
+//! the pass variance is the per-sample variance, with `N − 1` degrees of freedom for `N`
+//! samples (inflation ≤ 1.004 at N = 128). What remains is the heavy tails: rare bright paths
+//! (the sky through the ceiling hole found by a BSDF sample, the metal sphere's GGX tail) make
+//! the per-pixel estimates skewed, and a pixel whose rare path never came has a small estimated
+//! error and a large negative z. That excess depends on the total sample count N, not on how
+//! it is split into passes (Edgeworth: skewness of the mean ∝ 1/√N), and only more samples cure
+//! it. The reference's own error enters through `se_ref` (64 passes of Mitsuba's; ~0.4% per
+//! pixel at 4 bounces, ~1% direct).
+//!
+//! Measured with `cargo run --release -p furnace-cpu --example reference_budget` (one render
+//! per seed evaluated at every prefix N and pass size b; seeds 100–102), z std:
+//!
+//! | bounces | N | b = 1 (N passes) | b = 4 | b = N/16 (16 passes) | b = N/8 (8 passes) |
+//! |---|---|---|---|---|---|
+//! | 4 | 64 | 1.112 – 1.126 | 1.166 – 1.174 | 1.166 – 1.174 | 1.272 – 1.285 |
+//! | 4 | 128 | 1.054 – 1.059 | 1.078 – 1.082 | 1.116 – 1.123 | 1.222 |
+//! | 4 | 256 | 1.022 – 1.030 | 1.034 – 1.041 | 1.090 | 1.191 |
+//! | 4 | 2048 | 1.003 | 1.005 | 1.067 | 1.152 |
+//! | 1 | 128 | 1.627 | 1.641 | 1.664 | 1.738 |
+//! | 1 | 256 | 1.094 – 1.124 | 1.135 | 1.184 | — |
+//! | 1 | 512 | 1.011 – 1.013 | 1.018 | 1.081 | — |
+//! | 1 | 2048 | 1.007 | 1.008 | 1.013 | — |
+//!
+//! (ranges over seeds where more than one was run). Image-mean ratios were within ±0.06% in
+//! every configuration. Hence the cheapest configurations that meet the bar with margin —
+//! **4 bounces: 128 passes of 1 spp** (z std ≈ 1.055, 18× the seed-to-seed spread below
+//! 1.15); **direct: 512 passes of 1 spp** (≈ 1.012; at 256 spp the rarely sampled skylight
+//! pushes it to 1.09–1.12, too close). Fixed seed 11; the test prints its table with
+//! `--nocapture`. On failure the candidate, its standard error, the reference and the z image
+//! are written to `target/test-output/furnace-cpu/`, with the table.
 
+#[path = "support/cbox.rs"]
+mod cbox;
+
+use cbox::{Comparison, Reference};
 use furnace_brdf::SpecularOptions;
 use furnace_cpu::{RenderSettings, Renderer};
 use furnace_sampling::SamplerKind;
-use glam::DVec3;
-use std::path::Path;
+use std::time::Instant;
 
-const SIZE: u32 = 64;
-const BLOCK: usize = 4;
-const PASSES: u32 = 8;
+/// The bar of issue 5.
+const MAX_RATIO_ERROR: f64 = 5e-3;
+const Z_STD_RANGE: (f64, f64) = (0.9, 1.15);
 
-/// An RGB EXR as `(width, height, row-major pixels)`.
-fn read_exr(name: &str) -> (usize, usize, Vec<DVec3>) {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/cbox").join(name);
-    let image = exr::prelude::read_first_rgba_layer_from_file(
-        &path,
-        |resolution, _| (resolution.width(), resolution.height(), vec![DVec3::ZERO; resolution.area()]),
-        |(w, _, pixels), position, (r, g, b, _a): (f32, f32, f32, f32)| {
-            pixels[position.y() * *w + position.x()] = DVec3::new(r.into(), g.into(), b.into());
-        },
+fn row(stem: &str, passes: u32, c: &Comparison, seconds: f64) -> String {
+    let r = c.ratio();
+    format!(
+        "| {stem} | {passes} × 1 | {:.4}, {:.4}, {:.4} (± {:.4}) | {:+.3} | {:.3} | {:.4} | {:.1} at ({}, {}) | {} | {seconds:.1} s |",
+        r.x,
+        r.y,
+        r.z,
+        c.ratio_se.max_element(),
+        c.z_mean,
+        c.z_std,
+        c.z_over_3,
+        c.z_max.0,
+        c.z_max.1,
+        c.z_max.2,
+        c.z_count
     )
-    .unwrap_or_else(|e| panic!("{}: {e}", path.display()));
-    image.layer_data.channel_data.pixels
 }
 
-/// The reference and its standard error, averaged over `BLOCK × BLOCK` blocks.
-fn reference(stem: &str) -> (Vec<DVec3>, Vec<DVec3>) {
-    let (w, h, mean) = read_exr(&format!("{stem}.exr"));
-    let (_, _, stderr) = read_exr(&format!("{stem}_stderr.exr"));
-    assert_eq!((w, h), (SIZE as usize * BLOCK, SIZE as usize * BLOCK));
-    let mut m = vec![DVec3::ZERO; (SIZE * SIZE) as usize];
-    let mut v = vec![DVec3::ZERO; (SIZE * SIZE) as usize];
-    let n = (BLOCK * BLOCK) as f64;
-    for y in 0..h {
-        for x in 0..w {
-            let i = (y / BLOCK) * SIZE as usize + x / BLOCK;
-            m[i] += mean[y * w + x] / n;
-            // Pixels' errors are independent: the block mean's variance is Σ se²/n².
-            v[i] += stderr[y * w + x] * stderr[y * w + x] / (n * n);
-        }
-    }
-    (m, v.into_iter().map(|v| v.map(f64::sqrt)).collect())
-}
-
-fn compare(stem: &str, bounces: u32, spp: u32) {
-    let (ref_mean, ref_se) = reference(stem);
+fn compare(stem: &str, bounces: u32, passes: u32) {
+    let reference = Reference::load(stem);
     let scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
     let settings = RenderSettings {
-        width: SIZE,
-        height: SIZE,
+        width: reference.mean.width as u32,
+        height: reference.mean.height as u32,
         bounces,
         sampler: SamplerKind::Random,
         seed: 11,
@@ -72,60 +91,31 @@ fn compare(stem: &str, bounces: u32, spp: u32) {
         ..Default::default()
     };
     let renderer = Renderer::new(scene, settings).expect("a progressive sampler");
-    let passes: Vec<Vec<DVec3>> = (0..PASSES)
-        .map(|p| {
-            let mut film = renderer.new_film();
-            renderer.render_pass(&mut film, p * spp, spp).expect("render");
-            assert_eq!(film.rejected(), 0);
-            (0..SIZE * SIZE).map(|i| film.pixel(i % SIZE, i / SIZE)).collect()
-        })
-        .collect();
-    let n = f64::from(PASSES);
-    let pixels = (SIZE * SIZE) as usize;
-    let mut zs = Vec::with_capacity(pixels * 3);
-    let mut z_image = vec![DVec3::ZERO; pixels];
-    let mut candidate = vec![DVec3::ZERO; pixels];
-    let (mut ours_total, mut ours_var, mut ref_total) = (DVec3::ZERO, DVec3::ZERO, DVec3::ZERO);
-    for i in 0..pixels {
-        let mean = passes.iter().map(|p| p[i]).sum::<DVec3>() / n;
-        let var = passes.iter().map(|p| (p[i] - mean) * (p[i] - mean)).sum::<DVec3>() / (n - 1.0) / n;
-        candidate[i] = mean;
-        ours_total += mean;
-        ours_var += var;
-        ref_total += ref_mean[i];
-        let se = (var + ref_se[i] * ref_se[i]).map(f64::sqrt);
-        for c in 0..3 {
-            if se[c] > 0.0 {
-                let z = (mean[c] - ref_mean[i][c]) / se[c];
-                z_image[i][c] = z;
-                zs.push(z);
-            }
+    let start = Instant::now();
+    let candidate = cbox::render_passes(&renderer, passes, 1);
+    let seconds = start.elapsed().as_secs_f64();
+    let c = cbox::compare(&candidate, &reference);
+    let header = "| reference | passes × spp | ratio R, G, B (± se) | z mean | z std | \\|z\\| > 3 | max \\|z\\| | z values | time |\n|---|---|---|---|---|---|---|---|---|";
+    let table = format!("{header}\n{}", row(stem, passes, &c, seconds));
+    println!("{table}");
+    let ratio_ok = (c.ratio() - 1.0).abs().max_element() < MAX_RATIO_ERROR;
+    let z_ok = (Z_STD_RANGE.0..=Z_STD_RANGE.1).contains(&c.z_std);
+    if !(ratio_ok && z_ok) {
+        let dir = cbox::output_dir();
+        for (name, image) in [
+            ("candidate", &candidate.mean),
+            ("candidate_stderr", &candidate.stderr),
+            ("reference", &reference.mean),
+            ("z", &c.z_image),
+        ] {
+            image.write_exr(&dir.join(format!("{stem}_{name}.exr")));
         }
-    }
-    let p = pixels as f64;
-    let (ours_img, ref_img, img_se) = (ours_total / p, ref_total / p, ours_var.map(f64::sqrt) / p);
-    let z_mean = zs.iter().sum::<f64>() / zs.len() as f64;
-    let z_std = (zs.iter().map(|z| (z - z_mean).powi(2)).sum::<f64>() / (zs.len() as f64 - 1.0)).sqrt();
-    println!(
-        "{stem}: image mean {ours_img:.5} ± {img_se:.6} vs Mitsuba {ref_img:.5} (ratio {:.4}); z mean {z_mean:.3}, std {z_std:.3} over {} values",
-        ours_img / ref_img,
-        zs.len()
-    );
-    let means_ok = (0..3).all(|c| (ours_img[c] - ref_img[c]).abs() < 4.0 * img_se[c]);
-    if !(means_ok && z_mean.abs() < 0.1 && z_std < 1.35) {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/test-output/furnace-cpu");
-        std::fs::create_dir_all(&dir).expect("an output folder");
-        for (name, image) in [("candidate", &candidate), ("reference", &ref_mean), ("z", &z_image)] {
-            let path = dir.join(format!("{stem}_{name}.exr"));
-            exr::prelude::write_rgb_file(&path, SIZE as usize, SIZE as usize, |x, y| {
-                let v = image[y * SIZE as usize + x].as_vec3();
-                (v.x, v.y, v.z)
-            })
-            .expect("writing a diagnostic EXR");
-        }
+        std::fs::write(dir.join(format!("{stem}.md")), format!("{table}\n")).expect("writing the table");
         panic!(
-            "{stem}: image means {ours_img} ± {img_se} vs {ref_img}, z mean {z_mean}, std {z_std}; \
-             candidate, reference and z images in {}",
+            "{stem}: ratio {:.5} (bar ±{MAX_RATIO_ERROR}), z std {:.3} (bar {Z_STD_RANGE:?}); candidate, its \
+             standard error, reference, z images and the table in {}",
+            c.ratio(),
+            c.z_std,
             dir.display()
         );
     }
@@ -133,10 +123,10 @@ fn compare(stem: &str, bounces: u32, spp: u32) {
 
 #[test]
 fn cornell_box_direct_matches_mitsuba() {
-    compare("cbox_ref_direct", 1, 256);
+    compare("cbox_ref_direct", 1, 512);
 }
 
 #[test]
 fn cornell_box_four_bounces_matches_mitsuba() {
-    compare("cbox_ref_bounces4", 4, 256);
+    compare("cbox_ref_bounces4", 4, 128);
 }
