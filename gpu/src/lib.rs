@@ -16,6 +16,7 @@
 
 pub mod brdf;
 pub mod context;
+pub mod film;
 pub mod kernel;
 pub mod sampling;
 pub mod traverse;
