@@ -208,14 +208,11 @@ fn normal_map_bitangent_follows_the_file_tangent_handedness() {
 /// decreasing `v` (−z here), as a file tangent `(1, 0, 0, w = +1)` says for this plane — the
 /// same render with and without the file's tangents.
 ///
-/// Fails today: `furnace_scene::generate_tangents` sets the handedness so that B points along
+/// Until 2026-11-22 `furnace_scene::generate_tangents` set the handedness so that B pointed along
 /// *increasing* `v` (MikkTSpace fed glTF's UVs unflipped — KhronosGroup/glTF-Sample-Models#174,
-/// "NormalTangentTest does not work with MikkTSpace (w sign is flipped)"), so generated tangents
-/// flip the green channel relative to glTF's "+Y is up" and to the file tangents that exporters
-/// write (the Khronos sample viewer uses B = N × T for derived frames). Rendered 0.043 where
-/// 0.390 is expected. To be fixed in `scene/src/geometry.rs`.
+/// "NormalTangentTest does not work with MikkTSpace (w sign is flipped)"): rendered 0.043 where
+/// 0.390 is expected. This test found it.
 #[test]
-#[ignore = "scene: generated tangents flip the bitangent (B along +v, glTF's +Y is up = −v); fix in scene/src/geometry.rs"]
 fn normal_map_green_is_up_in_the_image_with_generated_tangents() {
     let sun = sun_from(Vec3::NEG_Z);
     let green = Some(tilted(Vec3::Y, 25.0));

@@ -45,8 +45,12 @@ pub fn decode_tangent(e: [i16; 4]) -> Vec4 {
 /// Per-vertex tangents from UV derivatives (Lengyel, "Computing Tangent Space Basis Vectors
 /// for an Arbitrary Mesh", 2001): each triangle's `∂p/∂u` and `∂p/∂v` are accumulated on its
 /// vertices, then the tangent is Gram–Schmidt-orthogonalised against the normal and the
-/// handedness is the sign of `dot(cross(n, t), ∂p/∂v)`. Triangles with degenerate UVs add
-/// nothing; a vertex left without a tangent gets an arbitrary one orthogonal to its normal.
+/// handedness is the sign of `dot(cross(n, t), −∂p/∂v)`: glTF's texture coordinates have `v`
+/// growing *down* the image while a normal map's green channel points *up* it, so the
+/// bitangent `w·cross(n, t)` must follow −v (what MikkTSpace gives when fed `1 − v`, and what
+/// exporters write into `TANGENT`; KhronosGroup/glTF-Sample-Models#174). Triangles with
+/// degenerate UVs add nothing; a vertex left without a tangent gets an arbitrary one
+/// orthogonal to its normal.
 /// (MikkTSpace, which glTF recommends, differs in how it splits and weights; the results agree
 /// on smooth, consistently mapped meshes.)
 pub fn generate_tangents(
@@ -87,7 +91,7 @@ pub fn generate_tangents(
             if ortho == Vec3::ZERO {
                 return n.any_orthonormal_vector().extend(1.0);
             }
-            let w = if n.cross(ortho).dot(b[i]) < 0.0 { -1.0 } else { 1.0 };
+            let w = if n.cross(ortho).dot(b[i]) > 0.0 { -1.0 } else { 1.0 };
             ortho.extend(w)
         })
         .collect()
@@ -181,18 +185,19 @@ mod tests {
 
     #[test]
     fn tangents_follow_u_and_detect_mirrored_uvs() {
-        // A unit quad in the xy-plane facing +z, u along +x, v along +y: tangent +x, w = +1.
+        // A unit quad in the xy-plane facing +z, u along +x, v along +y: tangent +x; "up" in
+        // the image is −v = −y = −cross(z, x), so w = −1.
         let p = [Vec3::ZERO, Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y];
         let n = [Vec3::Z; 4];
         let uv = [Vec2::ZERO, Vec2::X, Vec2::ONE, Vec2::Y];
         let tris = [[0, 1, 2], [0, 2, 3]];
         for t in generate_tangents(&p, &n, &uv, &tris) {
-            assert!((t - Vec4::new(1.0, 0.0, 0.0, 1.0)).abs().max_element() < 1e-6, "{t}");
+            assert!((t - Vec4::new(1.0, 0.0, 0.0, -1.0)).abs().max_element() < 1e-6, "{t}");
         }
-        // v mirrored (v along −y): same tangent, handedness −1.
+        // v mirrored (v along −y, the usual glTF layout of this quad): same tangent, w = +1.
         let uv_m = uv.map(|c| Vec2::new(c.x, 1.0 - c.y));
         for t in generate_tangents(&p, &n, &uv_m, &tris) {
-            assert!((t - Vec4::new(1.0, 0.0, 0.0, -1.0)).abs().max_element() < 1e-6, "{t}");
+            assert!((t - Vec4::new(1.0, 0.0, 0.0, 1.0)).abs().max_element() < 1e-6, "{t}");
         }
         // Degenerate UVs: a unit tangent orthogonal to the normal, no NaN.
         for t in generate_tangents(&p, &n, &[Vec2::ZERO; 4], &tris) {
