@@ -69,6 +69,14 @@ pub enum PostError {
         /// The expected type (`u32`, `u64`, `f64`).
         expected: &'static str,
     },
+    /// The accumulation state (`furnace.resume.*` channels) cannot be written or read.
+    #[error("{path}: resume state: {reason}", path = .path.display())]
+    FilmState {
+        /// The file concerned.
+        path: PathBuf,
+        /// What is wrong.
+        reason: String,
+    },
     /// An unknown tone-map name (from [`crate::Tonemap`]'s `FromStr`).
     #[error("unknown tone map '{0}' (expected one of: aces, pbr-neutral, clamp)")]
     UnknownTonemap(String),

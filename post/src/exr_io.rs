@@ -4,11 +4,12 @@
 use crate::PostError;
 use crate::atomic::write_atomic;
 use exr::prelude::{
-    AttributeValue, Encoding, Image, Layer, LayerAttributes, ReadChannels, ReadLayers, SpecificChannels,
-    Text, Vec2, WritableImage, read,
+    AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer, LayerAttributes,
+    ReadChannels, ReadLayers, SmallVec, SpecificChannels, Text, Vec2, WritableImage, read,
 };
 use glam::Vec3;
 use std::collections::{BTreeMap, HashMap};
+use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
@@ -211,15 +212,7 @@ pub fn write_exr(
 ) -> Result<(), PostError> {
     let path = path.as_ref();
     check_size(path, width, height, pixels.len())?;
-    let attributes = metadata.to_attributes(path)?;
-    let mut other = HashMap::new();
-    for (k, v) in attributes {
-        other.insert(
-            Text::from_slice_unchecked(k.as_bytes()),
-            AttributeValue::Text(Text::from_slice_unchecked(v.as_bytes())),
-        );
-    }
-    let layer_attributes = LayerAttributes { other, ..LayerAttributes::default() };
+    let layer_attributes = layer_attributes(path, metadata)?;
     let w = width as usize;
     let channels = SpecificChannels::rgb(|Vec2(x, y): Vec2<usize>| {
         let p = pixels[y * w + x];
@@ -227,10 +220,30 @@ pub fn write_exr(
     });
     let layer = Layer::new((w, height as usize), layer_attributes, Encoding::SMALL_LOSSLESS, channels);
     let image = Image::from_layer(layer);
+    write_encoded(path, |out| image.write().to_buffered(out))
+}
+
+/// The metadata as the layer's text attributes.
+fn layer_attributes(path: &Path, metadata: &Metadata) -> Result<LayerAttributes, PostError> {
+    let mut other = HashMap::new();
+    for (k, v) in metadata.to_attributes(path)? {
+        other.insert(
+            Text::from_slice_unchecked(k.as_bytes()),
+            AttributeValue::Text(Text::from_slice_unchecked(v.as_bytes())),
+        );
+    }
+    Ok(LayerAttributes { other, ..LayerAttributes::default() })
+}
+
+/// Writes `path` atomically with `encode`.
+fn write_encoded(
+    path: &Path,
+    encode: impl FnOnce(&mut BufWriter<&mut File>) -> exr::error::Result<()>,
+) -> Result<(), PostError> {
     let exr_err = |source| PostError::Exr { path: path.to_path_buf(), source };
     write_atomic(path, |file| {
         let mut out = BufWriter::new(file);
-        image.write().to_buffered(&mut out).map_err(exr_err)?;
+        encode(&mut out).map_err(exr_err)?;
         out.flush().map_err(|source| PostError::Io { path: path.to_path_buf(), source })
     })
 }
@@ -268,4 +281,245 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(u32, u32, Vec<Vec3>, Metadata
     let (_, pixels) = &layer.channel_data.pixels;
     // The exr crate limits sizes to i32 range, so these fit.
     Ok((size.0 as u32, size.1 as u32, pixels.clone(), metadata))
+}
+
+/// The layer (channel-name prefix) holding a progressive render's accumulation state.
+///
+/// Beside the `R`, `G`, `B` means (which viewers show as the image), [`write_exr_with_state`]
+/// stores, in the same part, the `u32` channels `furnace.resume.count` (accepted samples per
+/// pixel) and `furnace.resume.sumR.hi`, `furnace.resume.sumR.lo`, … `sumB.lo`: each pixel's
+/// `f64` sum per colour channel as its IEEE-754 bit pattern split into high and low 32 bits. EXR
+/// has no 64-bit sample type; the split keeps the sums exact, so a render resumed from the file
+/// continues bit-identically.
+pub const RESUME_LAYER: &str = "furnace.resume";
+
+/// `furnace.resume.count`.
+const COUNT_CHANNEL: &str = "furnace.resume.count";
+/// `[high, low]` halves of the R, G, B sums.
+const SUM_CHANNELS: [[&str; 2]; 3] = [
+    ["furnace.resume.sumR.hi", "furnace.resume.sumR.lo"],
+    ["furnace.resume.sumG.hi", "furnace.resume.sumG.lo"],
+    ["furnace.resume.sumB.hi", "furnace.resume.sumB.lo"],
+];
+
+/// The exact accumulation state of a progressive render (see [`RESUME_LAYER`]).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FilmState {
+    /// Per-pixel `f64` sums of the accepted samples, interleaved R, G, B, row-major from the
+    /// top (`3·width·height` values).
+    pub sums: Vec<f64>,
+    /// Per-pixel counts of accepted samples, row-major from the top (`width·height` values).
+    pub counts: Vec<u64>,
+}
+
+/// A furnace EXR as read by [`read_exr_with_state`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExrWithState {
+    /// Width of the data window.
+    pub width: u32,
+    /// Height of the data window.
+    pub height: u32,
+    /// The `R`, `G`, `B` channels, row-major from the top.
+    pub pixels: Vec<Vec3>,
+    /// The text attributes.
+    pub metadata: Metadata,
+    /// The accumulation state, if the file has the [`RESUME_LAYER`] channels.
+    pub state: Option<FilmState>,
+}
+
+/// Writes what [`write_exr`] writes — 32-bit float `R`, `G`, `B` and `metadata`, atomically —
+/// plus the accumulation state `sums` (3 per pixel) and `counts` (1 per pixel) as the
+/// [`RESUME_LAYER`] channels, exactly.
+///
+/// # Errors
+/// As [`write_exr`]; [`PostError::FilmState`] if `sums` or `counts` have the wrong length or a
+/// count exceeds `u32::MAX`. All name `path`.
+pub fn write_exr_with_state(
+    path: impl AsRef<Path>,
+    width: u32,
+    height: u32,
+    pixels: &[Vec3],
+    metadata: &Metadata,
+    sums: &[f64],
+    counts: &[u64],
+) -> Result<(), PostError> {
+    let path = path.as_ref();
+    check_size(path, width, height, pixels.len())?;
+    let n = pixels.len();
+    let bad = |reason: String| PostError::FilmState { path: path.to_path_buf(), reason };
+    if sums.len() != 3 * n || counts.len() != n {
+        return Err(bad(format!(
+            "{width}×{height} pixels need {} sums and {n} counts, got {} and {}",
+            3 * n,
+            sums.len(),
+            counts.len()
+        )));
+    }
+    let counts: Vec<u32> = counts
+        .iter()
+        .map(|&c| u32::try_from(c))
+        .collect::<Result<_, _>>()
+        .map_err(|_| bad(format!("a pixel count exceeds {}", u32::MAX)))?;
+    let layer_attributes = layer_attributes(path, metadata)?;
+    let mut list = SmallVec::new();
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        let values = pixels.iter().map(|p| p[c]).collect();
+        list.push(AnyChannel::new(name, FlatSamples::F32(values)));
+        let bits = || sums.iter().skip(c).step_by(3).map(|s| s.to_bits());
+        let [hi, lo] = SUM_CHANNELS[c];
+        list.push(AnyChannel::new(hi, FlatSamples::U32(bits().map(|b| (b >> 32) as u32).collect())));
+        list.push(AnyChannel::new(lo, FlatSamples::U32(bits().map(|b| b as u32).collect())));
+    }
+    list.push(AnyChannel::new(COUNT_CHANNEL, FlatSamples::U32(counts)));
+    let size = (width as usize, height as usize);
+    let layer = Layer::new(size, layer_attributes, Encoding::SMALL_LOSSLESS, AnyChannels::sort(list));
+    let image = Image::from_layer(layer);
+    write_encoded(path, |out| image.write().to_buffered(out))
+}
+
+/// Reads a furnace EXR with its accumulation state: the first layer's `R`, `G`, `B` channels
+/// (f16, f32 or u32, converted to f32), its text attributes, and the [`RESUME_LAYER`] channels
+/// when present (`state` is `None` for files without them, such as Mitsuba's or other
+/// renderers').
+///
+/// # Errors
+/// [`PostError::Exr`] if the file cannot be read; [`PostError::FilmState`] if it lacks an
+/// `R`, `G` or `B` channel, or has some but not all state channels, or one that is not `u32`;
+/// [`PostError::InvalidMetadataValue`] as [`read_exr`]. All name `path`.
+pub fn read_exr_with_state(path: impl AsRef<Path>) -> Result<ExrWithState, PostError> {
+    let path = path.as_ref();
+    let exr_err = |source| PostError::Exr { path: path.to_path_buf(), source };
+    let bad = |reason: String| PostError::FilmState { path: path.to_path_buf(), reason };
+    let image = read()
+        .no_deep_data()
+        .largest_resolution_level()
+        .all_channels()
+        .first_valid_layer()
+        .all_attributes()
+        .from_file(path)
+        .map_err(exr_err)?;
+    let layer = &image.layer_data;
+    let attributes = image.attributes.other.iter().chain(layer.attributes.other.iter());
+    let metadata = Metadata::from_attributes(path, attributes)?;
+    let channel = |name: &str| {
+        layer.channel_data.list.iter().find(|c| c.name == Text::from_slice_unchecked(name.as_bytes()))
+    };
+    let n = layer.size.0 * layer.size.1;
+    let mut pixels = vec![Vec3::ZERO; n];
+    for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
+        let ch = channel(name).ok_or_else(|| bad(format!("no '{name}' channel")))?;
+        for (p, v) in pixels.iter_mut().zip(ch.sample_data.values_as_f32()) {
+            p[c] = v;
+        }
+    }
+    let u32s = |name: &str| match channel(name).map(|c| &c.sample_data) {
+        Some(FlatSamples::U32(v)) if v.len() == n => Ok(Some(v)),
+        Some(_) => Err(bad(format!("channel '{name}' is not u32 per pixel"))),
+        None => Ok(None),
+    };
+    let names = std::iter::once(COUNT_CHANNEL).chain(SUM_CHANNELS.into_iter().flatten());
+    let found: Vec<(&str, Option<&Vec<u32>>)> =
+        names.map(|name| u32s(name).map(|v| (name, v))).collect::<Result<_, _>>()?;
+    let state = if found.iter().all(|(_, v)| v.is_none()) {
+        None
+    } else {
+        if let Some((missing, _)) = found.iter().find(|(_, v)| v.is_none()) {
+            return Err(bad(format!("incomplete resume state: no '{missing}' channel")));
+        }
+        let get = |i: usize| found[i].1.map_or(&[][..], |v| v.as_slice());
+        let counts = get(0).iter().map(|&c| u64::from(c)).collect();
+        let mut sums = vec![0.0; 3 * n];
+        for c in 0..3 {
+            let (hi, lo) = (get(1 + 2 * c), get(2 + 2 * c));
+            for (i, (&h, &l)) in hi.iter().zip(lo).enumerate() {
+                sums[3 * i + c] = f64::from_bits(u64::from(h) << 32 | u64::from(l));
+            }
+        }
+        Some(FilmState { sums, counts })
+    };
+    // The exr crate limits sizes to i32 range, so these fit.
+    Ok(ExrWithState { width: layer.size.0 as u32, height: layer.size.1 as u32, pixels, metadata, state })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("furnace-post-state-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn state_round_trips_bit_exactly_beside_rgb() {
+        let dir = scratch("round_trip");
+        let path = dir.join("s.exr");
+        let (w, h) = (3, 2);
+        let pixels: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f32, 0.5, -1.25)).collect();
+        // Values whose low 32 bits matter, signed zero, a subnormal, the largest finite, NaN
+        // with a payload: every bit of every sum must survive.
+        let mut sums = vec![
+            0.1,
+            -0.0,
+            f64::MIN_POSITIVE / 3.0,
+            f64::MAX,
+            f64::from_bits(0x7ff8_0000_dead_beef),
+            1.0 + f64::EPSILON,
+        ];
+        sums.extend((0..12).map(|i| (i as f64).sqrt() * 1e10 + 1e-7));
+        let counts = vec![0, 1, 7, u64::from(u32::MAX), 123_456, 42];
+        let meta = Metadata { spp: Some(7), scene: Some("x".into()), ..Metadata::default() };
+        write_exr_with_state(&path, w, h, &pixels, &meta, &sums, &counts).unwrap();
+
+        let back = read_exr_with_state(&path).unwrap();
+        assert_eq!((back.width, back.height), (w, h));
+        assert_eq!(back.pixels, pixels);
+        assert_eq!(back.metadata, meta);
+        let state = back.state.expect("the state channels were written");
+        let bits = |v: &[f64]| v.iter().map(|s| s.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&state.sums), bits(&sums));
+        assert_eq!(state.counts, counts);
+
+        // Readers that only want the image still see R, G, B.
+        let (rw, rh, rgb, m) = read_exr(&path).unwrap();
+        assert_eq!((rw, rh, rgb, m), (w, h, pixels, meta));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn files_without_state_read_as_none() {
+        let dir = scratch("none");
+        let path = dir.join("plain.exr");
+        let pixels = vec![Vec3::new(1.0, 2.0, 3.0); 4];
+        write_exr(&path, 2, 2, &pixels, &Metadata::default()).unwrap();
+        let back = read_exr_with_state(&path).unwrap();
+        assert_eq!((back.pixels, back.state), (pixels, None));
+
+        // Mitsuba 3's reference: B, G, R with PIZ compression, no state.
+        let mitsuba =
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("../cpu/tests/data/cbox/cbox_ref_direct.exr");
+        let back = read_exr_with_state(&mitsuba).unwrap();
+        let (w, h, rgb, _) = read_exr(&mitsuba).unwrap();
+        assert_eq!((back.width, back.height), (w, h));
+        assert_eq!(back.pixels, rgb);
+        assert!(back.state.is_none());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn bad_state_is_an_error_naming_the_file() {
+        let dir = scratch("bad");
+        let path = dir.join("bad.exr");
+        let pixels = vec![Vec3::ZERO; 2];
+        let m = Metadata::default();
+        let short = write_exr_with_state(&path, 2, 1, &pixels, &m, &[0.0; 5], &[0, 0]).unwrap_err();
+        assert!(matches!(short, PostError::FilmState { .. }), "{short}");
+        assert!(short.to_string().contains("bad.exr") && short.to_string().contains("6 sums"), "{short}");
+        let big = write_exr_with_state(&path, 2, 1, &pixels, &m, &[0.0; 6], &[1 << 32, 0]).unwrap_err();
+        assert!(big.to_string().contains("exceeds"), "{big}");
+        assert!(!path.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -57,7 +57,10 @@ mod srgb;
 mod tonemap;
 
 pub use error::PostError;
-pub use exr_io::{Metadata, read_exr, write_exr};
+pub use exr_io::{
+    ExrWithState, FilmState, Metadata, RESUME_LAYER, read_exr, read_exr_with_state, write_exr,
+    write_exr_with_state,
+};
 pub use png_io::write_png;
 pub use srgb::{linear_to_srgb, pixel_to_srgb8, quantize_unorm8, srgb_to_linear, srgb8_to_linear, to_srgb8};
 pub use tonemap::{Tonemap, aces_filmic, exposure_scale, pbr_neutral};
