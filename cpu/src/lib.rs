@@ -91,6 +91,6 @@ mod film;
 mod integrator;
 mod settings;
 
-pub use film::Film;
+pub use film::{Film, FilmSizeError};
 pub use integrator::{DIM_FIRST_BOUNCE, DIM_PIXEL, DIMS_PER_BOUNCE, Renderer};
 pub use settings::RenderSettings;
