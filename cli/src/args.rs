@@ -4,6 +4,7 @@ use clap::{Args, Parser, Subcommand, ValueEnum};
 use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
 use furnace_sampling::SamplerKind;
+use std::collections::BTreeSet;
 use std::path::PathBuf;
 
 /// furnace: a progressive path tracer.
@@ -29,13 +30,20 @@ pub enum Command {
 }
 
 /// `furnace render`.
-#[derive(Debug, Args)]
+#[derive(Debug, Clone, Args)]
 pub struct RenderArgs {
-    /// The .gltf or .glb scene; without it, the built-in reference Cornell box.
+    /// The .gltf or .glb scene; without it, the built-in reference Cornell box (with --resume:
+    /// the scene the file was rendered from).
     pub scene: Option<PathBuf>,
-    /// Samples per pixel (the total; also N of the fixed-N samplers hammersley and cmj).
+    /// Samples per pixel (the total, also when resuming; also N of the fixed-N samplers
+    /// hammersley and cmj).
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: u32,
+    /// Continue the render saved in PATH.exr (by furnace, finished, stopped by --time-limit or
+    /// Ctrl-C) up to --spp samples per pixel, bit-identical to an uninterrupted render. Settings
+    /// not given are the file's; settings given must match it. Writes to PATH unless --out.
+    #[arg(long, value_name = "PATH.exr")]
+    pub resume: Option<PathBuf>,
     /// Scattering events per path (0: only what the camera sees directly; 1: direct lighting).
     #[arg(long, default_value_t = 4)]
     pub bounces: u32,
@@ -67,6 +75,13 @@ pub struct RenderArgs {
     /// How the GGX lobes sample microfacet normals.
     #[arg(long, value_enum, default_value_t = SamplingArg::Caps)]
     pub specular_sampling: SamplingArg,
+    /// Which of the scene's cameras to render (0-based, in `furnace info` order) [default: the
+    /// first; a scene without one is framed around its geometry].
+    #[arg(long, value_name = "INDEX")]
+    pub camera: Option<u32>,
+    /// Russian roulette from the third scattering event on (unbiased; faster, noisier).
+    #[arg(long, value_enum, default_value_t = Switch::Off)]
+    pub russian_roulette: Switch,
     /// Output path: writes PATH.png and PATH.exr (a .png or .exr extension is replaced).
     #[arg(long, default_value = "furnace")]
     pub out: PathBuf,
@@ -76,6 +91,17 @@ pub struct RenderArgs {
     /// Stop after this many seconds (at a whole number of passes; at least one pass is done).
     #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_limit: Option<f64>,
+    /// The ids of the arguments given on the command line (not defaulted): filled by `main`
+    /// from clap's matches; a resumed render takes the others from the file.
+    #[arg(skip)]
+    pub given: BTreeSet<String>,
+}
+
+impl RenderArgs {
+    /// Whether argument `id` (the field name) was given on the command line.
+    pub fn given(&self, id: &str) -> bool {
+        self.given.contains(id)
+    }
 }
 
 /// `furnace info`.

@@ -1,7 +1,7 @@
 //! `furnace info`: what a scene holds, as the loader sees it.
 
 use crate::args::InfoArgs;
-use furnace_scene::{Projection, Scene};
+use furnace_scene::{Camera, Projection, Scene};
 use glam::Vec3;
 
 pub fn run(a: &InfoArgs) -> Result<(), String> {
@@ -12,6 +12,18 @@ pub fn run(a: &InfoArgs) -> Result<(), String> {
 
 fn v3(v: Vec3) -> String {
     format!("({:.4}, {:.4}, {:.4})", v.x, v.y, v.z)
+}
+
+/// A camera's projection and position.
+fn describe_camera(camera: &Camera) -> String {
+    let projection = match camera.projection {
+        Projection::Perspective { yfov, aspect_ratio } => {
+            let aspect = aspect_ratio.map_or_else(|| "not given".into(), |r| format!("{r:.4}"));
+            format!("perspective, yfov {:.2}°, aspect ratio {aspect}", yfov.to_degrees())
+        }
+        Projection::Orthographic { xmag, ymag } => format!("orthographic, xmag {xmag}, ymag {ymag}"),
+    };
+    format!("{projection}, at {}", v3(Vec3::from(camera.world_from_camera.translation)))
 }
 
 /// The report, one `key: value` line per item, then the warnings.
@@ -41,21 +53,16 @@ fn describe(scene: &Scene) -> String {
         },
     );
     line("sky", format!("radiance {}", v3(scene.sky)));
-    let camera = scene.default_camera();
-    let projection = match camera.projection {
-        Projection::Perspective { yfov, aspect_ratio } => {
-            let aspect = aspect_ratio.map_or_else(|| "not given".into(), |r| format!("{r:.4}"));
-            format!("perspective, yfov {:.2}°, aspect ratio {aspect}", yfov.to_degrees())
-        }
-        Projection::Orthographic { xmag, ymag } => format!("orthographic, xmag {xmag}, ymag {ymag}"),
-    };
-    let origin = Vec3::from(camera.world_from_camera.translation);
-    let source = if scene.cameras.is_empty() {
-        "none in the file; framed around the geometry".to_string()
+    if scene.cameras.is_empty() {
+        let camera = describe_camera(&scene.default_camera());
+        line("camera", format!("none in the file; framed around the geometry: {camera}"));
     } else {
-        format!("1 of {}", scene.cameras.len())
-    };
-    line("camera", format!("{source}: {projection}, at {}", v3(origin)));
+        let n = scene.cameras.len();
+        line("cameras", format!("{n} (render one with --camera INDEX; the default is 0)"));
+        for (i, camera) in scene.cameras.iter().enumerate() {
+            line(&format!("  camera {i}"), describe_camera(camera));
+        }
+    }
     line(
         "bytes/triangle",
         format!(
@@ -82,5 +89,21 @@ mod tests {
         assert!(text.contains("triangles       20516"), "{text}");
         assert!(text.contains("sun             travelling"), "{text}");
         assert!(text.contains("perspective, yfov 45.00°"), "{text}");
+    }
+
+    #[test]
+    fn lists_every_camera_with_its_index() {
+        let mut scene = furnace_scene::builtin::cornell_box().unwrap();
+        let n = scene.cameras.len();
+        assert!(n >= 1, "the Cornell box has its camera");
+        let mut second = scene.cameras[0];
+        second.projection = Projection::Orthographic { xmag: 2.0, ymag: 1.5 };
+        scene.cameras.push(second);
+        let text = describe(&scene);
+        assert!(text.contains(&format!("cameras         {}", n + 1)), "{text}");
+        assert!(text.contains(&format!("  camera {n}      orthographic, xmag 2, ymag 1.5")), "{text}");
+        scene.cameras.clear();
+        let text = describe(&scene);
+        assert!(text.contains("camera          none in the file; framed around the geometry"), "{text}");
     }
 }

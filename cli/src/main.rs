@@ -7,6 +7,10 @@
 //!   reference integrator (`furnace_cpu`), showing progress with `indicatif`, and writes the
 //!   linear image as OpenEXR (with the render's metadata) and the tone-mapped sRGB image as PNG
 //!   (`furnace_post`).
+//!   `--resume PATH.exr` continues a saved render bit-identically (the EXR carries the film's
+//!   exact sums and counts, `resume.rs`); Ctrl-C finishes the current pass, saves, and exits
+//!   with code 130 (`interrupt.rs`). The loop drives a [`backend::Backend`], so that the GPU
+//!   integrator plugs in beside the CPU one.
 //! * `furnace info SCENE` prints a scene's sizes, lights, camera and loader warnings.
 //! * `furnace compare CANDIDATE.exr REFERENCE.exr [--stderr …]` scores a render against a
 //!   reference as `shared/oracle/compare.py` does (RMSE, relative MSE, mean ratio, z-scores).
@@ -15,16 +19,20 @@
 //! exit code is 1; no user input panics.
 
 mod args;
+mod backend;
 mod compare;
 mod info;
+mod interrupt;
 mod render;
+mod resume;
 
-use clap::Parser;
 use clap::error::ErrorKind;
+use clap::parser::ValueSource;
+use clap::{CommandFactory, FromArgMatches};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
-    let cli = match args::Cli::try_parse() {
+    let cli = match parse() {
         Ok(cli) => cli,
         Err(e) => {
             if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
@@ -40,14 +48,31 @@ fn main() -> ExitCode {
         }
     };
     let result = match cli.command {
-        args::Command::Render(a) => render::run(&a),
-        args::Command::Info(a) => info::run(&a),
-        args::Command::Compare(a) => compare::run(&a),
+        args::Command::Render(a) => render::run(&a, &interrupt::Interrupt::install()),
+        args::Command::Info(a) => info::run(&a).map(|()| render::Outcome::Done),
+        args::Command::Compare(a) => compare::run(&a).map(|()| render::Outcome::Done),
     };
     match result {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(render::Outcome::Done) => ExitCode::SUCCESS,
+        // 128 + SIGINT, what a shell reports for a process ended by Ctrl-C.
+        Ok(render::Outcome::Interrupted) => ExitCode::from(130),
         Err(message) => fail(&message),
     }
+}
+
+/// The command line, with `RenderArgs::given` filled from clap's value sources.
+fn parse() -> Result<args::Cli, clap::Error> {
+    let matches = args::Cli::command().try_get_matches()?;
+    let mut cli = args::Cli::from_arg_matches(&matches)?;
+    if let (args::Command::Render(a), Some(m)) = (&mut cli.command, matches.subcommand_matches("render")) {
+        a.given = m
+            .ids()
+            .map(|id| id.as_str())
+            .filter(|id| m.value_source(id) == Some(ValueSource::CommandLine))
+            .map(str::to_string)
+            .collect();
+    }
+    Ok(cli)
 }
 
 /// Prints `error: MESSAGE` on stderr and returns exit code 1.

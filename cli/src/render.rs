@@ -1,11 +1,14 @@
 //! `furnace render`: load, render in passes with a progress bar, write EXR + PNG.
 
 use crate::args::{MAX_SIDE, RenderArgs, Switch};
+use crate::backend::{Backend, CpuBackend};
+use crate::interrupt::Interrupt;
+use crate::resume;
 use furnace_brdf::SpecularOptions;
-use furnace_cpu::{RenderSettings, Renderer};
-use furnace_post::{Metadata, to_srgb8, write_exr, write_png};
+use furnace_cpu::{Film, RenderSettings, Renderer};
+use furnace_post::{ExrWithState, Metadata, read_exr_with_state, to_srgb8, write_exr_with_state, write_png};
 use furnace_scene::{Projection, Scene, builtin};
-use glam::Vec3;
+use glam::{DVec3, Vec3};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
@@ -23,27 +26,129 @@ fn pass_spp(pixels: u64) -> u32 {
     (262_144 / pixels.max(1)).clamp(1, 4) as u32
 }
 
-pub fn run(a: &RenderArgs) -> Result<(), String> {
-    let (png_path, exr_path) = output_paths(&a.out);
-    let scene = load_scene(a.scene.as_deref())?;
+/// How a render ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Finished (or stopped by `--time-limit`, or nothing was left to render).
+    Done,
+    /// Stopped by Ctrl-C (exit code 130); the partial render is saved if a pass was done.
+    Interrupted,
+}
+
+/// A render's settings, resolved from the arguments, the scene and (when resuming) the file.
+struct Job {
+    args: RenderArgs,
+    settings: RenderSettings,
+    /// The camera's index, or `None` for a scene without cameras (framed around the geometry).
+    camera: Option<u32>,
+    scene_name: String,
+    scene_hash: String,
+}
+
+impl Job {
+    /// The EXR metadata of a render of this job with `spp` samples per pixel done.
+    fn metadata(&self, spp: u32, render_time_s: f64, rejected: u64) -> Metadata {
+        let a = &self.args;
+        let s = &self.settings;
+        let camera = self.camera.map_or_else(|| resume::FRAMED.to_string(), |c| c.to_string());
+        Metadata {
+            spp: Some(spp),
+            sampler: Some(s.sampler.to_string()),
+            bounces: Some(s.bounces),
+            seed: Some(u64::from(s.seed)),
+            scene: Some(self.scene_name.clone()),
+            render_time_s: Some(render_time_s),
+            rejected_samples: Some(rejected),
+            extra: [
+                (resume::SCENE_HASH, self.scene_hash.clone()),
+                (resume::MASKING, resume::cli_name(&a.masking)),
+                (resume::COMPENSATION, resume::cli_name(&a.compensation)),
+                (resume::SPECULAR_SAMPLING, resume::cli_name(&a.specular_sampling)),
+                (resume::CAMERA, camera),
+                (resume::RUSSIAN_ROULETTE, resume::cli_name(&a.russian_roulette)),
+                (resume::TARGET_SPP, a.spp.to_string()),
+                (resume::TONEMAP, a.tonemap.to_string()),
+                (resume::EXPOSURE, a.exposure.to_string()),
+            ]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect(),
+        }
+    }
+}
+
+/// A saved render to continue: its film and how far it got.
+struct Saved {
+    film: Film,
+    spp: u32,
+    render_time_s: f64,
+}
+
+pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
+    let mut args = a.clone();
+    // With --resume: the file's record fills the settings not given.
+    let resumed = match &a.resume {
+        Some(path) => {
+            let file = read_exr_with_state(path).map_err(|e| e.to_string())?;
+            if file.state.is_none() {
+                return Err(format!(
+                    "{}: no furnace resume state (furnace.resume.* channels): it was not written by \
+                     `furnace render` (or by a version before resume), so it cannot be continued",
+                    path.display()
+                ));
+            }
+            resume::apply_recorded(&mut args, path, &file.metadata, file.width, file.height)?;
+            Some(file)
+        }
+        None => None,
+    };
+
+    let mut scene = load_scene(args.scene.as_deref())?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
-    let (width, height) = image_size(&scene, a.width, a.height)?;
+    let scene_hash = resume::scene_hash(&scene);
+    let camera = select_camera(&mut scene, args.camera)?;
+    let (width, height) = image_size(&scene, args.width, args.height)?;
     let settings = RenderSettings {
         width,
         height,
-        bounces: a.bounces,
-        sampler: a.sampler,
-        seed: a.seed,
-        sample_count: a.sampler.needs_sample_count().then_some(a.spp),
+        bounces: args.bounces,
+        sampler: args.sampler,
+        seed: args.seed,
+        sample_count: args.sampler.needs_sample_count().then_some(args.spp),
         specular: SpecularOptions {
-            masking: a.masking.into(),
-            sampling: a.specular_sampling.into(),
-            compensation: a.compensation == Switch::On,
+            masking: args.masking.into(),
+            sampling: args.specular_sampling.into(),
+            compensation: args.compensation == Switch::On,
         },
-        russian_roulette: false,
+        russian_roulette: args.russian_roulette == Switch::On,
     };
+    let job = Job { scene_name: scene.name.clone(), scene_hash, camera, settings, args };
+    let a = &job.args;
+
+    let saved = match resumed {
+        Some(file) => {
+            let path = a.resume.clone().unwrap_or_default();
+            let recorded = resume::identity(&file.metadata, file.width, file.height);
+            let now = resume::identity(&job.metadata(0, 0.0, 0), width, height);
+            resume::check_same(&path, &recorded, &now)?;
+            let saved = restore(&path, file)?;
+            if saved.spp >= a.spp {
+                eprintln!(
+                    "{} already has {} samples per pixel (target {}): nothing to render; give a \
+                     larger --spp to continue",
+                    path.display(),
+                    saved.spp,
+                    a.spp
+                );
+                return Ok(Outcome::Done);
+            }
+            Some(saved)
+        }
+        None => None,
+    };
+
     if a.sampler.needs_sample_count() && a.time_limit.is_some() {
         eprintln!(
             "warning: the {} sampler builds one pattern of N = {} samples per pixel; if --time-limit \
@@ -51,73 +156,204 @@ pub fn run(a: &RenderArgs) -> Result<(), String> {
             a.sampler, a.spp
         );
     }
-    let scene_name = scene.name.clone();
     let renderer = Renderer::new(scene, settings).map_err(|e| e.to_string())?;
-
-    let pixels = u64::from(width) * u64::from(height);
-    let progress = progress_bar(a.quiet, a.spp);
-    let start = Instant::now();
-    let mut film = renderer.new_film();
-    let mut done = 0u32;
-    while done < a.spp {
-        if let Some(limit) = a.time_limit
-            && done > 0
-        {
-            // Stop before a pass that would, at the mean pass time so far, end past the limit.
-            let elapsed = start.elapsed().as_secs_f64();
-            let passes = f64::from(done) / f64::from(pass_spp(pixels));
-            if elapsed + elapsed / passes.max(1.0) > limit {
-                break;
-            }
-        }
-        let n = pass_spp(pixels).min(a.spp - done);
-        renderer.render_pass(&mut film, done, n).map_err(|e| e.to_string())?;
-        done += n;
-        progress.set_position(u64::from(done));
-        let rate = (pixels * u64::from(done)) as f64 / start.elapsed().as_secs_f64().max(1e-9);
-        progress.set_message(format!("{:.2} Msamples/s", rate / 1e6));
-    }
-    let seconds = start.elapsed().as_secs_f64();
-    progress.finish_and_clear();
-
-    let radiance: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
-    let metadata = Metadata {
-        spp: Some(done),
-        sampler: Some(a.sampler.to_string()),
-        bounces: Some(a.bounces),
-        seed: Some(u64::from(a.seed)),
-        scene: Some(scene_name.clone()),
-        render_time_s: Some(seconds),
-        rejected_samples: Some(film.rejected()),
-        extra: [
-            ("furnace.tonemap", a.tonemap.to_string()),
-            ("furnace.exposure_ev", a.exposure.to_string()),
-            ("furnace.masking", format!("{:?}", settings.specular.masking)),
-            ("furnace.specular_sampling", format!("{:?}", settings.specular.sampling)),
-            ("furnace.compensation", settings.specular.compensation.to_string()),
-        ]
-        .into_iter()
-        .map(|(k, v)| (k.to_string(), v))
-        .collect(),
+    let (film, first, previous_time) = match saved {
+        Some(s) => (s.film, s.spp, s.render_time_s),
+        None => (renderer.new_film(), 0, 0.0),
     };
-    write_exr(&exr_path, width, height, &radiance, &metadata).map_err(|e| e.to_string())?;
-    let srgb = to_srgb8(&radiance, a.exposure, a.tonemap);
-    write_png(&png_path, width, height, &srgb).map_err(|e| e.to_string())?;
+    let mut backend = CpuBackend::new(renderer, film);
+    let pass = render_passes(&mut backend, &job, first, interrupt)?;
+    if pass.done == first {
+        // Ctrl-C before the first pass: nothing new; leave every file as it was.
+        eprintln!("interrupted before the first pass: nothing rendered, nothing written");
+        return Ok(Outcome::Interrupted);
+    }
 
-    if !a.quiet {
-        let rate = (pixels * u64::from(done)) as f64 / seconds.max(1e-9) / 1e6;
-        let stopped =
-            if done < a.spp { format!(" (stopped by --time-limit; asked {})", a.spp) } else { String::new() };
+    let film = backend.film()?;
+    let (png_path, exr_path) = output_paths(&a.out);
+    let render_time = previous_time + pass.seconds;
+    let metadata = job.metadata(pass.done, render_time, film.rejected());
+    write_outputs(&film, &metadata, a, &exr_path, &png_path)?;
+
+    let stopped_by_user = pass.stop == Stop::Interrupt;
+    if !a.quiet || stopped_by_user {
+        let rendered = u64::from(pass.done - first);
+        let rate = (u64::from(width) * u64::from(height) * rendered) as f64 / pass.seconds.max(1e-9) / 1e6;
+        let from = if first > 0 { format!(" (resumed at {first})") } else { String::new() };
+        let stopped = match pass.stop {
+            Stop::Finished => String::new(),
+            Stop::TimeLimit => format!(" (stopped by --time-limit; asked {})", a.spp),
+            Stop::Interrupt => format!(" (interrupted; asked {})", a.spp),
+        };
         eprintln!(
-            "{scene_name}: {width}×{height}, {done} spp{stopped}, {} bounces, {} sampler: {seconds:.2} s ({rate:.2} Msamples/s)",
-            a.bounces, a.sampler
+            "{}: {width}×{height}, {} spp{from}{stopped}, {} bounces, {} sampler, {} backend: {:.2} s ({rate:.2} Msamples/s)",
+            job.scene_name,
+            pass.done,
+            a.bounces,
+            a.sampler,
+            backend.name(),
+            pass.seconds,
         );
         if film.rejected() > 0 {
             eprintln!("warning: {} non-finite samples rejected", film.rejected());
         }
         eprintln!("wrote {} and {}", exr_path.display(), png_path.display());
+        if pass.done < a.spp {
+            eprintln!(
+                "to continue to {} spp: furnace render --resume {}",
+                a.spp,
+                shell_quote(&exr_path.display().to_string())
+            );
+        }
     }
-    Ok(())
+    Ok(if stopped_by_user { Outcome::Interrupted } else { Outcome::Done })
+}
+
+/// Why the pass loop ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Stop {
+    Finished,
+    TimeLimit,
+    Interrupt,
+}
+
+/// What the pass loop did.
+struct Passes {
+    /// Samples per pixel in the film now (the next sample index).
+    done: u32,
+    /// Seconds spent rendering in this run.
+    seconds: f64,
+    stop: Stop,
+}
+
+/// Renders passes from sample index `first` up to the job's `--spp`, until done, the time limit
+/// or Ctrl-C, with a progress bar (or, when stderr is not a terminal, a progress line after the
+/// first pass and then every 10 s).
+fn render_passes(
+    backend: &mut dyn Backend,
+    job: &Job,
+    first: u32,
+    interrupt: &Interrupt,
+) -> Result<Passes, String> {
+    let a = &job.args;
+    let pixels = u64::from(job.settings.width) * u64::from(job.settings.height);
+    let bar = progress_bar(a.quiet, a.spp, first);
+    let log_lines = !a.quiet && bar.is_hidden();
+    let mut last_log: Option<Instant> = None;
+    let start = Instant::now();
+    let mut done = first;
+    let mut stop = Stop::Finished;
+    while done < a.spp {
+        if interrupt.requested() {
+            stop = Stop::Interrupt;
+            break;
+        }
+        if let Some(limit) = a.time_limit
+            && done > first
+        {
+            // Stop before a pass that would, at the mean pass time so far, end past the limit.
+            let elapsed = start.elapsed().as_secs_f64();
+            let passes = f64::from(done - first) / f64::from(pass_spp(pixels));
+            if elapsed + elapsed / passes.max(1.0) > limit {
+                stop = Stop::TimeLimit;
+                break;
+            }
+        }
+        let n = pass_spp(pixels).min(a.spp - done);
+        backend.render_pass(done, n)?;
+        done += n;
+        let elapsed = start.elapsed().as_secs_f64();
+        let rate = (pixels * u64::from(done - first)) as f64 / elapsed.max(1e-9) / 1e6;
+        bar.set_position(u64::from(done));
+        bar.set_message(format!("{rate:.2} Msamples/s"));
+        if log_lines && last_log.is_none_or(|t| t.elapsed().as_secs_f64() >= 10.0) {
+            eprintln!("progress: {done}/{} spp, {elapsed:.1} s, {rate:.2} Msamples/s", a.spp);
+            last_log = Some(Instant::now());
+        }
+    }
+    if done == a.spp && interrupt.requested() {
+        // Ctrl-C during the last pass: the render is complete anyway.
+        stop = Stop::Finished;
+    }
+    bar.finish_and_clear();
+    Ok(Passes { done, seconds: start.elapsed().as_secs_f64(), stop })
+}
+
+/// Writes the EXR (RGB, metadata and the resume state) and the tone-mapped PNG, each atomically.
+fn write_outputs(
+    film: &Film,
+    metadata: &Metadata,
+    a: &RenderArgs,
+    exr_path: &Path,
+    png_path: &Path,
+) -> Result<(), String> {
+    let (width, height) = (film.width(), film.height());
+    let radiance: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
+    let sums: Vec<f64> = film.sums().iter().flat_map(|s| s.to_array()).collect();
+    write_exr_with_state(exr_path, width, height, &radiance, metadata, &sums, film.counts())
+        .map_err(|e| e.to_string())?;
+    let srgb = to_srgb8(&radiance, a.exposure, a.tonemap);
+    write_png(png_path, width, height, &srgb).map_err(|e| e.to_string())
+}
+
+/// The film saved in `file`, checked: its state must be that of its own RGB image (each
+/// pixel's `f32(sum / count)`), which catches a file edited after furnace wrote it.
+fn restore(path: &Path, file: ExrWithState) -> Result<Saved, String> {
+    let p = path.display();
+    let state = file.state.unwrap_or_default();
+    let meta = &file.metadata;
+    let spp = meta.spp.ok_or_else(|| format!("{p}: no 'furnace.spp' attribute; it cannot be resumed"))?;
+    let rejected = meta
+        .rejected_samples
+        .ok_or_else(|| format!("{p}: no 'furnace.rejectedSamples' attribute; it cannot be resumed"))?;
+    let sums = state.sums.chunks_exact(3).map(DVec3::from_slice).collect();
+    let film = Film::from_parts(file.width, file.height, sums, state.counts, rejected)
+        .map_err(|e| format!("{p}: {e}"))?;
+    if let Some(c) = film.counts().iter().find(|&&c| c > u64::from(spp)) {
+        return Err(format!("{p}: a pixel has {c} samples but the file says {spp} spp; it was modified"));
+    }
+    let rgb = film.to_rgb_f32();
+    let stored = file.pixels.iter().flat_map(|v| v.to_array());
+    if let Some(i) = rgb.iter().zip(stored).position(|(a, b)| a.to_bits() != b.to_bits()) {
+        let (x, y) = ((i / 3) as u32 % file.width, (i / 3) as u32 / file.width);
+        return Err(format!(
+            "{p}: the resume state does not match the image at pixel ({x}, {y}); the file was modified \
+             after furnace wrote it"
+        ));
+    }
+    Ok(Saved { film, spp, render_time_s: meta.render_time_s.unwrap_or(0.0) })
+}
+
+/// Makes camera `index` the scene's default camera (the renderer renders that one); returns the
+/// index used, `None` for a scene without cameras.
+fn select_camera(scene: &mut Scene, index: Option<u32>) -> Result<Option<u32>, String> {
+    let n = scene.cameras.len();
+    match index {
+        None => Ok((n > 0).then_some(0)),
+        Some(_) if n == 0 => Err(format!(
+            "{} has no cameras (without --camera the view is framed around its geometry)",
+            scene.name
+        )),
+        Some(i) if i as usize >= n => Err(format!(
+            "{} has {n} camera{} (--camera 0 to {}), not camera {i}",
+            scene.name,
+            if n == 1 { "" } else { "s" },
+            n - 1
+        )),
+        Some(i) => {
+            scene.cameras.swap(0, i as usize);
+            Ok(Some(i))
+        }
+    }
+}
+
+/// `s` quoted for a POSIX shell when it needs it.
+fn shell_quote(s: &str) -> String {
+    if !s.is_empty() && s.bytes().all(|b| b.is_ascii_alphanumeric() || b"-_./,:+@%".contains(&b)) {
+        s.to_string()
+    } else {
+        format!("'{}'", s.replace('\'', r"'\''"))
+    }
 }
 
 fn load_scene(path: Option<&Path>) -> Result<Scene, String> {
@@ -164,11 +400,11 @@ fn image_size(scene: &Scene, width: Option<u32>, height: Option<u32>) -> Result<
     Ok((w, h))
 }
 
-fn progress_bar(quiet: bool, spp: u32) -> ProgressBar {
+fn progress_bar(quiet: bool, spp: u32, done: u32) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }
-    let bar = ProgressBar::new(u64::from(spp));
+    let bar = ProgressBar::new(u64::from(spp)).with_position(u64::from(done));
     if let Ok(style) = ProgressStyle::with_template(
         "{elapsed_precise} [{bar:40.cyan/blue}] {pos}/{len} spp  {msg}  ETA {eta}",
     ) {

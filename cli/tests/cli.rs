@@ -261,3 +261,321 @@ fn compare_size_mismatch_names_both_files() {
     assert!(err.starts_with("error: ") && err.contains("a.exr") && err.contains("b.exr"), "{err}");
     assert_eq!(err.trim_end().lines().count(), 1, "{err}");
 }
+
+/// `furnace render --quiet --width S --height S ARGS… --out DIR/NAME`; asserts success.
+fn render_ok(dir: &Path, name: &str, size: u32, args: &[&str]) -> PathBuf {
+    let out = dir.join(name);
+    let size = size.to_string();
+    let mut all = vec!["render", "--quiet", "--width", &size, "--height", &size];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--out", out.to_str().unwrap()]);
+    let o = furnace(&all);
+    assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+    dir.join(format!("{name}.exr"))
+}
+
+/// Asserts that two furnace EXRs hold the same film and image, bit for bit (everything but
+/// the render time, which is a measurement).
+fn assert_same_render(a: &Path, b: &Path) {
+    let ra = furnace_post::read_exr_with_state(a).unwrap();
+    let rb = furnace_post::read_exr_with_state(b).unwrap();
+    assert_eq!((ra.width, ra.height), (rb.width, rb.height));
+    let bits = |v: &[glam::Vec3]| v.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    assert!(bits(&ra.pixels) == bits(&rb.pixels), "RGB differs: {} vs {}", a.display(), b.display());
+    let (sa, sb) = (ra.state.unwrap(), rb.state.unwrap());
+    let sum_bits = |v: &[f64]| v.iter().map(|s| s.to_bits()).collect::<Vec<_>>();
+    assert!(sum_bits(&sa.sums) == sum_bits(&sb.sums), "film sums differ: {} vs {}", a.display(), b.display());
+    assert_eq!(sa.counts, sb.counts);
+    let (mut ma, mut mb) = (ra.metadata, rb.metadata);
+    ma.render_time_s = None;
+    mb.render_time_s = None;
+    assert_eq!(ma, mb);
+}
+
+#[test]
+fn resume_two_plus_two_is_bit_identical_to_four() {
+    let dir = temp_dir("resume_2_2");
+    // At 16×16 a pass is 4 spp, so the uninterrupted render adds its 4 samples in one pass and
+    // the resumed one in two runs of one pass: the f64 sums must agree across the boundary.
+    for (tag, extra) in [
+        ("sobol", &[][..]),
+        (
+            "pmj02_rr",
+            &["--sampler", "pmj02", "--russian-roulette", "on", "--bounces", "6", "--seed", "3"][..],
+        ),
+    ] {
+        let mut half = extra.to_vec();
+        half.extend_from_slice(&["--spp", "2"]);
+        let two = render_ok(&dir, &format!("{tag}_2"), 16, &half);
+        let mut full = extra.to_vec();
+        full.extend_from_slice(&["--spp", "4"]);
+        let four = render_ok(&dir, &format!("{tag}_4"), 16, &full);
+        // Only --spp on resume: every other setting comes from the file.
+        let resumed = dir.join(format!("{tag}_2_2"));
+        let o = furnace(&[
+            "render",
+            "--quiet",
+            "--resume",
+            two.to_str().unwrap(),
+            "--spp",
+            "4",
+            "--out",
+            resumed.to_str().unwrap(),
+        ]);
+        assert!(o.status.success(), "{tag}: {}", stderr(&o));
+        let resumed = dir.join(format!("{tag}_2_2.exr"));
+        assert_same_render(&resumed, &four);
+        let (_, _, _, meta) = furnace_post::read_exr(&resumed).unwrap();
+        assert_eq!(meta.spp, Some(4), "{tag}");
+        // The file resumed from is left alone when --out is given.
+        assert_eq!(furnace_post::read_exr(&two).unwrap().3.spp, Some(2), "{tag}");
+    }
+}
+
+#[test]
+fn resume_without_out_updates_the_file_and_keeps_the_png_look() {
+    let dir = temp_dir("resume_in_place");
+    let file = render_ok(&dir, "r", 8, &["--spp", "1", "--tonemap", "clamp", "--exposure", "1.5"]);
+    let o = furnace(&["render", "--quiet", "--resume", file.to_str().unwrap(), "--spp", "3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, _, _, meta) = furnace_post::read_exr(&file).unwrap();
+    assert_eq!(meta.spp, Some(3));
+    assert_eq!(meta.extra.get("furnace.tonemap").map(String::as_str), Some("clamp"));
+    assert_eq!(meta.extra.get("furnace.exposure_ev").map(String::as_str), Some("1.5"));
+    assert_eq!(meta.extra.get("furnace.target_spp").map(String::as_str), Some("3"));
+    assert!(meta.render_time_s.is_some_and(|t| t > 0.0));
+}
+
+#[test]
+fn resume_refuses_other_settings_naming_both_values() {
+    let dir = temp_dir("resume_mismatch");
+    let file = render_ok(&dir, "m", 8, &["--spp", "2", "--bounces", "3"]);
+    let before = std::fs::read(&file).unwrap();
+    let cbox = data("cbox/cbox.gltf");
+    for (args, needle) in [
+        (&["--bounces", "2"][..], "bounces is 3 in the file but 2 now"),
+        (&["--width", "9"][..], "width is 8 in the file but 9 now"),
+        (&["--sampler", "pmj02"][..], "sampler is sobol in the file but pmj02 now"),
+        (&["--seed", "1"][..], "seed is 0 in the file but 1 now"),
+        (&["--masking", "separable"][..], "masking is height-correlated in the file but separable now"),
+        (&["--compensation", "off"][..], "compensation is on in the file but off now"),
+        (&["--specular-sampling", "ndf"][..], "specular sampling is caps in the file but ndf now"),
+        (&["--russian-roulette", "on"][..], "russian roulette is off in the file but on now"),
+        (&[cbox.as_str()][..], "scene is <built-in cbox> in the file but cbox.gltf now"),
+    ] {
+        let mut all = vec!["render", "--quiet", "--resume", file.to_str().unwrap(), "--spp", "4"];
+        all.extend_from_slice(args);
+        let o = furnace(&all);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.starts_with("error: ") && err.contains("m.exr") && err.contains(needle),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    }
+    assert_eq!(std::fs::read(&file).unwrap(), before, "a refused resume leaves the file alone");
+}
+
+#[test]
+fn resume_of_a_fixed_n_sampler_needs_the_same_n() {
+    let dir = temp_dir("resume_fixed_n");
+    let file = render_ok(&dir, "h", 8, &["--spp", "4", "--sampler", "cmj"]);
+    let o = furnace(&["render", "--quiet", "--resume", file.to_str().unwrap(), "--spp", "8"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(
+        err.contains("sample count N of the fixed-N sampler (--spp) is 4 in the file but 8 now"),
+        "{err}"
+    );
+}
+
+#[test]
+fn resume_at_or_past_the_target_renders_nothing() {
+    let dir = temp_dir("resume_done");
+    let file = render_ok(&dir, "d", 8, &["--spp", "3"]);
+    let before = std::fs::read(&file).unwrap();
+    for spp in [None, Some("3"), Some("2")] {
+        let mut all = vec!["render", "--resume", file.to_str().unwrap()];
+        all.extend(spp.iter().flat_map(|s| ["--spp", *s]));
+        let o = furnace(&all);
+        assert!(o.status.success(), "{spp:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains("already has 3 samples per pixel"), "{spp:?}: {}", stderr(&o));
+    }
+    assert_eq!(std::fs::read(&file).unwrap(), before);
+}
+
+#[test]
+fn resume_refuses_files_without_furnace_state() {
+    let dir = temp_dir("resume_foreign");
+    let mitsuba = Path::new(env!("CARGO_MANIFEST_DIR")).join("../cpu/tests/data/cbox/cbox_ref_direct.exr");
+    let plain = dir.join("plain.exr");
+    furnace_post::write_exr(&plain, 1, 1, &[glam::Vec3::ONE], &furnace_post::Metadata::default()).unwrap();
+    for file in [mitsuba, plain] {
+        let o = furnace(&["render", "--quiet", "--resume", file.to_str().unwrap()]);
+        assert_eq!(o.status.code(), Some(1));
+        let err = stderr(&o);
+        let name = file.file_name().unwrap().to_str().unwrap();
+        assert!(err.contains(name) && err.contains("no furnace resume state"), "{err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    }
+    let o = furnace(&["render", "--quiet", "--resume", dir.join("none.exr").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("none.exr"), "{}", stderr(&o));
+}
+
+#[test]
+fn resume_detects_a_modified_image() {
+    let dir = temp_dir("resume_modified");
+    let file = render_ok(&dir, "e", 4, &["--spp", "2"]);
+    let mut r = furnace_post::read_exr_with_state(&file).unwrap();
+    let state = r.state.take().unwrap();
+    r.pixels[5].y += 1.0;
+    furnace_post::write_exr_with_state(&file, 4, 4, &r.pixels, &r.metadata, &state.sums, &state.counts)
+        .unwrap();
+    let o = furnace(&["render", "--quiet", "--resume", file.to_str().unwrap(), "--spp", "4"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("does not match the image at pixel (1, 1)"), "{}", stderr(&o));
+}
+
+#[test]
+fn camera_flag_selects_among_the_scene_cameras() {
+    let dir = temp_dir("camera");
+    // Khronos' Cameras sample (a perspective and an orthographic camera looking at a quad),
+    // given a sky so that the images are not black.
+    let text = std::fs::read_to_string(data("Cameras/glTF-Embedded/Cameras.gltf")).unwrap();
+    let nodes = r#""nodes" : [ 0, 1, 2 ]"#;
+    assert_eq!(text.matches(nodes).count(), 1, "the sample's scene changed");
+    let sky = r#""nodes" : [ 0, 1, 2 ], "extras" : { "background_radiance_rgb" : [ 1.0, 0.5, 0.25 ] }"#;
+    let scene_path = dir.join("Cameras.gltf");
+    std::fs::write(&scene_path, text.replace(nodes, sky)).unwrap();
+    let scene = scene_path.display().to_string();
+    let zero = render_ok(&dir, "c0", 12, &[&scene, "--spp", "1", "--camera", "0"]);
+    let default = render_ok(&dir, "cd", 12, &[&scene, "--spp", "1"]);
+    let one = render_ok(&dir, "c1", 12, &[&scene, "--spp", "1", "--camera", "1"]);
+    let read = |p: &Path| furnace_post::read_exr(p).unwrap();
+    assert_eq!(read(&zero).2, read(&default).2, "camera 0 is the default");
+    assert!(read(&zero).2.iter().any(|p| p.max_element() > 0.0), "the sky lights the scene");
+    assert_ne!(read(&zero).2, read(&one).2, "camera 1 sees the scene differently");
+    assert_eq!(read(&one).3.extra.get("furnace.camera").map(String::as_str), Some("1"));
+
+    let o =
+        furnace(&["render", &scene, "--quiet", "--camera", "2", "--out", dir.join("x").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.contains("Cameras.gltf has 2 cameras (--camera 0 to 1), not camera 2"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+
+    // Resuming keeps the camera; asking for another is refused.
+    let o = furnace(&["render", "--quiet", "--resume", one.to_str().unwrap(), "--spp", "2", "--camera", "0"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("camera is 1 in the file but 0 now"), "{}", stderr(&o));
+}
+
+#[test]
+fn info_lists_the_cameras() {
+    let o = furnace(&["info", &data("Cameras/glTF/Cameras.gltf")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("cameras         2"), "{text}");
+    assert!(text.contains("  camera 0") && text.contains("  camera 1"), "{text}");
+    assert!(text.contains("orthographic"), "{text}");
+}
+
+/// Starts a long render of the Cornell box with stderr piped, waits for its first progress
+/// line (printed after the first pass when stderr is not a terminal), and returns the child.
+#[cfg(unix)]
+// The caller waits for the child; on a failed read the test panics and the child, its stderr
+// closed, ends at its next progress line.
+#[allow(clippy::zombie_processes)]
+fn start_long_render(
+    out: &Path,
+    size: u32,
+) -> (std::process::Child, std::io::BufReader<std::process::ChildStderr>) {
+    use std::io::BufRead;
+    let size = size.to_string();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_furnace"))
+        .args(["render", "--width", &size, "--height", &size, "--spp", "1000000", "--out"])
+        .arg(out)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut reader = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    loop {
+        line.clear();
+        let n = reader.read_line(&mut line).unwrap();
+        assert!(n > 0, "furnace ended before its first pass: {:?}", child.wait());
+        if line.starts_with("progress: ") {
+            return (child, reader);
+        }
+    }
+}
+
+#[cfg(unix)]
+fn sigint(child: &std::process::Child) {
+    let ok = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success();
+    assert!(ok, "kill -INT failed");
+}
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_saves_a_partial_render_that_resumes_exactly() {
+    use std::io::Read;
+    let dir = temp_dir("ctrl_c");
+    let out = dir.join("p");
+    let (mut child, mut reader) = start_long_render(&out, 32);
+    sigint(&child);
+    let mut rest = String::new();
+    reader.read_to_string(&mut rest).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{rest}");
+    assert!(rest.contains("interrupted"), "{rest}");
+    assert!(rest.contains("furnace render --resume"), "{rest}");
+    assert!(dir.join("p.png").is_file());
+    let exr = dir.join("p.exr");
+    let (_, _, _, meta) = furnace_post::read_exr(&exr).unwrap();
+    let spp = meta.spp.unwrap();
+    // Passes are 4 spp at 32×32: whole passes only, at least one, far fewer than asked.
+    assert!(spp >= 4 && spp % 4 == 0 && spp < 1_000_000, "spp {spp}");
+    assert_eq!(meta.extra.get("furnace.target_spp").map(String::as_str), Some("1000000"));
+
+    // Resume to 8 spp past the interruption, and compare with one uninterrupted render.
+    let target = (spp + 8).to_string();
+    let resumed = dir.join("resumed");
+    let o = furnace(&[
+        "render",
+        "--quiet",
+        "--resume",
+        exr.to_str().unwrap(),
+        "--spp",
+        &target,
+        "--out",
+        resumed.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let whole = render_ok(&dir, "whole", 32, &["--spp", &target]);
+    assert_same_render(&dir.join("resumed.exr"), &whole);
+}
+
+#[cfg(unix)]
+#[test]
+fn second_ctrl_c_exits_at_once() {
+    use std::io::Read;
+    let dir = temp_dir("ctrl_c_twice");
+    let out = dir.join("q");
+    // 256×256: a pass is 4 spp of 65 536 pixels, long enough for the second signal to land in
+    // it (if it does not, the run saves first and still exits with 130).
+    let (mut child, mut reader) = start_long_render(&out, 256);
+    sigint(&child);
+    sigint(&child);
+    let mut rest = String::new();
+    reader.read_to_string(&mut rest).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{rest}");
+    assert!(rest.contains("interrupted twice"), "{rest}");
+    // Whatever was written is complete (atomic writes).
+    if dir.join("q.exr").exists() {
+        furnace_post::read_exr(dir.join("q.exr")).unwrap();
+    }
+}

@@ -1,0 +1,42 @@
+//! Ctrl-C: the first one asks the render loop to stop after the current pass (which then saves
+//! the partial image); a second one exits at once with code 130 (outputs already written stay
+//! intact: every file is written to a temporary name and renamed into place).
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicU32, Ordering};
+
+/// Whether Ctrl-C has been pressed (cheap to poll between passes).
+#[derive(Debug, Clone, Default)]
+pub struct Interrupt {
+    presses: Arc<AtomicU32>,
+}
+
+impl Interrupt {
+    /// Installs the process's Ctrl-C (SIGINT) handler. If that fails (another handler is
+    /// installed), warns and returns an `Interrupt` that is never set: Ctrl-C then ends the
+    /// process the default way.
+    pub fn install() -> Self {
+        let interrupt = Self::default();
+        let presses = Arc::clone(&interrupt.presses);
+        let installed = ctrlc::set_handler(move || {
+            // The handler runs on ctrlc's own thread, not in signal context: printing is fine.
+            if presses.fetch_add(1, Ordering::SeqCst) == 0 {
+                eprintln!(
+                    "\ninterrupted: finishing the current pass, then saving (Ctrl-C again to quit at once)"
+                );
+            } else {
+                eprintln!("\ninterrupted twice: quitting without saving this render");
+                std::process::exit(130);
+            }
+        });
+        if let Err(e) = installed {
+            eprintln!("warning: Ctrl-C will not save a partial render: {e}");
+        }
+        interrupt
+    }
+
+    /// Whether Ctrl-C has been pressed since [`Interrupt::install`].
+    pub fn requested(&self) -> bool {
+        self.presses.load(Ordering::SeqCst) > 0
+    }
+}

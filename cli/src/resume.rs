@@ -1,0 +1,323 @@
+//! What a furnace EXR records about its render, and resuming from it.
+//!
+//! Every EXR `furnace render` writes carries (besides R, G, B) the film's exact state — the
+//! `f64` sums and the counts of every pixel, in the `furnace.resume.*` channels
+//! (`furnace_post::write_exr_with_state`) — and, as `furnace.*` text attributes, every setting
+//! that decides the film: scene identity (name and a hash of its loaded content), size,
+//! bounces, sampler, seed, masking, compensation, specular sampling, camera, Russian roulette,
+//! and N for the fixed-N samplers. `--resume` restores the film from the sums and continues at
+//! sample index `furnace.spp`: each pixel's sum keeps adding samples in index order, so the
+//! result is bit-identical to an uninterrupted render.
+
+use crate::args::{MaskingArg, RenderArgs, SamplingArg, Switch};
+use clap::ValueEnum;
+use furnace_post::Metadata;
+use furnace_sampling::SamplerKind;
+use furnace_scene::Scene;
+use std::path::{Path, PathBuf};
+use std::str::FromStr;
+
+/// The name `furnace_scene::builtin::cornell_box` gives its scene (the scene of `furnace
+/// render` without a file).
+pub const BUILTIN_CBOX: &str = "<built-in cbox>";
+
+/// Hex hash of the scene's loaded content (`scene_hash`).
+pub const SCENE_HASH: &str = "furnace.scene_hash";
+/// `--masking`.
+pub const MASKING: &str = "furnace.masking";
+/// `--compensation`.
+pub const COMPENSATION: &str = "furnace.compensation";
+/// `--specular-sampling`.
+pub const SPECULAR_SAMPLING: &str = "furnace.specular_sampling";
+/// `--camera`: the index, or `framed` for a scene without cameras.
+pub const CAMERA: &str = "furnace.camera";
+/// `--russian-roulette`.
+pub const RUSSIAN_ROULETTE: &str = "furnace.russian_roulette";
+/// `--spp` asked for (the render may have stopped earlier; `furnace.spp` says where).
+pub const TARGET_SPP: &str = "furnace.target_spp";
+/// `--tonemap` (PNG only; free to change on resume).
+pub const TONEMAP: &str = "furnace.tonemap";
+/// `--exposure` (PNG only; free to change on resume).
+pub const EXPOSURE: &str = "furnace.exposure_ev";
+
+/// The `--camera` value recorded for a scene without cameras.
+pub const FRAMED: &str = "framed";
+
+/// A clap value's command-line spelling (`height-correlated`).
+pub fn cli_name(v: &impl ValueEnum) -> String {
+    v.to_possible_value().map(|p| p.get_name().to_string()).unwrap_or_default()
+}
+
+/// A 64-bit hash of everything the renderer reads from a scene (geometry, materials, textures,
+/// images, cameras, sun, sky), as 16 hex digits: two loads of the same content give the same
+/// hash, any change to what is rendered changes it (with probability 1 − 2⁻⁶⁴). Not
+/// cryptographic: it guards against resuming with an edited scene, not against forgery.
+pub fn scene_hash(scene: &Scene) -> String {
+    let mut h = WordHash::default();
+    let g = &scene.geometry;
+    h.len(g.positions.len());
+    for p in &g.positions {
+        p.to_array().iter().for_each(|c| h.word(c.to_bits()));
+    }
+    h.len(g.normals.len());
+    g.normals.iter().for_each(|&n| h.word(n));
+    h.len(g.uvs.len());
+    for uv in &g.uvs {
+        uv.to_array().iter().for_each(|c| h.word(c.to_bits()));
+    }
+    h.len(g.tangents.len());
+    for t in &g.tangents {
+        t.iter().for_each(|&c| h.word(u32::from(c as u16)));
+    }
+    h.len(g.triangles.len());
+    g.triangles.iter().flatten().for_each(|&i| h.word(i));
+    h.len(g.triangle_materials.len());
+    g.triangle_materials.iter().for_each(|&m| h.word(m));
+    for image in &scene.images {
+        h.word(image.width);
+        h.word(image.height);
+        h.len(image.texels.len());
+        image.texels.iter().for_each(|&t| h.word(u32::from_le_bytes(t)));
+    }
+    // The small parts by their Debug text: every field, floats in round-trip precision.
+    let small = format!(
+        "{:?}|{:?}|{:?}|{:?}|{:?}",
+        scene.materials, scene.textures, scene.cameras, scene.sun, scene.sky
+    );
+    h.len(small.len());
+    small.bytes().for_each(|b| h.word(u32::from(b)));
+    format!("{:016x}", h.finish())
+}
+
+/// A multiply–xorshift hash over 32-bit words (stable across platforms and Rust versions,
+/// unlike `std`'s `DefaultHasher`).
+struct WordHash(u64);
+
+impl Default for WordHash {
+    fn default() -> Self {
+        Self(0x243f_6a88_85a3_08d3)
+    }
+}
+
+impl WordHash {
+    fn word(&mut self, w: u32) {
+        self.0 = (self.0 ^ u64::from(w)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
+        self.0 ^= self.0 >> 29;
+    }
+
+    fn len(&mut self, n: usize) {
+        self.word(n as u32);
+        self.word((n as u64 >> 32) as u32);
+    }
+
+    fn finish(&self) -> u64 {
+        let mut x = self.0;
+        x ^= x >> 33;
+        x = x.wrapping_mul(0xff51_afd7_ed55_8ccd);
+        x ^= x >> 33;
+        x
+    }
+}
+
+/// The settings that decide the film, as `(setting, value)` pairs read from `meta` and the
+/// image size: two renders continue each other exactly when their lists are equal. A value the
+/// file lacks is `None`.
+pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, Option<String>)> {
+    let extra = |k: &str| meta.extra.get(k).cloned();
+    let scene_name = meta.scene.as_deref().map(|s| {
+        // The file name only: the same file given by another relative path is the same scene
+        // (the hash checks the content).
+        Path::new(s).file_name().map_or_else(|| s.to_string(), |n| n.to_string_lossy().into_owned())
+    });
+    let mut out = vec![
+        ("scene", scene_name),
+        ("scene content hash", extra(SCENE_HASH)),
+        ("width", Some(width.to_string())),
+        ("height", Some(height.to_string())),
+        ("bounces", meta.bounces.map(|b| b.to_string())),
+        ("sampler", meta.sampler.clone()),
+        ("seed", meta.seed.map(|s| s.to_string())),
+        ("masking", extra(MASKING)),
+        ("compensation", extra(COMPENSATION)),
+        ("specular sampling", extra(SPECULAR_SAMPLING)),
+        ("camera", extra(CAMERA)),
+        ("russian roulette", extra(RUSSIAN_ROULETTE)),
+    ];
+    let fixed_n = meta.sampler.as_deref().and_then(|s| SamplerKind::from_str(s).ok());
+    if fixed_n.is_some_and(|k| k.needs_sample_count()) {
+        out.push(("sample count N of the fixed-N sampler (--spp)", extra(TARGET_SPP)));
+    }
+    out
+}
+
+/// `Err` listing every setting that differs between the file's record and this render's, with
+/// both values.
+pub fn check_same(
+    file: &Path,
+    recorded: &[(&str, Option<String>)],
+    now: &[(&str, Option<String>)],
+) -> Result<(), String> {
+    let show = |v: &Option<String>| v.clone().unwrap_or_else(|| "(not recorded)".into());
+    let diffs: Vec<String> = recorded
+        .iter()
+        .zip(now)
+        .filter(|((_, a), (_, b))| a != b)
+        .map(|((name, a), (_, b))| format!("{name} is {} in the file but {} now", show(a), show(b)))
+        .collect();
+    if diffs.is_empty() {
+        return Ok(());
+    }
+    Err(format!("{}: cannot resume with different settings: {}", file.display(), diffs.join("; ")))
+}
+
+/// Fills every film-deciding argument that was not given on the command line from the file's
+/// record (`given` ones stay, to be checked by [`check_same`]); `--out` defaults to the file
+/// itself, `--spp` to the recorded target.
+pub fn apply_recorded(
+    a: &mut RenderArgs,
+    file: &Path,
+    meta: &Metadata,
+    width: u32,
+    height: u32,
+) -> Result<(), String> {
+    let missing =
+        |key: &str| format!("{}: no '{key}' attribute; this file's render cannot be resumed", file.display());
+    let invalid =
+        |key: &str, v: &str| format!("{}: attribute '{key}' = '{v}' is not a valid value", file.display());
+    let extra = |key: &'static str| meta.extra.get(key).map(String::as_str).ok_or_else(|| missing(key));
+    fn enum_value<T: ValueEnum>(v: &str) -> Option<T> {
+        T::from_str(v, false).ok()
+    }
+    if !a.given("scene") {
+        let name = meta.scene.as_deref().ok_or_else(|| missing("furnace.scene"))?;
+        a.scene = (name != BUILTIN_CBOX).then(|| PathBuf::from(name));
+    }
+    if !a.given("width") {
+        a.width = Some(width);
+    }
+    if !a.given("height") {
+        a.height = Some(height);
+    }
+    if !a.given("bounces") {
+        a.bounces = meta.bounces.ok_or_else(|| missing("furnace.bounces"))?;
+    }
+    if !a.given("sampler") {
+        let s = meta.sampler.as_deref().ok_or_else(|| missing("furnace.sampler"))?;
+        a.sampler = SamplerKind::from_str(s).map_err(|_| invalid("furnace.sampler", s))?;
+    }
+    if !a.given("seed") {
+        let seed = meta.seed.ok_or_else(|| missing("furnace.seed"))?;
+        a.seed = u32::try_from(seed).map_err(|_| invalid("furnace.seed", &seed.to_string()))?;
+    }
+    if !a.given("masking") {
+        let v = extra(MASKING)?;
+        a.masking = enum_value::<MaskingArg>(v).ok_or_else(|| invalid(MASKING, v))?;
+    }
+    if !a.given("compensation") {
+        let v = extra(COMPENSATION)?;
+        a.compensation = enum_value::<Switch>(v).ok_or_else(|| invalid(COMPENSATION, v))?;
+    }
+    if !a.given("specular_sampling") {
+        let v = extra(SPECULAR_SAMPLING)?;
+        a.specular_sampling = enum_value::<SamplingArg>(v).ok_or_else(|| invalid(SPECULAR_SAMPLING, v))?;
+    }
+    if !a.given("camera") {
+        let v = extra(CAMERA)?;
+        a.camera = match v {
+            FRAMED => None,
+            _ => Some(v.parse().map_err(|_| invalid(CAMERA, v))?),
+        };
+    }
+    if !a.given("russian_roulette") {
+        let v = extra(RUSSIAN_ROULETTE)?;
+        a.russian_roulette = enum_value::<Switch>(v).ok_or_else(|| invalid(RUSSIAN_ROULETTE, v))?;
+    }
+    if !a.given("spp") {
+        let v = extra(TARGET_SPP)?;
+        a.spp = v.parse().ok().filter(|&n| n > 0).ok_or_else(|| invalid(TARGET_SPP, v))?;
+    }
+    // The PNG's look: the file's unless given (any value may be given).
+    if !a.given("tonemap")
+        && let Some(v) = meta.extra.get(TONEMAP)
+    {
+        a.tonemap = v.parse().map_err(|_| invalid(TONEMAP, v))?;
+    }
+    if !a.given("exposure")
+        && let Some(v) = meta.extra.get(EXPOSURE)
+    {
+        a.exposure = v.parse().map_err(|_| invalid(EXPOSURE, v))?;
+    }
+    if !a.given("out") {
+        a.out = file.to_path_buf();
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use furnace_scene::builtin;
+
+    #[test]
+    fn builtin_name_is_the_cornell_box() {
+        assert_eq!(builtin::cornell_box().unwrap().name, BUILTIN_CBOX);
+    }
+
+    #[test]
+    fn scene_hash_is_stable_and_sees_changes() {
+        let a = builtin::cornell_box().unwrap();
+        let h = scene_hash(&a);
+        assert_eq!(h.len(), 16);
+        assert_eq!(scene_hash(&builtin::cornell_box().unwrap()), h);
+        let mut b = a.clone();
+        b.geometry.positions[7].x = f32::from_bits(b.geometry.positions[7].x.to_bits() ^ 1);
+        assert_ne!(scene_hash(&b), h, "one ulp of one vertex");
+        let mut c = a.clone();
+        c.sky.z += 0.5;
+        assert_ne!(scene_hash(&c), h, "the sky");
+        let mut d = a;
+        d.materials[0].roughness_factor *= 0.5;
+        assert_ne!(scene_hash(&d), h, "a material");
+    }
+
+    #[test]
+    fn mismatches_name_the_setting_and_both_values() {
+        let mut m = Metadata { bounces: Some(4), sampler: Some("sobol".into()), ..Metadata::default() };
+        m.extra.insert(CAMERA.into(), "0".into());
+        let mut n = m.clone();
+        n.bounces = Some(2);
+        n.extra.insert(CAMERA.into(), "1".into());
+        let file = Path::new("dir/r.exr");
+        assert!(check_same(file, &identity(&m, 8, 8), &identity(&m, 8, 8)).is_ok());
+        let e = check_same(file, &identity(&m, 8, 8), &identity(&n, 8, 6)).unwrap_err();
+        assert_eq!(
+            e,
+            "dir/r.exr: cannot resume with different settings: height is 8 in the file but 6 now; \
+             bounces is 4 in the file but 2 now; camera is 0 in the file but 1 now"
+        );
+    }
+
+    #[test]
+    fn fixed_n_samplers_record_n() {
+        let mut m = Metadata { sampler: Some("hammersley".into()), ..Metadata::default() };
+        m.extra.insert(TARGET_SPP.into(), "64".into());
+        let mut n = m.clone();
+        n.extra.insert(TARGET_SPP.into(), "128".into());
+        let e = check_same(Path::new("h.exr"), &identity(&m, 4, 4), &identity(&n, 4, 4)).unwrap_err();
+        assert!(
+            e.contains("sample count N of the fixed-N sampler (--spp) is 64 in the file but 128 now"),
+            "{e}"
+        );
+        // A progressive sampler's target may change.
+        m.sampler = Some("sobol".into());
+        n.sampler = Some("sobol".into());
+        assert!(check_same(Path::new("s.exr"), &identity(&m, 4, 4), &identity(&n, 4, 4)).is_ok());
+    }
+
+    #[test]
+    fn same_scene_by_another_path_is_the_same_scene() {
+        let m = Metadata { scene: Some("scenes/a.glb".into()), ..Metadata::default() };
+        let n = Metadata { scene: Some("./../x/scenes/a.glb".into()), ..Metadata::default() };
+        assert_eq!(identity(&m, 1, 1), identity(&n, 1, 1));
+    }
+}
