@@ -103,7 +103,13 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         None => None,
     };
 
-    let mut scene = load_scene(args.scene.as_deref())?;
+    let mut scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
+        // The scene came from the file's record: say so, and how to point at it.
+        (Some(file), None) => {
+            format!("{e} (the scene {} was rendered from; give its path after `render`)", file.display())
+        }
+        _ => e,
+    })?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }

@@ -378,6 +378,50 @@ fn resume_refuses_other_settings_naming_both_values() {
 }
 
 #[test]
+fn resume_finds_the_recorded_scene_or_says_how_to_give_it() {
+    let dir = temp_dir("resume_scene");
+    let scene = dir.join("cbox.gltf");
+    for f in ["cbox.gltf", "cbox.bin"] {
+        std::fs::copy(data(&format!("cbox/{f}")), dir.join(f)).unwrap();
+    }
+    let file = render_ok(&dir, "s", 8, &[scene.to_str().unwrap(), "--spp", "1"]);
+    // Without a scene argument the recorded path is loaded (and its content hash checked).
+    let o = furnace(&["render", "--quiet", "--resume", file.to_str().unwrap(), "--spp", "2"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    // Moved away: the error names the file and says what to do.
+    let moved = dir.join("moved.gltf");
+    std::fs::rename(&scene, &moved).unwrap();
+    let o = furnace(&["render", "--quiet", "--resume", file.to_str().unwrap(), "--spp", "3"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.contains("cbox.gltf") && err.contains("give its path after `render`"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    // Given explicitly: another file name is another scene (name and content are checked)…
+    let resume = |scene: &Path| {
+        furnace(&[
+            "render",
+            "--quiet",
+            scene.to_str().unwrap(),
+            "--resume",
+            file.to_str().unwrap(),
+            "--spp",
+            "3",
+        ])
+    };
+    let o = resume(&moved);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("scene is cbox.gltf in the file but moved.gltf now"), "{}", stderr(&o));
+    // …but the same file elsewhere is the same scene.
+    std::fs::create_dir(dir.join("elsewhere")).unwrap();
+    let elsewhere = dir.join("elsewhere/cbox.gltf");
+    std::fs::rename(&moved, &elsewhere).unwrap();
+    std::fs::rename(dir.join("cbox.bin"), dir.join("elsewhere/cbox.bin")).unwrap();
+    let o = resume(&elsewhere);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(furnace_post::read_exr(&file).unwrap().3.spp, Some(3));
+}
+
+#[test]
 fn resume_of_a_fixed_n_sampler_needs_the_same_n() {
     let dir = temp_dir("resume_fixed_n");
     let file = render_ok(&dir, "h", 8, &["--spp", "4", "--sampler", "cmj"]);
