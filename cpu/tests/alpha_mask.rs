@@ -174,6 +174,7 @@ fn check_pixels(
                 }
                 None => {
                     mixed += 1;
+                    // A mixture of the two values; the margin is the same f32 rounding as above.
                     let (lo, hi) = (when_false.min(when_true), when_false.max(when_true));
                     if v.cmplt(lo - 1e-5).any() || v.cmpgt(hi + 1e-5).any() {
                         failures.push(format!("| ({x}, {y}) | {v:.5} | between {lo:.4} and {hi:.4} |"));
