@@ -19,6 +19,7 @@ pub mod context;
 pub mod film;
 pub mod kernel;
 pub mod sampling;
+pub mod scene;
 pub mod traverse;
 pub mod wgsl;
 

@@ -12,6 +12,13 @@ pub const SAMPLING: &str = include_str!("wgsl/sampling.wgsl");
 /// metallic-roughness. Needs [`SAMPLING`] (warps).
 pub const BRDF: &str = include_str!("wgsl/brdf.wgsl");
 
+/// `furnace-scene`'s per-hit code over the scene buffers of [`crate::scene`]: attribute
+/// interpolation (octahedral normals, UVs, tangents), bilinear RGBA8 texture lookups with wrap
+/// modes, sRGB decode and KHR_texture_transform, `Material::evaluate`, furnace-cpu's
+/// `surface_point` (normal map, double-sided orientation) and alpha test. Needs the
+/// declarations of [`crate::scene::bindings`].
+pub const SCENE: &str = include_str!("wgsl/scene.wgsl");
+
 /// CWBVH traversal of `furnace-accel`'s GPU buffers: closest hit and any hit (shadow rays).
 pub const TRAVERSE: &str = include_str!("wgsl/traverse.wgsl");
 

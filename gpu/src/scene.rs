@@ -1,0 +1,546 @@
+//! The scene on the GPU: the Rust side of [`crate::wgsl::SCENE`] — the storage buffers a
+//! [`Scene`] becomes, the declarations a shader adds to read them, and the bind group entries.
+//!
+//! Six read-only storage buffers, each checked against the adapter's per-binding limit
+//! ([`GpuError::TooLarge`] names the one that does not fit). One code path for every adapter:
+//! no binding arrays, no sampled textures; all images live in one buffer of RGBA8 texels
+//! filtered by hand in WGSL.
+//!
+//! | WGSL name | element | bytes | holds |
+//! |---|---|---|---|
+//! | `scene_triangles` | [`GpuSceneTriangle`] | 16 per triangle | vertex indices, material index (clamped like furnace-cpu's) |
+//! | `scene_vertices` | [`GpuVertex`] | 16 per vertex | world position, octahedral shading normal (`oct_encode`, decoded in WGSL as `oct_decode`) |
+//! | `scene_uvs` | `vec2<f32>` | 8 per vertex, **only when some material is textured** | `TEXCOORD_0` |
+//! | `scene_tangents` | `vec2<u32>` | 8 per vertex, **only when some material is normal-mapped** | snorm16 tangent + handedness, as `Geometry::tangents` |
+//! | `scene_materials` | [`GpuMaterial`] | 256 per material | factors, flags, four resolved [`GpuTextureRef`]s |
+//! | `scene_texels` | `u32` | 4 per texel of each **used** image, + 2 KiB | the sRGB and linear decode tables (512 `f32`), then RGBA8 texels (R in the low byte) |
+//!
+//! An absent buffer is bound as one zeroed element (bindings cannot be empty).
+//!
+//! A texture reference holds what the lookup needs (where its image starts in `scene_texels`,
+//! its size, wrap modes, colour space, KHR_texture_transform matrix) so that a lookup reads one
+//! record and no texture or image table. Texels are decoded through the tables at the head of
+//! `scene_texels`, which hold `srgb_to_linear(i/255)` and `i/255` as computed by
+//! furnace-scene: decoding is bit-identical to the CPU's; only the bilinear weights and the
+//! texture transform differ by float rounding (see `scene.wgsl`).
+//!
+//! A shader that reads the scene composes [`crate::wgsl::SCENE`] and declares the buffers with
+//! [`bindings`]; the traversal's alpha callback is then one line:
+//!
+//! ```wgsl
+//! fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool { return scene_alpha_passes(triangle_id, u, v); }
+//! ```
+
+use bytemuck::{Pod, Zeroable};
+use furnace_scene::{AlphaMode, ColorSpace, Scene, Texture, TextureRef, WrapMode, srgb_to_linear};
+use wgpu::util::DeviceExt;
+
+use crate::{GpuContext, GpuError};
+
+/// Number of bindings the scene uses ([`bindings`], [`GpuScene::layout_entries`]).
+pub const BINDING_COUNT: u32 = 6;
+
+/// Word of `scene_texels` where the sRGB decode table starts (`srgb_to_linear(i / 255)`).
+pub const SRGB_TABLE: u32 = 0;
+/// Word of `scene_texels` where the linear decode table starts (`i / 255`).
+pub const LINEAR_TABLE: u32 = 256;
+/// Words of decode tables before the first texel.
+pub const TABLE_WORDS: u32 = 512;
+
+/// [`GpuMaterial::flags`] bits 0–1: the alpha mode ([`ALPHA_OPAQUE`], [`ALPHA_MASK`],
+/// [`ALPHA_BLEND`]).
+pub const ALPHA_MODE_BITS: u32 = 3;
+/// Alpha mode code of [`AlphaMode::Opaque`].
+pub const ALPHA_OPAQUE: u32 = 0;
+/// Alpha mode code of [`AlphaMode::Mask`] (cutoff in [`GpuMaterial::alpha_cutoff`]).
+pub const ALPHA_MASK: u32 = 1;
+/// Alpha mode code of [`AlphaMode::Blend`] (rendered opaque, as on the CPU).
+pub const ALPHA_BLEND: u32 = 2;
+/// [`GpuMaterial::flags`]: `doubleSided`.
+pub const MATERIAL_DOUBLE_SIDED: u32 = 4;
+/// [`GpuMaterial::flags`]: some slot has a texture (`Material::uses_textures`): the hit needs
+/// its UV.
+pub const MATERIAL_TEXTURED: u32 = 8;
+
+/// [`GpuTextureRef::flags`]: the slot has a texture (otherwise a lookup is opaque white).
+pub const TEXTURE_PRESENT: u32 = 1;
+/// [`GpuTextureRef::flags`]: RGB is sRGB-encoded ([`ColorSpace::Srgb`]); alpha is always linear.
+pub const TEXTURE_SRGB: u32 = 2;
+/// [`GpuTextureRef::flags`]: apply [`GpuTextureRef::transform`] (KHR_texture_transform).
+pub const TEXTURE_TRANSFORM: u32 = 4;
+/// [`GpuTextureRef::flags`] bits 4–5: `wrapS` ([`WRAP_REPEAT`], [`WRAP_CLAMP`], [`WRAP_MIRRORED`]).
+pub const WRAP_S_SHIFT: u32 = 4;
+/// [`GpuTextureRef::flags`] bits 6–7: `wrapT`.
+pub const WRAP_T_SHIFT: u32 = 6;
+/// Wrap code of [`WrapMode::Repeat`].
+pub const WRAP_REPEAT: u32 = 0;
+/// Wrap code of [`WrapMode::ClampToEdge`].
+pub const WRAP_CLAMP: u32 = 1;
+/// Wrap code of [`WrapMode::MirroredRepeat`].
+pub const WRAP_MIRRORED: u32 = 2;
+
+/// A triangle: its three vertex indices and its material (WGSL `SceneTriangle`).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
+pub struct GpuSceneTriangle {
+    /// First vertex.
+    pub i0: u32,
+    /// Second vertex.
+    pub i1: u32,
+    /// Third vertex.
+    pub i2: u32,
+    /// Index into `scene_materials`.
+    pub material: u32,
+}
+
+/// A vertex: world position and octahedral-encoded unit shading normal (WGSL `SceneVertex`,
+/// `vec3<f32>` + `u32` in 16 bytes).
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GpuVertex {
+    /// World-space position.
+    pub position: [f32; 3],
+    /// `furnace_scene::oct_encode` of the shading normal.
+    pub normal: u32,
+}
+
+/// One material slot's texture, resolved (WGSL `SceneTextureRef`): where its image is in
+/// `scene_texels`, its size, wrap modes, colour space and texture transform.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GpuTextureRef {
+    /// Index in `scene_texels` of texel (0, 0) (≥ [`TABLE_WORDS`]).
+    pub texel_offset: u32,
+    /// Image width in texels.
+    pub width: u32,
+    /// Image height in texels.
+    pub height: u32,
+    /// [`TEXTURE_PRESENT`], [`TEXTURE_SRGB`], [`TEXTURE_TRANSFORM`], wrap codes.
+    pub flags: u32,
+    /// `TextureTransform::matrix()` as computed on the CPU, its first two rows column by
+    /// column: `uv' = (t[0]·u + t[2]·v + t[4], t[1]·u + t[3]·v + t[5])`.
+    pub transform: [f32; 6],
+    /// Zero.
+    pub pad: [u32; 2],
+}
+
+/// A material as the WGSL reads it (`SceneMaterial`): `furnace_scene::Material` with its
+/// textures resolved. 256 bytes.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+pub struct GpuMaterial {
+    /// `baseColorFactor`, linear RGBA.
+    pub base_color_factor: [f32; 4],
+    /// Emitted radiance factor (`emissiveFactor × emissiveStrength`).
+    pub emissive: [f32; 3],
+    /// `normalTexture.scale`.
+    pub normal_scale: f32,
+    /// KHR_materials_specular `specularColorFactor`.
+    pub specular_color_factor: [f32; 3],
+    /// KHR_materials_specular `specularFactor`.
+    pub specular_factor: f32,
+    /// `metallicFactor`.
+    pub metallic_factor: f32,
+    /// `roughnessFactor`.
+    pub roughness_factor: f32,
+    /// `alphaCutoff` (MASK only; 0 otherwise).
+    pub alpha_cutoff: f32,
+    /// Alpha mode ([`ALPHA_MODE_BITS`]), [`MATERIAL_DOUBLE_SIDED`], [`MATERIAL_TEXTURED`].
+    pub flags: u32,
+    /// `baseColorTexture`.
+    pub base_color_texture: GpuTextureRef,
+    /// `metallicRoughnessTexture`.
+    pub metallic_roughness_texture: GpuTextureRef,
+    /// `normalTexture` (absent when the scene stores no tangents: the CPU then skips the normal
+    /// map too).
+    pub normal_texture: GpuTextureRef,
+    /// `emissiveTexture`.
+    pub emissive_texture: GpuTextureRef,
+}
+
+const _: () = assert!(size_of::<GpuSceneTriangle>() == 16);
+const _: () = assert!(size_of::<GpuVertex>() == 16);
+const _: () = assert!(size_of::<GpuTextureRef>() == 48);
+const _: () = assert!(size_of::<GpuMaterial>() == 256);
+
+/// The WGSL declarations of the six scene buffers at `@group(group)`, bindings `first` …
+/// `first + 5`, in the order of the [module table](self).
+pub fn bindings(group: u32, first: u32) -> String {
+    let names = [
+        ("scene_triangles", "array<SceneTriangle>"),
+        ("scene_vertices", "array<SceneVertex>"),
+        ("scene_uvs", "array<vec2<f32>>"),
+        ("scene_tangents", "array<vec2<u32>>"),
+        ("scene_materials", "array<SceneMaterial>"),
+        ("scene_texels", "array<u32>"),
+    ];
+    names
+        .iter()
+        .enumerate()
+        .map(|(k, (name, ty))| {
+            format!("@group({group}) @binding({}) var<storage, read> {name}: {ty};\n", first + k as u32)
+        })
+        .collect()
+}
+
+/// A slot's texture reference and texture, if both indices (texture, image) are in range.
+fn resolve<'a>(scene: &'a Scene, r: &'a Option<TextureRef>) -> Option<(&'a TextureRef, &'a Texture)> {
+    let r = r.as_ref()?;
+    let tex = scene.textures.get(r.texture as usize)?;
+    scene.images.get(tex.image as usize).map(|_| (r, tex))
+}
+
+fn wrap_code(w: WrapMode) -> u32 {
+    match w {
+        WrapMode::Repeat => WRAP_REPEAT,
+        WrapMode::ClampToEdge => WRAP_CLAMP,
+        WrapMode::MirroredRepeat => WRAP_MIRRORED,
+    }
+}
+
+/// A scene packed into the words of the six storage buffers (CPU side; [`GpuScene::upload`]
+/// copies them to the device, parity tests hand them to [`crate::kernel::run_with`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneBuffers {
+    /// `scene_triangles`.
+    pub triangles: Vec<GpuSceneTriangle>,
+    /// `scene_vertices`.
+    pub vertices: Vec<GpuVertex>,
+    /// `scene_uvs` (empty when no material is textured).
+    pub uvs: Vec<[f32; 2]>,
+    /// `scene_tangents` (empty when no material is normal-mapped).
+    pub tangents: Vec<[u32; 2]>,
+    /// `scene_materials`.
+    pub materials: Vec<GpuMaterial>,
+    /// `scene_texels`: [`TABLE_WORDS`] words of decode tables, then each used image's texels.
+    pub texels: Vec<u32>,
+    /// Images stored (those some material slot uses).
+    pub image_count: usize,
+}
+
+impl SceneBuffers {
+    /// Packs `scene`, checking every buffer against `max_binding` bytes (pass
+    /// [`GpuContext::max_storage_binding`], or a small value to test the error) before
+    /// allocating it.
+    ///
+    /// Only what shading reads is kept: UVs only when some material is textured, tangents only
+    /// when some material has a normal map (and the scene has tangents), images only when a
+    /// material slot uses them. Triangles' material indices are clamped to the last material
+    /// (glTF's default), as furnace-cpu does; a texture or image index out of range makes the
+    /// slot untextured (the CPU's lookup then returns white too).
+    ///
+    /// # Errors
+    /// [`GpuError::TooLarge`] naming the first buffer over `max_binding` bytes (or over the
+    /// 2³² texel words a `u32` index reaches).
+    pub fn new(scene: &Scene, max_binding: u64) -> Result<Self, GpuError> {
+        let g = &scene.geometry;
+        let limit = max_binding;
+        let check = |what: String, bytes: u64| {
+            if bytes > limit { Err(GpuError::TooLarge { what, bytes, limit }) } else { Ok(()) }
+        };
+        let textured = scene.materials.iter().any(|m| m.uses_textures());
+        let has_tangents = !g.tangents.is_empty();
+        let normal_mapped = has_tangents && scene.materials.iter().any(|m| m.normal_texture.is_some());
+        let nv = g.positions.len() as u64;
+        let nt = g.triangles.len() as u64;
+        check(format!("the scene's triangle buffer ({nt} triangles)"), nt * 16)?;
+        check(format!("the scene's vertex buffer ({nv} vertices)"), nv * 16)?;
+        if textured {
+            check(format!("the scene's UV buffer ({nv} vertices)"), nv * 8)?;
+        }
+        if normal_mapped {
+            check(format!("the scene's tangent buffer ({nv} vertices)"), nv * 8)?;
+        }
+        check(format!("the scene's material buffer ({} materials)", scene.materials.len()), {
+            scene.materials.len() as u64 * 256
+        })?;
+
+        // Images some slot uses, in first-use order, and where each starts.
+        let mut image_offset: Vec<Option<u64>> = vec![None; scene.images.len()];
+        let mut used = Vec::new();
+        let mut words = u64::from(TABLE_WORDS);
+        for m in &scene.materials {
+            let slots = [
+                &m.base_color_texture,
+                &m.metallic_roughness_texture,
+                if normal_mapped { &m.normal_texture } else { &None },
+                &m.emissive_texture,
+            ];
+            for slot in slots {
+                if let Some((_, tex)) = resolve(scene, slot) {
+                    let i = tex.image as usize;
+                    if image_offset[i].is_none() {
+                        image_offset[i] = Some(words);
+                        used.push(i);
+                        let img = &scene.images[i];
+                        words += u64::from(img.width) * u64::from(img.height);
+                    }
+                }
+            }
+        }
+        let texel_limit = limit.min(4 << 32);
+        if words * 4 > texel_limit {
+            return Err(GpuError::TooLarge {
+                what: format!("the scene's texel buffer ({} images)", used.len()),
+                bytes: words * 4,
+                limit: texel_limit,
+            });
+        }
+
+        let last = scene.materials.len().saturating_sub(1) as u32;
+        let triangles = g
+            .triangles
+            .iter()
+            .enumerate()
+            .map(|(t, &[i0, i1, i2])| GpuSceneTriangle {
+                i0,
+                i1,
+                i2,
+                material: g.triangle_materials.get(t).copied().unwrap_or(last).min(last),
+            })
+            .collect();
+        let vertices = g
+            .positions
+            .iter()
+            .enumerate()
+            .map(|(i, p)| GpuVertex {
+                position: p.to_array(),
+                // A vertex without a normal cannot come from the loader; +Z as oct_encode's
+                // fallback.
+                normal: g.normals.get(i).copied().unwrap_or(furnace_scene::oct_encode(glam::Vec3::Z)),
+            })
+            .collect();
+        let uvs = if textured {
+            (0..g.positions.len()).map(|i| g.uvs.get(i).map_or([0.0; 2], |uv| uv.to_array())).collect()
+        } else {
+            Vec::new()
+        };
+        let tangents = if normal_mapped {
+            (0..g.positions.len())
+                .map(|i| {
+                    // A missing tangent reads as None on the CPU; zero here gives the same (no
+                    // perturbation: a zero tangent has no orthogonal part).
+                    let e = g.tangents.get(i).copied().unwrap_or([0; 4]).map(|c| u32::from(c as u16));
+                    [e[0] | (e[1] << 16), e[2] | (e[3] << 16)]
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+
+        let texture_ref = |slot: &Option<TextureRef>| {
+            let Some((r, tex)) = resolve(scene, slot) else { return GpuTextureRef::zeroed() };
+            let img = &scene.images[tex.image as usize];
+            let mut flags = TEXTURE_PRESENT
+                | (wrap_code(tex.wrap_s) << WRAP_S_SHIFT)
+                | (wrap_code(tex.wrap_t) << WRAP_T_SHIFT);
+            if r.color_space == ColorSpace::Srgb {
+                flags |= TEXTURE_SRGB;
+            }
+            let mut transform = [1.0, 0.0, 0.0, 1.0, 0.0, 0.0];
+            if let Some(t) = &r.transform {
+                flags |= TEXTURE_TRANSFORM;
+                let m = t.matrix();
+                transform = [m.x_axis.x, m.x_axis.y, m.y_axis.x, m.y_axis.y, m.z_axis.x, m.z_axis.y];
+            }
+            GpuTextureRef {
+                // Fits: the texel buffer was checked against 2³² words above.
+                texel_offset: image_offset[tex.image as usize].unwrap_or(0) as u32,
+                width: img.width.max(1),
+                height: img.height.max(1),
+                flags,
+                transform,
+                pad: [0; 2],
+            }
+        };
+        let materials = scene
+            .materials
+            .iter()
+            .map(|m| {
+                let (alpha, cutoff) = match m.alpha_mode {
+                    AlphaMode::Opaque => (ALPHA_OPAQUE, 0.0),
+                    AlphaMode::Mask { cutoff } => (ALPHA_MASK, cutoff),
+                    AlphaMode::Blend => (ALPHA_BLEND, 0.0),
+                };
+                let mut flags = alpha;
+                if m.double_sided {
+                    flags |= MATERIAL_DOUBLE_SIDED;
+                }
+                if m.uses_textures() {
+                    flags |= MATERIAL_TEXTURED;
+                }
+                GpuMaterial {
+                    base_color_factor: m.base_color_factor.to_array(),
+                    emissive: m.emissive.to_array(),
+                    normal_scale: m.normal_scale,
+                    specular_color_factor: m.specular_color_factor.to_array(),
+                    specular_factor: m.specular_factor,
+                    metallic_factor: m.metallic_factor,
+                    roughness_factor: m.roughness_factor,
+                    alpha_cutoff: cutoff,
+                    flags,
+                    base_color_texture: texture_ref(&m.base_color_texture),
+                    metallic_roughness_texture: texture_ref(&m.metallic_roughness_texture),
+                    normal_texture: if normal_mapped {
+                        texture_ref(&m.normal_texture)
+                    } else {
+                        GpuTextureRef::zeroed()
+                    },
+                    emissive_texture: texture_ref(&m.emissive_texture),
+                }
+            })
+            .collect();
+
+        let mut texels = Vec::with_capacity(words as usize);
+        texels.extend((0..256).map(|i| srgb_to_linear(i as f32 / 255.0).to_bits()));
+        texels.extend((0..256u32).map(|i| (i as f32 / 255.0).to_bits()));
+        for &i in &used {
+            let img = &scene.images[i];
+            let n = img.width as usize * img.height as usize;
+            texels.extend(img.texels.iter().take(n).map(|&t| u32::from_le_bytes(t)));
+            // A short image reads as transparent black on the CPU (`Image::texel`'s ZERO).
+            texels.resize(texels.len() + n.saturating_sub(img.texels.len()), 0);
+        }
+        debug_assert_eq!(texels.len() as u64, words);
+        Ok(Self { triangles, vertices, uvs, tangents, materials, texels, image_count: used.len() })
+    }
+
+    /// The six buffers' words in binding order (an absent one as 4 zero words), e.g. for
+    /// [`crate::kernel::run_with`] with [`bindings`]`(0, 3)`.
+    pub fn extra(&self) -> [&[u32]; 6] {
+        fn w(s: &[u32]) -> &[u32] {
+            const EMPTY: &[u32] = &[0; 4];
+            if s.is_empty() { EMPTY } else { s }
+        }
+        [
+            w(bytemuck::cast_slice(&self.triangles)),
+            w(bytemuck::cast_slice(&self.vertices)),
+            w(bytemuck::cast_slice(&self.uvs)),
+            w(bytemuck::cast_slice(&self.tangents)),
+            w(bytemuck::cast_slice(&self.materials)),
+            w(&self.texels),
+        ]
+    }
+
+    /// Bytes of the per-triangle and per-vertex buffers (triangles, vertices, UVs, tangents).
+    pub fn geometry_bytes(&self) -> u64 {
+        (size_of_val(self.triangles.as_slice())
+            + size_of_val(self.vertices.as_slice())
+            + size_of_val(self.uvs.as_slice())
+            + size_of_val(self.tangents.as_slice())) as u64
+    }
+
+    /// [`Self::geometry_bytes`] per triangle (0 without triangles).
+    pub fn bytes_per_triangle(&self) -> f64 {
+        if self.triangles.is_empty() { 0.0 } else { self.geometry_bytes() as f64 / self.triangles.len() as f64 }
+    }
+
+    /// Bytes of all six buffers as uploaded.
+    pub fn bytes(&self) -> u64 {
+        self.extra().iter().map(|w| size_of_val(*w) as u64).sum()
+    }
+}
+
+/// A scene's six storage buffers on the device.
+#[derive(Debug)]
+pub struct GpuScene {
+    /// The buffers in binding order ([`bindings`]).
+    pub buffers: [wgpu::Buffer; 6],
+    /// Triangles.
+    pub triangle_count: usize,
+    /// [`SceneBuffers::geometry_bytes`].
+    pub geometry_bytes: u64,
+    /// [`SceneBuffers::bytes`].
+    pub bytes: u64,
+}
+
+impl GpuScene {
+    /// Packs `scene` ([`SceneBuffers::new`]) within this device's largest storage binding and
+    /// buffer size, and uploads it.
+    ///
+    /// # Errors
+    /// [`GpuError::TooLarge`] when a buffer exceeds the device's limits (nothing is allocated on
+    /// the device then); a wgpu error if an allocation fails.
+    pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
+        let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
+        Self::upload_buffers(ctx, &SceneBuffers::new(scene, limit)?)
+    }
+
+    /// Uploads already packed buffers.
+    pub fn upload_buffers(ctx: &GpuContext, packed: &SceneBuffers) -> Result<Self, GpuError> {
+        let names =
+            ["scene triangles", "scene vertices", "scene uvs", "scene tangents", "scene materials", "scene texels"];
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
+        let words = packed.extra();
+        let buffers = std::array::from_fn(|k| {
+            ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+                label: Some(names[k]),
+                contents: bytemuck::cast_slice(words[k]),
+                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            })
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Wgpu(e.to_string()));
+        }
+        ctx.check()?;
+        Ok(Self {
+            buffers,
+            triangle_count: packed.triangles.len(),
+            geometry_bytes: packed.geometry_bytes(),
+            bytes: packed.bytes(),
+        })
+    }
+
+    /// Bytes of the per-triangle and per-vertex buffers per triangle.
+    pub fn bytes_per_triangle(&self) -> f64 {
+        if self.triangle_count == 0 { 0.0 } else { self.geometry_bytes as f64 / self.triangle_count as f64 }
+    }
+
+    /// Bind group layout entries of the six buffers at bindings `first` … `first + 5`
+    /// (read-only storage, compute stage).
+    pub fn layout_entries(first: u32) -> [wgpu::BindGroupLayoutEntry; 6] {
+        std::array::from_fn(|k| wgpu::BindGroupLayoutEntry {
+            binding: first + k as u32,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage { read_only: true },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        })
+    }
+
+    /// Bind group entries matching [`GpuScene::layout_entries`].
+    pub fn bind_entries(&self, first: u32) -> [wgpu::BindGroupEntry<'_>; 6] {
+        std::array::from_fn(|k| wgpu::BindGroupEntry {
+            binding: first + k as u32,
+            resource: self.buffers[k].as_entire_binding(),
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bindings_name_six_buffers_in_order() {
+        let b = bindings(1, 4);
+        assert!(b.starts_with("@group(1) @binding(4) var<storage, read> scene_triangles"));
+        assert!(b.contains("@binding(9) var<storage, read> scene_texels: array<u32>;"));
+        assert_eq!(b.lines().count(), BINDING_COUNT as usize);
+    }
+
+    #[test]
+    fn cornell_box_keeps_no_uvs_tangents_or_texels() {
+        let scene = furnace_scene::builtin::cornell_box().unwrap();
+        let b = SceneBuffers::new(&scene, u64::MAX).unwrap();
+        assert!(b.uvs.is_empty() && b.tangents.is_empty());
+        assert_eq!(b.texels.len(), TABLE_WORDS as usize);
+        assert_eq!(b.triangles.len(), scene.geometry.triangle_count());
+        // The decode tables are furnace-scene's values, bit for bit.
+        assert_eq!(f32::from_bits(b.texels[(SRGB_TABLE + 128) as usize]), srgb_to_linear(128.0 / 255.0));
+        assert_eq!(f32::from_bits(b.texels[(LINEAR_TABLE + 255) as usize]), 1.0);
+    }
+}

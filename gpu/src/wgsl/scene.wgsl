@@ -1,0 +1,387 @@
+// furnace-gpu: scene module — WGSL twin of what furnace-scene and furnace-cpu's integrator do
+// at a hit (Rust side of the buffers: gpu/src/scene.rs; parity: gpu/tests/scene_parity.rs).
+//
+// What is twinned:
+//
+// * `scene_oct_decode`: `furnace_scene::oct_decode` (snorm16 octahedral normal, folded, then
+//   normalised), `scene_decode_tangent`: `decode_tangent`.
+// * `scene_position`, `scene_shading_normal`, `scene_uv`, `scene_tangent`: the barycentric
+//   interpolations of `Geometry::{triangle, shading_normal, uv, tangent}`
+//   (`(1 − b1 − b2)·a + b1·b + b2·c`, the same operations in the same order, glam's
+//   `normalize_or_zero` as `v · (1 / sqrt(dot))` with its finiteness test).
+// * `scene_image_sample`: `Image::sample_bilinear` — texel centres at (i + ½)/n, wrap modes
+//   REPEAT / CLAMP_TO_EDGE / MIRRORED_REPEAT, decode to linear *before* filtering, glam's
+//   `lerp` (`a·(1 − s) + b·s`), non-finite UV → (0, 0). Decoding reads the CPU's own tables
+//   (`srgb_to_linear(i/255)`, `i/255`, at the head of `scene_texels`): bit-identical. The
+//   texel coordinate is where the two sides differ: the CPU forms `u·n − ½` in f64; here the
+//   UV is first moved by whole wrap periods into [0, 1) (REPEAT), [0, 2) (MIRRORED) or clamped
+//   to [−1, 2] (CLAMP, beyond which both texels are the edge texel) — exact in f32 — and
+//   `u·n − ½` is formed in f32, so the bilinear weights differ by about one ULP of the texel
+//   coordinate (≈ n·2⁻²⁴), the texel chosen may differ only where its weight is ≈ 0.
+// * `scene_texture_transform`: `TextureTransform::apply` with the CPU's matrix (no sin/cos
+//   here), glam's `Mat3 · Vec3` order.
+// * `scene_texture_sample`: `TextureRef::sample_bilinear` (transform, wrap, colour space; a
+//   missing texture is opaque white).
+// * `scene_material_evaluate` → `MaterialSample`: `Material::evaluate`.
+// * `scene_surface_point`: furnace-cpu's `Renderer::surface_point`: position, geometric normal
+//   `normalize_or_zero(cross(v1 − v0, v2 − v0))`, interpolated shading normal (geometric when
+//   zero), the glTF normal map in the frame (T ⟂ N, B = w·N×T, N), and the orientation: on the
+//   back (dot(geometric, direction) > 0) a double-sided material flips both normals, a
+//   single-sided one gives no surface (`valid == 0`).
+// * `scene_alpha_passes`: furnace-cpu's `Renderer::alpha_passes` (the traversal's `hit_filter`):
+//   MASK materials keep a hit where `baseColorFactor.a × texture alpha ≥ alphaCutoff`.
+// * `scene_srgb_to_linear`: `furnace_scene::srgb_to_linear` for continuous values (texels use
+//   the exact table instead); pow differs from the CPU's powf by float rounding.
+//
+// A driver may fuse multiply-adds and WGSL division / sqrt are not correctly rounded, so
+// floating-point results agree with the CPU to float rounding, not bit for bit.
+//
+// What the composing shader must declare (this module declares no bindings; Rust:
+// `furnace_gpu::scene::bindings(group, first)`):
+//
+//   var<storage, read> scene_triangles: array<SceneTriangle>;
+//   var<storage, read> scene_vertices: array<SceneVertex>;
+//   var<storage, read> scene_uvs: array<vec2<f32>>;
+//   var<storage, read> scene_tangents: array<vec2<u32>>;
+//   var<storage, read> scene_materials: array<SceneMaterial>;
+//   var<storage, read> scene_texels: array<u32>;
+
+// Material flags (gpu/src/scene.rs: ALPHA_*, MATERIAL_*).
+const SCENE_ALPHA_MODE_BITS: u32 = 3u;
+const SCENE_ALPHA_MASK: u32 = 1u;
+const SCENE_DOUBLE_SIDED: u32 = 4u;
+const SCENE_TEXTURED: u32 = 8u;
+// Texture reference flags (TEXTURE_*, WRAP_*).
+const SCENE_TEX_PRESENT: u32 = 1u;
+const SCENE_TEX_SRGB: u32 = 2u;
+const SCENE_TEX_TRANSFORM: u32 = 4u;
+const SCENE_WRAP_S_SHIFT: u32 = 4u;
+const SCENE_WRAP_T_SHIFT: u32 = 6u;
+const SCENE_WRAP_REPEAT: u32 = 0u;
+const SCENE_WRAP_MIRRORED: u32 = 2u;
+// Decode tables at the head of scene_texels (SRGB_TABLE, LINEAR_TABLE).
+const SCENE_SRGB_TABLE: u32 = 0u;
+const SCENE_LINEAR_TABLE: u32 = 256u;
+
+// furnace_gpu::scene::GpuSceneTriangle (16 B).
+struct SceneTriangle {
+    i0: u32,
+    i1: u32,
+    i2: u32,
+    material: u32,
+}
+
+// furnace_gpu::scene::GpuVertex (16 B): world position, oct-encoded shading normal.
+struct SceneVertex {
+    position: vec3<f32>,
+    normal: u32,
+}
+
+// furnace_gpu::scene::GpuTextureRef (48 B).
+struct SceneTextureRef {
+    texel_offset: u32,
+    width: u32,
+    height: u32,
+    flags: u32,
+    transform: array<f32, 6>,
+    pad: array<u32, 2>,
+}
+
+// furnace_gpu::scene::GpuMaterial (256 B).
+struct SceneMaterial {
+    base_color_factor: vec4<f32>,
+    emissive: vec3<f32>,
+    normal_scale: f32,
+    specular_color_factor: vec3<f32>,
+    specular_factor: f32,
+    metallic_factor: f32,
+    roughness_factor: f32,
+    alpha_cutoff: f32,
+    flags: u32,
+    base_color_texture: SceneTextureRef,
+    metallic_roughness_texture: SceneTextureRef,
+    normal_texture: SceneTextureRef,
+    emissive_texture: SceneTextureRef,
+}
+
+// furnace_scene::MaterialSample.
+struct MaterialSample {
+    base_color: vec3<f32>,
+    alpha: f32,
+    metallic: f32,
+    roughness: f32,
+    emission: vec3<f32>,
+    specular_factor: f32,
+    specular_color: vec3<f32>,
+}
+
+// furnace-cpu's SurfacePoint; `valid` is 0 on the back of a single-sided material (the Rust
+// `None`), 1 otherwise.
+struct SceneSurfacePoint {
+    position: vec3<f32>,
+    valid: u32,
+    geometric: vec3<f32>,
+    shading: vec3<f32>,
+}
+
+// ---------------------------------------------------------------------------------------------
+// Float helpers with glam's operation order.
+
+// f32::is_finite, on the bits (a compiler may assume no NaN in float comparisons).
+fn scene_is_finite(x: f32) -> bool {
+    return (bitcast<u32>(x) & 0x7f800000u) != 0x7f800000u;
+}
+
+// Vec3::dot: (x·x' + y·y') + z·z'.
+fn scene_dot(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+// Vec3::cross.
+fn scene_cross(a: vec3<f32>, b: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(a.y * b.z - b.y * a.z, a.z * b.x - b.z * a.x, a.x * b.y - b.x * a.y);
+}
+
+// Vec3::normalize_or: v · (1/|v|) when that reciprocal is finite and positive, else fallback.
+fn scene_normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
+    let rcp = 1.0 / sqrt(scene_dot(v, v));
+    if scene_is_finite(rcp) && rcp > 0.0 {
+        return v * rcp;
+    }
+    return fallback;
+}
+
+fn scene_normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
+    return scene_normalize_or(v, vec3<f32>(0.0));
+}
+
+// (1 − b1 − b2)·a + b1·b + b2·c, glam's order.
+fn scene_interpolate3(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, b1: f32, b2: f32) -> vec3<f32> {
+    return (1.0 - b1 - b2) * a + b1 * b + b2 * c;
+}
+
+// i16 in bits 16k..16k+15 of `w`, as f32 / 32767.
+fn scene_snorm16(w: u32, k: u32) -> f32 {
+    let shift = 16u - 16u * k;
+    return f32(bitcast<i32>(w << shift) >> 16u) / 32767.0;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Geometry.
+
+// furnace_scene::oct_decode.
+fn scene_oct_decode(e: u32) -> vec3<f32> {
+    let x0 = scene_snorm16(e, 0u);
+    let y0 = scene_snorm16(e, 1u);
+    let z = 1.0 - abs(x0) - abs(y0);
+    let t = max(-z, 0.0);
+    let x = x0 + select(t, -t, x0 >= 0.0);
+    let y = y0 + select(t, -t, y0 >= 0.0);
+    let v = vec3<f32>(x, y, z);
+    return v * (1.0 / sqrt(scene_dot(v, v)));
+}
+
+// furnace_scene::decode_tangent of a vertex's two words.
+fn scene_decode_tangent(w: vec2<u32>) -> vec4<f32> {
+    return vec4<f32>(scene_snorm16(w.x, 0u), scene_snorm16(w.x, 1u), scene_snorm16(w.y, 0u), scene_snorm16(w.y, 1u));
+}
+
+// The material index of a triangle (clamped into the materials at upload).
+fn scene_triangle_material(triangle: u32) -> u32 {
+    return scene_triangles[triangle].material;
+}
+
+// The point at barycentrics (b1, b2) of a triangle.
+fn scene_position(triangle: u32, b1: f32, b2: f32) -> vec3<f32> {
+    let t = scene_triangles[triangle];
+    return scene_interpolate3(scene_vertices[t.i0].position, scene_vertices[t.i1].position,
+        scene_vertices[t.i2].position, b1, b2);
+}
+
+// Geometry::shading_normal: interpolated vertex normals, normalised (zero if they cancel).
+fn scene_shading_normal(triangle: u32, b1: f32, b2: f32) -> vec3<f32> {
+    let t = scene_triangles[triangle];
+    let n = scene_interpolate3(scene_oct_decode(scene_vertices[t.i0].normal),
+        scene_oct_decode(scene_vertices[t.i1].normal), scene_oct_decode(scene_vertices[t.i2].normal), b1, b2);
+    return scene_normalize_or_zero(n);
+}
+
+// Geometry::uv: interpolated UV0 ((0, 0) in a scene without UVs, whose buffer is one zero).
+fn scene_uv(triangle: u32, b1: f32, b2: f32) -> vec2<f32> {
+    let t = scene_triangles[triangle];
+    return (1.0 - b1 - b2) * scene_uvs[t.i0] + b1 * scene_uvs[t.i1] + b2 * scene_uvs[t.i2];
+}
+
+// Geometry::tangent: interpolated xyz re-normalised, handedness of the first vertex. Only
+// meaningful in a scene with tangents (some material normal-mapped).
+fn scene_tangent(triangle: u32, b1: f32, b2: f32) -> vec4<f32> {
+    let t = scene_triangles[triangle];
+    let ta = scene_decode_tangent(scene_tangents[t.i0]);
+    let tb = scene_decode_tangent(scene_tangents[t.i1]);
+    let tc = scene_decode_tangent(scene_tangents[t.i2]);
+    let xyz = scene_normalize_or_zero(scene_interpolate3(ta.xyz, tb.xyz, tc.xyz, b1, b2));
+    return vec4<f32>(xyz, select(1.0, -1.0, ta.w < 0.0));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Textures.
+
+// furnace_scene::srgb_to_linear (IEC 61966-2-1) for a continuous value.
+fn scene_srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        return c / 12.92;
+    }
+    return pow((c + 0.055) / 1.055, 2.4);
+}
+
+// Moves u by whole periods of the wrap mode (exact in f32: u − floor(u) is representable), so
+// that u·n stays small: [0, 1] for REPEAT, [0, 2] for MIRRORED; CLAMP clamps to [−1, 2], past
+// which both texels of the bilinear footprint are the edge texel.
+fn scene_wrap_reduce(u: f32, mode: u32) -> f32 {
+    if mode == SCENE_WRAP_REPEAT {
+        return u - floor(u);
+    }
+    if mode == SCENE_WRAP_MIRRORED {
+        return u - 2.0 * floor(0.5 * u);
+    }
+    return clamp(u, -1.0, 2.0);
+}
+
+// WrapMode::apply: texel index i (any integer) into 0..n.
+fn scene_wrap(i: i32, n: u32, mode: u32) -> u32 {
+    let m = i32(max(n, 1u));
+    if mode == SCENE_WRAP_REPEAT {
+        return u32(((i % m) + m) % m);
+    }
+    if mode == SCENE_WRAP_MIRRORED {
+        let r = ((i % (2 * m)) + 2 * m) % (2 * m);
+        return u32(select(2 * m - 1 - r, r, r < m));
+    }
+    return u32(clamp(i, 0, m - 1));
+}
+
+// Image::texel: texel (x, y) decoded to linear RGBA through the CPU's tables.
+fn scene_texel(t: SceneTextureRef, x: u32, y: u32) -> vec4<f32> {
+    let w = scene_texels[t.texel_offset + y * t.width + x];
+    let rgb = select(SCENE_LINEAR_TABLE, SCENE_SRGB_TABLE, (t.flags & SCENE_TEX_SRGB) != 0u);
+    return vec4<f32>(
+        bitcast<f32>(scene_texels[rgb + (w & 0xffu)]),
+        bitcast<f32>(scene_texels[rgb + ((w >> 8u) & 0xffu)]),
+        bitcast<f32>(scene_texels[rgb + ((w >> 16u) & 0xffu)]),
+        bitcast<f32>(scene_texels[SCENE_LINEAR_TABLE + (w >> 24u)]),
+    );
+}
+
+// Vec4::lerp.
+fn scene_lerp4(a: vec4<f32>, b: vec4<f32>, s: f32) -> vec4<f32> {
+    return a * (1.0 - s) + b * s;
+}
+
+// Image::sample_bilinear with the reference's wrap modes and colour space.
+fn scene_image_sample(t: SceneTextureRef, uv_in: vec2<f32>) -> vec4<f32> {
+    var uv = uv_in;
+    if !(scene_is_finite(uv.x) && scene_is_finite(uv.y)) {
+        uv = vec2<f32>(0.0);
+    }
+    let ws = (t.flags >> SCENE_WRAP_S_SHIFT) & 3u;
+    let wt = (t.flags >> SCENE_WRAP_T_SHIFT) & 3u;
+    let x = scene_wrap_reduce(uv.x, ws) * f32(t.width) - 0.5;
+    let y = scene_wrap_reduce(uv.y, wt) * f32(t.height) - 0.5;
+    let x0 = floor(x);
+    let y0 = floor(y);
+    let fx = x - x0;
+    let fy = y - y0;
+    let xa = scene_wrap(i32(x0), t.width, ws);
+    let xb = scene_wrap(i32(x0) + 1, t.width, ws);
+    let ya = scene_wrap(i32(y0), t.height, wt);
+    let yb = scene_wrap(i32(y0) + 1, t.height, wt);
+    let top = scene_lerp4(scene_texel(t, xa, ya), scene_texel(t, xb, ya), fx);
+    let bottom = scene_lerp4(scene_texel(t, xa, yb), scene_texel(t, xb, yb), fx);
+    return scene_lerp4(top, bottom, fy);
+}
+
+// TextureTransform::apply (matrix from the CPU); identity without the extension.
+fn scene_texture_transform(t: SceneTextureRef, uv: vec2<f32>) -> vec2<f32> {
+    if (t.flags & SCENE_TEX_TRANSFORM) == 0u {
+        return uv;
+    }
+    let m = t.transform;
+    return vec2<f32>(m[0] * uv.x + m[2] * uv.y + m[4], m[1] * uv.x + m[3] * uv.y + m[5]);
+}
+
+// TextureRef::sample_bilinear: linear RGBA at the stored UV0; opaque white without a texture.
+fn scene_texture_sample(t: SceneTextureRef, uv: vec2<f32>) -> vec4<f32> {
+    if (t.flags & SCENE_TEX_PRESENT) == 0u {
+        return vec4<f32>(1.0);
+    }
+    return scene_image_sample(t, scene_texture_transform(t, uv));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Materials.
+
+// Material::uses_textures: whether evaluating needs the hit's UV.
+fn scene_material_is_textured(material: u32) -> bool {
+    return (scene_materials[material].flags & SCENE_TEXTURED) != 0u;
+}
+
+// Material::evaluate: factors × textures at uv (ignored by an untextured material).
+fn scene_material_evaluate(material: u32, uv: vec2<f32>) -> MaterialSample {
+    let m = scene_materials[material];
+    let base = m.base_color_factor * scene_texture_sample(m.base_color_texture, uv);
+    let mr = scene_texture_sample(m.metallic_roughness_texture, uv);
+    let emission = m.emissive * scene_texture_sample(m.emissive_texture, uv).xyz;
+    return MaterialSample(base.xyz, base.w, m.metallic_factor * mr.z, m.roughness_factor * mr.y, emission,
+        m.specular_factor, m.specular_color_factor);
+}
+
+// Renderer::alpha_passes (the traversal's hit_filter): false only where a MASK material's
+// alpha is below its cutoff.
+fn scene_alpha_passes(triangle_id: u32, b1: f32, b2: f32) -> bool {
+    let mi = scene_triangles[triangle_id].material;
+    let flags = scene_materials[mi].flags;
+    if (flags & SCENE_ALPHA_MODE_BITS) != SCENE_ALPHA_MASK {
+        return true;
+    }
+    let uv = scene_uv(triangle_id, b1, b2);
+    let alpha = scene_materials[mi].base_color_factor.w
+        * scene_texture_sample(scene_materials[mi].base_color_texture, uv).w;
+    return alpha >= scene_materials[mi].alpha_cutoff;
+}
+
+// Renderer::surface_point for a ray travelling along `direction` that hit `triangle` at
+// barycentrics (b1, b2); `uv` is the hit's UV0 (used by a normal map only).
+fn scene_surface_point(triangle: u32, b1: f32, b2: f32, uv: vec2<f32>, direction: vec3<f32>) -> SceneSurfacePoint {
+    let t = scene_triangles[triangle];
+    let v0 = scene_vertices[t.i0].position;
+    let v1 = scene_vertices[t.i1].position;
+    let v2 = scene_vertices[t.i2].position;
+    let position = scene_interpolate3(v0, v1, v2, b1, b2);
+    var geometric = scene_normalize_or_zero(scene_cross(v1 - v0, v2 - v0));
+    var shading = scene_shading_normal(triangle, b1, b2);
+    if all(shading == vec3<f32>(0.0)) {
+        shading = geometric;
+    }
+    let normal_map = scene_materials[t.material].normal_texture;
+    if (normal_map.flags & SCENE_TEX_PRESENT) != 0u {
+        // glTF normal map: tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame
+        // (T, B = w·N×T, N), with T made orthogonal to the shading normal N.
+        let tangent = scene_tangent(triangle, b1, b2);
+        let s = scene_materials[t.material].normal_scale;
+        let m = (2.0 * scene_texture_sample(normal_map, uv).xyz - vec3<f32>(1.0)) * vec3<f32>(s, s, 1.0);
+        let tn = scene_normalize_or_zero(tangent.xyz - shading * scene_dot(shading, tangent.xyz));
+        if any(tn != vec3<f32>(0.0)) {
+            let bn = tangent.w * scene_cross(shading, tn);
+            shading = scene_normalize_or(m.x * tn + m.y * bn + m.z * shading, shading);
+        }
+    }
+    var valid = 1u;
+    if scene_dot(geometric, direction) > 0.0 {
+        if (scene_materials[t.material].flags & SCENE_DOUBLE_SIDED) == 0u {
+            valid = 0u;
+        }
+        geometric = -geometric;
+        shading = -shading;
+    }
+    return SceneSurfacePoint(position, valid, geometric, shading);
+}
