@@ -1,1 +1,181 @@
-//! Rust side of the WGSL CWBVH traversal ([`crate::wgsl::TRAVERSE`]): the buffers it binds.
+//! Rust side of the WGSL CWBVH traversal ([`crate::wgsl::TRAVERSE`]): the buffers it binds, the
+//! declarations a shader adds to use it, and the stack-size knob the overflow test turns.
+//!
+//! A shader that traces rays composes [`crate::wgsl::TRAVERSE`] (or [`module_with_stack_size`])
+//! with its own code, which must declare the two buffers (see [`bindings`]) and the alpha-mask
+//! callback `fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool`; then it calls
+//! `trace_closest(origin, dir, t_max) -> Hit`, `trace_any(origin, dir, t_max) -> bool` and
+//! `offset_ray_origin(p, n)`. The top of `traverse.wgsl` documents them, and the stack
+//! overflow behaviour (a linear sweep over the nodes: slower, never a lost hit).
+//!
+//! ```no_run
+//! # fn main() -> Result<(), furnace_gpu::GpuError> {
+//! use furnace_gpu::{GpuContext, AdapterChoice, kernel, traverse, wgsl};
+//! let ctx = GpuContext::new(&AdapterChoice::Best)?;
+//! let tris = [[glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y]];
+//! let bvh = furnace_accel::Bvh::build(&tris);
+//! let buffers = traverse::BvhBuffers::new(&bvh, ctx.max_storage_binding())?;
+//! let src = wgsl::compose(&[
+//!     kernel::PREAMBLE,
+//!     &traverse::bindings(0, 3),
+//!     wgsl::TRAVERSE,
+//!     "fn hit_filter(id: u32, u: f32, v: f32) -> bool { return true; }",
+//!     "@compute @workgroup_size(64) fn main() { /* trace_closest(...) */ }",
+//! ]);
+//! let out = kernel::run_with(&ctx, &src, &[], &buffers.extra(), 4, 1)?;
+//! # Ok(()) }
+//! ```
+
+use furnace_accel::{Bvh, GpuCwbvhNode, GpuTriangle, Layout};
+
+use crate::GpuError;
+
+/// Node groups the WGSL traversal stack holds (`TRV_STACK_SIZE` in `traverse.wgsl`): one per
+/// tree level below the root at most, so trees up to this depth never overflow. The same as
+/// obvhs's (and `furnace-accel`'s CPU) traversal stack.
+pub const DEFAULT_STACK_SIZE: u32 = 32;
+
+/// The line of `traverse.wgsl` that [`module_with_stack_size`] rewrites.
+const STACK_LINE: &str = "const TRV_STACK_SIZE: u32 = 32u;";
+
+/// `u32` words per node (80 bytes).
+pub const NODE_WORDS: usize = size_of::<GpuCwbvhNode>() / 4;
+/// `u32` words per triangle (48 bytes).
+pub const TRIANGLE_WORDS: usize = size_of::<GpuTriangle>() / 4;
+
+/// [`crate::wgsl::TRAVERSE`] with a traversal stack of `size` node groups instead of
+/// [`DEFAULT_STACK_SIZE`]: a smaller stack uses less private memory per invocation, and a tiny
+/// one makes ordinary trees overflow (how the tests exercise the fallback).
+///
+/// # Panics
+/// If `size` is 0.
+pub fn module_with_stack_size(size: u32) -> String {
+    assert!(size > 0, "the traversal stack needs at least one entry");
+    assert!(crate::wgsl::TRAVERSE.contains(STACK_LINE), "traverse.wgsl lost its stack-size line");
+    crate::wgsl::TRAVERSE.replace(STACK_LINE, &format!("const TRV_STACK_SIZE: u32 = {size}u;"))
+}
+
+/// The declarations of the two storage buffers the traversal reads, at `@group(group)`,
+/// bindings `first` (nodes) and `first + 1` (triangles), for the composing shader.
+pub fn bindings(group: u32, first: u32) -> String {
+    format!(
+        "@group({group}) @binding({first}) var<storage, read> bvh_nodes: array<CwbvhNode>;\n\
+         @group({group}) @binding({}) var<storage, read> bvh_triangles: array<Triangle>;\n",
+        first + 1
+    )
+}
+
+/// A CWBVH as the `u32` words of the two storage buffers of the WGSL traversal: the bytes of
+/// [`Bvh::gpu_nodes`] and [`Bvh::gpu_triangles`], unchanged (both are `Pod` with 4-byte
+/// fields, so the words are their little-endian bytes: exactly what a storage buffer holds).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct BvhBuffers {
+    /// `bvh_nodes`: [`NODE_WORDS`] words per node, root first.
+    pub nodes: Vec<u32>,
+    /// `bvh_triangles`: [`TRIANGLE_WORDS`] words per triangle slot, in leaf order.
+    pub triangles: Vec<u32>,
+}
+
+impl BvhBuffers {
+    /// Packs `bvh` and checks each buffer against `max_binding` bytes (pass
+    /// [`crate::GpuContext::max_storage_binding`]).
+    ///
+    /// A tree with no triangle becomes one all-zero node (no child, so no ray hits anything)
+    /// and one zero triangle, because zero-sized bindings are invalid; the traversal never
+    /// reaches that triangle.
+    ///
+    /// # Errors
+    /// [`GpuError::TooLarge`] when the node or triangle buffer exceeds `max_binding` (the
+    /// scene needs a device with a larger limit, or to be split).
+    ///
+    /// # Panics
+    /// If `bvh` was built with [`Layout::Bvh2`] but has triangles: the GPU traverses CWBVHs only
+    /// (a programming error, not a property of the scene).
+    pub fn new(bvh: &Bvh, max_binding: u64) -> Result<Self, GpuError> {
+        let nodes = bvh.gpu_nodes();
+        let tris = bvh.gpu_triangles();
+        assert!(
+            bvh.layout() == Layout::Cwbvh || tris.is_empty(),
+            "furnace-gpu traverses CWBVHs: build the Bvh with Layout::Cwbvh"
+        );
+        let check = |what: &str, bytes: usize| {
+            if bytes as u64 > max_binding {
+                Err(GpuError::TooLarge { what: what.into(), bytes: bytes as u64, limit: max_binding })
+            } else {
+                Ok(())
+            }
+        };
+        check(&format!("the BVH node buffer ({} nodes)", nodes.len()), size_of_val(nodes))?;
+        check(&format!("the BVH triangle buffer ({} triangle slots)", tris.len()), size_of_val(tris))?;
+        let nodes: Vec<u32> =
+            if nodes.is_empty() { vec![0; NODE_WORDS] } else { bytemuck::cast_slice(nodes).to_vec() };
+        let triangles: Vec<u32> =
+            if tris.is_empty() { vec![0; TRIANGLE_WORDS] } else { bytemuck::cast_slice(tris).to_vec() };
+        Ok(BvhBuffers { nodes, triangles })
+    }
+
+    /// Number of nodes in [`Self::nodes`].
+    pub fn node_count(&self) -> usize {
+        self.nodes.len() / NODE_WORDS
+    }
+
+    /// Number of triangle slots in [`Self::triangles`].
+    pub fn triangle_count(&self) -> usize {
+        self.triangles.len() / TRIANGLE_WORDS
+    }
+
+    /// Both buffers in binding order (nodes, triangles), e.g. for [`crate::kernel::run_with`]
+    /// with [`bindings`]`(0, 3)`.
+    pub fn extra(&self) -> [&[u32]; 2] {
+        [&self.nodes, &self.triangles]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn packs_the_bytes_of_accel_buffers() {
+        let tris = [[Vec3::ZERO, Vec3::X, Vec3::Y], [Vec3::Z, Vec3::X + Vec3::Z, Vec3::Y + Vec3::Z]];
+        let bvh = Bvh::build(&tris);
+        let b = BvhBuffers::new(&bvh, u64::MAX).unwrap();
+        assert_eq!(b.node_count(), bvh.gpu_nodes().len());
+        assert_eq!(b.triangle_count(), bvh.gpu_triangles().len());
+        let bytes: &[u8] = bytemuck::cast_slice(&b.nodes);
+        assert_eq!(bytes, bytemuck::cast_slice::<_, u8>(bvh.gpu_nodes()));
+        // Word 3 of a triangle is its id.
+        assert_eq!(b.triangles[3], bvh.gpu_triangles()[0].id);
+    }
+
+    #[test]
+    fn empty_tree_is_one_zero_node() {
+        let bvh = Bvh::build(&[]);
+        let b = BvhBuffers::new(&bvh, u64::MAX).unwrap();
+        assert_eq!(b.nodes, vec![0; NODE_WORDS]);
+        assert_eq!(b.triangles, vec![0; TRIANGLE_WORDS]);
+    }
+
+    #[test]
+    fn too_large_names_the_buffer_and_limit() {
+        let bvh = Bvh::build(&[[Vec3::ZERO, Vec3::X, Vec3::Y]]);
+        let err = BvhBuffers::new(&bvh, 40).unwrap_err();
+        match &err {
+            GpuError::TooLarge { bytes: 80, limit: 40, what } => assert!(what.contains("node"), "{what}"),
+            e => panic!("unexpected {e:?}"),
+        }
+        // Nodes fit, triangles (48 bytes) do not.
+        let err = BvhBuffers::new(&bvh, 47).unwrap_err();
+        assert!(err.to_string().contains("node"), "{err}");
+        let err = BvhBuffers::new(&bvh, 80).unwrap_err();
+        assert!(err.to_string().contains("triangle"), "{err}");
+    }
+
+    #[test]
+    fn stack_size_rewrites_one_line() {
+        let s = module_with_stack_size(2);
+        assert!(s.contains("const TRV_STACK_SIZE: u32 = 2u;"));
+        assert_eq!(s.matches("TRV_STACK_SIZE: u32").count(), 1);
+    }
+}
