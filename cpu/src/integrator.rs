@@ -3,9 +3,9 @@
 use crate::film::Film;
 use crate::settings::RenderSettings;
 use furnace_accel::{BuildOptions, Bvh, Hit, offset_ray_origin};
-use furnace_brdf::{Bsdf, MetallicRoughness, MetallicRoughnessParams};
+use furnace_brdf::{Bsdf, MetallicRoughness, MetallicRoughnessParams, SpecularOptions};
 use furnace_sampling::{AnySampler, Sampler, SamplerError};
-use furnace_scene::{AlphaMode, Camera, Material, Scene};
+use furnace_scene::{AlphaMode, Camera, Material, MaterialSample, Scene, oct_decode};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 
@@ -28,8 +28,26 @@ pub struct Renderer {
     camera: Camera,
     /// Material index of each triangle, clamped into `scene.materials`.
     triangle_materials: Vec<u32>,
+    /// Per material, its emission and BSDF when they do not vary over the surface (no
+    /// texture): built once here instead of at every hit (bit-identical to building them at
+    /// the hit, `Material::evaluate` ignores the UV without textures).
+    constant_materials: Vec<Option<ConstantMaterial>>,
+    /// `oct_decode` of each vertex normal, decoded once here rather than three times per hit.
+    normals: Vec<Vec3>,
     /// Whether any material is alpha-masked (otherwise rays skip the mask callback).
     any_masked: bool,
+}
+
+/// A material's emission and BSDF, when they are the same everywhere on its surface.
+struct ConstantMaterial {
+    emission: Vec3,
+    bsdf: MetallicRoughness,
+}
+
+/// The material at a hit: built once, or evaluated there.
+enum Shading<'a> {
+    Constant(&'a ConstantMaterial),
+    Evaluated(MaterialSample),
 }
 
 impl std::fmt::Debug for Renderer {
@@ -67,7 +85,28 @@ impl Renderer {
             .collect();
         let any_masked = scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }));
         let camera = scene.default_camera();
-        Ok(Self { scene, settings, bvh, sampler, camera, triangle_materials, any_masked })
+        let constant_materials = scene
+            .materials
+            .iter()
+            .map(|m| {
+                (!m.uses_textures()).then(|| {
+                    let params = m.evaluate(Vec2::ZERO, &scene.textures, &scene.images);
+                    ConstantMaterial { emission: params.emission, bsdf: bsdf(&params, settings.specular) }
+                })
+            })
+            .collect();
+        let normals = g.normals.iter().map(|&e| oct_decode(e)).collect();
+        Ok(Self {
+            scene,
+            settings,
+            bvh,
+            sampler,
+            camera,
+            triangle_materials,
+            constant_materials,
+            normals,
+            any_masked,
+        })
     }
 
     /// The scene being rendered.
@@ -156,27 +195,36 @@ impl Renderer {
                 radiance += throughput * scene.sky;
                 break;
             };
-            let material = &scene.materials[self.triangle_materials[hit.triangle as usize] as usize];
-            let uv = scene.geometry.uv(hit.triangle as usize, hit.barycentrics.x, hit.barycentrics.y);
-            let params = material.evaluate(uv, &scene.textures, &scene.images);
+            let material_index = self.triangle_materials[hit.triangle as usize] as usize;
+            let material = &scene.materials[material_index];
+            // Textured materials are evaluated at the hit's UV; the others were built once.
+            let (uv, shading) = match &self.constant_materials[material_index] {
+                Some(c) => (Vec2::ZERO, Shading::Constant(c)),
+                None => {
+                    let uv = scene.geometry.uv(hit.triangle as usize, hit.barycentrics.x, hit.barycentrics.y);
+                    (uv, Shading::Evaluated(material.evaluate(uv, &scene.textures, &scene.images)))
+                }
+            };
             let Some(surface) = self.surface_point(&hit, material, uv, direction) else {
                 // The back of a single-sided surface: black, like a one-sided BSDF.
                 break;
             };
-            radiance += throughput * params.emission;
+            let emission = match &shading {
+                Shading::Constant(c) => c.emission,
+                Shading::Evaluated(params) => params.emission,
+            };
+            radiance += throughput * emission;
             if event == self.settings.bounces {
                 break;
             }
-            let bsdf = MetallicRoughness::new(
-                MetallicRoughnessParams {
-                    base_color: params.base_color,
-                    metallic: params.metallic,
-                    roughness: params.roughness,
-                    specular_factor: params.specular_factor,
-                    specular_color: params.specular_color,
-                },
-                self.settings.specular,
-            );
+            let evaluated;
+            let bsdf = match &shading {
+                Shading::Constant(c) => &c.bsdf,
+                Shading::Evaluated(params) => {
+                    evaluated = bsdf(params, self.settings.specular);
+                    &evaluated
+                }
+            };
             let frame = Frame::new(surface.shading);
             let wo = frame.to_local(-direction);
             let leave = offset_ray_origin(surface.position, surface.geometric);
@@ -234,8 +282,10 @@ impl Renderer {
         let [v0, v1, v2] = g.triangle(t)?;
         let position = (1.0 - b1 - b2) * v0 + b1 * v1 + b2 * v2;
         let mut geometric = (v1 - v0).cross(v2 - v0).normalize_or_zero();
-        let mut shading = g.shading_normal(t, b1, b2).filter(|n| *n != Vec3::ZERO).unwrap_or(geometric);
-        if let (Some(normal_map), Some(tangent)) = (&material.normal_texture, g.tangent(t, b1, b2)) {
+        let mut shading = self.shading_normal(t, b1, b2).filter(|n| *n != Vec3::ZERO).unwrap_or(geometric);
+        if let Some(normal_map) = &material.normal_texture
+            && let Some(tangent) = g.tangent(t, b1, b2)
+        {
             // glTF normal map: tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame
             // (T, B = w·N×T, N), with T made orthogonal to the shading normal N.
             let m = normal_map.sample_bilinear(uv, &self.scene.textures, &self.scene.images).truncate();
@@ -254,6 +304,14 @@ impl Renderer {
             shading = -shading;
         }
         Some(SurfacePoint { position, geometric, shading })
+    }
+
+    /// `Geometry::shading_normal` over the pre-decoded normals (same arithmetic, same bits).
+    #[inline]
+    fn shading_normal(&self, t: usize, b1: f32, b2: f32) -> Option<Vec3> {
+        let [a, b, c] = *self.scene.geometry.triangles.get(t)?;
+        let n = |i: u32| self.normals.get(i as usize).copied();
+        Some(((1.0 - b1 - b2) * n(a)? + b1 * n(b)? + b2 * n(c)?).normalize_or_zero())
     }
 
     fn alpha_passes(&self, triangle: u32, barycentrics: Vec2) -> bool {
@@ -283,6 +341,20 @@ impl Renderer {
             self.bvh.occluded(origin, direction, f32::INFINITY)
         }
     }
+}
+
+/// The BSDF of evaluated material parameters.
+fn bsdf(params: &MaterialSample, specular: SpecularOptions) -> MetallicRoughness {
+    MetallicRoughness::new(
+        MetallicRoughnessParams {
+            base_color: params.base_color,
+            metallic: params.metallic,
+            roughness: params.roughness,
+            specular_factor: params.specular_factor,
+            specular_color: params.specular_color,
+        },
+        specular,
+    )
 }
 
 /// An orthonormal frame around a unit normal (Duff et al., "Building an Orthonormal Basis,
