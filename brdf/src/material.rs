@@ -96,6 +96,9 @@ impl MetallicRoughness {
     /// The diffuse attenuation `1 − sF·max(fr(cos θd))` of the dielectric layer.
     #[inline]
     fn diffuse_scale(&self, cos_theta_d: f32) -> f32 {
+        if self.specular_factor == 0.0 {
+            return 1.0; // `1 − 0·fr`, fr finite: the same value without the Fresnel term
+        }
         let fr = schlick(self.f0_dielectric, Rgb::ONE, cos_theta_d);
         1.0 - self.specular_factor * fr.max_element()
     }
@@ -117,9 +120,48 @@ impl MetallicRoughness {
         (spec / (spec + diff)).clamp(0.05, 0.95)
     }
 
+    /// Whether the specular lobe is exactly zero (`F0 = F90 = 0`: metallic 0 with
+    /// `specularFactor` 0, a plain Lambert surface). Its Fresnel factor is then `+0` and its
+    /// `eval` `+0` (every other factor is finite), so skipping it changes no bit of a result.
+    #[inline]
+    fn specular_is_zero(&self) -> bool {
+        self.specular.f0 == Rgb::ZERO && self.specular.f90 == Rgb::ZERO
+    }
+
+    /// The two-lobe part of `sample` once the lobe is chosen (`p < 1`).
+    #[inline]
+    fn sample_mixture(&self, wo: Vec3, p: f32, specular: bool, u: Vec2) -> Option<Sample> {
+        let (wi, lobe) = if specular {
+            // Only the direction: the weight is formed below from the mixture.
+            (self.specular.sample_reflection(wo, u)?.0, Lobe::Specular)
+        } else {
+            // Lambert's sample ignores uc.
+            (self.diffuse.sample(wo, 0.0, u)?.wi, Lobe::Diffuse)
+        };
+        let pdf = self.mixture_pdf(p, wo, wi);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        Some(Sample { wi, weight: self.eval(wo, wi) / pdf, pdf, lobe })
+    }
+
+    /// `p·pdf_spec + (1 − p)·pdf_diffuse`; with `p = 0` exactly `pdf_diffuse` (the specular
+    /// pdf is finite, so `0·pdf_spec = +0`), without evaluating the specular pdf.
+    #[inline]
+    fn mixture_pdf(&self, p: f32, wo: Vec3, wi: Vec3) -> f32 {
+        if p == 0.0 {
+            return self.diffuse.pdf(wo, wi);
+        }
+        p * self.specular.pdf(wo, wi) + (1.0 - p) * self.diffuse.pdf(wo, wi)
+    }
+
     fn eval_diffuse(&self, wo: Vec3, wi: Vec3) -> Rgb {
         if self.diffuse.albedo == Rgb::ZERO || !(above(wo) && above(wi)) {
             return Rgb::ZERO;
+        }
+        if self.specular_factor == 0.0 {
+            // diffuse_scale is exactly 1: no half vector needed.
+            return self.diffuse.albedo * (FRAC_1_PI * wi.z * 1.0);
         }
         let wm = (wo + wi).normalize_or(Vec3::Z);
         self.diffuse.albedo * (FRAC_1_PI * wi.z * self.diffuse_scale(wo.dot(wm)))
@@ -129,6 +171,10 @@ impl MetallicRoughness {
 impl Bsdf for MetallicRoughness {
     /// `(diffuse + specular)·cos θi`.
     fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if self.specular_is_zero() {
+            // `d + (+0) = d`: the zero lobe is not evaluated.
+            return self.eval_diffuse(wo, wi);
+        }
         self.eval_diffuse(wo, wi) + self.specular.eval(wo, wi)
     }
 
@@ -140,16 +186,7 @@ impl Bsdf for MetallicRoughness {
         if p >= 1.0 {
             return self.specular.sample(wo, uc, u);
         }
-        let (wi, lobe) = if uc < p {
-            (self.specular.sample(wo, uc, u)?.wi, Lobe::Specular)
-        } else {
-            (self.diffuse.sample(wo, uc, u)?.wi, Lobe::Diffuse)
-        };
-        let pdf = p * self.specular.pdf(wo, wi) + (1.0 - p) * self.diffuse.pdf(wo, wi);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
-        Some(Sample { wi, weight: self.eval(wo, wi) / pdf, pdf, lobe })
+        self.sample_mixture(wo, p, uc < p, u)
     }
 
     fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
@@ -157,6 +194,6 @@ impl Bsdf for MetallicRoughness {
         if p >= 1.0 {
             return self.specular.pdf(wo, wi);
         }
-        p * self.specular.pdf(wo, wi) + (1.0 - p) * self.diffuse.pdf(wo, wi)
+        self.mixture_pdf(p, wo, wi)
     }
 }

@@ -84,6 +84,30 @@ fn half_vector(wo: Vec3, wi: Vec3) -> Option<(Vec3, f32)> {
     Some((h / len, 0.5 * len))
 }
 
+impl GgxSpecular {
+    /// The direction part of [`Bsdf::sample`] for `wo` above the horizon: `(ωi, ωm, ωo·ωm, pdf)`,
+    /// or `None` exactly when `sample` returns `None`. Without the weight (G2, G1, Fresnel,
+    /// compensation), for callers that only need the direction.
+    #[inline]
+    pub(crate) fn sample_reflection(&self, wo: Vec3, u: Vec2) -> Option<(Vec3, Vec3, f32, f32)> {
+        let method = self.options.sampling;
+        let wm = self.ggx.sample_wm(wo, u, method);
+        let cos_om = wo.dot(wm);
+        if !(cos_om > 0.0) {
+            return None; // NDF sampled a back-facing microfacet
+        }
+        let wi = reflect(wo, wm);
+        if !above(wi) {
+            return None; // reflected below the horizon
+        }
+        let pdf = self.ggx.pdf_reflected(wo, wm, cos_om, method);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        Some((wi, wm, cos_om, pdf))
+    }
+}
+
 impl Bsdf for GgxSpecular {
     fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
         if !(above(wo) && above(wi)) {
@@ -101,19 +125,7 @@ impl Bsdf for GgxSpecular {
             return None;
         }
         let method = self.options.sampling;
-        let wm = self.ggx.sample_wm(wo, u, method);
-        let cos_om = wo.dot(wm);
-        if !(cos_om > 0.0) {
-            return None; // NDF sampled a back-facing microfacet
-        }
-        let wi = reflect(wo, wm);
-        if !above(wi) {
-            return None; // reflected below the horizon
-        }
-        let pdf = self.ggx.pdf_reflected(wo, wm, cos_om, method);
-        if !(pdf > 0.0 && pdf.is_finite()) {
-            return None;
-        }
+        let (wi, wm, cos_om, pdf) = self.sample_reflection(wo, u)?;
         let g2 = self.ggx.g2(wo, wi, self.options.masking);
         let throughput = match method {
             SpecularSampling::Ndf => g2 * cos_om / (wo.z * wm.z),
