@@ -128,6 +128,24 @@ impl MetallicRoughness {
         self.specular.f0 == Rgb::ZERO && self.specular.f90 == Rgb::ZERO
     }
 
+    /// [`Bsdf::sample`] with the lobe-choice number `uc ∈ [0, 1)` drawn only when it decides
+    /// something: `uc()` is called only if both lobes can be chosen (`0 < p < 1`). The result is
+    /// that of `sample(wo, uc(), u)`. A path tracer saves a sampler dimension at every Lambert or
+    /// pure-metal hit this way (samplers are addressable: skipping a dimension changes no other).
+    #[inline]
+    pub fn sample_lazy(&self, wo: Vec3, u: Vec2, uc: impl FnOnce() -> f32) -> Option<Sample> {
+        if !above(wo) {
+            return None;
+        }
+        let p = self.specular_probability(wo);
+        if p >= 1.0 {
+            return self.specular.sample(wo, 0.0, u); // the GGX lobe ignores uc
+        }
+        // With p = 0, `uc < p` is false for every uc ∈ [0, 1).
+        let specular = p > 0.0 && uc() < p;
+        self.sample_mixture(wo, p, specular, u)
+    }
+
     /// The two-lobe part of `sample` once the lobe is chosen (`p < 1`).
     #[inline]
     fn sample_mixture(&self, wo: Vec3, p: f32, specular: bool, u: Vec2) -> Option<Sample> {

@@ -243,8 +243,9 @@ impl Renderer {
             // Continue the path by sampling the BSDF.
             let dim = DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE * event;
             let [u1, u2] = self.sampler.value_2d(pixel, index, dim);
-            let uc = self.sampler.value(pixel, index, dim + 2);
-            let Some(s) = bsdf.sample(wo, uc, Vec2::new(u1, u2)) else { break };
+            // The lobe choice `uc` is drawn only where the material has two lobes.
+            let uc = || self.sampler.value(pixel, index, dim + 2);
+            let Some(s) = bsdf.sample_lazy(wo, Vec2::new(u1, u2), uc) else { break };
             let wi = frame.to_world(s.wi);
             if !(wi.dot(surface.geometric) > 0.0) {
                 // Above the shading normal's horizon but below the surface: the path ends
