@@ -19,10 +19,13 @@
 //!
 //! [`write_exr`] stores the *linear* image as 32-bit float RGB with the render's [`Metadata`]
 //! as text attributes; [`read_exr`] reads it back bit-identically and also reads other
-//! renderers' EXRs (e.g. Mitsuba 3's `B,G,R` float references). [`write_png`] stores the 8-bit
-//! sRGB image. Both writers are **atomic**: they write a temporary file in the target's
-//! directory and rename it into place, so an interrupted write never leaves a truncated image,
-//! and a failed write removes its temporary file. Errors are [`PostError`]s naming the file.
+//! renderers' EXRs (e.g. Mitsuba 3's `B,G,R` float references). [`write_exr_with_state`] adds a
+//! progressive render's exact accumulation state (per-pixel `f64` sums and counts, in the
+//! [`RESUME_LAYER`] channels) so that it can be resumed bit-identically; [`read_exr_with_state`]
+//! reads it back. [`write_png`] stores the 8-bit sRGB image. All writers are **atomic**: they
+//! write a temporary file in the target's directory and rename it into place, so an
+//! interrupted write never leaves a truncated image, and a failed write removes its temporary
+//! file. Errors are [`PostError`]s naming the file.
 //!
 //! ## Example
 //!
