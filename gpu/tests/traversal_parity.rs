@@ -6,17 +6,25 @@
 //!
 //! Run with `--nocapture` for the table (rays, agreement, ties, max t error, nodes per ray).
 //!
-//! What "agree" means: the same triangle id and |t_gpu − t_cpu| ≤ 1e-5 · t_cpu ([`T_REL_TOL`]).
-//! Two kinds of legitimate difference are counted, bounded and explained rather than failed:
+//! What "agree" means: the same triangle id, and t within 1e-5 relative ([`T_REL_TOL`]) **or**
+//! within the forward error bound of Möller–Trumbore in f32 for that ray and triangle
+//! ([`mt_error_bound`]). The table reports both: "agree %" is the strict 1e-5 figure, "bound %"
+//! adds the rays that need the error bound. On lavapipe (no FMA contraction, correctly rounded
+//! division) every t is bit-identical to the CPU's. On an NVIDIA H100 (Vulkan, driver 580) the
+//! compiler contracts multiply-adds, and t differs by a few ULPs *of the coordinates*: for a ray
+//! leaving a surface (t ~ 1e-4 from a wall 2 m from the origin) that is 1e-5–1e-4 relative to
+//! t, and for grazing rays (the determinant ~ sin of the angle) more; both implementations are
+//! then equally right, which is what the bound says. Two kinds of legitimate difference are
+//! counted, bounded and explained rather than failed:
 //!
 //! * **ties**: a different triangle at the same t (within the tolerance) — two triangles
 //!   meeting at the hit point (shared edges and vertices, coplanar overlaps). Which one wins
-//!   depends on the last bits of t: the GPU may fuse multiply-adds and divides to 2.5 ULP, so
-//!   t differs from the CPU's in the last bits and the first-found rule picks the other one.
-//! * **edge rays**: one side hits and the other misses (or hits farther), where a brute-force
-//!   check in f64 finds a candidate triangle within 1e-5 (barycentric) of its boundary, or at
-//!   t within 1e-5 of t_max, or (filter test) within 1e-5 of the mask's u = v cut: Möller–
-//!   Trumbore is not watertight, and at a boundary the last bit decides.
+//!   depends on the last bits of t.
+//! * **edge rays**: one side hits and the other misses (or hits farther), where the triangle
+//!   hit by the side that found the nearer hit (or, for any-hit, every candidate) lies within
+//!   the barycentric error bound (at least 1e-5) of its boundary, of t_max, or (filter test) of
+//!   the mask's u = v cut: Möller–Trumbore is not watertight, and at a boundary the last bit
+//!   decides.
 //!
 //! Anything else is a mismatch, and there must be none.
 
@@ -36,8 +44,44 @@ use glam::{DVec3, Vec2, Vec3};
 const T_REL_TOL: f32 = 1e-5;
 
 /// Barycentric distance to a triangle's boundary (and relative distance of t to t_max) under
-/// which a disagreement is an "edge ray" (see the module docs).
+/// which a disagreement is an "edge ray" (see the module docs), at least; raised per ray to the
+/// barycentric error bound of [`mt_error_bound`].
 const EDGE_EPS: f64 = 1e-5;
+
+/// Rounding errors allowed by [`mt_error_bound`], in units of f32's unit roundoff 2^-24: the
+/// longest chain of Möller–Trumbore (difference, cross product, dot product, product with the
+/// reciprocal) has 6 roundings, each of which a fused multiply-add may skip or an approximate
+/// division (2.5 ULP in WGSL) may widen; 16 covers both with room.
+const ROUNDINGS: f64 = 16.0;
+
+/// Forward error bounds (absolute, in t; and in barycentrics) of f32 Möller–Trumbore for ray
+/// (o, d) and triangle `tri`, to first order: the input differences `s = o − v0` and edges carry
+/// errors of ε·(|o| + |v0|) and ε·|v|, which the cross and dot products carry into
+/// `t = e2·(s×e1)/det` as ε·|e2|·|e1|·(|s| + |o| + |v0|)/|det|, and into `u = s·(d×e2)/det`, `v =
+/// d·(s×e1)/det` as ε·|d|·max(|e1|, |e2|)·(|s| + |o| + |v0|)/|det|. At normal incidence on unit-
+/// scale geometry that is a few 1e-7; at grazing angles |det| → 0 and the bound grows as the
+/// problem's own conditioning does.
+fn mt_error_bound(o: Vec3, d: Vec3, [a, b, c]: [Vec3; 3]) -> (f64, f64) {
+    let (o, d, a, b, c) = (o.as_dvec3(), d.as_dvec3(), a.as_dvec3(), b.as_dvec3(), c.as_dvec3());
+    let (e1, e2) = (b - a, c - a);
+    let det = e1.dot(d.cross(e2)).abs();
+    let eps = ROUNDINGS * f64::from(f32::EPSILON) * 0.5;
+    let scale = (o - a).length() + o.length() + a.length() + b.length().max(c.length());
+    if det == 0.0 {
+        return (f64::INFINITY, f64::INFINITY);
+    }
+    let t = eps * e1.length() * e2.length() * scale / det;
+    let bary = eps * d.length() * e1.length().max(e2.length()) * scale / det;
+    (t, bary)
+}
+
+/// Whether `t_gpu` agrees with `t_cpu` for triangle `tri`: within 1e-5 relative, or within
+/// twice the f32 error bound (each side may be off by the bound).
+fn t_agrees(r: &TestRay, tri: [Vec3; 3], t_cpu: f32, t_gpu: f32) -> (bool, bool) {
+    let diff = (t_gpu - t_cpu).abs();
+    let strict = diff <= T_REL_TOL * t_cpu;
+    (strict, strict || f64::from(diff) <= 2.0 * mt_error_bound(r.o, r.d, tri).0)
+}
 
 /// Ties and edge rays allowed, as a fraction of the rays of a set. On the scenes here they are
 /// ≲ 0.05% (shared edges are hit by about one ray in a few thousand at these resolutions);
@@ -126,9 +170,9 @@ impl Filter {
             Filter::Pattern => id.is_multiple_of(2) && !(id.is_multiple_of(4) && b.x > b.y),
         }
     }
-    /// Whether the filter's decision at (u, v) is within `EDGE_EPS` of flipping.
-    fn marginal(self, id: u32, u: f64, v: f64) -> bool {
-        self == Filter::Pattern && id.is_multiple_of(4) && (u - v).abs() < EDGE_EPS
+    /// Whether the filter's decision at (u, v) is within `eps` of flipping.
+    fn marginal(self, id: u32, u: f64, v: f64, eps: f64) -> bool {
+        self == Filter::Pattern && id.is_multiple_of(4) && (u - v).abs() < eps
     }
 }
 
@@ -211,22 +255,26 @@ fn mt_f64(o: Vec3, d: Vec3, [a, b, c]: [Vec3; 3]) -> Option<(f64, f64, f64)> {
 
 /// Triangle `id` as a candidate of ray `r` below `t_limit`, in f64: `None` if the ray clearly
 /// misses it (or the filter clearly rejects it), `Some(true)` if the answer is marginal — within
-/// `EDGE_EPS` of the triangle's boundary, of the filter's cut, or of `t_limit` — so that the
+/// the error bound (at least `EDGE_EPS`) of the triangle's boundary, of the filter's cut, of
+/// `t_limit` or of t = 0 — so that the
 /// last bit of a float can change it, `Some(false)` if it is clearly a hit.
 fn candidate(tri: [Vec3; 3], id: u32, filter: Filter, r: &TestRay, t_limit: f32) -> Option<bool> {
     let t_limit = t_limit.min(f32::MAX) as f64;
     let (t, u, v) = mt_f64(r.o, r.d, tri)?;
+    let (t_err, bary_err) = mt_error_bound(r.o, r.d, tri);
+    // Each side may be off by the bound: twice it separates the sides' answers.
+    let (eb, te) = (2.0 * bary_err.max(EDGE_EPS), 2.0 * t_err);
     let w = 1.0 - u - v;
-    let inside = u > -EDGE_EPS && v > -EDGE_EPS && w > -EDGE_EPS;
-    if !(inside && t > 0.0 && t < t_limit * (1.0 + EDGE_EPS)) {
+    let inside = u > -eb && v > -eb && w > -eb;
+    if !(inside && t > -te && t < t_limit * (1.0 + EDGE_EPS) + te) {
         return None;
     }
-    let near_cut = filter.marginal(id, u, v);
+    let near_cut = filter.marginal(id, u, v, eb);
     if !near_cut && !filter.accepts(id, Vec2::new(u as f32, v as f32)) {
         return None;
     }
-    let near_edge = u < EDGE_EPS || v < EDGE_EPS || w < EDGE_EPS;
-    let near_limit = t > t_limit * (1.0 - EDGE_EPS);
+    let near_edge = u < eb || v < eb || w < eb;
+    let near_limit = t > t_limit * (1.0 - EDGE_EPS) - te || t < te;
     Some(near_cut || near_edge || near_limit)
 }
 
@@ -250,6 +298,7 @@ struct Tally {
     rays: usize,
     hits: usize,
     agree: usize,
+    agree_bound: usize,
     ties: usize,
     edges: usize,
     mismatches: Vec<String>,
@@ -292,14 +341,20 @@ fn compare(
         };
         match (c, g.hit) {
             (None, None) => t.agree += 1,
-            (Some((ci, ct, _)), Some((gi, gt, _))) if ci == gi && (gt - ct).abs() <= T_REL_TOL * ct => {
-                t.agree += 1;
+            (Some((ci, ct, _)), Some((gi, gt, _)))
+                if ci == gi && t_agrees(r, tris[ci as usize], ct, gt).1 =>
+            {
+                if t_agrees(r, tris[ci as usize], ct, gt).0 {
+                    t.agree += 1;
+                } else {
+                    t.agree_bound += 1;
+                }
                 t.max_t_rel = t.max_t_rel.max((gt - ct).abs() / ct);
             }
-            (Some((_, ct, _)), Some((gi, gt, _)))
-                if (gt - ct).abs() <= T_REL_TOL * ct
+            (Some((ci, ct, _)), Some((gi, gt, _)))
+                if t_agrees(r, tris[ci as usize], ct, gt).1
                     && intersect_triangle(r.o, r.d, tris[gi as usize], f32::INFINITY)
-                        .is_some_and(|h| (h.t - ct).abs() <= T_REL_TOL * ct) =>
+                        .is_some_and(|h| t_agrees(r, tris[gi as usize], ct, h.t).1) =>
             {
                 t.ties += 1;
                 t.max_t_rel = t.max_t_rel.max((gt - ct).abs() / ct);
@@ -335,18 +390,19 @@ fn compare(
 
 fn print_header() {
     eprintln!(
-        "| scene | rays | filter | hits | agree % | ties | edge rays | max t rel err | any-hit agree % | occluded | nodes/ray closest | nodes/ray any | max stack | fallbacks |"
+        "| scene | rays | filter | hits | agree % | bound % | ties | edge rays | max t rel err | any-hit agree % | occluded | nodes/ray closest | nodes/ray any | max stack | fallbacks |"
     );
-    eprintln!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
+    eprintln!("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|");
 }
 
 fn print_row(name: &str, filter: Filter, t: &Tally) {
     let n = t.rays as f64;
     eprintln!(
-        "| {name} | {} | {filter:?} | {} | {:.4} | {} | {} | {:.2e} | {:.4} | {} | {:.1} | {:.1} | {} | {} |",
+        "| {name} | {} | {filter:?} | {} | {:.4} | {:.4} | {} | {} | {:.2e} | {:.4} | {} | {:.1} | {:.1} | {} | {} |",
         t.rays,
         t.hits,
         100.0 * t.agree as f64 / n,
+        100.0 * (t.agree + t.agree_bound) as f64 / n,
         t.ties,
         t.edges,
         t.max_t_rel,
@@ -419,7 +475,7 @@ fn ray_sets(
         let n = if rng.f() < 0.5 { n } else { -n };
         (p, n)
     };
-    let (w, h) = (256u32, 160u32);
+    let (w, h) = (204u32, 204u32);
     let camera_rays = (0..w * h)
         .map(|k| {
             let px = Vec2::new((k % w) as f32 + rng.f(), (k / w) as f32 + rng.f());
