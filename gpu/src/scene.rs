@@ -432,7 +432,11 @@ impl SceneBuffers {
 
     /// [`Self::geometry_bytes`] per triangle (0 without triangles).
     pub fn bytes_per_triangle(&self) -> f64 {
-        if self.triangles.is_empty() { 0.0 } else { self.geometry_bytes() as f64 / self.triangles.len() as f64 }
+        if self.triangles.is_empty() {
+            0.0
+        } else {
+            self.geometry_bytes() as f64 / self.triangles.len() as f64
+        }
     }
 
     /// Bytes of all six buffers as uploaded.
@@ -468,8 +472,14 @@ impl GpuScene {
 
     /// Uploads already packed buffers.
     pub fn upload_buffers(ctx: &GpuContext, packed: &SceneBuffers) -> Result<Self, GpuError> {
-        let names =
-            ["scene triangles", "scene vertices", "scene uvs", "scene tangents", "scene materials", "scene texels"];
+        let names = [
+            "scene triangles",
+            "scene vertices",
+            "scene uvs",
+            "scene tangents",
+            "scene materials",
+            "scene texels",
+        ];
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let words = packed.extra();
         let buffers = std::array::from_fn(|k| {
