@@ -608,9 +608,9 @@ fn second_ctrl_c_exits_at_once() {
     use std::io::Read;
     let dir = temp_dir("ctrl_c_twice");
     let out = dir.join("q");
-    // 256×256: a pass is 4 spp of 65 536 pixels, long enough for the second signal to land in
-    // it (if it does not, the run saves first and still exits with 130).
-    let (mut child, mut reader) = start_long_render(&out, 256);
+    // 1024×1024: a pass is 1 spp of 2²⁰ pixels and saving takes longer still, so the second
+    // signal, sent right after the first, lands while the process works.
+    let (mut child, mut reader) = start_long_render(&out, 1024);
     sigint(&child);
     sigint(&child);
     let mut rest = String::new();
