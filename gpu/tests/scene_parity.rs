@@ -49,7 +49,7 @@ impl Rng {
         lo + (hi - lo) * self.f32()
     }
     fn below(&mut self, n: u32) -> u32 {
-        ((self.next_u64() >> 32) * u64::from(n) >> 32) as u32
+        (((self.next_u64() >> 32) * u64::from(n)) >> 32) as u32
     }
     fn unit_vector(&mut self) -> Vec3 {
         let z = self.range(-1.0, 1.0);
@@ -132,7 +132,7 @@ fn png(width: u32, height: u32, texel: impl Fn(u32, u32) -> [u8; 4]) -> Vec<u8> 
 /// A random-texel image (fixed seed).
 fn noise_png(width: u32, height: u32, seed: u64) -> Vec<u8> {
     png(width, height, |x, y| {
-        let mut r = Rng(seed ^ (u64::from(y) << 32 | u64::from(x)).wrapping_mul(0x2545_F491_4F6C_DD1D));
+        let mut r = Rng(seed ^ ((u64::from(y) << 32) | u64::from(x)).wrapping_mul(0x2545_F491_4F6C_DD1D));
         let v = r.next_u64().to_le_bytes();
         [v[0], v[1], v[2], v[3]]
     })
