@@ -49,3 +49,53 @@ impl Backend for CpuBackend {
         Ok(self.film.clone())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use furnace_cpu::RenderSettings;
+    use furnace_scene::builtin;
+
+    fn cpu(film: Option<Film>) -> CpuBackend {
+        let settings = RenderSettings { width: 8, height: 8, russian_roulette: true, ..Default::default() };
+        let renderer = Renderer::new(builtin::cornell_box().unwrap(), settings).unwrap();
+        let film = film.unwrap_or_else(|| renderer.new_film());
+        CpuBackend::new(renderer, film)
+    }
+
+    /// The film's bits: sums, counts and rejections (`==` on `f64` would let −0 equal +0).
+    fn bits(film: &Film) -> (Vec<u64>, Vec<u64>, u64) {
+        let sums = film.sums().iter().flat_map(|s| s.to_array().map(f64::to_bits)).collect();
+        (sums, film.counts().to_vec(), film.rejected())
+    }
+
+    /// Renders passes of the given sizes from index 0 and returns the film.
+    fn passes(backend: &mut CpuBackend, sizes: &[u32]) -> Film {
+        let mut first = 0;
+        for &n in sizes {
+            backend.render_pass(first, n).unwrap();
+            first += n;
+        }
+        backend.film().unwrap()
+    }
+
+    #[test]
+    fn pass_boundaries_do_not_change_the_film() {
+        let whole = passes(&mut cpu(None), &[6]);
+        assert!(whole.counts().iter().all(|&c| c == 6), "no sample of the Cornell box is rejected");
+        for sizes in [&[1, 5][..], &[5, 1], &[2, 2, 2], &[1, 1, 1, 1, 1, 1]] {
+            assert_eq!(bits(&passes(&mut cpu(None), sizes)), bits(&whole), "{sizes:?}");
+        }
+    }
+
+    #[test]
+    fn a_restored_film_continues_exactly() {
+        let whole = passes(&mut cpu(None), &[6]);
+        let half = passes(&mut cpu(None), &[3]);
+        let restored =
+            Film::from_parts(8, 8, half.sums().to_vec(), half.counts().to_vec(), half.rejected()).unwrap();
+        let mut backend = cpu(Some(restored));
+        backend.render_pass(3, 3).unwrap();
+        assert_eq!(bits(&backend.film().unwrap()), bits(&whole));
+    }
+}
