@@ -11,7 +11,8 @@
 //!   exact sums and counts, `resume.rs`); Ctrl-C finishes the current pass, saves, and exits
 //!   with code 130 (`interrupt.rs`). The loop drives a [`backend::Backend`], so that the GPU
 //!   integrator plugs in beside the CPU one.
-//! * `furnace info SCENE` prints a scene's sizes, lights, camera and loader warnings.
+//! * `furnace info SCENE` prints a scene's sizes, lights, cameras (with their `--camera` index)
+//!   and loader warnings.
 //! * `furnace compare CANDIDATE.exr REFERENCE.exr [--stderr …]` scores a render against a
 //!   reference as `shared/oracle/compare.py` does (RMSE, relative MSE, mean ratio, z-scores).
 //!
