@@ -17,6 +17,7 @@
 pub mod brdf;
 pub mod context;
 pub mod film;
+pub mod integrator;
 pub mod kernel;
 pub mod sampling;
 pub mod scene;
@@ -24,3 +25,4 @@ pub mod traverse;
 pub mod wgsl;
 
 pub use context::{AdapterChoice, GpuContext, GpuError, test_context};
+pub use integrator::GpuRenderer;

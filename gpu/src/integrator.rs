@@ -1,0 +1,416 @@
+//! [`GpuRenderer`]: furnace-cpu's path tracer on the GPU.
+//!
+//! The shader is the concatenation of the twins — [`wgsl::SAMPLING`], [`wgsl::BRDF`],
+//! [`wgsl::SCENE`], [`wgsl::TRAVERSE`], the film module — and `integrator.wgsl`, a line-for-line
+//! twin of `Renderer::trace` (same sampler dimensions, same branches), so the GPU estimates the
+//! same integral with the same sample points; images agree with the CPU's within noise
+//! (`tests/integrator.rs`).
+//!
+//! A pass of `n` samples per pixel is cut into dispatches of a few rows × a few samples, each
+//! bounded to about [`GpuRenderer::samples_per_dispatch`] samples, so that no dispatch runs long
+//! enough to trip a driver watchdog; one invocation owns a pixel within a dispatch and adds its
+//! samples in index order.
+//!
+//! Bindings (group 0): 0 the [`FrameParams`] uniform (dynamic offset, one slot per dispatch),
+//! 1–2 the film, 3–4 the BVH, 5–10 the scene, 11 the Turquin table — eleven storage buffers,
+//! within every Vulkan/Metal/DX12 adapter's per-stage limit (the WebGPU default of 8 is not: the
+//! device is opened with the adapter's own limits).
+
+use crate::film::{FilmData, FilmPrecision, GpuFilm};
+use crate::sampling::SamplerParams;
+use crate::scene::GpuScene;
+use crate::traverse::BvhBuffers;
+use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
+use bytemuck::{Pod, Zeroable};
+use furnace_accel::{BuildOptions, Bvh};
+use furnace_cpu::RenderSettings;
+use furnace_sampling::AnySampler;
+use furnace_scene::{AlphaMode, Camera, Projection, Scene};
+use wgpu::util::DeviceExt;
+
+/// `FrameParams.flags`: Russian roulette on.
+pub const FRAME_RUSSIAN_ROULETTE: u32 = 1;
+/// `FrameParams.flags`: orthographic camera.
+pub const FRAME_ORTHOGRAPHIC: u32 = 2;
+/// `FrameParams.flags`: some material is alpha-masked (rays call the alpha test).
+pub const FRAME_ANY_MASKED: u32 = 4;
+/// `FrameParams.flags`: the scene has a sun.
+pub const FRAME_HAS_SUN: u32 = 8;
+
+/// The uniform block of one dispatch (176 bytes), twin of `integrator.wgsl`'s `FrameParams`.
+#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
+#[repr(C)]
+pub struct FrameParams {
+    /// Camera-to-world rotation/scale columns (xyz) and translation.
+    pub cam_x: [f32; 4],
+    /// See `cam_x`.
+    pub cam_y: [f32; 4],
+    /// See `cam_x`.
+    pub cam_z: [f32; 4],
+    /// See `cam_x`.
+    pub cam_t: [f32; 4],
+    /// Direction sunlight travels (xyz).
+    pub sun_direction: [f32; 4],
+    /// Sun irradiance (rgb).
+    pub sun_irradiance: [f32; 4],
+    /// Sky radiance (rgb).
+    pub sky: [f32; 4],
+    /// The sampler.
+    pub sampler: SamplerParams,
+    /// Image width.
+    pub width: u32,
+    /// Image height.
+    pub height: u32,
+    /// First sample index of this dispatch.
+    pub first_sample: u32,
+    /// Samples per pixel in this dispatch.
+    pub samples: u32,
+    /// Scattering events per path.
+    pub bounces: u32,
+    /// `FRAME_*` bits.
+    pub flags: u32,
+    /// [`brdf::options_flags`] of the settings' specular options.
+    pub bsdf_flags: u32,
+    /// First image row of this dispatch.
+    pub row_offset: u32,
+    /// `tan(yfov/2)` or `ymag`.
+    pub fov_scale: f32,
+    /// `width / height` as the CPU computes it.
+    pub aspect: f32,
+    /// Padding.
+    pub pad: [u32; 2],
+}
+
+const _: () = assert!(size_of::<FrameParams>() == 176);
+
+/// Uniform slots are this far apart (WebGPU's largest `min_uniform_buffer_offset_alignment`).
+const SLOT: u64 = 256;
+
+/// One dispatch of a pass: rows `row_offset ..` × samples `first_sample ..`.
+#[derive(Debug, Clone, Copy)]
+struct Dispatch {
+    row_offset: u32,
+    rows: u32,
+    first_sample: u32,
+    samples: u32,
+}
+
+/// The scene, BVH, film and pipeline on one device.
+#[derive(Debug)]
+pub struct GpuRenderer {
+    ctx: GpuContext,
+    settings: RenderSettings,
+    sampler: AnySampler,
+    base: FrameParams,
+    pipeline: wgpu::ComputePipeline,
+    layout: wgpu::BindGroupLayout,
+    film: GpuFilm,
+    scene: GpuScene,
+    bvh: [wgpu::Buffer; 2],
+    turquin: wgpu::Buffer,
+    bytes_per_triangle: f64,
+    samples_per_dispatch: u64,
+    max_samples_per_invocation: u32,
+}
+
+/// The composed WGSL of the integrator for a film precision (for tests and tools).
+pub fn shader_source(precision: FilmPrecision) -> String {
+    let decls = format!(
+        "@group(0) @binding(0) var<uniform> params: FrameParams;\n{}{}{}\
+         @group(0) @binding(11) var<storage, read> turquin_table: array<f32>;\n",
+        precision.bindings(0, 1),
+        traverse::bindings(0, 3),
+        scene::bindings(0, 5),
+    );
+    wgsl::compose(&[
+        wgsl::SAMPLING,
+        wgsl::BRDF,
+        wgsl::SCENE,
+        wgsl::TRAVERSE,
+        precision.wgsl(),
+        &decls,
+        include_str!("wgsl/integrator.wgsl"),
+    ])
+}
+
+fn storage_buffer(ctx: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buffer {
+    let mut v = words.to_vec();
+    v.resize(v.len().max(4), 0);
+    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some(label),
+        contents: bytemuck::cast_slice(&v),
+        usage: wgpu::BufferUsages::STORAGE,
+    })
+}
+
+fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    }
+}
+
+impl GpuRenderer {
+    /// Uploads `scene` (seen through `camera`) and builds the pipeline for `settings`.
+    ///
+    /// # Errors
+    /// The sampler's (fixed-N samplers need `sample_count`), [`GpuError::TooLarge`] when a
+    /// buffer exceeds the adapter's limits, or a pipeline error.
+    pub fn new(
+        ctx: GpuContext,
+        scene: &Scene,
+        camera: &Camera,
+        settings: RenderSettings,
+    ) -> Result<Self, GpuError> {
+        let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)
+            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)
+            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        let g = &scene.geometry;
+        let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
+        let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
+        let bvh_words = BvhBuffers::new(&bvh, limit)?;
+        let [nodes, tris] = bvh_words.extra();
+        let bvh = [storage_buffer(&ctx, "bvh nodes", nodes), storage_buffer(&ctx, "bvh triangles", tris)];
+        let gpu_scene = GpuScene::upload(&ctx, scene)?;
+        let turquin = storage_buffer(&ctx, "turquin", bytemuck::cast_slice(&brdf::turquin_table()));
+        let precision = FilmPrecision::for_context(&ctx);
+        let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
+        let base = frame_params(scene, camera, &settings, sampler_params);
+
+        let mut entries = vec![wgpu::BindGroupLayoutEntry {
+            binding: 0,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Uniform,
+                has_dynamic_offset: true,
+                min_binding_size: wgpu::BufferSize::new(size_of::<FrameParams>() as u64),
+            },
+            count: None,
+        }];
+        entries.extend(GpuFilm::layout_entries(1));
+        entries.push(storage_entry(3, true));
+        entries.push(storage_entry(4, true));
+        entries.extend(GpuScene::layout_entries(5));
+        entries.push(storage_entry(11, true));
+        let device = &ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("integrator"),
+            entries: &entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("integrator"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some("integrator"),
+            source: wgpu::ShaderSource::Wgsl(shader_source(precision).into()),
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some("integrator"),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some("main"),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Wgpu(e.to_string()));
+        }
+        // Software adapters (lavapipe) run ~1 Msample/s and end any shader loop after 65535
+        // iterations per invocation (all loops together): one sample per invocation there.
+        let software = !crate::context::is_hardware(&ctx.info);
+        let (samples_per_dispatch, max_samples_per_invocation) =
+            if software { (1 << 16, 1) } else { (1 << 23, 8) };
+        Ok(Self {
+            bytes_per_triangle: gpu_scene.bytes_per_triangle(),
+            ctx,
+            settings,
+            sampler,
+            base,
+            pipeline,
+            layout,
+            film,
+            scene: gpu_scene,
+            bvh,
+            turquin,
+            samples_per_dispatch,
+            max_samples_per_invocation,
+        })
+    }
+
+    /// The device.
+    pub fn context(&self) -> &GpuContext {
+        &self.ctx
+    }
+
+    /// The settings it renders with.
+    pub fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    /// Scene bytes on the GPU per triangle (geometry, BVH excluded).
+    pub fn bytes_per_triangle(&self) -> f64 {
+        self.bytes_per_triangle
+    }
+
+    /// About how many samples one dispatch computes (the watchdog bound).
+    pub fn samples_per_dispatch(&self) -> u64 {
+        self.samples_per_dispatch
+    }
+
+    /// How the film sums.
+    pub fn film_precision(&self) -> FilmPrecision {
+        self.film.precision()
+    }
+
+    fn dispatches(&self, first: u32, n: u32) -> Vec<Dispatch> {
+        let (w, h) = (self.settings.width.max(1), self.settings.height.max(1));
+        let per_invocation = n.min(self.max_samples_per_invocation).max(1);
+        let rows =
+            (self.samples_per_dispatch / (u64::from(w) * u64::from(per_invocation))).clamp(8, u64::from(h));
+        let rows = (rows as u32).div_ceil(8) * 8;
+        let mut v = Vec::new();
+        let mut s = 0;
+        while s < n {
+            let samples = per_invocation.min(n - s);
+            let mut row = 0;
+            while row < h {
+                v.push(Dispatch {
+                    row_offset: row,
+                    rows: rows.min(h - row),
+                    first_sample: first + s,
+                    samples,
+                });
+                row += rows;
+            }
+            s += samples;
+        }
+        v
+    }
+
+    /// Adds samples `first_sample .. first_sample + samples_per_pixel` of every pixel to the film
+    /// (then folds an `F32Pass` film). Errors as the CPU's for a fixed-N sampler run past N, and
+    /// on any device error (validation, out of memory, device lost).
+    pub fn render_pass(&mut self, first_sample: u32, samples_per_pixel: u32) -> Result<(), GpuError> {
+        if samples_per_pixel == 0 || self.settings.width == 0 || self.settings.height == 0 {
+            return Ok(());
+        }
+        self.sampler
+            .check_index(first_sample.saturating_add(samples_per_pixel - 1))
+            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        let end = first_sample.saturating_add(samples_per_pixel);
+        let dispatches = self.dispatches(first_sample, end - first_sample);
+        let mut bytes = vec![0u8; dispatches.len() * SLOT as usize];
+        for (k, d) in dispatches.iter().enumerate() {
+            let p = FrameParams {
+                first_sample: d.first_sample,
+                samples: d.samples,
+                row_offset: d.row_offset,
+                ..self.base
+            };
+            bytes[k * SLOT as usize..][..size_of::<FrameParams>()].copy_from_slice(bytemuck::bytes_of(&p));
+        }
+        let device = &self.ctx.device;
+        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("frame params"),
+            contents: &bytes,
+            usage: wgpu::BufferUsages::UNIFORM,
+        });
+        let mut entries = vec![wgpu::BindGroupEntry {
+            binding: 0,
+            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                buffer: &params,
+                offset: 0,
+                size: wgpu::BufferSize::new(size_of::<FrameParams>() as u64),
+            }),
+        }];
+        entries.extend(self.film.bind_entries(1));
+        entries.push(wgpu::BindGroupEntry { binding: 3, resource: self.bvh[0].as_entire_binding() });
+        entries.push(wgpu::BindGroupEntry { binding: 4, resource: self.bvh[1].as_entire_binding() });
+        entries.extend(self.scene.bind_entries(5));
+        entries.push(wgpu::BindGroupEntry { binding: 11, resource: self.turquin.as_entire_binding() });
+        let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("integrator"),
+            layout: &self.layout,
+            entries: &entries,
+        });
+        let mut encoder = device.create_command_encoder(&Default::default());
+        {
+            let mut pass = encoder.begin_compute_pass(&Default::default());
+            pass.set_pipeline(&self.pipeline);
+            for (k, d) in dispatches.iter().enumerate() {
+                pass.set_bind_group(0, &bind, &[(k as u64 * SLOT) as u32]);
+                pass.dispatch_workgroups(self.settings.width.div_ceil(8), d.rows.div_ceil(8), 1);
+            }
+        }
+        self.ctx.queue.submit([encoder.finish()]);
+        self.ctx.wait()?;
+        self.film.fold(&self.ctx)
+    }
+
+    /// The film so far (sums in `f64`, counts, rejected samples).
+    pub fn film(&self) -> Result<FilmData, GpuError> {
+        self.film.read(&self.ctx)
+    }
+
+    /// Replaces the film (to resume a saved render).
+    pub fn load_film(&mut self, data: &FilmData) -> Result<(), GpuError> {
+        self.film.write(&self.ctx, data)
+    }
+}
+
+/// The per-render part of the uniform block.
+fn frame_params(scene: &Scene, camera: &Camera, s: &RenderSettings, sampler: SamplerParams) -> FrameParams {
+    let m = camera.world_from_camera;
+    let v4 = |v: glam::Vec3A| [v.x, v.y, v.z, 0.0];
+    let (w, h) = (s.width.max(1) as f32, s.height.max(1) as f32);
+    let (fov_scale, ortho) = match camera.projection {
+        Projection::Perspective { yfov, .. } => ((yfov * 0.5).tan(), 0),
+        Projection::Orthographic { ymag, .. } => (ymag, FRAME_ORTHOGRAPHIC),
+    };
+    let any_masked = scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }));
+    let mut flags = ortho;
+    if s.russian_roulette {
+        flags |= FRAME_RUSSIAN_ROULETTE;
+    }
+    if any_masked {
+        flags |= FRAME_ANY_MASKED;
+    }
+    let (sun_direction, sun_irradiance) = match scene.sun {
+        Some(sun) => {
+            flags |= FRAME_HAS_SUN;
+            (sun.direction.extend(0.0).to_array(), sun.irradiance.extend(0.0).to_array())
+        }
+        None => ([0.0; 4], [0.0; 4]),
+    };
+    FrameParams {
+        cam_x: v4(m.matrix3.x_axis),
+        cam_y: v4(m.matrix3.y_axis),
+        cam_z: v4(m.matrix3.z_axis),
+        cam_t: v4(m.translation),
+        sun_direction,
+        sun_irradiance,
+        sky: scene.sky.extend(0.0).to_array(),
+        sampler,
+        width: s.width,
+        height: s.height,
+        first_sample: 0,
+        samples: 0,
+        bounces: s.bounces,
+        flags,
+        bsdf_flags: brdf::options_flags(s.specular),
+        row_offset: 0,
+        fov_scale,
+        aspect: w / h,
+        pad: [0; 2],
+    }
+}

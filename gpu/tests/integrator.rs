@@ -1,0 +1,182 @@
+//! The GPU integrator against the CPU reference (furnace-cpu) on the Cornell box.
+//!
+//! 1. Same sampler, same seed: both estimate the image from the *same* sample points, so the
+//!    images must agree far more closely than their noise — per-channel means within 1e-3
+//!    relative. Paths may still part where a float differs by an ulp at a branch (FMA
+//!    contraction on the GPU), so per-pixel agreement is reported, not required.
+//! 2. Independent estimates (random sampler, different seeds), one sample per pass so each
+//!    pixel's standard error comes from its own samples: per-channel means within 0.5% and
+//!    per-pixel z = (gpu − cpu)/√(se_gpu² + se_cpu²) with |mean| < 0.1 and std ≤ 1.15 (the
+//!    issue's bounds; with N = 128 samples the variance estimate inflates z's std by ≈ 1.01).
+
+mod common;
+
+use furnace_cpu::{RenderSettings, Renderer};
+use furnace_gpu::integrator::{FrameParams, shader_source};
+use furnace_gpu::{GpuRenderer, film::FilmPrecision, test_context};
+use furnace_sampling::SamplerKind;
+use furnace_scene::builtin;
+
+const SIZE: u32 = 64;
+
+fn settings(sampler: SamplerKind, seed: u32) -> RenderSettings {
+    RenderSettings { width: SIZE, height: SIZE, sampler, seed, ..RenderSettings::default() }
+}
+
+/// Per-pixel sample means and variances of the mean, from `passes` passes of one sample.
+fn per_sample_stats(
+    mut pass: impl FnMut(u32) -> Vec<[f64; 3]>,
+    passes: u32,
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let n = (SIZE * SIZE) as usize;
+    let mut sum = vec![[0.0f64; 3]; n];
+    let mut sq = vec![[0.0f64; 3]; n];
+    for k in 0..passes {
+        for (i, v) in pass(k).iter().enumerate() {
+            for c in 0..3 {
+                sum[i][c] += v[c];
+                sq[i][c] += v[c] * v[c];
+            }
+        }
+    }
+    let p = f64::from(passes);
+    let mean: Vec<[f64; 3]> = sum.iter().map(|s| s.map(|x| x / p)).collect();
+    let var = sq
+        .iter()
+        .zip(&mean)
+        .map(|(q, m)| std::array::from_fn(|c| ((q[c] / p - m[c] * m[c]) * p / (p - 1.0)).max(0.0) / p))
+        .collect();
+    (mean, var)
+}
+
+fn channel_means(img: &[[f64; 3]]) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for v in img {
+        for c in 0..3 {
+            m[c] += v[c] / img.len() as f64;
+        }
+    }
+    m
+}
+
+#[test]
+fn frame_params_layout_matches_wgsl() {
+    let src = shader_source(FilmPrecision::F64);
+    macro_rules! off {
+        ($($f:ident),*) => { [$((stringify!($f), std::mem::offset_of!(FrameParams, $f))),*] };
+    }
+    let mut members = off!(
+        cam_x,
+        cam_y,
+        cam_z,
+        cam_t,
+        sun_direction,
+        sun_irradiance,
+        sky,
+        sampler,
+        width,
+        height,
+        first_sample,
+        samples,
+        bounces,
+        flags,
+        bsdf_flags,
+        row_offset,
+        fov_scale,
+        aspect
+    )
+    .to_vec();
+    members.push(("pad0", 168));
+    members.push(("pad1", 172));
+    common::assert_layout(&src, "FrameParams", size_of::<FrameParams>(), &members);
+}
+
+#[test]
+fn same_samples_give_the_same_image() {
+    let Some(ctx) = test_context() else { return };
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    let s = settings(SamplerKind::Sobol, 3);
+    const SPP: u32 = 16;
+    let cpu = Renderer::new(scene.clone(), s).unwrap();
+    let mut film = cpu.new_film();
+    cpu.render_pass(&mut film, 0, SPP).unwrap();
+    let mut gpu = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
+    eprintln!("adapter {}, film {:?}", gpu.context().describe(), gpu.film_precision());
+    gpu.render_pass(0, SPP).unwrap();
+    let g = gpu.film().unwrap();
+    assert_eq!(g.rejected, 0);
+    let n = (SIZE * SIZE) as usize;
+    let mut close = 0;
+    let (mut gm, mut cm) = ([0.0f64; 3], [0.0f64; 3]);
+    for i in 0..n {
+        assert_eq!(g.count[i], u64::from(SPP), "pixel {i} sample count");
+        let gp = g.mean(i);
+        let cp = film.pixel(i as u32 % SIZE, i as u32 / SIZE).to_array();
+        let rel = (0..3).map(|c| (gp[c] - cp[c]).abs() / cp[c].abs().max(1e-3)).fold(0.0, f64::max);
+        close += usize::from(rel < 1e-4);
+        for c in 0..3 {
+            gm[c] += gp[c] / n as f64;
+            cm[c] += cp[c] / n as f64;
+        }
+    }
+    eprintln!("same samples: {close}/{n} pixels within 1e-4; means gpu {gm:?} cpu {cm:?}");
+    for c in 0..3 {
+        let rel = (gm[c] - cm[c]).abs() / cm[c];
+        assert!(rel < 1e-3, "channel {c}: GPU mean {} vs CPU {} (rel {rel:e})", gm[c], cm[c]);
+    }
+    // Most paths must be the same paths (a twin that is merely unbiased would give ~0%).
+    assert!(close * 2 > n, "only {close}/{n} pixels agree within 1e-4 with the same sample points");
+}
+
+#[test]
+fn independent_estimates_agree_within_noise() {
+    let Some(ctx) = test_context() else { return };
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    const PASSES: u32 = 128;
+    let cpu = Renderer::new(scene.clone(), settings(SamplerKind::Random, 1)).unwrap();
+    let mut film = cpu.new_film();
+    let (cm, cv) = per_sample_stats(
+        |k| {
+            film.clear();
+            cpu.render_pass(&mut film, k, 1).unwrap();
+            (0..SIZE * SIZE).map(|i| film.pixel(i % SIZE, i / SIZE).to_array()).collect()
+        },
+        PASSES,
+    );
+    let mut gpu = GpuRenderer::new(ctx, &scene, &camera, settings(SamplerKind::Random, 2)).unwrap();
+    let mut prev = gpu.film().unwrap();
+    let (gm, gv) = per_sample_stats(
+        |k| {
+            gpu.render_pass(k, 1).unwrap();
+            let now = gpu.film().unwrap();
+            let v = (0..(SIZE * SIZE) as usize)
+                .map(|i| std::array::from_fn(|c| now.sum[i][c] - prev.sum[i][c]))
+                .collect();
+            prev = now;
+            v
+        },
+        PASSES,
+    );
+    let (a, b) = (channel_means(&gm), channel_means(&cm));
+    let mut zs = Vec::new();
+    for i in 0..gm.len() {
+        for c in 0..3 {
+            let se = (gv[i][c] + cv[i][c]).sqrt();
+            if se > 0.0 {
+                zs.push((gm[i][c] - cm[i][c]) / se);
+            }
+        }
+    }
+    let zn = zs.len() as f64;
+    let zmean = zs.iter().sum::<f64>() / zn;
+    let zstd = (zs.iter().map(|z| (z - zmean).powi(2)).sum::<f64>() / zn).sqrt();
+    eprintln!("independent: means gpu {a:?} cpu {b:?}; z mean {zmean:.3}, std {zstd:.3} over {zn} values");
+    for c in 0..3 {
+        let ratio = a[c] / b[c];
+        assert!((ratio - 1.0).abs() < 5e-3, "channel {c}: GPU/CPU mean ratio {ratio}");
+    }
+    assert!(zmean.abs() < 0.1, "z mean {zmean}");
+    assert!(zstd <= 1.15, "z std {zstd}");
+}
