@@ -384,7 +384,7 @@ impl Bvh {
         Some(Ray {
             origin: origin.into(),
             direction: d,
-            inv_direction: Vec3A::new(safe_recip(d.x), safe_recip(d.y), safe_recip(d.z)),
+            inv_direction: safe_recip3(d),
             tmin: 0.0,
             tmax: t_max * (CULL_SLACK / self.dir_scale),
         })
@@ -411,13 +411,23 @@ const WIDE_NODE_LIMIT: usize = 16_384;
 /// decided by exact comparisons of the triangle test's `t`.
 const CULL_SLACK: f32 = 1.0 + 1.0 / 4096.0;
 
-/// `1/x`, with `|x| < 2^-100` (including ±0) mapped to `±2^100`, so that slab tests never see
-/// `0 · ∞ = NaN`. `2^100` times any box extent and quantisation step stays finite in `f32`.
-#[inline(always)]
+/// The scalar form of `safe_recip3`, which the traversal uses; kept as its test reference.
+#[cfg(test)]
 fn safe_recip(x: f32) -> f32 {
     const TINY: f32 = 7.888_609e-31; // 2^-100
     const HUGE: f32 = 1.267_650_6e30; // 2^100
     if x.abs() < TINY { HUGE.copysign(x) } else { 1.0 / x }
+}
+
+/// `1/x` per component, `|x| < 2^-100` (including ±0) mapped to `±2^100`, so that slab tests
+/// never see `0 · ∞ = NaN` (`2^100` times any box extent and quantisation step stays finite in
+/// `f32`); one vector division (the same IEEE quotient per lane).
+#[inline(always)]
+fn safe_recip3(d: Vec3A) -> Vec3A {
+    const TINY: f32 = 7.888_609e-31; // 2^-100
+    const HUGE: f32 = 1.267_650_6e30; // 2^100
+    let tiny = d.abs().cmplt(Vec3A::splat(TINY));
+    Vec3A::select(tiny, Vec3A::splat(HUGE).copysign(d), Vec3A::ONE / d)
 }
 
 /// `2^-m` with `m ∈ [0, 64]` the smallest integer such that obvhs's `1e-4` cut-off becomes
@@ -450,5 +460,25 @@ mod tests {
         assert_eq!(safe_recip(0.0), 1.267_650_6e30);
         assert_eq!(safe_recip(-0.0), -1.267_650_6e30);
         assert_eq!(safe_recip(0.5), 2.0);
+        for x in [0.0f32, -0.0, 0.5, -3.0, 1e-31, -1e-29, 7.888_609e-31, f32::MAX, 1e-45] {
+            let v = safe_recip3(Vec3A::new(x, -x, 1.0));
+            assert_eq!(
+                v.to_array().map(f32::to_bits),
+                [safe_recip(x), safe_recip(-x), 1.0].map(f32::to_bits)
+            );
+        }
+    }
+
+    #[test]
+    fn negative_zero_direction_components_hit() {
+        // A direction component of -0.0 has the reciprocal -2^100: the box test must treat it
+        // as negative (it once took the near plane from `d < 0` and missed every box).
+        let floor = [[Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 0.0, 1.0)]];
+        let bvh = Bvh::build(&floor);
+        for dir in [Vec3::new(-0.0, -1.0, -0.0), Vec3::new(0.0, -1.0, -0.0), Vec3::new(-0.0, -1.0, 0.0)] {
+            let hit = bvh.closest_hit(Vec3::new(0.1, 1.0, 0.1), dir, f32::INFINITY);
+            assert_eq!(hit.map(|h| h.t), Some(1.0), "{dir:?}");
+            assert!(bvh.occluded(Vec3::new(0.1, 1.0, 0.1), dir, f32::INFINITY), "{dir:?}");
+        }
     }
 }

@@ -114,14 +114,18 @@ pub(crate) struct NodeRay {
 impl NodeRay {
     #[inline(always)]
     pub(crate) fn new(ray: &Ray) -> Self {
+        // Sign bits, not `d < 0`: a `-0.0` component has the reciprocal `-2^100`
+        // (`Bvh::obvhs_ray`), so it must enter through the far plane like any negative one;
+        // with `d < 0` it took the near plane and the ray missed every box.
         let d = ray.direction;
+        let negative = [d.x.is_sign_negative(), d.y.is_sign_negative(), d.z.is_sign_negative()];
         NodeRay {
             origin: ray.origin,
             inv_direction: ray.inv_direction,
-            negative: [d.x < 0.0, d.y < 0.0, d.z < 0.0],
-            oct_inv4: (if d.x < 0.0 { 0 } else { 0x0404_0404 })
-                | (if d.y < 0.0 { 0 } else { 0x0202_0202 })
-                | (if d.z < 0.0 { 0 } else { 0x0101_0101 }),
+            negative,
+            oct_inv4: (if negative[0] { 0 } else { 0x0404_0404 })
+                | (if negative[1] { 0 } else { 0x0202_0202 })
+                | (if negative[2] { 0 } else { 0x0101_0101 }),
         }
     }
 }
@@ -151,7 +155,10 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
                 depth = (depth + 1).min(STACK - 1);
             }
             let slot_index = (child_index_offset - 24) ^ (r.oct_inv4 & 0xff);
-            let relative_index = (hits_imask & !(0xffff_ffffu32 << slot_index)).count_ones();
+            // `slot_index < 8`: only the low byte (`imask`) counts; a table, as baseline x86-64
+            // has no `popcnt` instruction.
+            let relative_index =
+                u32::from(POPCOUNT_8[(hits_imask & !(0xffff_ffffu32 << slot_index)) as usize & 0xff]);
             let node = &nodes[(current.0 + relative_index) as usize];
             let hitmask = node.intersect(&r, t_max, r.oct_inv4);
             current = (node.child_base, (hitmask & 0xff00_0000) | node.imask);
@@ -202,3 +209,14 @@ pub(crate) fn any(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize) ->
 }
 
 const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
+
+/// The number of set bits of every byte.
+const POPCOUNT_8: [u8; 256] = {
+    let mut table = [0u8; 256];
+    let mut i = 0;
+    while i < 256 {
+        table[i] = (i as u32).count_ones() as u8;
+        i += 1;
+    }
+    table
+};
