@@ -82,6 +82,15 @@ pub struct RenderArgs {
     /// Russian roulette from the third scattering event on (unbiased; faster, noisier).
     #[arg(long, value_enum, default_value_t = Switch::Off)]
     pub russian_roulette: Switch,
+    /// Where to render: cpu (the reference integrator), gpu (wgpu: Vulkan, Metal or DX12), or
+    /// auto (a hardware GPU if there is one, else the CPU; software GPUs such as lavapipe are
+    /// slower than the CPU integrator and used only when asked for).
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    pub backend: BackendArg,
+    /// The GPU adapter: a part of its name (case-insensitive) or its index in the list that an
+    /// unknown name prints; implies --backend gpu when --backend is auto.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub adapter: Option<String>,
     /// Output path: writes PATH.png and PATH.exr (a .png or .exr extension is replaced).
     #[arg(long, default_value = "furnace")]
     pub out: PathBuf,
@@ -131,6 +140,17 @@ pub struct CompareArgs {
 
 /// The largest image side accepted.
 pub const MAX_SIDE: u32 = 16_384;
+
+/// `--backend`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum BackendArg {
+    /// The CPU reference integrator (rayon).
+    Cpu,
+    /// The wgpu integrator.
+    Gpu,
+    /// A hardware GPU if present, else the CPU.
+    Auto,
+}
 
 /// `--masking`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

@@ -3,6 +3,9 @@
 //! only this trait, so the wgpu integrator plugs in beside the CPU one.
 
 use furnace_cpu::{Film, Renderer};
+use furnace_gpu::GpuRenderer;
+use furnace_gpu::film::FilmData;
+use glam::DVec3;
 
 /// An integrator accumulating into its own film.
 ///
@@ -20,6 +23,11 @@ pub trait Backend {
     /// The film so far: per-pixel sums and counts, and the rejected-sample count (a device
     /// backend reads it back here).
     fn film(&mut self) -> Result<Film, String>;
+
+    /// Samples per pixel per pass for an image of `pixels` pixels: small enough that the
+    /// progress bar moves, `--time-limit` stops promptly and Ctrl-C is answered within about a
+    /// fifth of a second.
+    fn pass_samples(&self, pixels: u64) -> u32;
 }
 
 /// The CPU reference integrator (`furnace_cpu`, rayon over rows).
@@ -47,6 +55,63 @@ impl Backend for CpuBackend {
 
     fn film(&mut self) -> Result<Film, String> {
         Ok(self.film.clone())
+    }
+
+    /// At most 4, and about 2¹⁸ samples per pass (a fifth of a second on two cores).
+    fn pass_samples(&self, pixels: u64) -> u32 {
+        (262_144 / pixels.max(1)).clamp(1, 4) as u32
+    }
+}
+
+/// The wgpu integrator (`furnace_gpu`); the film is read back when asked for.
+#[derive(Debug)]
+pub struct GpuBackend {
+    renderer: GpuRenderer,
+}
+
+impl GpuBackend {
+    /// Renders with `renderer`, continuing `film` if given (a restored render).
+    pub fn new(mut renderer: GpuRenderer, film: Option<&Film>) -> Result<Self, String> {
+        if let Some(f) = film {
+            let data = FilmData {
+                width: f.width(),
+                height: f.height(),
+                sum: f.sums().iter().map(|s| s.to_array()).collect(),
+                count: f.counts().to_vec(),
+                rejected: f.rejected(),
+            };
+            renderer.load_film(&data).map_err(|e| e.to_string())?;
+        }
+        Ok(Self { renderer })
+    }
+
+    /// The adapter, in one line.
+    pub fn describe(&self) -> String {
+        self.renderer.context().describe()
+    }
+}
+
+impl Backend for GpuBackend {
+    fn name(&self) -> &'static str {
+        "gpu"
+    }
+
+    fn render_pass(&mut self, first_index: u32, n: u32) -> Result<(), String> {
+        self.renderer.render_pass(first_index, n).map_err(|e| e.to_string())
+    }
+
+    fn film(&mut self) -> Result<Film, String> {
+        let d = self.renderer.film().map_err(|e| e.to_string())?;
+        let sums = d.sum.iter().map(|s| DVec3::from_array(*s)).collect();
+        Film::from_parts(d.width, d.height, sums, d.count, d.rejected).map_err(|e| e.to_string())
+    }
+
+    /// About 2²⁴ samples per pass on hardware (tens of milliseconds on a large GPU), 2¹⁶ on a
+    /// software adapter; 1 to 64 samples per pixel.
+    fn pass_samples(&self, pixels: u64) -> u32 {
+        let target: u64 =
+            if furnace_gpu::context::is_hardware(&self.renderer.context().info) { 1 << 24 } else { 1 << 16 };
+        (target / pixels.max(1)).clamp(1, 64) as u32
     }
 }
 

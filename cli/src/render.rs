@@ -1,11 +1,13 @@
 //! `furnace render`: load, render in passes with a progress bar, write EXR + PNG.
 
+use crate::args::BackendArg;
 use crate::args::{MAX_SIDE, RenderArgs, Switch};
-use crate::backend::{Backend, CpuBackend};
+use crate::backend::{Backend, CpuBackend, GpuBackend};
 use crate::interrupt::Interrupt;
 use crate::resume;
 use furnace_brdf::SpecularOptions;
 use furnace_cpu::{Film, RenderSettings, Renderer};
+use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
 use furnace_post::{ExrWithState, Metadata, read_exr_with_state, to_srgb8, write_exr_with_state, write_png};
 use furnace_scene::{Projection, Scene, builtin};
 use glam::{DVec3, Vec3};
@@ -19,12 +21,6 @@ pub const DEFAULT_WIDTH: u32 = 512;
 
 /// Largest number of pixels accepted (8192² — 2 GiB of `f64` film).
 const MAX_PIXELS: u64 = 1 << 26;
-
-/// Samples per pixel per pass: at most 4, and about 2¹⁸ samples per pass (a fifth of a second
-/// on two cores), so the progress bar moves and `--time-limit` stops promptly.
-fn pass_spp(pixels: u64) -> u32 {
-    (262_144 / pixels.max(1)).clamp(1, 4) as u32
-}
 
 /// How a render ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -162,13 +158,13 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             a.sampler, a.spp
         );
     }
-    let renderer = Renderer::new(scene, settings).map_err(|e| e.to_string())?;
     let (film, first, previous_time) = match saved {
-        Some(s) => (s.film, s.spp, s.render_time_s),
-        None => (renderer.new_film(), 0, 0.0),
+        Some(s) => (Some(s.film), s.spp, s.render_time_s),
+        None => (None, 0, 0.0),
     };
-    let mut backend = CpuBackend::new(renderer, film);
-    let pass = render_passes(&mut backend, &job, first, interrupt)?;
+    let mut backend = make_backend(a, scene, settings, film)?;
+    let backend = backend.as_mut();
+    let pass = render_passes(backend, &job, first, interrupt)?;
     if pass.done == first {
         // Ctrl-C before the first pass: nothing new; leave every file as it was.
         eprintln!("interrupted before the first pass: nothing rendered, nothing written");
@@ -215,6 +211,41 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     Ok(if stopped_by_user { Outcome::Interrupted } else { Outcome::Done })
 }
 
+/// The integrator `--backend` and `--adapter` ask for, holding `film` if one is restored.
+fn make_backend(
+    a: &RenderArgs,
+    scene: Scene,
+    settings: RenderSettings,
+    film: Option<Film>,
+) -> Result<Box<dyn Backend>, String> {
+    let gpu_context = match (a.backend, &a.adapter) {
+        (BackendArg::Cpu, _) => None,
+        (BackendArg::Gpu | BackendArg::Auto, Some(name)) => {
+            Some(GpuContext::new(&AdapterChoice::Named(name.clone())).map_err(|e| e.to_string())?)
+        }
+        (BackendArg::Gpu, None) => Some(GpuContext::new(&AdapterChoice::Best).map_err(|e| e.to_string())?),
+        // auto: a hardware adapter if there is one; without, the CPU integrator (software
+        // adapters are slower than it).
+        (BackendArg::Auto, None) => GpuContext::new(&AdapterChoice::Hardware).ok(),
+    };
+    match gpu_context {
+        Some(ctx) => {
+            let camera = scene.default_camera();
+            let renderer = GpuRenderer::new(ctx, &scene, &camera, settings).map_err(|e| e.to_string())?;
+            let backend = GpuBackend::new(renderer, film.as_ref())?;
+            if !a.quiet {
+                eprintln!("rendering on {}", backend.describe());
+            }
+            Ok(Box::new(backend))
+        }
+        None => {
+            let renderer = Renderer::new(scene, settings).map_err(|e| e.to_string())?;
+            let film = film.unwrap_or_else(|| renderer.new_film());
+            Ok(Box::new(CpuBackend::new(renderer, film)))
+        }
+    }
+}
+
 /// Why the pass loop ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Stop {
@@ -259,13 +290,13 @@ fn render_passes(
         {
             // Stop before a pass that would, at the mean pass time so far, end past the limit.
             let elapsed = start.elapsed().as_secs_f64();
-            let passes = f64::from(done - first) / f64::from(pass_spp(pixels));
+            let passes = f64::from(done - first) / f64::from(backend.pass_samples(pixels));
             if elapsed + elapsed / passes.max(1.0) > limit {
                 stop = Stop::TimeLimit;
                 break;
             }
         }
-        let n = pass_spp(pixels).min(a.spp - done);
+        let n = backend.pass_samples(pixels).min(a.spp - done);
         backend.render_pass(done, n)?;
         done += n;
         let elapsed = start.elapsed().as_secs_f64();
@@ -433,13 +464,6 @@ mod tests {
         assert_eq!(p("out/x.png"), ("out/x.png".into(), "out/x.exr".into()));
         assert_eq!(p("x.EXR"), ("x.png".into(), "x.exr".into()));
         assert_eq!(p("render.v2"), ("render.v2.png".into(), "render.v2.exr".into()));
-    }
-
-    #[test]
-    fn passes_are_one_to_four_spp() {
-        assert_eq!(pass_spp(512 * 512), 1);
-        assert_eq!(pass_spp(32 * 32), 4);
-        assert_eq!(pass_spp(0), 4);
     }
 
     #[test]
