@@ -445,7 +445,7 @@ fn warps_match_to_float_rounding() {
             us.push(Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32));
         }
     }
-    let mut rng = Rng(0xa11_ce);
+    let mut rng = Rng(0x000a_11ce);
     for _ in 0..20_000 {
         us.push(Vec2::new(to_unit_f32(rng.u32()), to_unit_f32(rng.u32())));
     }

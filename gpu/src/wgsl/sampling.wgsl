@@ -278,7 +278,14 @@ fn smp_cmj_point(s_in: u32, n_total: u32, p: u32) -> vec2<u32> {
     let sy = smp_kensler_permute(s / m, n, p * 0x02e5be93u);
     let jx = smp_kensler_hash(s, p * 0x967a889bu);
     let jy = smp_kensler_hash(s, p * 0x368cc8b7u);
-    return vec2<u32>(smp_div_frac(sx * n + sy, jx, m * n), smp_div_frac(s, jy, n_total));
+    // x = div_frac(sx·n + sy, jx, m·n), y = div_frac(s, jy, n_total), by one call site in a
+    // loop: GPU compilers inline every call, and the restoring division is large.
+    var out = vec2<u32>(0u);
+    for (var a = 0u; a < 2u; a++) {
+        let y = a == 1u;
+        out[a] = smp_div_frac(select(sx * n + sy, s, y), select(jx, jy, y), select(m * n, n_total, y));
+    }
+    return out;
 }
 
 // `Cmj::pair`.
@@ -320,10 +327,13 @@ fn smp_pmj02_pair(seed: u32, pixel: u32, index: u32, pair: u32) -> vec2<u32> {
     if pair != 0u {
         i = smp_owen_shuffle_index(index, key);
     }
-    return vec2<u32>(
-        smp_pmj02_coordinate(i, 0u, smp_hash2(key, 0x2f6b1d3bu)),
-        smp_pmj02_coordinate(i, 1u, smp_hash2(key, 0x7c1595d9u)),
-    );
+    // x: pmj02_coordinate(i, xors[0], hash2(key, 0x2f6b1d3b)), y: (xors[1], 0x7c1595d9), by one
+    // call site in a loop (compilers inline every call).
+    var out = vec2<u32>(0u);
+    for (var axis = 0u; axis < 2u; axis++) {
+        out[axis] = smp_pmj02_coordinate(i, axis, smp_hash2(key, select(0x2f6b1d3bu, 0x7c1595d9u, axis == 1u)));
+    }
+    return out;
 }
 
 // `sobol_bits(index, dim)`, dim < 4: closed forms for 0 and 1, the matrix product for 2 and 3.
@@ -354,25 +364,6 @@ fn smp_sobol_bits(index: u32, dim: u32) -> u32 {
     return x;
 }
 
-// `OwenSobol::bits`.
-fn smp_sobol_bits_dim(seed: u32, pixel: u32, index: u32, dimension: u32) -> u32 {
-    let group_seed = smp_hash3(seed, dimension / 4u, pixel);
-    let d = dimension % 4u;
-    let i = smp_owen_shuffle_index(index, group_seed);
-    return smp_owen_scramble(smp_sobol_bits(i, d), smp_hash2(group_seed, d));
-}
-
-// `OwenSobol::bits_2d` inside one group (dimension % 4 != 3).
-fn smp_sobol_bits_2d_group(seed: u32, pixel: u32, index: u32, dimension: u32) -> vec2<u32> {
-    let group_seed = smp_hash3(seed, dimension / 4u, pixel);
-    let d = dimension % 4u;
-    let i = smp_owen_shuffle_index(index, group_seed);
-    return vec2<u32>(
-        smp_owen_scramble(smp_sobol_bits(i, d), smp_hash2(group_seed, d)),
-        smp_owen_scramble(smp_sobol_bits(i, d + 1u), smp_hash2(group_seed, d + 1u)),
-    );
-}
-
 // The 2-D pattern `pair` of a pair-based sampler (hammersley, cmj, pmj02).
 fn smp_pair(p: SamplerParams, pixel: u32, index: u32, pair: u32) -> vec2<u32> {
     // A fixed-N kind needs 1 <= N (SamplerParams::new guarantees it); max() only keeps a bad
@@ -394,49 +385,70 @@ fn smp_pair(p: SamplerParams, pixel: u32, index: u32, pair: u32) -> vec2<u32> {
 // ---------------------------------------------------------------------------------------------
 // The sampler API (the `Sampler` trait of lib.rs, dispatched like `AnySampler`)
 
-// `Sampler::bits`: the sample as a 0.32 fixed-point fraction. An unknown `kind` gives 0.
-fn sampler_bits(p: SamplerParams, pixel: u32, index: u32, dim: u32) -> u32 {
+// Coordinates `dim` and, if `count` is 2, `dim + 1` (wrapping) of the sampler; `.y` is 0 when
+// `count` is 1. The one place that evaluates the samplers: GPU compilers inline every call, so
+// each sampler appears once per call of `sampler_bits(_2d)`, not once per coordinate.
+//
+// Pair-based kinds (hammersley, cmj, pmj02; pairs.rs `impl_sampler_by_pairs`): dimension d is
+// coordinate d & 1 of pattern d / 2; two coordinates starting at an even d come from one pattern,
+// from an odd d they straddle two. Sobol (sobol.rs): dimension d is coordinate d % 4 of group
+// d / 4 (`seed_k = hash3(seed, k, pixel)`, index shuffled per group); a pair at 4k + 3 straddles
+// two groups. An unknown `kind` gives 0.
+fn smp_bits_n(p: SamplerParams, pixel: u32, index: u32, dim: u32, count: u32) -> vec2<u32> {
+    var out = vec2<u32>(0u);
     switch p.kind {
         case SAMPLER_KIND_RANDOM: {
-            return smp_hash4(p.seed, dim, index, pixel);
+            for (var j = 0u; j < count; j++) {
+                out[j] = smp_hash4(p.seed, dim + j, index, pixel);
+            }
         }
         case SAMPLER_KIND_HAMMERSLEY, SAMPLER_KIND_CMJ, SAMPLER_KIND_PMJ02: {
-            return smp_pair(p, pixel, index, dim / 2u)[dim & 1u];
+            var j = 0u;
+            loop {
+                let d = dim + j;
+                let pattern = smp_pair(p, pixel, index, d / 2u);
+                out[j] = pattern[d & 1u];
+                j += 1u;
+                if j < count && (d & 1u) == 0u {
+                    out[j] = pattern.y;
+                    j += 1u;
+                }
+                if j >= count {
+                    break;
+                }
+            }
         }
         case SAMPLER_KIND_SOBOL: {
-            return smp_sobol_bits_dim(p.seed, pixel, index, dim);
+            var j = 0u;
+            loop {
+                let group_seed = smp_hash3(p.seed, (dim + j) / 4u, pixel);
+                let i = smp_owen_shuffle_index(index, group_seed);
+                loop {
+                    let d = (dim + j) % 4u;
+                    out[j] = smp_owen_scramble(smp_sobol_bits(i, d), smp_hash2(group_seed, d));
+                    j += 1u;
+                    if j >= count || d == 3u {
+                        break;
+                    }
+                }
+                if j >= count {
+                    break;
+                }
+            }
         }
-        default: {
-            return 0u;
-        }
+        default: {}
     }
+    return out;
+}
+
+// `Sampler::bits`: the sample as a 0.32 fixed-point fraction. An unknown `kind` gives 0.
+fn sampler_bits(p: SamplerParams, pixel: u32, index: u32, dim: u32) -> u32 {
+    return smp_bits_n(p, pixel, index, dim, 1u).x;
 }
 
 // `Sampler::bits_2d`: dimensions `dim` and `dim + 1` (wrapping), equal to two `sampler_bits`.
 fn sampler_bits_2d(p: SamplerParams, pixel: u32, index: u32, dim: u32) -> vec2<u32> {
-    let next = dim + 1u;
-    switch p.kind {
-        case SAMPLER_KIND_HAMMERSLEY, SAMPLER_KIND_CMJ, SAMPLER_KIND_PMJ02: {
-            if (dim & 1u) == 0u {
-                return smp_pair(p, pixel, index, dim / 2u);
-            }
-            // The pair straddles two patterns.
-            return vec2<u32>(sampler_bits(p, pixel, index, dim), sampler_bits(p, pixel, index, next));
-        }
-        case SAMPLER_KIND_SOBOL: {
-            if dim % 4u != 3u {
-                return smp_sobol_bits_2d_group(p.seed, pixel, index, dim);
-            }
-            // The pair straddles two groups.
-            return vec2<u32>(
-                smp_sobol_bits_dim(p.seed, pixel, index, dim),
-                smp_sobol_bits_dim(p.seed, pixel, index, next),
-            );
-        }
-        default: { // SAMPLER_KIND_RANDOM (and unknown kinds: 0, 0)
-            return vec2<u32>(sampler_bits(p, pixel, index, dim), sampler_bits(p, pixel, index, next));
-        }
-    }
+    return smp_bits_n(p, pixel, index, dim, 2u);
 }
 
 // `Sampler::value`: the sample in [0, 1), exactly `to_unit_f32(sampler_bits(...))`.
