@@ -7,9 +7,9 @@
 //!
 //! | WGSL | Rust | parity |
 //! |---|---|---|
-//! | `sampler_bits(p, pixel, index, dim)` | [`Sampler::bits`] of the [`AnySampler`] that [`SamplerParams::sampler`] builds | bit for bit |
-//! | `sampler_bits_2d(…)` (`vec2<u32>`) | [`Sampler::bits_2d`] | bit for bit |
-//! | `sampler_value(…)`, `sampler_value_2d(…)` | [`Sampler::value`], [`Sampler::value_2d`] | bit for bit |
+//! | `sampler_bits(p, pixel, index, dim)` | [`Sampler::bits`](furnace_sampling::Sampler::bits) of the [`AnySampler`] that [`SamplerParams::sampler`] builds | bit for bit |
+//! | `sampler_bits_2d(…)` (`vec2<u32>`) | [`Sampler::bits_2d`](furnace_sampling::Sampler::bits_2d) | bit for bit |
+//! | `sampler_value(…)`, `sampler_value_2d(…)` | [`Sampler::value`](furnace_sampling::Sampler::value), [`Sampler::value_2d`](furnace_sampling::Sampler::value_2d) | bit for bit |
 //! | `to_unit_f32(bits)` | [`furnace_sampling::to_unit_f32`] | bit for bit |
 //! | `smp_*` helpers (PCG / Kensler / Laine–Karras hashes, Owen scramble and index shuffle, `div_frac`, `isqrt`, Sobol and PMJ02 coordinates) | `furnace_sampling::hash`, `fixed`, [`furnace_sampling::sobol_bits`], [`furnace_sampling::pmj02_coordinate`] | bit for bit |
 //! | `warp_concentric_disk`, `warp_uniform_hemisphere`, `warp_cosine_hemisphere` | `furnace_sampling::warp::square_to_*` | same formulas; within the tolerance of `tests/sampler_parity.rs` (WGSL's `sin`, `cos`, `sqrt` and `/` are not correctly rounded) |

@@ -39,6 +39,10 @@
 // `furnace_gpu::sampling::wgsl_generated()` emits from the Rust constants, the layout of
 // `SamplerParams` against its `#[repr(C)]` twin, and that this module declares no bindings.
 //
+// Code size: GPU compilers inline every call, so the samplers are evaluated at one call site
+// (`smp_bits_n`, for one or two coordinates), and CMJ's two divisions and PMJ02's two chain walks
+// run in two-iteration loops: each `sampler_*` call in a shader costs one copy of each sampler.
+//
 // Requires: nothing (no bindings; every private name starts with `smp_`).
 // Provides: `SamplerParams`, `SAMPLER_KIND_*`, `sampler_bits`, `sampler_bits_2d`,
 // `sampler_value`, `sampler_value_2d`, `to_unit_f32`, `warp_concentric_disk`,
