@@ -849,6 +849,27 @@ fn empty_tree_and_invalid_rays_hit_nothing() {
     }
 }
 
+/// A direction component of −0.0 has the reciprocal −2^100: the node test must treat it as
+/// negative (with `d < 0` such a ray missed every box — the CPU twin's
+/// `negative_zero_direction_components_hit`).
+#[test]
+fn negative_zero_direction_components_hit() {
+    let Some(ctx) = test_context() else { return };
+    let floor = [[Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, -1.0), Vec3::new(0.0, 0.0, 1.0)]];
+    let bvh = Bvh::build(&floor);
+    let buffers = BvhBuffers::new(&bvh, ctx.max_storage_binding()).unwrap();
+    let o = Vec3::new(0.1, 1.0, 0.1);
+    let rays: Vec<TestRay> =
+        [Vec3::new(-0.0, -1.0, -0.0), Vec3::new(0.0, -1.0, -0.0), Vec3::new(-0.0, -1.0, 0.0)]
+            .into_iter()
+            .map(|d| TestRay { o, d, t_max: f32::INFINITY, t_any: f32::INFINITY })
+            .collect();
+    for (r, g) in rays.iter().zip(trace_gpu(&ctx, &buffers, wgsl::TRAVERSE, Filter::All, &rays)) {
+        assert_eq!(g.hit.map(|h| h.1), Some(1.0), "closest hit along {:?}", r.d);
+        assert!(g.occluded, "any hit along {:?}", r.d);
+    }
+}
+
 /// The WGSL structs have the bytes of accel's `#[repr(C)]` ones (naga reflection).
 #[test]
 fn wgsl_structs_match_accel_layout() {

@@ -222,7 +222,7 @@ fn trv_intersect_triangle(o: vec3<f32>, d: vec3<f32>, v0: vec3<f32>, v1: vec3<f3
 struct TrvRay {
     o: vec3<f32>,
     inv_d: vec3<f32>,
-    /// Direction component < 0, per axis.
+    /// Direction component's sign bit set (−0.0 included), per axis.
     neg: vec3<bool>,
     /// obvhs's `ray_get_octant_inv4`: (7 − octant) in every byte.
     oct_inv4: u32,
@@ -230,7 +230,10 @@ struct TrvRay {
 
 fn trv_make_ray(o: vec3<f32>, d: vec3<f32>) -> TrvRay {
     let inv = vec3<f32>(trv_safe_recip(d.x), trv_safe_recip(d.y), trv_safe_recip(d.z));
-    let neg = vec3<bool>(d.x < 0.0, d.y < 0.0, d.z < 0.0);
+    // Sign bits, not `d < 0`: a −0.0 component has the reciprocal −2^100, so it must enter
+    // through the far plane like any negative one (with `d < 0` such a ray missed every box;
+    // furnace-accel's NodeRay had the same bug, fixed in 2245c1b).
+    let neg = (bitcast<vec3<u32>>(d) >> vec3<u32>(31u)) == vec3<u32>(1u);
     let oct = select(0x04040404u, 0u, neg.x) | select(0x02020202u, 0u, neg.y) | select(0x01010101u, 0u, neg.z);
     return TrvRay(o, inv, neg, oct);
 }
