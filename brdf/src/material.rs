@@ -112,7 +112,12 @@ impl MetallicRoughness {
         }
         let diff = luminance(self.diffuse.albedo) * self.diffuse_scale(mu);
         if !(diff > 0.0) {
-            return 1.0;
+            // Only a diffuse lobe that is zero everywhere may go unsampled. With specularFactor 1
+            // the estimate `1 − F(μo)` rounds to 0 below μo ≈ 1e-8 although `eval`'s diffuse
+            // term (scaled at the half vector) is not: sampling only the specular lobe there
+            // dropped that energy (tests/consistency.rs,
+            // samples_carry_both_lobes_when_a_lobe_estimate_vanishes).
+            return if self.diffuse.albedo == Rgb::ZERO { 1.0 } else { 0.95 };
         }
         if !(spec > 0.0) {
             return 0.0;

@@ -466,7 +466,8 @@ fn bsdf_specular_probability(m: BsdfParams, wo: vec3<f32>) -> f32 {
         spec *= bsdf_e_ss(mu, m.alpha, brdf_height_correlated(m));
     }
     let diff = brdf_luminance(m.diffuse) * brdf_diffuse_scale(m, mu);
-    if !(diff > 0.0) { return 1.0; }
+    // Only a diffuse lobe that is zero everywhere may go unsampled (see the Rust).
+    if !(diff > 0.0) { return select(0.95, 1.0, all(m.diffuse == vec3<f32>(0.0))); }
     if !(spec > 0.0) { return 0.0; }
     return brdf_clamp(spec / (spec + diff), 0.05, 0.95);
 }
