@@ -27,6 +27,9 @@ pub enum Command {
     /// Score a candidate EXR against a reference EXR (as shared/oracle/compare.py): RMSE,
     /// relative MSE, per-channel mean ratio and, with --stderr, per-pixel z-score statistics.
     Compare(CompareArgs),
+    /// Measure a backend on a scene: Msamples/s, Mrays/s, ms per frame, time to first frame and
+    /// GPU bytes per triangle, as a Markdown table and JSON.
+    Bench(BenchArgs),
 }
 
 /// `furnace render`.
@@ -136,6 +139,95 @@ pub struct CompareArgs {
     /// Write a PNG of |candidate − reference| per pixel, its 99th percentile mapped to white.
     #[arg(long, value_name = "PATH.png")]
     pub error_map: Option<PathBuf>,
+}
+
+/// `furnace bench`.
+#[derive(Debug, Clone, Args)]
+pub struct BenchArgs {
+    /// Where to run: cpu, gpu or auto (as `furnace render --backend`).
+    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
+    pub backend: BackendArg,
+    /// The GPU adapter: a part of its name or its index; implies --backend gpu when auto.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub adapter: Option<String>,
+    /// The scene: cbox (the built-in reference Cornell box), interior:N (the procedural sunlit
+    /// interior of about N triangles, e.g. interior:1e6), or a .gltf/.glb path.
+    #[arg(long, default_value = "cbox", value_parser = parse_scene)]
+    pub scene: SceneArg,
+    /// Image width [default: 256 for cbox, else 512 or from --height and the camera].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIDE as i64))]
+    pub width: Option<u32>,
+    /// Image height [default: 256 for cbox, else from the width and the camera].
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIDE as i64))]
+    pub height: Option<u32>,
+    /// Measure exactly this many samples per pixel (after the 1-spp first frame) instead of
+    /// passes for --min-seconds.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub spp: Option<u32>,
+    /// Without --spp: render passes until this many seconds have passed.
+    #[arg(long, value_name = "SECONDS", default_value_t = 2.0, value_parser = parse_seconds)]
+    pub min_seconds: f64,
+    /// Scattering events per path.
+    #[arg(long, default_value_t = 4)]
+    pub bounces: u32,
+    /// Sampler: random, hammersley, cmj, pmj02, sobol (the fixed-N ones need --spp).
+    #[arg(long, default_value_t = furnace_cpu::RenderSettings::default().sampler)]
+    pub sampler: SamplerKind,
+    /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
+    #[arg(long, value_name = "PATH")]
+    pub json: Option<PathBuf>,
+    /// CPU backend: do not estimate rays per sample (the estimate renders a small image on a GPU
+    /// adapter, software included).
+    #[arg(long)]
+    pub no_rays: bool,
+    /// No progress line on stderr.
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// `furnace bench --scene`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SceneArg {
+    /// The built-in reference Cornell box.
+    Cbox,
+    /// `furnace_scene::builtin::sunlit_interior` of about this many triangles.
+    Interior(u32),
+    /// A glTF/GLB file.
+    File(PathBuf),
+}
+
+/// The most triangles `--scene interior:N` accepts.
+pub const MAX_INTERIOR_TRIANGLES: u32 = 20_000_000;
+
+fn parse_scene(s: &str) -> Result<SceneArg, String> {
+    if s == "cbox" {
+        return Ok(SceneArg::Cbox);
+    }
+    if let Some(n) = s.strip_prefix("interior:") {
+        let t = n.trim().replace('_', "");
+        let value = t.parse::<u64>().ok().or_else(|| {
+            t.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite() && *x >= 0.0 && x.fract() == 0.0 && *x < 1e19)
+                .map(|x| x as u64)
+        });
+        return match value {
+            Some(v) if (1..=u64::from(MAX_INTERIOR_TRIANGLES)).contains(&v) => {
+                Ok(SceneArg::Interior(v as u32))
+            }
+            Some(v) => {
+                Err(format!("interior:{v}: the triangle count must be from 1 to {MAX_INTERIOR_TRIANGLES}"))
+            }
+            None => Err(format!(
+                "'{s}': interior:N needs a whole number of triangles (e.g. interior:1000000 or interior:1e6)"
+            )),
+        };
+    }
+    let lower = s.to_ascii_lowercase();
+    if lower.ends_with(".gltf") || lower.ends_with(".glb") {
+        return Ok(SceneArg::File(PathBuf::from(s)));
+    }
+    Err(format!("unknown scene '{s}': expected cbox, interior:N (about N triangles) or a .gltf/.glb path"))
 }
 
 /// The largest image side accepted.

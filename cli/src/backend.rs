@@ -89,6 +89,11 @@ impl GpuBackend {
     pub fn describe(&self) -> String {
         self.renderer.context().describe()
     }
+
+    /// The renderer (`furnace bench` turns ray counting on and reads the count and sizes).
+    pub fn renderer_mut(&mut self) -> &mut GpuRenderer {
+        &mut self.renderer
+    }
 }
 
 impl Backend for GpuBackend {

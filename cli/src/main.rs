@@ -15,12 +15,16 @@
 //!   and loader warnings.
 //! * `furnace compare CANDIDATE.exr REFERENCE.exr [--stderr …]` scores a render against a
 //!   reference as `shared/oracle/compare.py` does (RMSE, relative MSE, mean ratio, z-scores).
+//! * `furnace bench [--backend …] [--scene cbox|interior:N|PATH]` measures a backend:
+//!   Msamples/s, Mrays/s, ms per frame, time to first frame, GPU bytes per triangle, as a
+//!   Markdown table and JSON (`bench.rs`).
 //!
 //! Every error is one line on stderr, `error: …`, naming the file where there is one, and the
 //! exit code is 1; no user input panics.
 
 mod args;
 mod backend;
+mod bench;
 mod compare;
 mod info;
 mod interrupt;
@@ -52,6 +56,7 @@ fn main() -> ExitCode {
         args::Command::Render(a) => render::run(&a, &interrupt::Interrupt::install()),
         args::Command::Info(a) => info::run(&a).map(|()| render::Outcome::Done),
         args::Command::Compare(a) => compare::run(&a).map(|()| render::Outcome::Done),
+        args::Command::Bench(a) => bench::run(&a).map(|()| render::Outcome::Done),
     };
     match result {
         Ok(render::Outcome::Done) => ExitCode::SUCCESS,

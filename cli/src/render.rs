@@ -418,7 +418,11 @@ pub fn output_paths(out: &Path) -> (PathBuf, PathBuf) {
 
 /// The image size: given sides win; a missing side follows the camera's aspect ratio (the
 /// file's `aspectRatio`, or `xmag/ymag` of an orthographic camera; square without one).
-fn image_size(scene: &Scene, width: Option<u32>, height: Option<u32>) -> Result<(u32, u32), String> {
+pub(crate) fn image_size(
+    scene: &Scene,
+    width: Option<u32>,
+    height: Option<u32>,
+) -> Result<(u32, u32), String> {
     let aspect = match scene.default_camera().projection {
         Projection::Perspective { aspect_ratio, .. } => aspect_ratio.unwrap_or(1.0),
         Projection::Orthographic { xmag, ymag } => xmag / ymag,

@@ -623,3 +623,102 @@ fn second_ctrl_c_exits_at_once() {
         furnace_post::read_exr(dir.join("q.exr")).unwrap();
     }
 }
+
+#[test]
+fn bench_cpu_prints_json_with_every_field() {
+    let o = furnace(&[
+        "bench",
+        "--backend",
+        "cpu",
+        "--scene",
+        "cbox",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--spp",
+        "4",
+        "--json",
+        "-",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is JSON");
+    assert_eq!(v["backend"], "cpu");
+    assert_eq!(v["scene"], "cbox");
+    assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(32), Some(32)));
+    assert_eq!((v["spp"].as_u64(), v["bounces"].as_u64()), (Some(4), Some(4)));
+    assert!(v["triangles"].as_u64().is_some_and(|t| t > 0));
+    for key in ["seconds", "msamples_per_s", "ms_per_frame", "time_to_first_frame_s"] {
+        assert!(v[key].as_f64().is_some_and(|x| x > 0.0 && x.is_finite()), "{key}: {}", v[key]);
+    }
+    // Rays are estimated on a GPU adapter when there is one; with none they are null and say why.
+    let note = v["rays_counted"].as_str().expect("rays_counted is a string");
+    match v["mrays_per_s"].as_f64() {
+        Some(m) => {
+            assert!(note.starts_with("estimated"), "{note}");
+            // At least one closest-hit ray per sample, at most two rays per event (cbox: no sun).
+            let r = v["rays_per_sample"].as_f64().unwrap();
+            assert!((1.0..=10.0).contains(&r), "rays per sample {r}");
+            assert!(m > 0.0);
+        }
+        None => assert!(note.starts_with("not counted"), "{note}"),
+    }
+    for key in ["gpu_bytes_per_triangle", "gpu_bvh_bytes_per_triangle", "gpu_scene_bytes", "gpu_bvh_bytes"] {
+        assert!(v[key].is_null(), "{key} on the CPU: {}", v[key]);
+    }
+    // The table goes to stderr when the JSON takes stdout.
+    assert!(stderr(&o).contains("| Msamples/s |"), "{}", stderr(&o));
+}
+
+#[test]
+fn bench_writes_the_json_file_and_the_table() {
+    let dir = temp_dir("bench_json_file");
+    let path = dir.join("bench.json");
+    let o = furnace(&[
+        "bench",
+        "--backend",
+        "cpu",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "1",
+        "--bounces",
+        "1",
+        "--no-rays",
+        "--quiet",
+        "--json",
+        path.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let table = String::from_utf8_lossy(&o.stdout);
+    assert!(table.lines().next().is_some_and(|l| l.starts_with("| backend |")), "{table}");
+    assert!(table.contains("| cpu |") && table.contains("16×16"), "{table}");
+    let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
+    assert_eq!(v["spp"].as_u64(), Some(1));
+    assert!(v["mrays_per_s"].is_null());
+    assert_eq!(v["rays_counted"], "not counted: --no-rays");
+    assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "no temporary file is left");
+}
+
+#[test]
+fn bench_bad_scene_is_one_line() {
+    for scene in ["nope", "interior:", "interior:0", "interior:1.5", "interior:99999999999"] {
+        let o = furnace(&["bench", "--backend", "cpu", "--scene", scene]);
+        assert_eq!(o.status.code(), Some(1), "{scene}");
+        let e = stderr(&o);
+        assert_eq!(e.trim_end().lines().count(), 1, "{scene}: {e}");
+        assert!(e.starts_with("error: ") && e.contains("scene"), "{scene}: {e}");
+    }
+    // A missing glTF file is an error naming it, after the scene is looked for.
+    let o = furnace(&["bench", "--backend", "cpu", "--scene", "missing.glb"]);
+    assert_eq!(o.status.code(), Some(1));
+    let e = stderr(&o);
+    assert_eq!(e.trim_end().lines().count(), 1, "{e}");
+    assert!(e.contains("missing.glb"), "{e}");
+    // A fixed-N sampler needs --spp.
+    let o = furnace(&["bench", "--backend", "cpu", "--sampler", "cmj"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("--spp"), "{}", stderr(&o));
+}

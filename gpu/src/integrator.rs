@@ -12,9 +12,13 @@
 //! samples in index order.
 //!
 //! Bindings (group 0): 0 the [`FrameParams`] uniform (dynamic offset, one slot per dispatch),
-//! 1–2 the film, 3–4 the BVH, 5–10 the scene, 11 the Turquin table — eleven storage buffers,
-//! within every Vulkan/Metal/DX12 adapter's per-stage limit (the WebGPU default of 8 is not: the
-//! device is opened with the adapter's own limits).
+//! 1–2 the film, 3–4 the BVH, 5–10 the scene, 11 the Turquin table, 12 the ray counter — twelve
+//! storage buffers, within every Vulkan/Metal/DX12 adapter's per-stage limit (the WebGPU default
+//! of 8 is not: the device is opened with the adapter's own limits).
+//!
+//! Ray counting (for `furnace bench`): with [`GpuRenderer::set_count_rays`] on, every invocation
+//! adds the rays it traced (closest-hit and shadow) to a 64-bit counter with one `atomicAdd`
+//! (two on a carry); off — the default — no atomic runs.
 
 use crate::film::{FilmData, FilmPrecision, GpuFilm};
 use crate::sampling::SamplerParams;
@@ -36,6 +40,8 @@ pub const FRAME_ORTHOGRAPHIC: u32 = 2;
 pub const FRAME_ANY_MASKED: u32 = 4;
 /// `FrameParams.flags`: the scene has a sun.
 pub const FRAME_HAS_SUN: u32 = 8;
+/// `FrameParams.flags`: add the rays traced to the ray counter (binding 12).
+pub const FRAME_COUNT_RAYS: u32 = 16;
 
 /// The uniform block of one dispatch (176 bytes), twin of `integrator.wgsl`'s `FrameParams`.
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
@@ -109,6 +115,9 @@ pub struct GpuRenderer {
     bvh: [wgpu::Buffer; 2],
     turquin: wgpu::Buffer,
     bytes_per_triangle: f64,
+    bvh_bytes: u64,
+    scene_bytes: u64,
+    ray_counter: wgpu::Buffer,
     samples_per_dispatch: u64,
     max_samples_per_invocation: u32,
 }
@@ -117,7 +126,8 @@ pub struct GpuRenderer {
 pub fn shader_source(precision: FilmPrecision) -> String {
     let decls = format!(
         "@group(0) @binding(0) var<uniform> params: FrameParams;\n{}{}{}\
-         @group(0) @binding(11) var<storage, read> turquin_table: array<f32>;\n",
+         @group(0) @binding(11) var<storage, read> turquin_table: array<f32>;\n\
+         @group(0) @binding(12) var<storage, read_write> ray_counter: array<atomic<u32>, 2>;\n",
         precision.bindings(0, 1),
         traverse::bindings(0, 3),
         scene::bindings(0, 5),
@@ -178,7 +188,13 @@ impl GpuRenderer {
         let bvh_words = BvhBuffers::new(&bvh, limit)?;
         let [nodes, tris] = bvh_words.extra();
         let bvh = [storage_buffer(&ctx, "bvh nodes", nodes), storage_buffer(&ctx, "bvh triangles", tris)];
+        let bvh_bytes = bvh.iter().map(wgpu::Buffer::size).sum();
         let gpu_scene = GpuScene::upload(&ctx, scene)?;
+        let ray_counter = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("ray counter"),
+            contents: bytemuck::cast_slice(&[0u32; 2]),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+        });
         let turquin = storage_buffer(&ctx, "turquin", bytemuck::cast_slice(&brdf::turquin_table()));
         let precision = FilmPrecision::for_context(&ctx);
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
@@ -199,6 +215,7 @@ impl GpuRenderer {
         entries.push(storage_entry(4, true));
         entries.extend(GpuScene::layout_entries(5));
         entries.push(storage_entry(11, true));
+        entries.push(storage_entry(12, false));
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -232,6 +249,9 @@ impl GpuRenderer {
             if software { (1 << 16, 1) } else { (1 << 23, 8) };
         Ok(Self {
             bytes_per_triangle: gpu_scene.bytes_per_triangle(),
+            bvh_bytes,
+            scene_bytes: gpu_scene.bytes,
+            ray_counter,
             ctx,
             settings,
             sampler,
@@ -260,6 +280,39 @@ impl GpuRenderer {
     /// Scene bytes on the GPU per triangle (geometry, BVH excluded).
     pub fn bytes_per_triangle(&self) -> f64 {
         self.bytes_per_triangle
+    }
+
+    /// Bytes of the BVH on the GPU (nodes and triangle references).
+    pub fn bvh_bytes(&self) -> u64 {
+        self.bvh_bytes
+    }
+
+    /// Bytes of the scene buffers on the GPU (geometry, materials, textures; BVH excluded).
+    pub fn scene_bytes(&self) -> u64 {
+        self.scene_bytes
+    }
+
+    /// Whether the passes that follow count the rays they trace (off by default: counting costs
+    /// one atomic per invocation).
+    pub fn set_count_rays(&mut self, on: bool) {
+        if on {
+            self.base.flags |= FRAME_COUNT_RAYS;
+        } else {
+            self.base.flags &= !FRAME_COUNT_RAYS;
+        }
+    }
+
+    /// The rays (closest-hit and shadow) traced by the counting passes since the last call, which
+    /// resets the counter.
+    ///
+    /// # Errors
+    /// A device error while reading the counter back.
+    pub fn take_ray_count(&mut self) -> Result<u64, GpuError> {
+        let words = crate::film::read_buffer(&self.ctx, &self.ray_counter)?;
+        self.ctx.queue.write_buffer(&self.ray_counter, 0, bytemuck::cast_slice(&[0u32; 2]));
+        self.ctx.queue.submit([]);
+        self.ctx.wait()?;
+        Ok(u64::from(words[0]) | (u64::from(words[1]) << 32))
     }
 
     /// About how many samples one dispatch computes (the watchdog bound).
@@ -338,6 +391,7 @@ impl GpuRenderer {
         entries.push(wgpu::BindGroupEntry { binding: 4, resource: self.bvh[1].as_entire_binding() });
         entries.extend(self.scene.bind_entries(5));
         entries.push(wgpu::BindGroupEntry { binding: 11, resource: self.turquin.as_entire_binding() });
+        entries.push(wgpu::BindGroupEntry { binding: 12, resource: self.ray_counter.as_entire_binding() });
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("integrator"),
             layout: &self.layout,

@@ -180,3 +180,20 @@ fn independent_estimates_agree_within_noise() {
     assert!(zmean.abs() < 0.1, "z mean {zmean}");
     assert!(zstd <= 1.15, "z std {zstd}");
 }
+
+#[test]
+fn ray_counter_counts_every_ray_only_when_asked() {
+    let Some(ctx) = test_context() else { return };
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    // No bounces: exactly one closest-hit ray per sample (the Cornell box has no sun).
+    let s = RenderSettings { width: 16, height: 16, bounces: 0, ..RenderSettings::default() };
+    let mut gpu = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
+    gpu.render_pass(0, 2).unwrap();
+    assert_eq!(gpu.take_ray_count().unwrap(), 0, "counting is off by default");
+    gpu.set_count_rays(true);
+    gpu.render_pass(2, 3).unwrap();
+    assert_eq!(gpu.take_ray_count().unwrap(), 16 * 16 * 3);
+    assert_eq!(gpu.take_ray_count().unwrap(), 0, "taking the count resets it");
+    assert!(gpu.bvh_bytes() > 0 && gpu.scene_bytes() > 0);
+}

@@ -2,7 +2,7 @@
 //
 // Requires (composed before it by furnace_gpu::integrator): sampling.wgsl, brdf.wgsl,
 // scene.wgsl, traverse.wgsl, a film module, and the bindings of the params uniform, the film,
-// the BVH, the scene and the Turquin table.
+// the BVH, the scene, the Turquin table and the ray counter.
 //
 // One invocation per pixel of a tile of rows; it adds `samples` consecutive samples of its pixel
 // to the film in index order, as the CPU does, so pixel sums follow the same order.
@@ -17,6 +17,11 @@ const FRAME_RUSSIAN_ROULETTE: u32 = 1u;
 const FRAME_ORTHOGRAPHIC: u32 = 2u;
 const FRAME_ANY_MASKED: u32 = 4u;
 const FRAME_HAS_SUN: u32 = 8u;
+const FRAME_COUNT_RAYS: u32 = 16u;
+
+// Rays this invocation traced (closest-hit and shadow); added to `ray_counter` at its end when
+// FRAME_COUNT_RAYS is set.
+var<private> rays_traced: u32 = 0u;
 
 // gpu/src/integrator.rs `FrameParams` (checked by naga reflection in tests/integrator.rs).
 struct FrameParams {
@@ -116,6 +121,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
     var event = 0u;
     let inf = bitcast<f32>(0x7f800000u);
     loop {
+        rays_traced += 1u;
         let hit = trace_closest(origin, direction, inf);
         if !hit.hit {
             // The ray leaves the scene: the sky is gathered here and only here.
@@ -148,8 +154,11 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             let to_sun = -params.sun_direction.xyz;
             if dot(to_sun, surface.geometric) > 0.0 {
                 let f = bsdf_eval(bsdf, wo, frame_to_local(frame, to_sun));
-                if any(f != vec3<f32>(0.0)) && !trace_any(leave, to_sun, inf) {
-                    radiance += throughput * f * params.sun_irradiance.xyz;
+                if any(f != vec3<f32>(0.0)) {
+                    rays_traced += 1u;
+                    if !trace_any(leave, to_sun, inf) {
+                        radiance += throughput * f * params.sun_irradiance.xyz;
+                    }
                 }
             }
         }
@@ -195,5 +204,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
         let u = sampler_value_2d(params.sampler, pixel, index, DIM_PIXEL);
         let ray = camera_ray(vec2<f32>(f32(x) + u.x, f32(y) + u.y));
         film_add(pixel, trace_path(pixel, index, ray.origin, ray.direction));
+    }
+    if (params.flags & FRAME_COUNT_RAYS) != 0u {
+        // A 64-bit sum in two words: the carry goes to word 1.
+        let old = atomicAdd(&ray_counter[0], rays_traced);
+        if old > 0xffffffffu - rays_traced {
+            atomicAdd(&ray_counter[1], 1u);
+        }
     }
 }

@@ -1,0 +1,426 @@
+//! `furnace bench`: throughput of a backend on a scene — Msamples/s, Mrays/s, ms per frame, time
+//! to first frame and GPU memory per triangle — as a Markdown table and JSON.
+//!
+//! * Time to first frame: from the start of setup (adapter, scene build or load, BVH, upload,
+//!   pipeline) to the end of the first pass of one sample per pixel. That pass is a warm-up and
+//!   is not part of the measured passes.
+//! * Then passes of the backend's own size (`Backend::pass_samples`) until `--min-seconds` have
+//!   passed, or exactly `--spp` samples per pixel.
+//! * Rays (closest-hit and shadow): on the GPU, counted during the measured passes (one atomic
+//!   per invocation, `GpuRenderer::set_count_rays`). The CPU integrator has no counter: its rays
+//!   per sample are estimated by a counting GPU render of the same scene and settings on a small
+//!   image of the same aspect ratio (the two backends trace the same paths), when an adapter is
+//!   available; the output says which.
+
+use crate::args::{BackendArg, BenchArgs, SceneArg};
+use crate::backend::{Backend, CpuBackend, GpuBackend};
+use crate::render::image_size;
+use furnace_cpu::{RenderSettings, Renderer};
+use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
+use furnace_scene::{Scene, builtin};
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::Path;
+use std::time::Instant;
+
+/// Pixels of the image on which CPU rays per sample are counted (on the GPU).
+const ESTIMATE_PIXELS: f64 = 4096.0;
+/// Samples per pixel of that count.
+const ESTIMATE_SPP: u32 = 16;
+
+/// One benchmark's results.
+#[derive(Debug, Clone)]
+struct Report {
+    backend: &'static str,
+    adapter: String,
+    scene: String,
+    triangles: u64,
+    width: u32,
+    height: u32,
+    bounces: u32,
+    sampler: String,
+    spp: u32,
+    seconds: f64,
+    time_to_first_frame_s: f64,
+    rays: Rays,
+    gpu: Option<GpuMemory>,
+}
+
+/// How many rays the measured passes traced.
+#[derive(Debug, Clone)]
+enum Rays {
+    /// Counted on the GPU during the measured passes.
+    Counted(u64),
+    /// Rays per sample counted on a smaller render (how, in words).
+    Estimated { per_sample: f64, how: String },
+    /// Not counted (why).
+    None(String),
+}
+
+/// Scene and BVH bytes on the GPU.
+#[derive(Debug, Clone, Copy)]
+struct GpuMemory {
+    bytes_per_triangle: f64,
+    scene_bytes: u64,
+    bvh_bytes: u64,
+}
+
+impl Report {
+    fn samples(&self) -> f64 {
+        f64::from(self.width) * f64::from(self.height) * f64::from(self.spp)
+    }
+
+    fn msamples_per_s(&self) -> f64 {
+        self.samples() / self.seconds.max(1e-12) / 1e6
+    }
+
+    fn rays_per_sample(&self) -> Option<f64> {
+        match &self.rays {
+            Rays::Counted(n) => Some(*n as f64 / self.samples().max(1.0)),
+            Rays::Estimated { per_sample, .. } => Some(*per_sample),
+            Rays::None(_) => None,
+        }
+    }
+
+    fn mrays_per_s(&self) -> Option<f64> {
+        self.rays_per_sample().map(|r| r * self.msamples_per_s())
+    }
+
+    /// Milliseconds per sample per pixel of the whole image.
+    fn ms_per_frame(&self) -> f64 {
+        self.seconds * 1e3 / f64::from(self.spp.max(1))
+    }
+
+    fn rays_note(&self) -> String {
+        match &self.rays {
+            Rays::Counted(_) => "counted on the GPU".to_string(),
+            Rays::Estimated { how, .. } => format!("estimated: {how}"),
+            Rays::None(why) => format!("not counted: {why}"),
+        }
+    }
+
+    fn table(&self) -> String {
+        let opt =
+            |v: Option<f64>, digits: usize| v.map_or_else(|| "–".to_string(), |x| format!("{x:.digits$}"));
+        let mrays = match (&self.rays, self.mrays_per_s()) {
+            (Rays::Estimated { .. }, Some(m)) => format!("≈ {m:.2}"),
+            (_, m) => opt(m, 2),
+        };
+        let gpu = self.gpu.map_or_else(
+            || "–".to_string(),
+            |g| {
+                format!(
+                    "{:.1} + BVH {:.1}",
+                    g.bytes_per_triangle,
+                    g.bvh_bytes as f64 / self.triangles.max(1) as f64
+                )
+            },
+        );
+        let mut s = String::new();
+        s.push_str(
+            "| backend | adapter | scene | triangles | size | bounces | sampler | spp | s | Msamples/s \
+             | Mrays/s | rays/sample | ms/frame | first frame s | GPU bytes/triangle |\n",
+        );
+        s.push_str("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {}×{} | {} | {} | {} | {:.2} | {:.2} | {} | {} | {:.2} | {:.2} | {} |",
+            self.backend,
+            self.adapter.replace('|', "/"),
+            self.scene.replace('|', "/"),
+            self.triangles,
+            self.width,
+            self.height,
+            self.bounces,
+            self.sampler,
+            self.spp,
+            self.seconds,
+            self.msamples_per_s(),
+            mrays,
+            opt(self.rays_per_sample(), 3),
+            self.ms_per_frame(),
+            self.time_to_first_frame_s,
+            gpu,
+        );
+        let _ = writeln!(s, "\nrays: {}", self.rays_note());
+        s
+    }
+
+    fn json(&self) -> String {
+        let num = |x: Option<f64>| match x {
+            Some(v) if v.is_finite() => format!("{v}"),
+            _ => "null".to_string(),
+        };
+        let g = self.gpu;
+        let fields: Vec<(&str, String)> = vec![
+            ("backend", json_string(self.backend)),
+            ("adapter", json_string(&self.adapter)),
+            ("scene", json_string(&self.scene)),
+            ("triangles", self.triangles.to_string()),
+            ("width", self.width.to_string()),
+            ("height", self.height.to_string()),
+            ("bounces", self.bounces.to_string()),
+            ("sampler", json_string(&self.sampler)),
+            ("spp", self.spp.to_string()),
+            ("seconds", num(Some(self.seconds))),
+            ("msamples_per_s", num(Some(self.msamples_per_s()))),
+            ("mrays_per_s", num(self.mrays_per_s())),
+            ("rays_per_sample", num(self.rays_per_sample())),
+            ("rays_counted", json_string(&self.rays_note())),
+            ("ms_per_frame", num(Some(self.ms_per_frame()))),
+            ("time_to_first_frame_s", num(Some(self.time_to_first_frame_s))),
+            ("gpu_bytes_per_triangle", num(g.map(|g| g.bytes_per_triangle))),
+            ("gpu_bvh_bytes_per_triangle", num(g.map(|g| g.bvh_bytes as f64 / self.triangles.max(1) as f64))),
+            ("gpu_scene_bytes", g.map_or_else(|| "null".to_string(), |g| g.scene_bytes.to_string())),
+            ("gpu_bvh_bytes", g.map_or_else(|| "null".to_string(), |g| g.bvh_bytes.to_string())),
+        ];
+        let body: Vec<String> = fields.iter().map(|(k, v)| format!("  \"{k}\": {v}")).collect();
+        format!("{{\n{}\n}}\n", body.join(",\n"))
+    }
+}
+
+/// `s` as a JSON string literal.
+fn json_string(s: &str) -> String {
+    let mut out = String::with_capacity(s.len() + 2);
+    out.push('"');
+    for c in s.chars() {
+        match c {
+            '"' => out.push_str("\\\""),
+            '\\' => out.push_str("\\\\"),
+            '\n' => out.push_str("\\n"),
+            '\r' => out.push_str("\\r"),
+            '\t' => out.push_str("\\t"),
+            c if (c as u32) < 0x20 => {
+                let _ = write!(out, "\\u{:04x}", c as u32);
+            }
+            c => out.push(c),
+        }
+    }
+    out.push('"');
+    out
+}
+
+/// The backend being measured (one, built once: the size difference of the variants does not
+/// matter).
+#[allow(clippy::large_enum_variant)]
+enum Engine {
+    Cpu(CpuBackend),
+    Gpu(GpuBackend),
+}
+
+impl Engine {
+    fn backend(&mut self) -> &mut dyn Backend {
+        match self {
+            Engine::Cpu(b) => b,
+            Engine::Gpu(b) => b,
+        }
+    }
+}
+
+fn load(scene: &SceneArg) -> Result<Scene, String> {
+    match scene {
+        SceneArg::Cbox => builtin::cornell_box().map_err(|e| e.to_string()),
+        SceneArg::Interior(n) => Ok(builtin::sunlit_interior(*n)),
+        SceneArg::File(p) => Scene::load(p).map_err(|e| e.to_string()),
+    }
+}
+
+/// The GPU context `--backend` and `--adapter` ask for (`None`: the CPU).
+fn gpu_context(a: &BenchArgs) -> Result<Option<GpuContext>, String> {
+    Ok(match (a.backend, &a.adapter) {
+        (BackendArg::Cpu, _) => None,
+        (BackendArg::Gpu | BackendArg::Auto, Some(name)) => {
+            Some(GpuContext::new(&AdapterChoice::Named(name.clone())).map_err(|e| e.to_string())?)
+        }
+        (BackendArg::Gpu, None) => Some(GpuContext::new(&AdapterChoice::Best).map_err(|e| e.to_string())?),
+        (BackendArg::Auto, None) => GpuContext::new(&AdapterChoice::Hardware).ok(),
+    })
+}
+
+pub fn run(a: &BenchArgs) -> Result<(), String> {
+    if a.sampler.needs_sample_count() && a.spp.is_none() {
+        return Err(format!(
+            "the {} sampler needs the sample count in advance: give --spp (or use sobol, pmj02 or random)",
+            a.sampler
+        ));
+    }
+    let start = Instant::now();
+    let ctx = gpu_context(a)?;
+    let scene = load(&a.scene)?;
+    for w in &scene.warnings {
+        eprintln!("warning: {}: {w}", scene.name);
+    }
+    let (width, height) = match (a.width, a.height, &a.scene) {
+        // The issue's reference size for the Cornell box.
+        (None, None, SceneArg::Cbox) => (256, 256),
+        (w, h, _) => image_size(&scene, w, h)?,
+    };
+    let settings = RenderSettings {
+        width,
+        height,
+        bounces: a.bounces,
+        sampler: a.sampler,
+        seed: 0,
+        // The warm-up frame and the measured samples.
+        sample_count: a.sampler.needs_sample_count().then(|| a.spp.map_or(1, |n| n.saturating_add(1))),
+        ..RenderSettings::default()
+    };
+    let triangles = scene.geometry.triangle_count() as u64;
+    let scene_name = match &a.scene {
+        SceneArg::Cbox => "cbox".to_string(),
+        SceneArg::Interior(n) => format!("interior:{n}"),
+        SceneArg::File(p) => p.display().to_string(),
+    };
+    let (mut engine, adapter) = match ctx {
+        Some(ctx) => {
+            let adapter = ctx.info.name.clone();
+            let camera = scene.default_camera();
+            let renderer = GpuRenderer::new(ctx, &scene, &camera, settings).map_err(|e| e.to_string())?;
+            (Engine::Gpu(GpuBackend::new(renderer, None)?), adapter)
+        }
+        None => {
+            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+            let renderer = Renderer::new(scene.clone(), settings).map_err(|e| e.to_string())?;
+            let film = renderer.new_film();
+            (Engine::Cpu(CpuBackend::new(renderer, film)), format!("{threads} threads"))
+        }
+    };
+    let backend_name = engine.backend().name();
+    if !a.quiet {
+        eprintln!(
+            "benchmarking {scene_name} ({triangles} triangles) at {width}×{height} on {backend_name} ({adapter})"
+        );
+    }
+    engine.backend().render_pass(0, 1)?;
+    let time_to_first_frame_s = start.elapsed().as_secs_f64();
+
+    if let Engine::Gpu(g) = &mut engine {
+        g.renderer_mut().set_count_rays(true);
+        g.renderer_mut().take_ray_count().map_err(|e| e.to_string())?;
+    }
+    let per_pass = engine.backend().pass_samples(u64::from(width) * u64::from(height)).max(1);
+    let mut done = 0u32;
+    let timer = Instant::now();
+    loop {
+        let n = match a.spp {
+            Some(total) if done >= total => break,
+            Some(total) => per_pass.min(total - done),
+            None if done > 0 && timer.elapsed().as_secs_f64() >= a.min_seconds => break,
+            None => per_pass,
+        };
+        engine.backend().render_pass(1 + done, n)?;
+        done += n;
+    }
+    let seconds = timer.elapsed().as_secs_f64();
+
+    let (rays, gpu) = match &mut engine {
+        Engine::Gpu(g) => {
+            let r = g.renderer_mut();
+            r.set_count_rays(false);
+            let counted = r.take_ray_count().map_err(|e| e.to_string())?;
+            let memory = GpuMemory {
+                bytes_per_triangle: r.bytes_per_triangle(),
+                scene_bytes: r.scene_bytes(),
+                bvh_bytes: r.bvh_bytes(),
+            };
+            (Rays::Counted(counted), Some(memory))
+        }
+        Engine::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None),
+        Engine::Cpu(_) => (estimate_rays(a, &scene, settings), None),
+    };
+    let report = Report {
+        backend: backend_name,
+        adapter,
+        scene: scene_name,
+        triangles,
+        width,
+        height,
+        bounces: a.bounces,
+        sampler: a.sampler.to_string(),
+        spp: done,
+        seconds,
+        time_to_first_frame_s,
+        rays,
+        gpu,
+    };
+    let json = report.json();
+    match a.json.as_deref() {
+        Some(p) if p == Path::new("-") => {
+            eprint!("{}", report.table());
+            print!("{json}");
+        }
+        Some(p) => {
+            print!("{}", report.table());
+            write_atomically(p, json.as_bytes())?;
+        }
+        None => print!("{}", report.table()),
+    }
+    std::io::stdout().flush().map_err(|e| format!("stdout: {e}"))
+}
+
+/// CPU rays per sample, counted by a GPU render of the same scene and settings on about
+/// [`ESTIMATE_PIXELS`] pixels of the same aspect ratio.
+fn estimate_rays(a: &BenchArgs, scene: &Scene, settings: RenderSettings) -> Rays {
+    let choice = match &a.adapter {
+        Some(name) => AdapterChoice::Named(name.clone()),
+        None => AdapterChoice::Best,
+    };
+    let ctx = match GpuContext::new(&choice) {
+        Ok(c) => c,
+        Err(e) => {
+            return Rays::None(format!(
+                "the CPU integrator has no ray counter and no GPU adapter counts for it ({e})"
+            ));
+        }
+    };
+    let (w, h) = (f64::from(settings.width), f64::from(settings.height));
+    let scale = (ESTIMATE_PIXELS / (w * h)).sqrt().min(1.0);
+    let (sw, sh) = (((w * scale).round() as u32).max(1), ((h * scale).round() as u32).max(1));
+    let small = RenderSettings {
+        width: sw,
+        height: sh,
+        sample_count: settings.sample_count.map(|n| n.max(ESTIMATE_SPP)),
+        ..settings
+    };
+    let adapter = ctx.info.name.clone();
+    let count = || -> Result<u64, String> {
+        let mut r =
+            GpuRenderer::new(ctx, scene, &scene.default_camera(), small).map_err(|e| e.to_string())?;
+        r.set_count_rays(true);
+        r.render_pass(0, ESTIMATE_SPP).map_err(|e| e.to_string())?;
+        r.take_ray_count().map_err(|e| e.to_string())
+    };
+    match count() {
+        Ok(n) => Rays::Estimated {
+            per_sample: n as f64 / (f64::from(sw) * f64::from(sh) * f64::from(ESTIMATE_SPP)),
+            how: format!(
+                "rays per sample counted on the GPU ({adapter}) on a {sw}×{sh} render at {ESTIMATE_SPP} spp of the same scene and settings"
+            ),
+        },
+        Err(e) => Rays::None(format!("the CPU integrator has no ray counter and the GPU count failed ({e})")),
+    }
+}
+
+/// Writes `bytes` to a temporary file beside `path` and renames it over `path`.
+fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    let name = path.file_name().ok_or_else(|| format!("{}: not a file path", path.display()))?;
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".tmp{}", std::process::id()));
+    let tmp = path.with_file_name(tmp_name);
+    let result = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
+    result.map_err(|e| {
+        let _ = std::fs::remove_file(&tmp);
+        format!("{}: {e}", path.display())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn json_strings_are_escaped() {
+        assert_eq!(json_string("a\"b\\c\nd\u{1}"), r#""a\"b\\c\nd\u0001""#);
+    }
+}
