@@ -23,10 +23,12 @@ use std::io::Write as _;
 use std::path::Path;
 use std::time::Instant;
 
-/// Pixels of the image on which CPU rays per sample are counted (on the GPU).
-const ESTIMATE_PIXELS: f64 = 4096.0;
-/// Samples per pixel of that count.
-const ESTIMATE_SPP: u32 = 16;
+/// Pixels and samples per pixel of the render on which CPU rays per sample are counted on a
+/// hardware GPU: 65 536 paths.
+const ESTIMATE: (f64, u32) = (4096.0, 16);
+/// The same on a software adapter (lavapipe: about 0.01 Msamples/s on two cores): 4096 paths,
+/// rays per sample within a few percent.
+const ESTIMATE_SOFTWARE: (f64, u32) = (1024.0, 4);
 
 /// One benchmark's results.
 #[derive(Debug, Clone)]
@@ -358,8 +360,8 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     std::io::stdout().flush().map_err(|e| format!("stdout: {e}"))
 }
 
-/// CPU rays per sample, counted by a GPU render of the same scene and settings on about
-/// [`ESTIMATE_PIXELS`] pixels of the same aspect ratio.
+/// CPU rays per sample, counted by a GPU render of the same scene and settings on a small image
+/// of the same aspect ratio ([`ESTIMATE`], [`ESTIMATE_SOFTWARE`]).
 fn estimate_rays(a: &BenchArgs, scene: &Scene, settings: RenderSettings) -> Rays {
     let choice = match &a.adapter {
         Some(name) => AdapterChoice::Named(name.clone()),
@@ -373,13 +375,15 @@ fn estimate_rays(a: &BenchArgs, scene: &Scene, settings: RenderSettings) -> Rays
             ));
         }
     };
+    let (pixels, spp) =
+        if furnace_gpu::context::is_hardware(&ctx.info) { ESTIMATE } else { ESTIMATE_SOFTWARE };
     let (w, h) = (f64::from(settings.width), f64::from(settings.height));
-    let scale = (ESTIMATE_PIXELS / (w * h)).sqrt().min(1.0);
+    let scale = (pixels / (w * h)).sqrt().min(1.0);
     let (sw, sh) = (((w * scale).round() as u32).max(1), ((h * scale).round() as u32).max(1));
     let small = RenderSettings {
         width: sw,
         height: sh,
-        sample_count: settings.sample_count.map(|n| n.max(ESTIMATE_SPP)),
+        sample_count: settings.sample_count.map(|n| n.max(spp)),
         ..settings
     };
     let adapter = ctx.info.name.clone();
@@ -387,14 +391,14 @@ fn estimate_rays(a: &BenchArgs, scene: &Scene, settings: RenderSettings) -> Rays
         let mut r =
             GpuRenderer::new(ctx, scene, &scene.default_camera(), small).map_err(|e| e.to_string())?;
         r.set_count_rays(true);
-        r.render_pass(0, ESTIMATE_SPP).map_err(|e| e.to_string())?;
+        r.render_pass(0, spp).map_err(|e| e.to_string())?;
         r.take_ray_count().map_err(|e| e.to_string())
     };
     match count() {
         Ok(n) => Rays::Estimated {
-            per_sample: n as f64 / (f64::from(sw) * f64::from(sh) * f64::from(ESTIMATE_SPP)),
+            per_sample: n as f64 / (f64::from(sw) * f64::from(sh) * f64::from(spp)),
             how: format!(
-                "rays per sample counted on the GPU ({adapter}) on a {sw}×{sh} render at {ESTIMATE_SPP} spp of the same scene and settings"
+                "rays per sample counted on the GPU ({adapter}) on a {sw}×{sh} render at {spp} spp of the same scene and settings"
             ),
         },
         Err(e) => Rays::None(format!("the CPU integrator has no ray counter and the GPU count failed ({e})")),
