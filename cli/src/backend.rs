@@ -42,6 +42,11 @@ impl CpuBackend {
     pub fn new(renderer: Renderer, film: Film) -> Self {
         Self { renderer, film }
     }
+
+    /// The renderer (`furnace bench` reads its scene).
+    pub fn renderer(&self) -> &Renderer {
+        &self.renderer
+    }
 }
 
 impl Backend for CpuBackend {

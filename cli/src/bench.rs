@@ -282,7 +282,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         }
         None => {
             let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-            let renderer = Renderer::new(scene.clone(), settings).map_err(|e| e.to_string())?;
+            let renderer = Renderer::new(scene, settings).map_err(|e| e.to_string())?;
             let film = renderer.new_film();
             (Engine::Cpu(CpuBackend::new(renderer, film)), format!("{threads} threads"))
         }
@@ -328,7 +328,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
             (Rays::Counted(counted), Some(memory))
         }
         Engine::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None),
-        Engine::Cpu(_) => (estimate_rays(a, &scene, settings), None),
+        Engine::Cpu(c) => (estimate_rays(a, c.renderer().scene(), settings), None),
     };
     let report = Report {
         backend: backend_name,
