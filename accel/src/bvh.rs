@@ -1,13 +1,13 @@
 //! Building the BVH over a triangle soup and tracing rays through it.
 
-use std::time::Duration;
-
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::{
     BvhBuildParams,
-    bvh2::{Bvh2, builder::build_bvh2_from_tris},
-    cwbvh::{CwBvh, builder::build_cwbvh_from_tris},
+    bvh2::{Bvh2, leaf_collapser::collapse, reinsertion::ReinsertionOptimizer},
+    cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh},
+    ploc::PlocBuilder,
     ray::{Ray, RayHit},
+    splits::split_aabbs_preset,
     triangle::Triangle,
 };
 
@@ -183,21 +183,23 @@ impl Bvh {
         }
         let skipped = triangles.len() - valid.len();
         let quality = options.quality.unwrap_or_else(|| BuildQuality::for_triangle_count(valid.len()));
-        let mut unused = Duration::ZERO;
         let tree = if valid.is_empty() {
             Tree::Empty
         } else {
             match options.layout {
                 Layout::Cwbvh => {
-                    let b = build_cwbvh_from_tris(&valid, quality.params(), &mut unused);
-                    let wide = if b.nodes.len() <= WIDE_NODE_LIMIT {
+                    let b = build_cwbvh(&valid, quality.params());
+                    // obvhs's own traversal (used above the limit) has a fixed 32-entry stack
+                    // that overwrites its top entry when full and so loses hits below that
+                    // depth; a tree that deep is traversed by `traverse`, whose stack spills.
+                    let wide = if b.nodes.len() <= WIDE_NODE_LIMIT || cwbvh_depth(&b) >= OBVHS_STACK {
                         b.nodes.iter().map(WideNode::from_cwbvh).collect()
                     } else {
                         Vec::new()
                     };
                     Tree::Cwbvh(b, wide)
                 }
-                Layout::Bvh2 => Tree::Bvh2(build_bvh2_from_tris(&valid, quality.params(), &mut unused)),
+                Layout::Bvh2 => Tree::Bvh2(build_bvh2(&valid, quality.params())),
             }
         };
         let primitive_indices: &[u32] = match &tree {
@@ -390,6 +392,133 @@ impl Bvh {
         })
     }
 }
+
+/// The BVH2 both layouts start from: obvhs's `build_*_from_tris` helpers up to their shared
+/// point (optional spatial pre-splits, PLOC, reinsertion), step for step, so that trees are
+/// the same as the helpers'.
+///
+/// The helpers are not called because in builds with debug assertions (`cargo test`) they end
+/// with obvhs's validators, which assert that a CWBVH is less than 32 levels deep
+/// (`CwBvh::validate`; obvhs's traversal stack size): a valid but deep tree, such as the one over
+/// a few thousand concentric triangles, panicked there. [`validate_if_shallow`] runs the same
+/// validators where they hold.
+fn build_ploc(triangles: &[Triangle], config: &BvhBuildParams) -> Bvh2 {
+    let mut bvh2 = if config.pre_split {
+        let mut largest_half_area = 0.0f32;
+        let mut avg_area = 0.0f32;
+        let mut aabbs: Vec<_> = triangles
+            .iter()
+            .map(|tri| {
+                let aabb = tri.aabb();
+                let half_area = aabb.half_area();
+                largest_half_area = half_area.max(largest_half_area);
+                avg_area += half_area;
+                aabb
+            })
+            .collect();
+        let mut indices: Vec<u32> = (0..triangles.len() as u32).collect();
+        avg_area /= triangles.len() as f32;
+        split_aabbs_preset(&mut aabbs, &mut indices, triangles, avg_area, largest_half_area);
+        PlocBuilder::with_capacity(aabbs.len()).build(
+            config.ploc_search_distance,
+            &aabbs,
+            indices,
+            config.sort_precision,
+            config.search_depth_threshold,
+        )
+    } else {
+        PlocBuilder::with_capacity(triangles.len()).build(
+            config.ploc_search_distance,
+            triangles,
+            (0..triangles.len() as u32).collect(),
+            config.sort_precision,
+            config.search_depth_threshold,
+        )
+    };
+    bvh2.uses_spatial_splits = config.pre_split;
+    bvh2
+}
+
+/// obvhs's `build_cwbvh_from_tris` without its debug-build validation (see [`build_ploc`]).
+fn build_cwbvh(triangles: &[Triangle], config: BvhBuildParams) -> CwBvh {
+    let mut bvh2 = build_ploc(triangles, &config);
+    ReinsertionOptimizer::default().run(&mut bvh2, config.reinsertion_batch_ratio, None);
+    let cwbvh = bvh2_to_cwbvh(&bvh2, config.max_prims_per_leaf.clamp(1, 3), true, false);
+    validate_if_shallow(triangles, &config, &mut bvh2, Some(&cwbvh));
+    cwbvh
+}
+
+/// obvhs's `build_bvh2_from_tris` without its debug-build validation (see [`build_ploc`]), and
+/// with `max_depth` (the size of obvhs's BVH2 traversal stack) made to cover the final tree.
+fn build_bvh2(triangles: &[Triangle], config: BvhBuildParams) -> Bvh2 {
+    let mut bvh2 = build_ploc(triangles, &config);
+    let mut reinsertion = ReinsertionOptimizer::default();
+    reinsertion.run(&mut bvh2, config.reinsertion_batch_ratio, None);
+    collapse(&mut bvh2, config.max_prims_per_leaf.clamp(1, 255), config.collapse_traversal_cost);
+    reinsertion.run(
+        &mut bvh2,
+        config.reinsertion_batch_ratio * config.post_collapse_reinsertion_batch_ratio_multiplier,
+        None,
+    );
+    validate_if_shallow(triangles, &config, &mut bvh2, None);
+    bvh2
+}
+
+/// Makes `bvh2.max_depth` cover the tree, then, in builds with debug assertions, runs obvhs's
+/// validators as its builder helpers do, where their depth assertion holds: on a CWBVH of
+/// fewer than [`OBVHS_STACK`] levels (and its BVH2). Deeper trees are valid input and are
+/// traversed correctly; they are only not checked by obvhs's recursive validators.
+fn validate_if_shallow(
+    triangles: &[Triangle],
+    config: &BvhBuildParams,
+    bvh2: &mut Bvh2,
+    cwbvh: Option<&CwBvh>,
+) {
+    // obvhs sizes the BVH2 traversal stack (`fast_stack!`) from `max_depth`, and its validator
+    // asserts `depth < max_depth`; PLOC sets it, but reinsertion can deepen the tree.
+    let depth = bvh2_depth(bvh2);
+    bvh2.max_depth = bvh2.max_depth.max(depth + 1);
+    if cfg!(debug_assertions) && cwbvh.is_none_or(|c| cwbvh_depth(c) < OBVHS_STACK) {
+        bvh2.validate(triangles, false, config.pre_split);
+        if let Some(c) = cwbvh {
+            c.validate(triangles, false);
+        }
+    }
+}
+
+/// The number of node levels of a BVH2 (a lone leaf root: 1), without recursion.
+fn bvh2_depth(bvh2: &Bvh2) -> usize {
+    let mut deepest = 0;
+    let mut stack = vec![(0usize, 1usize)];
+    while let Some((index, depth)) = stack.pop() {
+        let Some(node) = bvh2.nodes.get(index) else { continue };
+        deepest = deepest.max(depth);
+        if !node.is_leaf() {
+            let first = node.first_index as usize;
+            stack.push((first, depth + 1));
+            stack.push((first + 1, depth + 1));
+        }
+    }
+    deepest
+}
+
+/// The number of node levels of a CWBVH (a root with only leaf children: 1), without recursion.
+fn cwbvh_depth(cwbvh: &CwBvh) -> usize {
+    let mut deepest = 0;
+    let mut stack = vec![(0usize, 1usize)];
+    while let Some((index, depth)) = stack.pop() {
+        let Some(node) = cwbvh.nodes.get(index) else { continue };
+        deepest = deepest.max(depth);
+        for k in 0..node.imask.count_ones() as usize {
+            stack.push((node.child_base_idx as usize + k, depth + 1));
+        }
+    }
+    deepest
+}
+
+/// obvhs's CWBVH traversal stack size (`cwbvh::TRAVERSAL_STACK_SIZE`): its validator asserts a
+/// depth below it, and its traversal loses hits in trees deeper than it.
+const OBVHS_STACK: usize = 32;
 
 /// Largest CWBVH (in nodes) traversed with decoded [`WideNode`]s (256 bytes each, so 4 MiB
 /// here); larger trees keep obvhs's 80-byte nodes and node test. Decoding cuts the node test's

@@ -131,19 +131,35 @@ impl NodeRay {
 }
 
 /// The CWBVH traversal of Ylitie et al. 2017 as obvhs's `traverse!` macro does it (node groups
-/// and triangle groups as `(base, mask)` pairs, a fixed 32-entry stack), over [`WideNode`]s.
+/// and triangle groups as `(base, mask)` pairs), over [`WideNode`]s.
 /// `leaf(slot, t_max)` tests leaf slot `slot`; it returns `Break` to stop, or the new box cull
 /// distance (`Continue(t)`, `t < t_max` lowers it).
+///
+/// The stack holds [`STACK`] node groups. A group is pushed at most once per tree level, so a
+/// tree of ≤ [`STACK`] levels (every tree obvhs builds for ordinary scenes) never fills it.
+/// When a push finds it full, the bottom (shallowest) group is dropped and the ray marked; when
+/// the stack then runs empty, a marked ray finishes with a sweep over every node's leaf
+/// children, box-tested against the current cull distance, so no hit is lost: the closest hit
+/// has the same `t` as with an unbounded stack (a tie between triangles at the same `t` may
+/// resolve differently) and an any-hit query finds a hit if there is one. This is the GPU
+/// twin's behaviour (`gpu/src/wgsl/traverse.wgsl`, "Traversal stack and its overflow").
+/// obvhs's `StackStack`, which this replaced, overwrote its top entry when full and silently
+/// lost every hit below it. Cost on trees that never overflow: +2.3% instructions of a whole
+/// render (callgrind, `BENCHMARKS.md`'s 64² command), images bit-identical; a heap spill
+/// instead of the sweep (exact too) cost +2.5%.
 #[inline(always)]
 fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> ControlFlow<(), f32>) {
-    const STACK: usize = 32;
     if nodes.is_empty() {
         return;
     }
     let r = NodeRay::new(ray);
     let mut t_max = ray.tmax;
     let mut stack = [(0u32, 0u32); STACK];
-    let mut depth = 0usize;
+    // A ring buffer: groups `bottom..top` are on the stack, group `i` in `stack[i % STACK]`;
+    // `bottom` stays 0 unless the stack overflows (no copying when it does).
+    let (mut top, mut bottom) = (0usize, 0usize);
+    // Whether a group was dropped from the full stack (then the sweep runs at the end).
+    let mut overflowed = false;
     let mut current = (0u32, 0x8000_0000u32);
     loop {
         if current.1 & 0xff00_0000 != 0 {
@@ -151,8 +167,13 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
             let child_index_offset = 31 - hits_imask.leading_zeros();
             current.1 &= !(1u32 << child_index_offset);
             if current.1 & 0xff00_0000 != 0 {
-                stack[depth] = current;
-                depth = (depth + 1).min(STACK - 1);
+                if top - bottom == STACK {
+                    // Full: drop the bottom (shallowest) group; the sweep covers it.
+                    bottom += 1;
+                    overflowed = true;
+                }
+                stack[top % STACK] = current;
+                top += 1;
             }
             let slot_index = (child_index_offset - 24) ^ (r.oct_inv4 & 0xff);
             // `slot_index < 8`: only the low byte (`imask`) counts; a table, as baseline x86-64
@@ -177,11 +198,55 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
             }
         }
         if current.1 & 0xff00_0000 == 0 {
-            if depth == 0 {
+            if top == bottom {
+                if overflowed {
+                    sweep(nodes, &r, t_max, &mut leaf);
+                }
                 return;
             }
-            depth -= 1;
-            current = stack[depth];
+            top -= 1;
+            current = stack[top % STACK];
+        }
+    }
+}
+
+/// Tests the leaf slots of `node` whose boxes `hitmask` (a [`WideNode::intersect`] result) says
+/// the ray enters, lowering `t_max` as `leaf` says; `Break` when `leaf` stops the traversal.
+#[inline(always)]
+fn leaves(
+    node: &WideNode,
+    hitmask: u32,
+    t_max: &mut f32,
+    leaf: &mut impl FnMut(usize) -> ControlFlow<(), f32>,
+) -> ControlFlow<()> {
+    let mut primitives = hitmask & 0x00ff_ffff;
+    while primitives != 0 {
+        let local = 31 - primitives.leading_zeros();
+        primitives &= !(1u32 << local);
+        let t = leaf((node.primitive_base + local) as usize)?;
+        if t < *t_max {
+            *t_max = t;
+        }
+    }
+    ControlFlow::Continue(())
+}
+
+/// The fallback after a stack overflow: every node's leaf children, box-tested with the current
+/// cull distance (inner children are not followed: every leaf is some node's child). Leaves
+/// already tested are tested again, which changes no result. Inlined although cold: passing
+/// the caller's closure to an out-of-line function keeps its captured state (the best hit so
+/// far) in memory on the common path too (+2–3% instructions of a render under callgrind).
+#[inline(always)]
+fn sweep(
+    nodes: &[WideNode],
+    r: &NodeRay,
+    mut t_max: f32,
+    leaf: &mut impl FnMut(usize) -> ControlFlow<(), f32>,
+) {
+    for node in nodes {
+        let hitmask = node.intersect(r, t_max, r.oct_inv4);
+        if leaves(node, hitmask, &mut t_max, leaf).is_break() {
+            return;
         }
     }
 }
@@ -210,6 +275,10 @@ pub(crate) fn any(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize) ->
 
 const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
+/// Node groups [`traverse`] keeps in its fixed array before spilling to the heap (obvhs's
+/// CWBVH stack size; the test scenes and glTF samples stay well below it).
+const STACK: usize = 32;
+
 /// The number of set bits of every byte.
 const POPCOUNT_8: [u8; 256] = {
     let mut table = [0u8; 256];
@@ -220,3 +289,127 @@ const POPCOUNT_8: [u8; 256] = {
     }
     table
 };
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::triangle::intersect_triangle;
+    use glam::Vec3;
+
+    /// A tiny xorshift generator: the tests need reproducible rays, not good randomness.
+    struct Rng(u64);
+    impl Rng {
+        fn range(&mut self, lo: f32, hi: f32) -> f32 {
+            self.0 ^= self.0 << 13;
+            self.0 ^= self.0 >> 7;
+            self.0 ^= self.0 << 17;
+            lo + (hi - lo) * ((self.0 >> 40) as f32 / (1u64 << 24) as f32)
+        }
+    }
+
+    /// A hand-built chain of `levels` CWBVH nodes (the tree of
+    /// `gpu/tests/traversal_parity.rs`'s deep-tree test): chain node k has two inner children
+    /// whose boxes cover the whole scene, a leaf holder with triangles 3k..3k+3 and chain node
+    /// k + 1. Rays whose octant visits the chain child first push one group per level, so the
+    /// stack reaches `levels` groups; the old fixed 32-entry stack overwrote its top entry from
+    /// there on and lost the holders' triangles.
+    fn chain(levels: usize, tris: &[[Vec3; 3]]) -> Vec<WideNode> {
+        let (lo, hi) = tris
+            .iter()
+            .flatten()
+            .fold((Vec3::splat(f32::MAX), Vec3::splat(f32::MIN)), |(l, h), v| (l.min(*v), h.max(*v)));
+        // Grid cell 2^(e − 127), so that 255 cells cover the scene.
+        let cell = ((hi - lo).max_element() / 255.0).log2().ceil() as i32;
+        let e = (127 + cell) as u8;
+        let full = [255u8, 255, 0, 0, 0, 0, 0, 0];
+        let internal = |slot: u8| (1u8 << 5) | (24 + slot);
+        let node = |imask: u8, child_base_idx: u32, primitive_base_idx: u32, child_meta: [u8; 8]| CwBvhNode {
+            p: lo,
+            e: [e; 3],
+            imask,
+            child_base_idx,
+            primitive_base_idx,
+            child_meta,
+            child_min_x: [0; 8],
+            child_max_x: full,
+            child_min_y: [0; 8],
+            child_max_y: full,
+            child_min_z: [0; 8],
+            child_max_z: full,
+        };
+        let mut nodes = Vec::new();
+        for k in 0..levels {
+            // Chain node k at 2k; its children at 2k + 1 (holder, slot 0) and 2k + 2 (chain,
+            // slot 1).
+            let last = k + 1 == levels;
+            let meta = [internal(0), if last { 0 } else { internal(1) }, 0, 0, 0, 0, 0, 0];
+            nodes.push(node(if last { 0b01 } else { 0b11 }, 2 * k as u32 + 1, 0, meta));
+            // Holder k: one leaf of 3 triangles (unary count 0b111) at offset 0 from 3k.
+            nodes.push(node(0, 0, 3 * k as u32, [0b111 << 5, 0, 0, 0, 0, 0, 0, 0]));
+        }
+        nodes.iter().map(WideNode::from_cwbvh).collect()
+    }
+
+    #[test]
+    fn deep_chain_loses_no_hits() {
+        const LEVELS: usize = 100;
+        // Nested triangles at increasing z: many hits per ray, one closest (0.01 apart in z, so
+        // no near ties for box culling to get wrong).
+        let tris: Vec<[Vec3; 3]> = (0..3 * LEVELS)
+            .map(|k| {
+                let s = 1.0 + 0.01 * k as f32;
+                let z = k as f32 * 1e-2;
+                [Vec3::new(-s, -s, z), Vec3::new(s, -s * 0.5, z), Vec3::new(0.0, s, z)]
+            })
+            .collect();
+        let nodes = chain(LEVELS, &tris);
+        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let (mut hits, mut deep) = (0, 0);
+        for _ in 0..4096 {
+            let o = Vec3::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), rng.range(-1.0, 4.0));
+            let d = Vec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            if d.length_squared() < 1e-4 {
+                continue;
+            }
+            let ray = Ray {
+                origin: o.into(),
+                direction: d.into(),
+                inv_direction: Vec3A::ONE / Vec3A::from(d),
+                tmin: 0.0,
+                tmax: f32::INFINITY,
+            };
+            let brute = tris.iter().enumerate().fold(None, |best: Option<(usize, f32)>, (i, t)| {
+                match intersect_triangle(o, d, *t, best.map_or(f32::INFINITY, |b| b.1)) {
+                    Some(h) => Some((i, h.t)),
+                    None => best,
+                }
+            });
+            let mut got: Option<(usize, f32)> = None;
+            closest(&nodes, &ray, |slot| {
+                match intersect_triangle(o, d, tris[slot], got.map_or(f32::INFINITY, |b| b.1)) {
+                    Some(h) => {
+                        got = Some((slot, h.t));
+                        // Cull slightly beyond the hit, as `Bvh` does (CULL_SLACK, 2^-12).
+                        h.t * (1.0 + 1.0 / 4096.0)
+                    }
+                    None => f32::INFINITY,
+                }
+            });
+            assert_eq!(got, brute, "closest hit, ray {o} {d}");
+            // Any-hit up to a distance short of and past the closest hit.
+            for t_any in [1.0f32, 3.0] {
+                let brute_any = tris.iter().any(|t| intersect_triangle(o, d, *t, t_any).is_some());
+                let any_ray = Ray { tmax: t_any * (1.0 + 1.0 / 4096.0), ..ray };
+                let got_any =
+                    any(&nodes, &any_ray, |slot| intersect_triangle(o, d, tris[slot], t_any).is_some());
+                assert_eq!(got_any, brute_any, "any hit, ray {o} {d} t_max {t_any}");
+            }
+            if let Some((slot, _)) = brute {
+                hits += 1;
+                deep += usize::from(slot >= 3 * STACK);
+            }
+        }
+        // The test means something only if many closest hits lie below the fixed stack.
+        assert!(hits > 1000 && deep > 300, "{hits} hits, {deep} below level {STACK}");
+    }
+}
