@@ -144,9 +144,9 @@ impl NodeRay {
 /// resolve differently) and an any-hit query finds a hit if there is one. This is the GPU
 /// twin's behaviour (`gpu/src/wgsl/traverse.wgsl`, "Traversal stack and its overflow").
 /// obvhs's `StackStack`, which this replaced, overwrote its top entry when full and silently
-/// lost every hit below it. Cost on trees that never overflow: +2.3% instructions of a whole
-/// render (callgrind, `BENCHMARKS.md`'s 64² command), images bit-identical; a heap spill
-/// instead of the sweep (exact too) cost +2.5%.
+/// lost every hit below it. Cost on trees that never overflow: +0.25% instructions of a whole
+/// render (callgrind, `BENCHMARKS.md`'s 64² Sobol command: 135.11 M → 135.45 M), images
+/// bit-identical; a heap spill instead of the sweep (exact too) cost +2.5%.
 #[inline(always)]
 fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> ControlFlow<(), f32>) {
     if nodes.is_empty() {
@@ -160,8 +160,14 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
     let (mut top, mut bottom) = (0usize, 0usize);
     // Whether a group was dropped from the full stack (then the sweep runs at the end).
     let mut overflowed = false;
+    // The sweep's next node, and the inner-child mask: all of them, none in the sweep. The sweep runs in this loop rather than in a
+    // function of its own: a second call site of `leaf` kept the caller's closure state (the
+    // best hit so far) in memory on the common path too, +2.3% instructions of a render.
+    let mut sweep_next = 0usize;
+    let mut follow_inner = 0xff00_0000u32;
     let mut current = (0u32, 0x8000_0000u32);
     loop {
+        let node;
         if current.1 & 0xff00_0000 != 0 {
             let hits_imask = current.1;
             let child_index_offset = 31 - hits_imask.leading_zeros();
@@ -180,73 +186,35 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
             // has no `popcnt` instruction.
             let relative_index =
                 u32::from(POPCOUNT_8[(hits_imask & !(0xffff_ffffu32 << slot_index)) as usize & 0xff]);
-            let node = &nodes[(current.0 + relative_index) as usize];
-            let hitmask = node.intersect(&r, t_max, r.oct_inv4);
-            current = (node.child_base, (hitmask & 0xff00_0000) | node.imask);
-            let mut primitives = hitmask & 0x00ff_ffff;
-            while primitives != 0 {
-                let local = 31 - primitives.leading_zeros();
-                primitives &= !(1u32 << local);
-                match leaf((node.primitive_base + local) as usize) {
-                    ControlFlow::Break(()) => return,
-                    ControlFlow::Continue(t) => {
-                        if t < t_max {
-                            t_max = t;
-                        }
+            node = &nodes[(current.0 + relative_index) as usize];
+        } else if top != bottom {
+            top -= 1;
+            current = stack[top % STACK];
+            continue;
+        } else if overflowed && sweep_next < nodes.len() {
+            // The fallback: every node's leaf children, box-tested with the current cull
+            // distance. Leaves already tested are tested again, which changes no result.
+            node = &nodes[sweep_next];
+            sweep_next += 1;
+            // The sweep follows no inner child: every leaf is some node's child.
+            follow_inner = 0;
+        } else {
+            return;
+        }
+        let hitmask = node.intersect(&r, t_max, r.oct_inv4);
+        current = (node.child_base, (hitmask & follow_inner) | node.imask);
+        let mut primitives = hitmask & 0x00ff_ffff;
+        while primitives != 0 {
+            let local = 31 - primitives.leading_zeros();
+            primitives &= !(1u32 << local);
+            match leaf((node.primitive_base + local) as usize) {
+                ControlFlow::Break(()) => return,
+                ControlFlow::Continue(t) => {
+                    if t < t_max {
+                        t_max = t;
                     }
                 }
             }
-        }
-        if current.1 & 0xff00_0000 == 0 {
-            if top == bottom {
-                if overflowed {
-                    sweep(nodes, &r, t_max, &mut leaf);
-                }
-                return;
-            }
-            top -= 1;
-            current = stack[top % STACK];
-        }
-    }
-}
-
-/// Tests the leaf slots of `node` whose boxes `hitmask` (a [`WideNode::intersect`] result) says
-/// the ray enters, lowering `t_max` as `leaf` says; `Break` when `leaf` stops the traversal.
-#[inline(always)]
-fn leaves(
-    node: &WideNode,
-    hitmask: u32,
-    t_max: &mut f32,
-    leaf: &mut impl FnMut(usize) -> ControlFlow<(), f32>,
-) -> ControlFlow<()> {
-    let mut primitives = hitmask & 0x00ff_ffff;
-    while primitives != 0 {
-        let local = 31 - primitives.leading_zeros();
-        primitives &= !(1u32 << local);
-        let t = leaf((node.primitive_base + local) as usize)?;
-        if t < *t_max {
-            *t_max = t;
-        }
-    }
-    ControlFlow::Continue(())
-}
-
-/// The fallback after a stack overflow: every node's leaf children, box-tested with the current
-/// cull distance (inner children are not followed: every leaf is some node's child). Leaves
-/// already tested are tested again, which changes no result. Inlined although cold: passing
-/// the caller's closure to an out-of-line function keeps its captured state (the best hit so
-/// far) in memory on the common path too (+2–3% instructions of a render under callgrind).
-#[inline(always)]
-fn sweep(
-    nodes: &[WideNode],
-    r: &NodeRay,
-    mut t_max: f32,
-    leaf: &mut impl FnMut(usize) -> ControlFlow<(), f32>,
-) {
-    for node in nodes {
-        let hitmask = node.intersect(r, t_max, r.oct_inv4);
-        if leaves(node, hitmask, &mut t_max, leaf).is_break() {
-            return;
         }
     }
 }
