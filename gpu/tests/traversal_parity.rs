@@ -657,9 +657,8 @@ fn stack_overflow_falls_back_without_losing_hits() {
     }
 }
 
-/// A degenerate tree deeper than the default stack: obvhs will not build one (its validator
-/// asserts depth < 32, and `Bvh::build` panics on such input with debug assertions on), so the
-/// tree is written here by hand: a chain of `LEVELS` nodes, each with two internal children —
+/// A degenerate tree deeper than the default stack, written here by hand so that its shape is
+/// known exactly: a chain of `LEVELS` nodes, each with two internal children —
 /// a "holder" node with one leaf of up to 3 triangles, and the next chain node. Every child box
 /// is the whole scene (the box test always passes), so every ray walks the whole chain. When
 /// the chain child comes first in the ray's octant order (slot 1 first for d.z < 0), each level

@@ -34,7 +34,7 @@
 //
 // The stack lives in function memory and holds TRV_STACK_SIZE node groups (8 bytes each). The
 // traversal pushes at most one group per tree level, so a tree of depth ≤ TRV_STACK_SIZE never
-// overflows (obvhs's builder validates depth < 32 in debug builds and panics otherwise; the
+// overflows (furnace-accel builds deeper trees too, e.g. 4000 concentric triangles; the
 // parity-test scenes, up to 10^5 triangles, reach a stack depth of 7). When a push finds the stack full, the BOTTOM group (the
 // shallowest, the one that would be visited last) is dropped and the ray remembers it. When
 // the stack runs empty, a ray that dropped a group runs a FALLBACK: a linear sweep over every
@@ -44,8 +44,8 @@
 // resolve to the other triangle), only slower (O(node count) for that ray). `trace_stats` counts
 // rays that needed it. Tested in gpu/tests/traversal_parity.rs with stacks of 1 and 2 on the
 // Cornell box and with a hand-built 100-level chain at the default size, against the CPU and
-// brute force; with the sweep disabled those tests fail. The CPU twin instead overwrites its top entry on overflow (obvhs's
-// `StackStack`), so on trees deeper than 32 levels the GPU is right where the CPU may miss.
+// brute force; with the sweep disabled those tests fail. The CPU twin (accel/src/traverse.rs)
+// does the same since 5985e74 (it used to overwrite its top entry and lose hits).
 // The Rust side can shrink the stack (`furnace_gpu::traverse::module_with_stack_size`) to test
 // this path.
 //
