@@ -152,7 +152,7 @@ impl Sampler for OwenSobol {
     fn bits_2d(&self, pixel: u32, index: u32, dimension: u32) -> [u32; 2] {
         if dimension % 4 == 3 {
             // The pair straddles two groups.
-            return [self.bits(pixel, index, dimension), self.bits(pixel, index, dimension + 1)];
+            return [self.bits(pixel, index, dimension), self.bits(pixel, index, dimension.wrapping_add(1))];
         }
         let seed = self.group_seed(pixel, dimension);
         let d = dimension % 4;

@@ -112,3 +112,16 @@ fn index_past_n_repeats_the_pattern_and_is_reported() {
 }
 
 use furnace_sampling::Sampler as _;
+
+/// Dimensions wrap at `u32::MAX` for every sampler, as the `Sampler` trait's default
+/// `bits_2d` does: the pair at the last dimension is (`u32::MAX`, 0), never an overflow panic
+/// (Owen-Sobol's group-straddling pair once computed `dimension + 1` unwrapped; the WGSL twin
+/// wraps).
+#[test]
+fn the_pair_at_the_last_dimension_wraps() {
+    for kind in SamplerKind::ALL {
+        let s = AnySampler::new(kind, 3, kind.needs_sample_count().then_some(16)).unwrap();
+        let pair = s.bits_2d(5, 7, u32::MAX);
+        assert_eq!(pair, [s.bits(5, 7, u32::MAX), s.bits(5, 7, 0)], "{kind}");
+    }
+}
