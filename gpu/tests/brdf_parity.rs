@@ -17,6 +17,8 @@
 
 mod common;
 
+use common::Rng;
+
 use furnace_brdf::ggx::ALPHA_MIN;
 use furnace_brdf::{
     Bsdf, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions, SpecularSampling,
@@ -57,17 +59,8 @@ const IN_WORDS: usize = 10;
 /// Words per output record: eval (3), pdf, sample wi (3), pdf, weight (3), lobe.
 const OUT_WORDS: usize = 12;
 
-/// SplitMix64: a small deterministic generator (the inputs are fixed by the seed).
-struct Rng(u64);
-
+// Helpers on the shared generator (`common::Rng`, SplitMix64).
 impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
     /// Uniform in [0, 1) with 24 bits, as a sampler's `to_unit_f32` gives.
     fn unit(&mut self) -> f32 {
         (self.next_u64() >> 40) as f32 * (1.0 / 16_777_216.0)

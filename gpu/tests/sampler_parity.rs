@@ -7,6 +7,8 @@
 
 mod common;
 
+use common::Rng;
+
 use furnace_gpu::sampling::{SamplerParams, kind_code, wgsl_generated};
 use furnace_gpu::{kernel, test_context, wgsl};
 use furnace_sampling::fixed::{div_frac, div_frac_bitwise, isqrt};
@@ -34,17 +36,8 @@ const GRID_INDICES: u32 = 40;
 /// Mismatch rows printed before the count.
 const SHOW: usize = 8;
 
-/// splitmix64: the test's own deterministic generator (test code may use `u64`).
-struct Rng(u64);
-
+// Helpers on the shared generator (`common::Rng`, SplitMix64).
 impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
     fn u32(&mut self) -> u32 {
         (self.next_u64() >> 32) as u32
     }

@@ -24,6 +24,8 @@
 
 mod common;
 
+use common::Rng;
+
 use furnace_gpu::scene::{
     self, GpuMaterial, GpuScene, GpuSceneTriangle, GpuTextureRef, GpuVertex, SceneBuffers,
 };
@@ -37,16 +39,8 @@ use std::path::{Path, PathBuf};
 // ---------------------------------------------------------------------------------------------
 // Random numbers (SplitMix64: the inputs are fixed by the seed).
 
-struct Rng(u64);
-
+// Helpers on the shared generator (`common::Rng`, SplitMix64).
 impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
     /// Uniform in [0, 1).
     fn f32(&mut self) -> f32 {
         (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32

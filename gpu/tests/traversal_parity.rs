@@ -30,6 +30,8 @@
 
 mod common;
 
+use common::Rng;
+
 use std::time::Instant;
 
 use furnace_accel::{Bvh, GpuCwbvhNode, GpuTriangle, intersect_triangle, offset_ray_origin};
@@ -93,26 +95,17 @@ const MARGINAL_FRACTION: f64 = 0.005;
 const IN_WORDS: usize = 8;
 const OUT_WORDS: usize = 8;
 
-/// A small deterministic generator (SplitMix64).
-struct Rng(u64);
-
+// Helpers on the shared generator (`common::Rng`, SplitMix64).
 impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-        z ^ (z >> 31)
-    }
     /// Uniform in [0, 1).
     fn f(&mut self) -> f32 {
-        (self.next() >> 40) as f32 / (1u64 << 24) as f32
+        (self.next_u64() >> 40) as f32 / (1u64 << 24) as f32
     }
     fn range(&mut self, a: f32, b: f32) -> f32 {
         a + (b - a) * self.f()
     }
     fn below(&mut self, n: usize) -> usize {
-        (self.next() % n as u64) as usize
+        (self.next_u64() % n as u64) as usize
     }
     fn sphere(&mut self) -> Vec3 {
         let z = self.range(-1.0, 1.0);

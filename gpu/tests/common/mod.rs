@@ -1,4 +1,5 @@
-//! Shared by the parity tests: WGSL struct layouts by naga reflection.
+//! Shared by the parity tests: WGSL struct layouts by naga reflection, and the input
+//! generator.
 
 #![allow(dead_code)] // Each test binary uses a subset.
 
@@ -40,4 +41,19 @@ pub fn assert_layout(source: &str, name: &str, size: usize, members: &[(&str, us
         members: members.iter().map(|(n, o)| (n.to_string(), *o as u32)).collect(),
     };
     assert_eq!(got, want, "WGSL struct {name} differs from its Rust twin (left: WGSL, right: Rust)");
+}
+
+/// SplitMix64: the tests' deterministic input generator (test code may use `u64`); each test
+/// file adds the draws it needs in its own `impl Rng { … }` (same crate).
+pub struct Rng(pub u64);
+
+impl Rng {
+    /// The next 64 random bits.
+    pub fn next_u64(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9e37_79b9_7f4a_7c15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+        z ^ (z >> 31)
+    }
 }
