@@ -282,7 +282,7 @@ impl Renderer {
         let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
         let [v0, v1, v2] = g.triangle(t)?;
         let position = (1.0 - b1 - b2) * v0 + b1 * v1 + b2 * v2;
-        let mut geometric = (v1 - v0).cross(v2 - v0).normalize_or_zero();
+        let mut geometric = geometric_normal(v0, v1, v2);
         let mut shading = self.shading_normal(t, b1, b2).filter(|n| *n != Vec3::ZERO).unwrap_or(geometric);
         if let Some(normal_map) = &material.normal_texture
             && let Some(tangent) = g.tangent(t, b1, b2)
@@ -342,6 +342,26 @@ impl Renderer {
             self.bvh.occluded(origin, direction, f32::INFINITY)
         }
     }
+}
+
+/// The unit normal `(v1 − v0) × (v2 − v0)` of a triangle, or zero if it has none.
+///
+/// `normalize_or_zero` squares the cross product's length, which overflows `f32` once the
+/// edges pass ~4e9 (|cross|² > 3.4e38) and underflows below ~1e-10 (|cross|² < 1e-45): the
+/// normal came out zero, the path ended at every large or tiny triangle and the scene went
+/// dark (`tests/stability.rs::scaled_cornell_box_renders_the_same_image`, at scale 1e10 the
+/// Cornell box lost half its light). Then the cross product is first divided by its largest
+/// component, which is exact enough for a direction; elsewhere the result is bit-identical to
+/// `normalize_or_zero` (the GPU twin's).
+#[inline]
+fn geometric_normal(v0: Vec3, v1: Vec3, v2: Vec3) -> Vec3 {
+    let c = (v1 - v0).cross(v2 - v0);
+    let n = c.normalize_or_zero();
+    if n != Vec3::ZERO || !c.is_finite() {
+        return n;
+    }
+    let m = c.abs().max_element();
+    if m > 0.0 { (c / m).normalize_or_zero() } else { Vec3::ZERO }
 }
 
 /// The BSDF of evaluated material parameters.
