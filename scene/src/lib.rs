@@ -7,7 +7,9 @@
 //!   The default scene's node hierarchy is flattened into world-space indexed triangles
 //!   ([`Geometry`]): instanced meshes expanded, shading normals transformed by the
 //!   inverse-transpose and octahedral-encoded (Cigolle et al. 2014), per-face normals when a
-//!   primitive has none, degenerate or non-finite triangles dropped and counted.
+//!   primitive has none, zero-area triangles dropped and counted; a NaN or infinite position
+//!   (or one a node's transform takes beyond f32's range) is an error naming the primitive,
+//!   its accessor and the vertex.
 //! * **Materials** ([`Material`]): metallic-roughness with KHR_materials_specular and
 //!   KHR_materials_emissive_strength, alpha MASK, double-sided; textures stored as 8-bit RGBA and
 //!   decoded (sRGB → linear, IEC 61966-2-1) when sampled bilinearly with glTF wrap modes and
@@ -45,7 +47,7 @@ mod texture;
 pub use camera::{Camera, DEFAULT_YFOV, Projection, Ray};
 pub use error::{SceneError, Warning};
 pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, oct_decode, oct_encode};
-pub use load::SUPPORTED_EXTENSIONS;
+pub use load::{MAX_COORDINATE, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
 pub use material::{AlphaMode, Material, MaterialSample};
 pub use texture::{ColorSpace, Image, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear};
 
@@ -85,7 +87,8 @@ pub struct Scene {
     pub sky: Vec3,
     /// What the loader ignored or repaired, each reported once.
     pub warnings: Vec<Warning>,
-    /// Degenerate (zero-area) or non-finite triangles dropped while loading.
+    /// Degenerate (zero-area) triangles dropped while loading (non-finite positions are an
+    /// error).
     pub dropped_triangles: usize,
 }
 
@@ -106,7 +109,7 @@ pub struct SceneStats {
     pub texture_bytes: usize,
     /// `geometry_bytes / triangles`.
     pub bytes_per_triangle: f64,
-    /// Degenerate or non-finite triangles dropped.
+    /// Degenerate (zero-area) triangles dropped.
     pub dropped_triangles: usize,
 }
 

@@ -393,6 +393,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
                     &mut ctx,
                     &prim,
                     &ppath,
+                    &npath,
                     world,
                     &buffers,
                     needs_uv,
@@ -406,15 +407,16 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
     }
     if geo.triangles.is_empty() {
         let reason = if dropped > 0 {
-            format!("all {dropped} triangles are degenerate or non-finite")
+            format!("all {dropped} triangles have zero area")
         } else {
             "the scene has no triangles".to_string()
         };
         return Err(SceneError::NothingToRender { file: file.to_string(), reason });
     }
     if dropped > 0 {
-        ctx.warn("", format!("{dropped} degenerate or non-finite triangles dropped"));
+        ctx.warn("", format!("{dropped} zero-area triangles dropped (they cannot be hit)"));
     }
+    check_scale(&mut ctx, &geo);
     if !needs_uv {
         geo.uvs = Vec::new();
     }
@@ -433,6 +435,42 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
         warnings: ctx.warnings,
         dropped_triangles: dropped,
     })
+}
+
+/// Largest world coordinate magnitude of a scene that f32 ray tracing handles: above it the
+/// Möller–Trumbore products (edge² × distance) overflow and hits are lost. The Cornell box
+/// renders its s = 1 image when scaled by 1e12 (|coordinates| ≤ 2e12) and breaks at 1e13
+/// (`furnace-cpu`'s `tests/stability.rs`); 2⁴² ≈ 4.4e12.
+pub const MAX_COORDINATE: f32 = 4_398_046_511_104.0;
+
+/// Below this largest coordinate magnitude the whole scene sits where ray offsets are an
+/// absolute 2⁻¹⁶ (`furnace_accel::offset`, for coordinates under 1/32): ≥ 1.5% of the scene,
+/// enough to leak light through corners. The Cornell box renders its s = 1 image scaled by 1e-3
+/// (|coordinates| ≤ 2e-3) and visibly differs at 1e-4; 2⁻¹⁰ ≈ 9.8e-4.
+pub const MIN_COORDINATE: f32 = 1.0 / 1024.0;
+
+/// Warns when the scene's coordinates lie outside what the renderer measured to be scale
+/// invariant ([`MIN_COORDINATE`] … [`MAX_COORDINATE`]).
+fn check_scale(ctx: &mut Ctx<'_>, geo: &Geometry) {
+    let used: HashSet<u32> = geo.triangles.iter().flatten().copied().collect();
+    let max = used.iter().map(|&i| geo.positions[i as usize].abs().max_element()).fold(0.0f32, f32::max);
+    if max > MAX_COORDINATE {
+        ctx.warn(
+            "",
+            format!(
+                "coordinates up to {max:e}: beyond ~{MAX_COORDINATE:.1e} f32 ray–triangle tests overflow and \
+                 hits are lost; scale the scene down"
+            ),
+        );
+    } else if max < MIN_COORDINATE {
+        ctx.warn(
+            "",
+            format!(
+                "all coordinates within ±{max:e}: ray offsets (2^-16 near the origin) are a sizeable fraction of \
+                 the scene and light may leak; scale the scene up"
+            ),
+        );
+    }
 }
 
 fn make_camera(ctx: &mut Ctx<'_>, cam: &gltf::Camera<'_>, world: Mat4) -> Camera {
@@ -614,6 +652,7 @@ fn add_primitive(
     ctx: &mut Ctx<'_>,
     prim: &gltf::Primitive<'_>,
     ppath: &str,
+    npath: &str,
     world: Mat4,
     buffers: &[Vec<u8>],
     needs_uv: bool,
@@ -635,6 +674,22 @@ fn add_primitive(
     };
     let (pos, _) = read_floats(&pos_acc, buffers, &[Dimensions::Vec3]).map_err(|e| ctx.invalid(e))?;
     let nverts = pos.len() / 3;
+    // NaN and infinite positions are an error, not dropped triangles: the glTF Validator
+    // reports them (ACCESSOR_INVALID_FLOAT), and a model with a broken vertex is one the user
+    // wants to hear about by name rather than see rendered with a hole.
+    if let Some(i) = pos.iter().position(|x| !x.is_finite()) {
+        let v = i / 3;
+        return Err(ctx.invalid((
+            format!("{ppath}.attributes.POSITION"),
+            format!(
+                "accessors[{}] vertex {v} is ({}, {}, {}): positions must be finite",
+                pos_acc.index(),
+                pos[3 * v],
+                pos[3 * v + 1],
+                pos[3 * v + 2]
+            ),
+        )));
+    }
     let check_count = |ctx: &Ctx<'_>, name: &str, n: usize| {
         if n != nverts {
             Err(ctx.invalid((
@@ -690,6 +745,20 @@ fn add_primitive(
     let flip = Mat3::from_mat4(world).determinant() < 0.0;
     let wp: Vec<Vec3> =
         pos.chunks_exact(3).map(|p| world.transform_point3(Vec3::new(p[0], p[1], p[2]))).collect();
+    // Finite positions that the node's (finite) transform takes past f32's range.
+    if let Some(v) = wp.iter().position(|p| !p.is_finite()) {
+        return Err(ctx.invalid((
+            format!("{npath}: {ppath}.attributes.POSITION"),
+            format!(
+                "vertex {v} ({}, {}, {}) transformed to world space is {}: the node's transform takes it \
+                 beyond f32's range (3.4e38)",
+                pos[3 * v],
+                pos[3 * v + 1],
+                pos[3 * v + 2],
+                wp[v]
+            ),
+        )));
+    }
     // Shading normals in world space; `None` if absent or any is unusable (then per-face).
     let wn: Option<Vec<Vec3>> = normals.and_then(|n| {
         let v: Vec<Vec3> = n
@@ -751,11 +820,22 @@ fn add_primitive(
         let (pa, pb, pc) = (wp[a], wp[b], wp[c]);
         let cross = (pb - pa).cross(pc - pa);
         let area2 = cross.length();
-        let finite = area2.is_finite() && pa.is_finite() && pb.is_finite() && pc.is_finite();
-        if !(area2 > 0.0) || !finite {
-            *dropped += 1;
-            continue;
-        }
+        // The face normal. `length` squares the cross product, which overflows f32 for edges
+        // beyond ~4e9 and underflows below ~5e-12: such triangles were dropped as if
+        // degenerate. Then it is formed in f64, where the positions' differences are exact and
+        // nothing over- or underflows; only a zero cross product (zero area) drops a triangle.
+        let face_normal = if area2 > 0.0 && area2.is_finite() {
+            cross / area2
+        } else {
+            let (da, db, dc) = (pa.as_dvec3(), pb.as_dvec3(), pc.as_dvec3());
+            let c64 = (db - da).cross(dc - da);
+            let l = c64.length();
+            if !(l > 0.0 && l.is_finite()) {
+                *dropped += 1;
+                continue;
+            }
+            (c64 / l).as_vec3()
+        };
         if wn.is_some() {
             geo.triangles.push([(base + a) as u32, (base + b) as u32, (base + c) as u32]);
         } else {
@@ -763,7 +843,6 @@ fn add_primitive(
             if v0 + 3 > u32::MAX as usize {
                 return Err(ctx.invalid((ppath.to_string(), "more than 2^32 vertices".into())));
             }
-            let face_normal = cross / area2;
             let n = oct_encode(face_normal);
             let face_tangent = needs_tangent.then(|| {
                 let uv = [uv_at(a), uv_at(b), uv_at(c)];
