@@ -30,6 +30,10 @@ pub enum Command {
     /// Measure a backend on a scene: Msamples/s, Mrays/s, ms per frame, time to first frame and
     /// GPU bytes per triangle, as a Markdown table and JSON.
     Bench(BenchArgs),
+    /// Speed against accuracy: render a scene under several configurations (sampler × BRDF
+    /// sampling × compensation × backend), record error against a reference and time at
+    /// checkpoints of 1, 2, 4, … spp, and write CSV, JSON and error-vs-spp / error-vs-time charts.
+    Chart(crate::chart::ChartArgs),
 }
 
 /// `furnace render`.
@@ -199,7 +203,7 @@ pub enum SceneArg {
 /// The most triangles `--scene interior:N` accepts.
 pub const MAX_INTERIOR_TRIANGLES: u32 = 20_000_000;
 
-fn parse_scene(s: &str) -> Result<SceneArg, String> {
+pub(crate) fn parse_scene(s: &str) -> Result<SceneArg, String> {
     if s == "cbox" {
         return Ok(SceneArg::Cbox);
     }

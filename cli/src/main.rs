@@ -18,6 +18,9 @@
 //! * `furnace bench [--backend …] [--scene cbox|interior:N|PATH]` measures a backend:
 //!   Msamples/s, Mrays/s, ms per frame, time to first frame, GPU bytes per triangle, as a
 //!   Markdown table and JSON (`bench.rs`).
+//! * `furnace chart --reference REF.exr [--samplers …] [--sampling …]` charts speed against
+//!   accuracy: error against the reference and render time at checkpoints, per configuration,
+//!   as CSV, JSON, PNG and SVG (`chart.rs`); resumable.
 //!
 //! Every error is one line on stderr, `error: …`, naming the file where there is one, and the
 //! exit code is 1; no user input panics.
@@ -25,6 +28,7 @@
 mod args;
 mod backend;
 mod bench;
+mod chart;
 mod compare;
 mod info;
 mod interrupt;
@@ -57,6 +61,7 @@ fn main() -> ExitCode {
         args::Command::Info(a) => info::run(&a).map(|()| render::Outcome::Done),
         args::Command::Compare(a) => compare::run(&a).map(|()| render::Outcome::Done),
         args::Command::Bench(a) => bench::run(&a).map(|()| render::Outcome::Done),
+        args::Command::Chart(a) => chart::run(&a, &interrupt::Interrupt::install()),
     };
     match result {
         Ok(render::Outcome::Done) => ExitCode::SUCCESS,

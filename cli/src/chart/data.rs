@@ -1,0 +1,303 @@
+//! The study's data: rows (one per configuration × checkpoint), the least-squares slope, the
+//! CSV and JSON files, and the `--external` CSV of peer series.
+
+use serde_json::{Value, json};
+use std::fmt::Write as _;
+use std::path::Path;
+
+/// One measurement: a configuration at a checkpoint.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    /// The configuration's name (`sobol/caps/comp-off/cpu`).
+    pub config: String,
+    /// Sampler name.
+    pub sampler: String,
+    /// BRDF sampling method (`ndf`, `vndf`, `caps`).
+    pub sampling: String,
+    /// Energy compensation (`on`, `off`).
+    pub compensation: String,
+    /// Backend (`cpu`, `gpu`).
+    pub backend: String,
+    /// Samples per pixel.
+    pub spp: u32,
+    /// Wall time of the render passes that produced this image (seconds).
+    pub seconds: f64,
+    /// Root mean squared error against the reference.
+    pub rmse: f64,
+    /// Relative MSE against the reference (`compare::score`'s, ε = 1e-2).
+    pub relmse: f64,
+    /// Whether the reference was rendered with this configuration's model (masking,
+    /// compensation); `false`: the error has a bias floor that is not the method's.
+    pub reference_matches: bool,
+}
+
+/// The CSV header of the study's data file.
+pub const CSV_HEADER: &str =
+    "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches";
+
+/// The rows as CSV (with [`CSV_HEADER`]); numbers in Rust's shortest round-trip form.
+pub fn to_csv(rows: &[Row]) -> String {
+    let mut s = String::from(CSV_HEADER);
+    s.push('\n');
+    for r in rows {
+        let _ = writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{}",
+            r.config,
+            r.sampler,
+            r.sampling,
+            r.compensation,
+            r.backend,
+            r.spp,
+            r.seconds,
+            r.rmse,
+            r.relmse,
+            r.reference_matches
+        );
+    }
+    s
+}
+
+/// A row as a JSON object.
+pub fn row_json(r: &Row) -> Value {
+    json!({
+        "config": r.config,
+        "sampler": r.sampler,
+        "sampling": r.sampling,
+        "compensation": r.compensation,
+        "backend": r.backend,
+        "spp": r.spp,
+        "seconds": finite(r.seconds),
+        "rmse": finite(r.rmse),
+        "relmse": finite(r.relmse),
+        "reference_matches": r.reference_matches,
+    })
+}
+
+/// `x` as a JSON number, `null` when not finite (JSON has no NaN or infinity).
+fn finite(x: f64) -> Value {
+    if x.is_finite() { json!(x) } else { Value::Null }
+}
+
+/// A row read back from the JSON of a previous run.
+pub fn row_from_json(v: &Value) -> Result<Row, String> {
+    let text = |k: &str| {
+        v.get(k).and_then(Value::as_str).map(str::to_string).ok_or_else(|| format!("a row has no '{k}'"))
+    };
+    let num = |k: &str| match v.get(k) {
+        Some(Value::Null) => Ok(f64::NAN),
+        Some(x) => x.as_f64().ok_or_else(|| format!("a row's '{k}' is not a number")),
+        None => Err(format!("a row has no '{k}'")),
+    };
+    let spp = v
+        .get("spp")
+        .and_then(Value::as_u64)
+        .and_then(|n| u32::try_from(n).ok())
+        .ok_or_else(|| "a row has no valid 'spp'".to_string())?;
+    Ok(Row {
+        config: text("config")?,
+        sampler: text("sampler")?,
+        sampling: text("sampling")?,
+        compensation: text("compensation")?,
+        backend: text("backend")?,
+        spp,
+        seconds: num("seconds")?,
+        rmse: num("rmse")?,
+        relmse: num("relmse")?,
+        reference_matches: v.get("reference_matches").and_then(Value::as_bool).unwrap_or(true),
+    })
+}
+
+/// Least-squares slope of `ln y` against `ln x` over the points with `x > 0` and finite
+/// `y > 0`: the convergence rate (−0.5 for RMSE of independent samples). `None` with fewer than
+/// two such points or when every `x` is the same.
+pub fn log_log_slope(points: impl IntoIterator<Item = (f64, f64)>) -> Option<f64> {
+    let logs: Vec<(f64, f64)> = points
+        .into_iter()
+        .filter(|&(x, y)| x > 0.0 && x.is_finite() && y > 0.0 && y.is_finite())
+        .map(|(x, y)| (x.ln(), y.ln()))
+        .collect();
+    if logs.len() < 2 {
+        return None;
+    }
+    let n = logs.len() as f64;
+    let mx = logs.iter().map(|p| p.0).sum::<f64>() / n;
+    let my = logs.iter().map(|p| p.1).sum::<f64>() / n;
+    let sxx: f64 = logs.iter().map(|p| (p.0 - mx) * (p.0 - mx)).sum();
+    let sxy: f64 = logs.iter().map(|p| (p.0 - mx) * (p.1 - my)).sum();
+    (sxx > 0.0).then(|| sxy / sxx)
+}
+
+/// One point of an external series (`--external`): any field may be missing.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExternalPoint {
+    /// The series it belongs to (its legend entry).
+    pub label: String,
+    /// Samples per pixel.
+    pub spp: Option<f64>,
+    /// Seconds.
+    pub seconds: Option<f64>,
+    /// RMSE against the same reference.
+    pub rmse: Option<f64>,
+    /// Relative MSE (ε = 1e-2, as `furnace compare`).
+    pub relmse: Option<f64>,
+}
+
+/// The header an `--external` CSV must start with.
+pub const EXTERNAL_HEADER: &str = "label,spp,seconds,rmse,relmse";
+
+/// Parses an `--external` CSV: the header [`EXTERNAL_HEADER`], then one point per line; fields
+/// may be empty (missing), blank lines and lines starting with `#` are skipped; no quoting (a
+/// label cannot hold a comma).
+pub fn parse_external(path: &Path, text: &str) -> Result<Vec<ExternalPoint>, String> {
+    let p = path.display();
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim()))
+        .filter(|(_, l)| !l.is_empty() && !l.starts_with('#'));
+    let header_ok =
+        lines.next().is_some_and(|(_, l)| l.split(',').map(str::trim).eq(EXTERNAL_HEADER.split(',')));
+    if !header_ok {
+        return Err(format!("{p}: the first line must be the header '{EXTERNAL_HEADER}'"));
+    }
+    let mut points = Vec::new();
+    for (n, line) in lines {
+        let f: Vec<&str> = line.split(',').map(str::trim).collect();
+        if f.len() != 5 {
+            return Err(format!("{p}:{n}: {} fields, expected 5 ({EXTERNAL_HEADER})", f.len()));
+        }
+        let num = |i: usize, name: &str| -> Result<Option<f64>, String> {
+            if f[i].is_empty() {
+                return Ok(None);
+            }
+            match f[i].parse::<f64>() {
+                Ok(x) if x.is_finite() && x > 0.0 => Ok(Some(x)),
+                _ => Err(format!("{p}:{n}: {name} '{}' is not a positive number", f[i])),
+            }
+        };
+        if f[0].is_empty() {
+            return Err(format!("{p}:{n}: empty label"));
+        }
+        points.push(ExternalPoint {
+            label: f[0].to_string(),
+            spp: num(1, "spp")?,
+            seconds: num(2, "seconds")?,
+            rmse: num(3, "rmse")?,
+            relmse: num(4, "relmse")?,
+        });
+    }
+    if points.is_empty() {
+        return Err(format!("{p}: no data rows"));
+    }
+    Ok(points)
+}
+
+/// The first key under which `recorded` and `now` differ, with both values (`None`: equal).
+pub fn first_difference(recorded: &Value, now: &Value) -> Option<(String, String, String)> {
+    let show = |v: Option<&Value>| v.map_or_else(|| "(absent)".to_string(), Value::to_string);
+    match (recorded.as_object(), now.as_object()) {
+        (Some(a), Some(b)) => {
+            let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+            keys.sort();
+            keys.dedup();
+            keys.into_iter()
+                .find(|k| a.get(*k) != b.get(*k))
+                .map(|k| (k.clone(), show(a.get(k)), show(b.get(k))))
+        }
+        _ => (recorded != now).then(|| (String::new(), recorded.to_string(), now.to_string())),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn slope_of_an_exact_power_law_is_its_exponent() {
+        // y = 3 x^-0.5 at x = 1, 2, 4, …, 1024: the fit is exact up to rounding (1e-12).
+        let pts: Vec<(f64, f64)> = (0..11).map(|k| (2f64.powi(k), 3.0 * 2f64.powi(k).powf(-0.5))).collect();
+        assert!((log_log_slope(pts).unwrap() + 0.5).abs() < 1e-12);
+        let pts = [(1.0, 1.0), (10.0, 1e-3)];
+        assert!((log_log_slope(pts).unwrap() + 3.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn slope_is_least_squares_over_the_logs() {
+        // ln x = 0, 1, 2 and ln y = 0, 0, 3: slope = Σ(dx·dy)/Σdx² = (−1·−1 + 0 + 1·2)/2 = 1.5.
+        let e = std::f64::consts::E;
+        let pts = [(1.0, 1.0), (e, 1.0), (e * e, e.powi(3))];
+        assert!((log_log_slope(pts).unwrap() - 1.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn slope_skips_unusable_points_and_needs_two() {
+        assert_eq!(log_log_slope([(1.0, 1.0)]), None);
+        assert_eq!(log_log_slope([(2.0, 1.0), (2.0, 0.5)]), None, "all x equal");
+        let pts = [(1.0, 1.0), (2.0, 0.0), (4.0, f64::NAN), (0.0, 1.0), (4.0, 0.25)];
+        assert!((log_log_slope(pts).unwrap() + 1.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn csv_and_json_rows_round_trip() {
+        let row = Row {
+            config: "sobol/caps/comp-off/cpu".into(),
+            sampler: "sobol".into(),
+            sampling: "caps".into(),
+            compensation: "off".into(),
+            backend: "cpu".into(),
+            spp: 8,
+            seconds: 0.125,
+            rmse: 0.1 + 0.2,
+            relmse: 1e-7,
+            reference_matches: false,
+        };
+        assert_eq!(row_from_json(&row_json(&row)).unwrap(), row);
+        let csv = to_csv(std::slice::from_ref(&row));
+        assert_eq!(
+            csv,
+            format!(
+                "{CSV_HEADER}\nsobol/caps/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false\n"
+            )
+        );
+    }
+
+    #[test]
+    fn external_csv_parses_with_missing_fields_and_comments() {
+        let text = "# Mitsuba 3 scalar_rgb on this VM\nlabel, spp,seconds,rmse,relmse\n\nmitsuba,16,2.5,0.01,\nmitsuba,64,,0.005,1e-4\n";
+        let pts = parse_external(Path::new("m.csv"), text).unwrap();
+        assert_eq!(pts.len(), 2);
+        assert_eq!(
+            pts[0],
+            ExternalPoint {
+                label: "mitsuba".into(),
+                spp: Some(16.0),
+                seconds: Some(2.5),
+                rmse: Some(0.01),
+                relmse: None
+            }
+        );
+        assert_eq!((pts[1].seconds, pts[1].relmse), (None, Some(1e-4)));
+    }
+
+    #[test]
+    fn external_csv_errors_name_the_line() {
+        let bad = |t: &str| parse_external(Path::new("e.csv"), t).unwrap_err();
+        assert!(bad("a,b\n").contains("header"), "{}", bad("a,b\n"));
+        assert!(bad("label,spp,seconds,rmse,relmse\n").contains("no data rows"));
+        let e = bad("label,spp,seconds,rmse,relmse\nx,1,2,3\n");
+        assert!(e.contains("e.csv:2") && e.contains("4 fields"), "{e}");
+        let e = bad("label,spp,seconds,rmse,relmse\nx,1,2,-3,\n");
+        assert!(e.contains("e.csv:2") && e.contains("rmse"), "{e}");
+    }
+
+    #[test]
+    fn first_difference_names_the_key() {
+        let a = json!({"bounces": 4, "spp": 64});
+        assert_eq!(first_difference(&a, &a), None);
+        let b = json!({"bounces": 3, "spp": 64});
+        assert_eq!(first_difference(&a, &b), Some(("bounces".into(), "4".into(), "3".into())));
+        let c = json!({"bounces": 4});
+        assert_eq!(first_difference(&a, &c), Some(("spp".into(), "64".into(), "(absent)".into())));
+    }
+}
