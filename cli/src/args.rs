@@ -180,10 +180,15 @@ pub struct BenchArgs {
     /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
-    /// CPU backend: do not estimate rays per sample (the estimate renders a small image on a GPU
-    /// adapter, software included).
+    /// Do not count rays: on the GPU, no traversal counters (rays, nodes, triangles per ray);
+    /// on the CPU, no estimate of rays per sample (it renders a small image on a GPU adapter,
+    /// software included).
     #[arg(long)]
     pub no_rays: bool,
+    /// GPU: invocations per pixel in a workgroup (a power of two, 1–64) instead of the
+    /// renderer's choice (16 on hardware, 1 on software adapters) — for occupancy studies.
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=64))]
+    pub group_samples: Option<u32>,
     /// No progress line on stderr.
     #[arg(long, short)]
     pub quiet: bool,

@@ -46,6 +46,19 @@ struct Report {
     time_to_first_frame_s: f64,
     rays: Rays,
     gpu: Option<GpuMemory>,
+    profile: Option<GpuProfile>,
+}
+
+/// Where the GPU's time goes (GPU backend).
+#[derive(Debug, Clone, Copy)]
+struct GpuProfile {
+    /// Sum of the measured passes' GPU timestamps (compute only; `None` without
+    /// `TIMESTAMP_QUERY`).
+    gpu_seconds: Option<f64>,
+    /// Invocations per pixel in a workgroup.
+    group_samples: u32,
+    /// Traversal counters of the measured passes (`None` with `--no-rays`).
+    counts: Option<furnace_gpu::integrator::TraceCounts>,
 }
 
 /// How many rays the measured passes traced.
@@ -91,6 +104,33 @@ impl Report {
     /// Milliseconds per sample per pixel of the whole image.
     fn ms_per_frame(&self) -> f64 {
         self.seconds * 1e3 / f64::from(self.spp.max(1))
+    }
+
+    /// The GPU profile as text lines (empty on the CPU).
+    fn profile_lines(&self) -> String {
+        let Some(p) = self.profile else { return String::new() };
+        let mut s = format!("GPU: {} invocation(s) per pixel in a workgroup of 64", p.group_samples);
+        if let Some(g) = p.gpu_seconds {
+            let _ = write!(
+                s,
+                "; GPU timestamps {:.3} ms/frame = {:.1}% of wall time",
+                g * 1e3 / f64::from(self.spp.max(1)),
+                100.0 * g / self.seconds.max(1e-12)
+            );
+        }
+        if let Some(c) = p.counts {
+            let per = |x: u64| x as f64 / c.rays.max(1) as f64;
+            let _ = write!(
+                s,
+                "; per ray: {:.1} nodes, {:.1} triangles; deepest stack {}, fallback sweeps {}",
+                per(c.nodes),
+                per(c.triangles),
+                c.max_stack_depth,
+                c.fallbacks
+            );
+        }
+        s.push('\n');
+        s
     }
 
     fn rays_note(&self) -> String {
@@ -145,6 +185,7 @@ impl Report {
             gpu,
         );
         let _ = writeln!(s, "\nrays: {}", self.rays_note());
+        s.push_str(&self.profile_lines());
         s
     }
 
@@ -176,6 +217,24 @@ impl Report {
             ("gpu_scene_bytes", g.map_or_else(|| "null".to_string(), |g| g.scene_bytes.to_string())),
             ("gpu_bvh_bytes", g.map_or_else(|| "null".to_string(), |g| g.bvh_bytes.to_string())),
         ];
+        let p = self.profile;
+        let counts = p.and_then(|p| p.counts);
+        let per_ray = |f: fn(&furnace_gpu::integrator::TraceCounts) -> u64| {
+            num(counts.map(|c| f(&c) as f64 / c.rays.max(1) as f64))
+        };
+        let mut fields = fields;
+        fields.extend([
+            ("gpu_group_samples", p.map_or_else(|| "null".to_string(), |p| p.group_samples.to_string())),
+            ("gpu_timestamp_seconds", num(p.and_then(|p| p.gpu_seconds))),
+            (
+                "gpu_timestamp_ms_per_frame",
+                num(p.and_then(|p| p.gpu_seconds).map(|g| g * 1e3 / f64::from(self.spp.max(1)))),
+            ),
+            ("nodes_per_ray", per_ray(|c| c.nodes)),
+            ("triangles_per_ray", per_ray(|c| c.triangles)),
+            ("max_stack_depth", counts.map_or_else(|| "null".to_string(), |c| c.max_stack_depth.to_string())),
+            ("fallback_sweeps", counts.map_or_else(|| "null".to_string(), |c| c.fallbacks.to_string())),
+        ]);
         let body: Vec<String> = fields.iter().map(|(k, v)| format!("  \"{k}\": {v}")).collect();
         format!("{{\n{}\n}}\n", body.join(",\n"))
     }
@@ -296,10 +355,15 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     engine.backend().render_pass(0, 1)?;
     let time_to_first_frame_s = start.elapsed().as_secs_f64();
 
+    let mut timing = false;
     if let Engine::Gpu(g) = &mut engine {
-        g.renderer_mut().set_count_rays(true);
-        g.renderer_mut().take_ray_count().map_err(|e| e.to_string())?;
+        let r = g.renderer_mut();
+        r.set_count_rays(!a.no_rays);
+        r.take_trace_counts().map_err(|e| e.to_string())?;
+        r.set_group_samples(a.group_samples);
+        timing = r.set_timing(true);
     }
+    let mut gpu_seconds = 0.0;
     let per_pass = engine.backend().pass_samples(u64::from(width) * u64::from(height)).max(1);
     let mut done = 0u32;
     let timer = Instant::now();
@@ -311,24 +375,35 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
             None => per_pass,
         };
         engine.backend().render_pass(1 + done, n)?;
+        if let Engine::Gpu(g) = &mut engine {
+            gpu_seconds += g.renderer_mut().last_pass_gpu_seconds().unwrap_or(0.0);
+        }
         done += n;
     }
     let seconds = timer.elapsed().as_secs_f64();
 
-    let (rays, gpu) = match &mut engine {
+    let (rays, gpu, profile) = match &mut engine {
         Engine::Gpu(g) => {
             let r = g.renderer_mut();
             r.set_count_rays(false);
-            let counted = r.take_ray_count().map_err(|e| e.to_string())?;
+            r.set_timing(false);
+            let counts = r.take_trace_counts().map_err(|e| e.to_string())?;
             let memory = GpuMemory {
                 bytes_per_triangle: r.bytes_per_triangle(),
                 scene_bytes: r.scene_bytes(),
                 bvh_bytes: r.bvh_bytes(),
             };
-            (Rays::Counted(counted), Some(memory))
+            let profile = GpuProfile {
+                gpu_seconds: timing.then_some(gpu_seconds),
+                group_samples: r.group_samples(per_pass),
+                counts: (!a.no_rays).then_some(counts),
+            };
+            let rays =
+                if a.no_rays { Rays::None("--no-rays".to_string()) } else { Rays::Counted(counts.rays) };
+            (rays, Some(memory), Some(profile))
         }
-        Engine::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None),
-        Engine::Cpu(c) => (estimate_rays(a, c.renderer().scene(), settings), None),
+        Engine::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None, None),
+        Engine::Cpu(c) => (estimate_rays(a, c.renderer().scene(), settings), None, None),
     };
     let report = Report {
         backend: backend_name,
@@ -344,6 +419,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         time_to_first_frame_s,
         rays,
         gpu,
+        profile,
     };
     let json = report.json();
     match a.json.as_deref() {

@@ -4,8 +4,7 @@
 // scene.wgsl, traverse.wgsl, a film module, and the bindings of the params uniform, the film,
 // the BVH, the scene, the Turquin table and the ray counter.
 //
-// One invocation per pixel of a tile of rows; it adds `samples` consecutive samples of its pixel
-// to the film in index order, as the CPU does, so pixel sums follow the same order.
+// Each pixel's samples are added to the film in index order, as the CPU adds them (see `main`).
 
 // Sampler dimensions: furnace_cpu::{DIM_PIXEL, DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE}.
 const DIM_PIXEL: u32 = 0u;
@@ -47,8 +46,9 @@ struct FrameParams {
     // computed on the CPU exactly as furnace-scene's Camera::generate_ray does.
     fov_scale: f32,
     aspect: f32,
-    pad0: u32,
-    pad1: u32,
+    // Invocations per pixel in a workgroup (a power of two ≤ 64), and the tile's width in pixels.
+    group_samples: u32,
+    tile_width: u32,
 }
 
 // The alpha-mask callback of traverse.wgsl: masked materials' cut-outs are not hits.
@@ -191,25 +191,72 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
     return radiance;
 }
 
-@compute @workgroup_size(8, 8)
-fn main(@builtin(global_invocation_id) gid: vec3<u32>) {
-    let x = gid.x;
-    let y = params.row_offset + gid.y;
-    if x >= params.width || y >= params.height {
+// One sample of `pixel` at (x, y): a camera ray jittered inside the pixel, traced.
+fn pixel_sample(x: u32, y: u32, pixel: u32, index: u32) -> vec3<f32> {
+    let u = sampler_value_2d(params.sampler, pixel, index, DIM_PIXEL);
+    let ray = camera_ray(vec2<f32>(f32(x) + u.x, f32(y) + u.y));
+    return trace_path(pixel, index, ray.origin, ray.direction);
+}
+
+// Adds `v` to the 64-bit counter in words `k`, `k + 1` (the carry goes to word k + 1).
+fn counter_add(k: u32, v: u32) {
+    if v == 0u {
         return;
     }
+    let old = atomicAdd(&ray_counter[k], v);
+    if old > 0xffffffffu - v {
+        atomicAdd(&ray_counter[k + 1u], 1u);
+    }
+}
+
+// Invocations of a workgroup (FrameParams.group_samples × pixels of a tile).
+const GROUP_SIZE: u32 = 64u;
+
+// One sample per invocation when a workgroup shares its pixels' samples (group_samples > 1).
+var<workgroup> group_values: array<vec4<f32>, GROUP_SIZE>;
+
+// A workgroup covers a tile of (64 / group_samples) pixels, tile_width wide; each pixel's
+// group_samples invocations are consecutive. With group_samples = 1 an invocation owns its pixel
+// and adds `samples` samples in index order; with more, invocation `sub` computes sample
+// first_sample + sub and the pixel's first invocation adds the group's values in index order
+// after a barrier — the same additions in the same order either way, so the film does not
+// depend on the grouping (tests/integrator.rs); grouping only spreads a small image over more
+// of the GPU.
+@compute @workgroup_size(64)
+fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l: u32) {
+    let sg = params.group_samples;
+    let tw = params.tile_width;
+    let th = (GROUP_SIZE / sg) / tw;
+    let p = l / sg;
+    let sub = l % sg;
+    let x = wg.x * tw + p % tw;
+    let y = params.row_offset + wg.y * th + p / tw;
+    let inside = x < params.width && y < params.height;
     let pixel = y * params.width + x;
-    for (var k = 0u; k < params.samples; k++) {
-        let index = params.first_sample + k;
-        let u = sampler_value_2d(params.sampler, pixel, index, DIM_PIXEL);
-        let ray = camera_ray(vec2<f32>(f32(x) + u.x, f32(y) + u.y));
-        film_add(pixel, trace_path(pixel, index, ray.origin, ray.direction));
+    if sg == 1u {
+        if inside {
+            for (var k = 0u; k < params.samples; k++) {
+                film_add(pixel, pixel_sample(x, y, pixel, params.first_sample + k));
+            }
+        }
+    } else {
+        var value = vec4<f32>(0.0);
+        if inside && sub < params.samples {
+            value = vec4<f32>(pixel_sample(x, y, pixel, params.first_sample + sub), 0.0);
+        }
+        group_values[l] = value;
+        workgroupBarrier();
+        if inside && sub == 0u {
+            for (var k = 0u; k < params.samples; k++) {
+                film_add(pixel, group_values[l + k].xyz);
+            }
+        }
     }
     if (params.flags & FRAME_COUNT_RAYS) != 0u {
-        // A 64-bit sum in two words: the carry goes to word 1.
-        let old = atomicAdd(&ray_counter[0], rays_traced);
-        if old > 0xffffffffu - rays_traced {
-            atomicAdd(&ray_counter[1], 1u);
-        }
+        counter_add(0u, rays_traced);
+        counter_add(2u, trace_stats.nodes);
+        counter_add(4u, trace_stats.triangles);
+        atomicAdd(&ray_counter[6], trace_stats.fallbacks);
+        atomicMax(&ray_counter[7], trace_stats.max_depth);
     }
 }
