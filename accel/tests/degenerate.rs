@@ -164,3 +164,40 @@ fn hits_closer_than_obvhs_node_epsilon_are_found() {
         assert!(bvh.occluded(o, Vec3::NEG_Z, 1.0), "{opt:?}");
     }
 }
+
+/// Huge triangles among ordinary ones. Beyond `MAX_BUILD_COORDINATE` (2⁵⁶): before,
+/// one triangle of ±1e19 made obvhs's CWBVH conversion panic (`distribute_left < 7`: its f32
+/// surface areas overflowed) with every build preset. Now they are skipped like degenerate
+/// ones, the rest of the tree is exact (brute force over the kept triangles), and a triangle
+/// just inside the limit is kept and builds.
+#[test]
+fn huge_triangles_are_skipped_not_a_panic() {
+    use furnace_accel::MAX_BUILD_COORDINATE;
+    let base = random_soup(500, 0.2, 4);
+    let m = MAX_BUILD_COORDINATE;
+    // Large but kept: a triangle of 2^20 … 2^40 among small ones built fine, but obvhs's debug
+    // validator panicked on it (absolute tolerance); the tree is exact.
+    for k in [20, 24, 30, 40] {
+        let r = 2f32.powi(k);
+        let mut tris = base.clone();
+        tris.push([Vec3::new(0.3, 0.2, 0.1), Vec3::new(r, 0.7, 0.1), Vec3::new(0.1, r * 0.77, 0.3)]);
+        tris.push([Vec3::new(r * 0.5, r * 0.9, -r), Vec3::new(r, 0.3, 0.1), Vec3::new(-r * 0.3, r, r * 0.7)]);
+        check(&format!("soup + triangles of 2^{k}"), &tris, 300);
+    }
+    for r in [1e19f32, 1e25, 1e30, f32::MAX] {
+        let mut tris = base.clone();
+        tris.push([Vec3::new(-r, -r, 5.0), Vec3::new(r, -r, 5.0), Vec3::new(0.0, r, 5.0)]);
+        tris.push([Vec3::new(0.1, 0.1, 0.1), Vec3::new(0.2, 0.1, 0.1), Vec3::new(0.1, r, 0.1)]);
+        for opt in all_options() {
+            let bvh = Bvh::build_with(&tris, opt);
+            assert_eq!(bvh.skipped_count(), 2, "r = {r:e} {opt:?}");
+        }
+        check(&format!("soup + triangles of {r:e}"), &tris[..base.len()], 300);
+    }
+    // At the limit: kept, and no panic.
+    let mut tris = base.clone();
+    tris.push([Vec3::new(-m, -m, 5.0), Vec3::new(m, -m, 5.0), Vec3::new(0.0, m, 5.0)]);
+    for opt in all_options() {
+        assert_eq!(Bvh::build_with(&tris, opt).skipped_count(), 0, "{opt:?}");
+    }
+}
