@@ -67,6 +67,10 @@ Fixed-N samplers (hammersley, cmj) need the sample count in advance: each checkp
 as its own render with N = that checkpoint (how they are meant to be used), so they cost about \
 twice the samples of a progressive sampler, and their time at a checkpoint is that render's.
 
+Errors, against the reference, over all pixels and channels (as `furnace compare` and \
+shared/oracle/compare.py): RMSE = sqrt(mean (x − r)²); relative MSE = mean (x − r)² / (r² + ε), \
+ε = 1e-2. Slopes: least squares of ln(error) against ln(spp) over the checkpoints.
+
 Time is the wall time of the render passes only: no scene load, BVH build, upload, pipeline \
 creation, film read-back or error computation.
 
@@ -132,6 +136,12 @@ pub struct ChartArgs {
     /// Peer series to draw on the same axes (CSV: label,spp,seconds,rmse,relmse); repeatable.
     #[arg(long, value_name = "FILE.csv")]
     pub external: Vec<PathBuf>,
+    /// The time axis of the error-vs-time charts: wall (wall time of the render passes) or cpu
+    /// (the process's CPU time over them, all threads: steadier than wall time on a machine
+    /// shared with other work, meaningless for the GPU backend). Both are recorded; this only
+    /// picks what the charts show (--external seconds are drawn on the same axis).
+    #[arg(long, value_enum, default_value_t = ChartTime::Wall)]
+    pub time: ChartTime,
     /// No progress bar and no summary table (warnings and errors are still printed).
     #[arg(long, short)]
     pub quiet: bool,
@@ -144,6 +154,15 @@ pub enum ChartBackend {
     Cpu,
     /// The wgpu integrator (`--adapter` picks the adapter; else the best one, software too).
     Gpu,
+}
+
+/// `furnace chart --time`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ChartTime {
+    /// Wall time.
+    Wall,
+    /// Process CPU time (user + system, all threads).
+    Cpu,
 }
 
 /// One configuration of the study.
@@ -167,7 +186,7 @@ impl Config {
         )
     }
 
-    fn row(&self, spp: u32, seconds: f64, rmse: f64, relmse: f64, reference_matches: bool) -> Row {
+    fn row(&self, spp: u32, time: Timing, rmse: f64, relmse: f64, reference_matches: bool) -> Row {
         Row {
             config: self.name(),
             sampler: self.sampler.to_string(),
@@ -175,7 +194,8 @@ impl Config {
             compensation: resume::cli_name(&self.compensation),
             backend: resume::cli_name(&self.backend),
             spp,
-            seconds,
+            seconds: time.wall,
+            cpu_seconds: time.cpu,
             rmse,
             relmse,
             reference_matches,
@@ -483,6 +503,9 @@ fn prepare(a: &ChartArgs) -> Result<Study, String> {
             }
         }
     }
+    if study.configs.is_empty() {
+        return Err("no configurations: give at least one sampler, sampling method and backend".into());
+    }
     for comp in study.compensations() {
         let probe = Config { compensation: comp, ..study.configs[0] };
         let (r, matches) = study.reference_for(&probe);
@@ -600,7 +623,9 @@ fn save_data(study: &Study, rows: &mut [Row], machine: &Value) -> Result<(), Str
                     of (x - r)^2 / (r^2 + 0.01) (furnace compare, shared/oracle/compare.py)",
         "timing": "seconds: wall time of the render passes that produced the image (progressive samplers: all \
                    passes up to the checkpoint; fixed-N samplers: the passes of that checkpoint's own N-sample \
-                   render); excludes scene load, BVH build, upload, pipeline creation, film read-back and metrics",
+                   render); excludes scene load, BVH build, upload, pipeline creation, film read-back and metrics. \
+                   cpu_seconds: the process's CPU time (user + system, all threads; 10 ms ticks of \
+                   /proc/self/stat) over the same passes",
         "slopes": "least squares of ln(error) against ln(spp) over the configuration's checkpoints",
         "configs": configs,
         "rows": rows.iter().map(data::row_json).collect::<Vec<_>>(),
@@ -656,6 +681,10 @@ fn save_charts(study: &Study, rows: &[Row], external: &[ExternalPoint]) -> Resul
     let s = &study.settings;
     let what = format!("{} {}×{}, {} bounces", study.scene_name, s.width, s.height, s.bounces);
     let biased_any = study.configs.iter().any(|c| !study.reference_for(c).1);
+    let time_of = |r: &Row| match study.args.time {
+        ChartTime::Wall => r.seconds,
+        ChartTime::Cpu => r.cpu_seconds,
+    };
     for (metric, metric_name, get, ext_get, ideal) in [
         (
             "rmse",
@@ -683,7 +712,7 @@ fn save_charts(study: &Study, rows: &[Row], external: &[ExternalPoint]) -> Resul
                 }
                 let points = mine
                     .iter()
-                    .map(|r| (if by_time { r.seconds } else { f64::from(r.spp) }, get(r)))
+                    .map(|r| (if by_time { time_of(r) } else { f64::from(r.spp) }, get(r)))
                     .collect();
                 let style = Style {
                     color: sampler_color(c.sampler),
@@ -717,9 +746,14 @@ fn save_charts(study: &Study, rows: &[Row], external: &[ExternalPoint]) -> Resul
                 series.push(Series { label: text, points, style });
             }
             let mut note = if by_time {
-                "Time: wall time of the render passes only (no setup, BVH build, read-back or metrics). Fixed-N \
-                 samplers: one render per checkpoint."
-                    .to_string()
+                format!(
+                    "Time: {} of the render passes only (no setup, BVH build, read-back or metrics). Fixed-N \
+                     samplers: one render per checkpoint.",
+                    match study.args.time {
+                        ChartTime::Wall => "wall time",
+                        ChartTime::Cpu => "process CPU time (user + system, all threads)",
+                    }
+                )
             } else {
                 format!(
                     "Slope: least squares of log error vs log spp over the checkpoints ({ideal} for independent \
@@ -745,8 +779,11 @@ fn save_charts(study: &Study, rows: &[Row], external: &[ExternalPoint]) -> Resul
             if metric == "relmse" {
                 note.push_str(" relMSE = mean (x−r)²/(r²+0.01).");
             }
-            let (x, file_x) =
-                if by_time { ("seconds (render passes)", "time") } else { ("samples per pixel", "spp") };
+            let (x, file_x) = match (by_time, study.args.time) {
+                (false, _) => ("samples per pixel", "spp"),
+                (true, ChartTime::Wall) => ("seconds (wall time of the render passes)", "time"),
+                (true, ChartTime::Cpu) => ("CPU seconds of the render passes (all threads)", "time"),
+            };
             let labels = Labels {
                 title: format!(
                     "{what}: {metric_name} vs {}",
@@ -803,6 +840,13 @@ fn make_backend(
     }
 }
 
+/// Time spent in render passes: wall and process CPU seconds.
+#[derive(Debug, Clone, Copy)]
+struct Timing {
+    wall: f64,
+    cpu: f64,
+}
+
 /// The error of `film` against `reference` (the metrics of `furnace compare`).
 fn measure(film: &Film, reference: &[Vec3]) -> Result<(f64, f64), String> {
     let rgb: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
@@ -847,24 +891,28 @@ fn render_to(
     interrupt: &Interrupt,
     progress: &Progress,
     name: &str,
-    mut at: impl FnMut(u32, f64, &Film) -> Result<(), String>,
+    mut at: impl FnMut(u32, Timing, &Film) -> Result<(), String>,
 ) -> Result<bool, String> {
     let mut done = 0u32;
-    let mut seconds = 0.0f64;
+    let mut time = Timing { wall: 0.0, cpu: 0.0 };
     for &target in targets {
         while done < target {
             if interrupt.requested() {
                 return Ok(false);
             }
             let n = backend.pass_samples(pixels).min(target - done);
-            let t = Instant::now();
+            let (t, cpu) = (Instant::now(), data::process_cpu_seconds());
             backend.render_pass(done, n)?;
-            seconds += t.elapsed().as_secs_f64();
+            time.wall += t.elapsed().as_secs_f64();
+            time.cpu += match (cpu, data::process_cpu_seconds()) {
+                (Some(a), Some(b)) => b - a,
+                _ => f64::NAN,
+            };
             done += n;
             progress.advance(n, format!("{name} {done}/{}", targets.last().copied().unwrap_or(0)));
         }
         let film = backend.film()?;
-        at(target, seconds, &film)?;
+        at(target, time, &film)?;
     }
     Ok(true)
 }
@@ -940,10 +988,10 @@ pub fn run(a: &ChartArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     'configs: for (c, left) in &todo {
         let name = c.name();
         let (reference, matches) = study.reference_for(c);
-        let on_checkpoint = |spp: u32, seconds: f64, film: &Film, rows: &mut Vec<Row>, machine: &Value| {
+        let on_checkpoint = |spp: u32, time: Timing, film: &Film, rows: &mut Vec<Row>, machine: &Value| {
             let (rmse, relmse) = measure(film, &reference.pixels)?;
             rows.retain(|r| !(r.config == name && r.spp == spp));
-            rows.push(c.row(spp, seconds, rmse, relmse, matches));
+            rows.push(c.row(spp, time, rmse, relmse, matches));
             if film.rejected() > 0 {
                 progress.bar.suspend(|| {
                     eprintln!("warning: {name}: {} non-finite samples rejected", film.rejected())
@@ -1015,17 +1063,18 @@ fn note_adapter(machine: &mut Value, adapter: Option<String>) {
 /// A Markdown table of each configuration's last checkpoint and slopes.
 fn summary(study: &Study, rows: &[Row]) -> String {
     let mut s = String::from(
-        "| config | spp | seconds | RMSE | relMSE | slope RMSE | slope relMSE | ref model |\n|---|---|---|---|---|---|---|---|\n",
+        "| config | spp | seconds | CPU s | RMSE | relMSE | slope RMSE | slope relMSE | ref model |\n|---|---|---|---|---|---|---|---|---|\n",
     );
     for c in &study.configs {
         let mine = rows_of(rows, &c.name());
         let Some(last) = mine.last() else { continue };
         let k = |v: Option<f64>| v.map_or_else(|| "–".to_string(), |k| format!("{k:.3}"));
         s.push_str(&format!(
-            "| {} | {} | {:.3} | {:.4e} | {:.4e} | {} | {} | {} |\n",
+            "| {} | {} | {:.3} | {:.2} | {:.4e} | {:.4e} | {} | {} | {} |\n",
             last.config,
             last.spp,
             last.seconds,
+            last.cpu_seconds,
             last.rmse,
             last.relmse,
             k(slope(&mine, |r| r.rmse)),

@@ -111,19 +111,22 @@ fn a_tiny_study_writes_csv_json_png_and_svg() {
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
         lines[0],
-        "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches"
+        "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,cpu_seconds"
     );
     // 4 configurations × checkpoints 1, 2, 4, 8.
     assert_eq!(lines.len(), 1 + 16, "{csv}");
     let mut seen = Vec::new();
     for line in &lines[1..] {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 10, "{line}");
+        assert_eq!(f.len(), 11, "{line}");
         assert_eq!(f[0], format!("{}/{}/comp-{}/{}", f[1], f[2], f[3], f[4]), "{line}");
         let (seconds, rmse, relmse): (f64, f64, f64) =
             (f[6].parse().unwrap(), f[7].parse().unwrap(), f[8].parse().unwrap());
         assert!(seconds > 0.0 && rmse > 0.0 && relmse > 0.0, "{line}");
         assert_eq!(f[9], if f[3] == "on" { "true" } else { "false" }, "{line}");
+        // CPU time of the passes: 10 ms ticks (0 for a pass shorter than a tick), or empty
+        // where /proc/self/stat does not exist.
+        assert!(f[10].is_empty() || f[10].parse::<f64>().is_ok_and(|t| t >= 0.0), "{line}");
         seen.push((f[1].to_string(), f[3].to_string(), f[5].parse::<u32>().unwrap()));
     }
     for sampler in ["sobol", "hammersley"] {

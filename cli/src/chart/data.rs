@@ -22,6 +22,10 @@ pub struct Row {
     pub spp: u32,
     /// Wall time of the render passes that produced this image (seconds).
     pub seconds: f64,
+    /// CPU time (user + system, all threads of the process) of those passes, in seconds, at
+    /// 10 ms resolution (Linux `/proc/self/stat`; NaN where unavailable). On a loaded machine
+    /// it is a steadier measure of the CPU backend's work than wall time.
+    pub cpu_seconds: f64,
     /// Root mean squared error against the reference.
     pub rmse: f64,
     /// Relative MSE against the reference (`compare::score`'s, ε = 1e-2).
@@ -33,7 +37,7 @@ pub struct Row {
 
 /// The CSV header of the study's data file.
 pub const CSV_HEADER: &str =
-    "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches";
+    "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,cpu_seconds";
 
 /// The rows as CSV (with [`CSV_HEADER`]); numbers in Rust's shortest round-trip form.
 pub fn to_csv(rows: &[Row]) -> String {
@@ -42,7 +46,7 @@ pub fn to_csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{}",
             r.config,
             r.sampler,
             r.sampling,
@@ -52,7 +56,8 @@ pub fn to_csv(rows: &[Row]) -> String {
             r.seconds,
             r.rmse,
             r.relmse,
-            r.reference_matches
+            r.reference_matches,
+            if r.cpu_seconds.is_finite() { r.cpu_seconds.to_string() } else { String::new() }
         );
     }
     s
@@ -68,6 +73,7 @@ pub fn row_json(r: &Row) -> Value {
         "backend": r.backend,
         "spp": r.spp,
         "seconds": finite(r.seconds),
+        "cpu_seconds": finite(r.cpu_seconds),
         "rmse": finite(r.rmse),
         "relmse": finite(r.relmse),
         "reference_matches": r.reference_matches,
@@ -102,6 +108,7 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
         backend: text("backend")?,
         spp,
         seconds: num("seconds")?,
+        cpu_seconds: num("cpu_seconds").unwrap_or(f64::NAN),
         rmse: num("rmse")?,
         relmse: num("relmse")?,
         reference_matches: v.get("reference_matches").and_then(Value::as_bool).unwrap_or(true),
@@ -193,6 +200,18 @@ pub fn parse_external(path: &Path, text: &str) -> Result<Vec<ExternalPoint>, Str
     Ok(points)
 }
 
+/// CPU time of this process so far (user + system, all threads), in seconds at the kernel's
+/// `USER_HZ` resolution of 1/100 s, from `/proc/self/stat`; `None` where that does not exist.
+pub fn process_cpu_seconds() -> Option<f64> {
+    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
+    // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
+    let rest = &stat[stat.rfind(')')? + 1..];
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = |i: usize| f.get(i - 3).and_then(|v| v.parse::<u64>().ok());
+    // USER_HZ is 100 on every Linux architecture's /proc ABI.
+    Some((ticks(14)? + ticks(15)?) as f64 / 100.0)
+}
+
 /// The first key under which `recorded` and `now` differ, with both values (`None`: equal).
 pub fn first_difference(recorded: &Value, now: &Value) -> Option<(String, String, String)> {
     let show = |v: Option<&Value>| v.map_or_else(|| "(absent)".to_string(), Value::to_string);
@@ -248,6 +267,7 @@ mod tests {
             backend: "cpu".into(),
             spp: 8,
             seconds: 0.125,
+            cpu_seconds: 0.25,
             rmse: 0.1 + 0.2,
             relmse: 1e-7,
             reference_matches: false,
@@ -257,7 +277,7 @@ mod tests {
         assert_eq!(
             csv,
             format!(
-                "{CSV_HEADER}\nsobol/caps/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false\n"
+                "{CSV_HEADER}\nsobol/caps/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25\n"
             )
         );
     }
@@ -289,6 +309,20 @@ mod tests {
         assert!(e.contains("e.csv:2") && e.contains("4 fields"), "{e}");
         let e = bad("label,spp,seconds,rmse,relmse\nx,1,2,-3,\n");
         assert!(e.contains("e.csv:2") && e.contains("rmse"), "{e}");
+    }
+
+    #[test]
+    fn process_cpu_time_grows_with_work() {
+        let Some(t0) = process_cpu_seconds() else { return };
+        // Spin for 200 ms of wall time: the process's CPU time cannot fall, and grows by at
+        // least one 10 ms tick even if a busy machine gives us a tenth of a core.
+        let start = std::time::Instant::now();
+        let mut x = 0u64;
+        while start.elapsed().as_millis() < 200 {
+            x = std::hint::black_box(x.wrapping_add(1));
+        }
+        let t1 = process_cpu_seconds().unwrap();
+        assert!(t1 >= t0 + 0.01, "{t0} {t1}");
     }
 
     #[test]
