@@ -150,15 +150,17 @@ fn powers_of_two(lo: f64, hi: f64) -> Vec<f64> {
     if v.len() > 12 { v.into_iter().step_by(2).collect() } else { v }
 }
 
-/// A tick label: plain decimals from 0.01 to 99 999, else `1e-3`-style.
+/// A tick label: plain decimals with up to four significant digits from 0.001 to 99 999,
+/// else `1e-4`-style.
 pub fn tick(v: f64) -> String {
     if v == 0.0 || !v.is_finite() {
         return format!("{v}");
     }
     let a = v.abs();
-    if (0.01..100_000.0).contains(&a) {
-        let s = format!("{v:.3}");
-        let s = s.trim_end_matches('0').trim_end_matches('.');
+    if (0.001..100_000.0).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        let s = format!("{v:.decimals$}");
+        let s = if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.') } else { &s };
         return s.to_string();
     }
     let e = a.log10().floor() as i32;
@@ -298,8 +300,12 @@ mod tests {
         assert_eq!(tick(1.0), "1");
         assert_eq!(tick(64.0), "64");
         assert_eq!(tick(0.25), "0.25");
-        assert_eq!(tick(0.001), "1e-3");
-        assert_eq!(tick(0.0025), "2.5e-3");
+        assert_eq!(tick(0.001), "0.001");
+        assert_eq!(tick(0.0025), "0.0025");
+        assert_eq!(tick(0.005), "0.005");
+        assert_eq!(tick(100.0), "100");
+        assert_eq!(tick(0.0005), "5e-4");
+        assert_eq!(tick(0.00025), "2.5e-4");
         assert_eq!(tick(1e6), "1e6");
     }
 
