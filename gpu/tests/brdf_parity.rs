@@ -5,7 +5,9 @@
 //! `cargo test -p furnace-gpu --test brdf_parity -- --nocapture` prints the table of maximum
 //! errors per function and configuration.
 //!
-//! eval and pdf get identical inputs on both sides and are compared directly (relative 1e-5).
+//! eval and pdf get identical inputs on both sides and are compared directly (relative 1e-5,
+//! eval per channel relative to the value plus the lobes at full Fresnel — Fresnel errors are
+//! absolute).
 //! A sample is compared in three ways (see `check`): the lobe must be the same (a flip is
 //! allowed only where `uc` sits within 1e-6 of the specular probability; counted and bounded);
 //! wi within 1e-5 of the Rust's; pdf and weight within 1e-5 of the Rust sample's or of the Rust
@@ -432,10 +434,9 @@ struct ConfigStats {
     /// gives the GPU's outcome: a reflection on the horizon or a back-facing microfacet within
     /// rounding.
     validity_flips: usize,
-    /// Samples whose direction rounding decides (VNDF/caps rim, the pole; see check).
+    /// Samples whose direction rounding decides (VNDF/caps rim, the pole, grazing views; see
+    /// check).
     rim: usize,
-    /// eval/pdf values accepted as ill-conditioned at their inputs (see `ulp_spread`).
-    ill_eval: usize,
     /// Lobe choices that differ because uc sits within 1e-6 of the specular probability.
     boundary: usize,
     /// Records that fail, and why.
@@ -455,7 +456,7 @@ fn is_rim(options: SpecularOptions, rec: &Record) -> bool {
 }
 
 /// Direction tolerance at the pole: √(2·2⁻²⁴·2) ≈ 4.9e-4 (two ulps of z under the square root),
-/// doubled.
+/// doubled; also for views grazing the horizon (see `check`).
 const POLE_DIR_TOL: f32 = 1e-3;
 
 /// How far `f` moves (by `metric`) when one component of `wo` or `wi` moves by one ulp up or
@@ -516,35 +517,10 @@ fn check(
         // eval: per channel, relative to the value plus the unattenuated diffuse term
         // albedo·cos θi/π: the diffuse attenuation 1 − sF·max(F) cancels towards 0 at grazing
         // half angles, so its rounding is absolute on the scale of that term.
-        // Where the Rust's own value moves by more than the tolerance when wo or wi moves by one
-        // ulp (the GPU's fused multiply-adds and rounding amount to that much), the GPU's value
-        // is accepted within the tolerance plus SPREAD_FACTOR times that movement (backward
-        // stability): Schlick's (1 − cos θd)⁵ as cos θd → 1 in a channel whose F0 is 0
-        // (values ~1e-19, relatively ill-conditioned by 5·ulp/(1 − cos θd)), and the half
-        // vector of a sharp lobe (D moves by ~4·ulp/α).
         let e = bsdf.eval(rec.wo, rec.wi);
-        let scale = diffuse_scale_at(bsdf, rec.wo, rec.wi);
-        let err = rel3(v3(&o[0..3]), e, scale);
-        if err > REL_TOL
-            && err
-                <= REL_TOL
-                    + SPREAD_FACTOR
-                        * ulp_spread(rec.wo, rec.wi, |a, b| bsdf.eval(a, b), |x, y| rel3(x, y, scale))
-        {
-            st.ill_eval += 1;
-        } else {
-            st.worst[0].add(err, k);
-        }
-        let err = rel(f32::from_bits(o[3]), bsdf.pdf(rec.wo, rec.wi), 0.0);
-        if err > REL_TOL
-            && err
-                <= REL_TOL
-                    + SPREAD_FACTOR * ulp_spread(rec.wo, rec.wi, |a, b| bsdf.pdf(a, b), |x, y| rel(x, y, 0.0))
-        {
-            st.ill_eval += 1;
-        } else {
-            st.worst[1].add(err, k);
-        }
+        let scale = diffuse_scale_at(bsdf, rec.wo, rec.wi) + specular_scale_at(bsdf, rec.wo, rec.wi);
+        st.worst[0].add(rel3(v3(&o[0..3]), e, scale), k);
+        st.worst[1].add(rel(f32::from_bits(o[3]), bsdf.pdf(rec.wo, rec.wi), 0.0), k);
 
         // sample
         let g = gpu_sample(o);
@@ -628,10 +604,15 @@ fn check(
         // At the pole (a reflection straight up): sin θ = √(1 − z²) of a z rounded to 1 or to
         // 1 − 2⁻²⁴ is 0 or 3.45e-4, so directions within POLE_DIR_TOL are the same sample.
         let pole = s.wi.z >= 1.0 - 1e-6 && wi_err <= POLE_DIR_TOL;
+        // A view within 1e-4 of the horizon: VNDF's stretched view has z = cos θo/α, and its
+        // frame and projection divide by it, so a few ulps of rounding move the direction by up
+        // to ~ulp·α/cos θo (measured on the H100: 3.7e-5 at cos θo = 3e-7, pdf and weight
+        // identical).
+        let grazing = rec.wo.z < 1e-4 && wi_err <= POLE_DIR_TOL;
         if ok(wi_err, wi_spread) && ok(pdf_err, pdf_spread) && ok(weight_err, weight_spread) {
             st.ill += 1;
             st.ill_at_edge_u += usize::from(is_edge(rec.u.x) || is_edge(rec.u.y));
-        } else if (rim || pole) && ok(pdf_err, pdf_spread) && ok(weight_err, weight_spread) {
+        } else if (rim || pole || grazing) && ok(pdf_err, pdf_spread) && ok(weight_err, weight_spread) {
             st.rim += 1;
         } else {
             st.failures.push((
@@ -652,9 +633,9 @@ fn check(
     }
     let _ = writeln!(
         table,
-        " pdf direct | eval/pdf ill-conditioned | ill-conditioned samples (edge u) | rim/pole | None/Some flips | lobe on boundary | failures |"
+        " pdf direct | ill-conditioned samples (edge u) | rim/pole | None/Some flips | lobe on boundary | failures |"
     );
-    let _ = writeln!(table, "|---|{}---|---|---|---|---|---|---|", "---|".repeat(FUNCS.len()));
+    let _ = writeln!(table, "|---|{}---|---|---|---|---|---|", "---|".repeat(FUNCS.len()));
     for (st, o) in stats.iter().zip(configs) {
         let _ = write!(table, "| {} |", config_name(*o));
         for f in &st.worst {
@@ -662,9 +643,8 @@ fn check(
         }
         let _ = writeln!(
             table,
-            " {:.1e} | {} | {} ({}) | {} | {} | {} | {} |",
+            " {:.1e} | {} ({}) | {} | {} | {} | {} |",
             st.pdf_direct.err,
-            st.ill_eval,
             st.ill,
             st.ill_at_edge_u,
             st.rim,
@@ -691,7 +671,7 @@ fn check(
     let mut failures = String::new();
     let (mut ill, mut flips, mut boundary) = (0, 0, 0);
     for (st, o) in stats.iter().zip(configs) {
-        ill += st.ill + st.rim + st.ill_eval;
+        ill += st.ill + st.rim;
         flips += st.validity_flips;
         boundary += st.boundary;
         for (f, name) in FUNCS.iter().enumerate() {
@@ -721,6 +701,18 @@ fn check(
         "WGSL BSDF differs from furnace-brdf (lobe flips on the boundary {boundary}, bound \
          {boundary_bound}; ill-conditioned samples {ill}, None/Some flips {flips}, bound {ill_bound}):\n{failures}"
     );
+}
+
+/// The specular lobe's value with its Fresnel factor at its largest reflectance in every
+/// channel (the absolute scale of the Fresnel rounding): Schlick's F = F0 + (F90 − F0)(1 − cos θd)⁵
+/// in a channel with F0 = 0 near normal incidence is ~1e-15…1e-20 and relatively
+/// ill-conditioned (5·δ/(1 − cos θd) for a rounding δ of cos θd, a few ulps on the GPU), but its
+/// absolute error is ≤ 5δ ≈ 1e-6: eval errors are measured against the lobe at full Fresnel,
+/// i.e. as absolute errors of F (≤ 1e-5 of the channel's possible reflectance).
+fn specular_scale_at(bsdf: &MetallicRoughness, wo: Vec3, wi: Vec3) -> Vec3 {
+    let s = bsdf.specular;
+    let full = Vec3::splat(s.f0.max_element().max(s.f90.max_element()));
+    furnace_brdf::GgxSpecular { f0: full, f90: full, ..s }.eval(wo, wi)
 }
 
 /// The unattenuated diffuse term albedo·cos θi/π (the absolute scale of the diffuse rounding).
