@@ -7,7 +7,15 @@
 //! bounces, sampler, seed, masking, compensation, specular sampling, camera, Russian roulette,
 //! and N for the fixed-N samplers. `--resume` restores the film from the sums and continues at
 //! sample index `furnace.spp`: each pixel's sum keeps adding samples in index order, so the
-//! result is bit-identical to an uninterrupted render.
+//! result is bit-identical to an uninterrupted render on the same backend and adapter (on a GPU
+//! without `f64` shaders, whose film sums each pass in `f32`, only where the pass boundaries
+//! agree, as after Ctrl-C or `--time-limit`).
+//!
+//! The backend is not part of the record: a render started on the CPU may be continued on a
+//! GPU, or the reverse. Both integrators trace the same sample indices, so the continuation adds
+//! exactly the missing samples, computed by the other backend: an unbiased estimate of the same
+//! image, equal to an uninterrupted render to the float rounding of each path, not bit for bit
+//! (`tests/gpu.rs` checks it).
 
 use crate::args::{MaskingArg, RenderArgs, SamplingArg, Switch};
 use clap::ValueEnum;

@@ -62,9 +62,12 @@ pub struct GpuContext {
     pub info: wgpu::AdapterInfo,
     /// Whether shaders may use `f64` ([`wgpu::Features::SHADER_F64`]).
     pub shader_f64: bool,
-    /// Errors raised asynchronously (uncaptured validation / OOM errors, device loss), drained by
+    /// Errors raised asynchronously (uncaptured validation / OOM errors), drained by
     /// [`GpuContext::check`].
     errors: Arc<Mutex<Vec<GpuError>>>,
+    /// Why the device was lost, once it is: reported by every later [`GpuContext::check`]
+    /// (a lost device stays lost; the validation errors that follow are its consequences).
+    lost: Arc<Mutex<Option<String>>>,
 }
 
 /// All adapters of all backends wgpu was built with (`WGPU_BACKEND` narrows them).
@@ -165,11 +168,11 @@ impl GpuContext {
                 v.push(GpuError::Wgpu(e.to_string()));
             }
         }));
-        let sink = errors.clone();
+        let lost: Arc<Mutex<Option<String>>> = Arc::default();
+        let sink = lost.clone();
         device.set_device_lost_callback(move |reason, message| {
-            if let Ok(mut v) = sink.lock() {
-                v.push(GpuError::DeviceLost(format!("{reason:?}: {message}")));
-            }
+            let mut v = sink.lock().unwrap_or_else(|p| p.into_inner());
+            v.get_or_insert_with(|| format!("{reason:?}: {message}"));
         });
         Ok(Self {
             shader_f64: required_features.contains(wgpu::Features::SHADER_F64),
@@ -178,19 +181,64 @@ impl GpuContext {
             queue,
             info,
             errors,
+            lost,
         })
     }
 
-    /// Returns the first error raised since the last call (validation, out of memory, device
-    /// lost), if any.
+    /// [`GpuError::DeviceLost`] once the device is lost (on this and every later call: the
+    /// errors queued since are dropped, they are the loss's consequences); otherwise the first
+    /// error raised since the last call (validation, out of memory), if any, the others raised
+    /// since being dropped.
     pub fn check(&self) -> Result<(), GpuError> {
         let mut v = self.errors.lock().unwrap_or_else(|p| p.into_inner());
-        if v.is_empty() { Ok(()) } else { Err(v.remove(0)) }
+        if let Some(reason) = self.lost.lock().unwrap_or_else(|p| p.into_inner()).as_ref() {
+            v.clear();
+            return Err(GpuError::DeviceLost(reason.clone()));
+        }
+        // The first error; those after it are usually its consequences (an allocation that
+        // failed leaves an invalid buffer that every later command using it reports): dropped,
+        // so that they are not blamed on the next, unrelated call.
+        let first = if v.is_empty() { Ok(()) } else { Err(v.remove(0)) };
+        v.clear();
+        first
+    }
+
+    /// A buffer holding `contents` (padded with zeros to a multiple of 4 bytes), `COPY_DST` added
+    /// to `usage`. Unlike `wgpu::util::DeviceExt::create_buffer_init`, which panics when the
+    /// device is lost (its buffer cannot be mapped at creation), a lost device or failed
+    /// allocation is an `Err` here, at once if already known, else from the next
+    /// [`GpuContext::check`] / [`GpuContext::wait`].
+    pub fn buffer_init(
+        &self,
+        label: &str,
+        contents: &[u8],
+        usage: wgpu::BufferUsages,
+    ) -> Result<wgpu::Buffer, GpuError> {
+        self.check()?;
+        let size = (contents.len() as u64).div_ceil(wgpu::COPY_BUFFER_ALIGNMENT).max(1)
+            * wgpu::COPY_BUFFER_ALIGNMENT;
+        let buffer = self.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some(label),
+            size,
+            usage: usage | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let aligned = contents.len() / 4 * 4;
+        self.queue.write_buffer(&buffer, 0, &contents[..aligned]);
+        if aligned < contents.len() {
+            let mut tail = [0u8; 4];
+            tail[..contents.len() - aligned].copy_from_slice(&contents[aligned..]);
+            self.queue.write_buffer(&buffer, aligned as u64, &tail);
+        }
+        Ok(buffer)
     }
 
     /// Blocks until the queue is idle, then reports any error raised meanwhile.
     pub fn wait(&self) -> Result<(), GpuError> {
-        self.device.poll(wgpu::PollType::wait_indefinitely()).map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        if let Err(e) = self.device.poll(wgpu::PollType::wait_indefinitely()) {
+            self.check()?; // a lost device says so
+            return Err(GpuError::Wgpu(e.to_string()));
+        }
         self.check()
     }
 

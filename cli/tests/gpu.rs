@@ -1,0 +1,274 @@
+//! End-to-end tests of `furnace render --backend gpu`: exact resume, Ctrl-C, resuming across
+//! backends, and a machine without any GPU adapter.
+//!
+//! `--backend gpu` takes the best adapter there is, a software one included: in CI that is
+//! Mesa's lavapipe (reported as "llvmpipe (LLVM …)"; `--adapter lavapipe` would not match it).
+//! lavapipe is slow, so images are 8×8 or 16×16 with a few samples per pixel.
+//!
+//! Like the `furnace-gpu` tests, these need an adapter and **fail** without one unless
+//! `FURNACE_SKIP_GPU_TESTS=1` is set (then they print that they skip and pass). The exception is
+//! [`no_adapter_is_one_line_and_auto_falls_back_to_the_cpu`], which hides every adapter itself
+//! and so runs everywhere.
+//!
+//! Resuming across backends (a render started on the CPU continued on the GPU, or the reverse)
+//! is allowed: `--backend` is not among the settings that must match. Both integrators trace the
+//! same sample indices of the same sampler, so the continuation adds exactly the samples that
+//! were missing, computed by the other backend — an unbiased estimate of the same image, equal to
+//! an uninterrupted render to float rounding of each path but not bit for bit.
+//! [`resume_across_backends_adds_the_missing_samples_of_the_other_backend`] checks that
+//! continuation to the bit.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// `FURNACE_SKIP_GPU_TESTS=1`: this test is skipped (as `furnace_gpu::test_context`).
+fn skip_gpu() -> bool {
+    let skip = std::env::var("FURNACE_SKIP_GPU_TESTS").is_ok_and(|v| v == "1");
+    if skip {
+        eprintln!("FURNACE_SKIP_GPU_TESTS=1: skipping a GPU test");
+    }
+    skip
+}
+
+fn furnace(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_furnace")).args(args).output().expect("the furnace binary runs")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh, empty directory for one test.
+fn temp_dir(name: &str) -> PathBuf {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("furnace-cli-gpu").join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// `furnace render --width S --height S ARGS… --out DIR/NAME`; asserts success and that it
+/// rendered on `backend` (from the summary line), returns the EXR's path.
+fn render_ok(dir: &Path, name: &str, size: u32, backend: &str, args: &[&str]) -> PathBuf {
+    let out = dir.join(name);
+    let size = size.to_string();
+    let mut all = vec!["render", "--backend", backend, "--width", &size, "--height", &size];
+    all.extend_from_slice(args);
+    all.extend_from_slice(&["--out", out.to_str().unwrap()]);
+    let o = furnace(&all);
+    assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+    assert_on(&o, backend);
+    dir.join(format!("{name}.exr"))
+}
+
+/// `furnace render --backend BACKEND --resume FILE --spp SPP --out DIR/NAME`; asserts success
+/// and the backend, returns the EXR's path.
+fn resume_ok(dir: &Path, name: &str, file: &Path, backend: &str, spp: &str) -> PathBuf {
+    let out = dir.join(name);
+    let args = ["render", "--backend", backend, "--resume", file.to_str().unwrap(), "--spp", spp, "--out"];
+    let o = Command::new(env!("CARGO_BIN_EXE_furnace")).args(args).arg(&out).output().unwrap();
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    assert_on(&o, backend);
+    dir.join(format!("{name}.exr"))
+}
+
+/// The summary line names the backend that rendered (`…, gpu backend: …`).
+fn assert_on(o: &Output, backend: &str) {
+    let err = stderr(o);
+    assert!(err.contains(&format!(" {backend} backend: ")), "expected a {backend} render: {err}");
+    assert_eq!(err.contains("rendering on "), backend == "gpu", "adapter line: {err}");
+}
+
+/// Asserts that two furnace EXRs hold the same film and image, bit for bit (everything but
+/// the render time, which is a measurement).
+fn assert_same_render(a: &Path, b: &Path) {
+    let ra = furnace_post::read_exr_with_state(a).unwrap();
+    let rb = furnace_post::read_exr_with_state(b).unwrap();
+    assert_eq!((ra.width, ra.height), (rb.width, rb.height));
+    let bits = |v: &[glam::Vec3]| v.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    assert!(bits(&ra.pixels) == bits(&rb.pixels), "RGB differs: {} vs {}", a.display(), b.display());
+    let (sa, sb) = (ra.state.unwrap(), rb.state.unwrap());
+    let sum_bits = |v: &[f64]| v.iter().map(|s| s.to_bits()).collect::<Vec<_>>();
+    assert!(sum_bits(&sa.sums) == sum_bits(&sb.sums), "film sums differ: {} vs {}", a.display(), b.display());
+    assert_eq!(sa.counts, sb.counts);
+    let (mut ma, mut mb) = (ra.metadata, rb.metadata);
+    ma.render_time_s = None;
+    mb.render_time_s = None;
+    assert_eq!(ma, mb);
+}
+
+#[test]
+fn gpu_resume_two_plus_two_is_bit_identical_to_four() {
+    if skip_gpu() {
+        return;
+    }
+    let dir = temp_dir("resume_2_2");
+    // Russian roulette on, 6 bounces: the paths use more sampler dimensions and branch on them.
+    let settings = ["--russian-roulette", "on", "--bounces", "6", "--seed", "3"];
+    let two = render_ok(&dir, "two", 16, "gpu", &[&settings[..], &["--spp", "2"]].concat());
+    let four = render_ok(&dir, "four", 16, "gpu", &[&settings[..], &["--spp", "4"]].concat());
+    // The uninterrupted render adds its 4 samples in one pass (a pass is up to 64 spp at 16×16),
+    // the resumed one in two runs: the f64 film must agree across the boundary and the upload.
+    let resumed = resume_ok(&dir, "two_two", &two, "gpu", "4");
+    assert_same_render(&resumed, &four);
+    assert_eq!(furnace_post::read_exr(&resumed).unwrap().3.spp, Some(4));
+}
+
+/// Starts a long GPU render with stderr piped, waits for its first progress line (printed
+/// after the first pass when stderr is not a terminal), and returns the child.
+#[cfg(unix)]
+// The caller waits for the child; on a failed read the test panics and the child, its stderr
+// closed, ends at its next progress line.
+#[allow(clippy::zombie_processes)]
+fn start_long_gpu_render(
+    out: &Path,
+    size: u32,
+) -> (std::process::Child, std::io::BufReader<std::process::ChildStderr>) {
+    use std::io::BufRead;
+    let size = size.to_string();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_furnace"))
+        .args(["render", "--backend", "gpu", "--width", &size, "--height", &size, "--spp", "1000000"])
+        .arg("--out")
+        .arg(out)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut reader = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut line = String::new();
+    let mut seen = String::new();
+    loop {
+        line.clear();
+        let n = reader.read_line(&mut line).unwrap();
+        assert!(n > 0, "furnace ended before its first pass: {:?}\n{seen}", child.wait());
+        seen.push_str(&line);
+        if line.starts_with("progress: ") {
+            assert!(seen.contains("rendering on "), "not on a GPU: {seen}");
+            return (child, reader);
+        }
+    }
+}
+
+#[cfg(unix)]
+fn sigint(child: &std::process::Child) {
+    let ok = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success();
+    assert!(ok, "kill -INT failed");
+}
+
+#[cfg(unix)]
+#[test]
+fn gpu_ctrl_c_saves_a_partial_render_that_resumes_exactly() {
+    use std::io::Read;
+    if skip_gpu() {
+        return;
+    }
+    let dir = temp_dir("ctrl_c");
+    let (mut child, mut reader) = start_long_gpu_render(&dir.join("p"), 8);
+    sigint(&child);
+    let mut rest = String::new();
+    reader.read_to_string(&mut rest).unwrap();
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130), "{rest}");
+    assert!(rest.contains("interrupted") && rest.contains(" gpu backend: "), "{rest}");
+    assert!(rest.contains("furnace render --resume"), "{rest}");
+    assert!(dir.join("p.png").is_file());
+    let exr = dir.join("p.exr");
+    let (_, _, _, meta) = furnace_post::read_exr(&exr).unwrap();
+    let spp = meta.spp.unwrap();
+    // A GPU pass at 8×8 is 64 spp (2¹⁶ or 2²⁴ samples per pass, at most 64 spp): whole passes
+    // only, at least one, far fewer than asked.
+    assert!(spp >= 64 && spp % 64 == 0 && spp < 1_000_000, "spp {spp}");
+    assert_eq!(meta.extra.get("furnace.target_spp").map(String::as_str), Some("1000000"));
+
+    // Resume to one pass past the interruption, and compare with one uninterrupted render.
+    let target = (spp + 64).to_string();
+    let resumed = resume_ok(&dir, "resumed", &exr, "gpu", &target);
+    let whole = render_ok(&dir, "whole", 8, "gpu", &["--spp", &target]);
+    assert_same_render(&resumed, &whole);
+}
+
+/// Per-pixel `f64` sums (r, g, b) and counts of a furnace EXR's film.
+fn film(path: &Path) -> (Vec<f64>, Vec<u64>) {
+    let s = furnace_post::read_exr_with_state(path).unwrap().state.unwrap();
+    (s.sums, s.counts)
+}
+
+#[test]
+fn resume_across_backends_adds_the_missing_samples_of_the_other_backend() {
+    if skip_gpu() {
+        return;
+    }
+    let dir = temp_dir("cross_backend");
+    let size = 8;
+    let cpu2 = render_ok(&dir, "cpu2", size, "cpu", &["--spp", "2"]);
+    let cpu4 = render_ok(&dir, "cpu4", size, "cpu", &["--spp", "4"]);
+    let gpu2 = render_ok(&dir, "gpu2", size, "gpu", &["--spp", "2"]);
+    let gpu4 = render_ok(&dir, "gpu4", size, "gpu", &["--spp", "4"]);
+    for (start, end, (first2, _), (other2, other4)) in
+        [("cpu", "gpu", (&cpu2, &cpu4), (&gpu2, &gpu4)), ("gpu", "cpu", (&gpu2, &gpu4), (&cpu2, &cpu4))]
+    {
+        let resumed = resume_ok(&dir, &format!("{start}2_{end}4"), first2, end, "4");
+        let (sums, counts) = film(&resumed);
+        assert!(counts.iter().all(|&c| c == 4), "{start} → {end}: counts {counts:?}");
+        assert_eq!(furnace_post::read_exr(&resumed).unwrap().3.spp, Some(4));
+        // Expected: samples 0, 1 of the starting backend, then samples 2, 3 of the other one,
+        // i.e. first2 + (other4 − other2). Sums of four f32 samples are exact in f64 unless
+        // their exponents differ by more than 29 bits, so the two sides agree to a few f64
+        // ulps: 1e-12 relative is 10⁴ ulps of headroom yet 10⁸ times below a sample's weight.
+        let (a, _) = film(first2);
+        let (b2, _) = film(other2);
+        let (b4, _) = film(other4);
+        let expected: Vec<f64> = (0..sums.len()).map(|i| a[i] + (b4[i] - b2[i])).collect();
+        let tolerance = |e: f64| 1e-12 * e.abs().max(1.0);
+        let bad: Vec<String> = (0..sums.len())
+            .filter(|&i| (sums[i] - expected[i]).abs() > tolerance(expected[i]))
+            .take(8)
+            .map(|i| format!("pixel {} channel {}: {} vs {}", i / 3, i % 3, sums[i], expected[i]))
+            .collect();
+        assert!(
+            bad.is_empty(),
+            "{start} → {end}: the resumed film is not the {start}'s samples 0-1 plus the {end}'s \
+             samples 2-3 ({}): {bad:#?}",
+            resumed.display()
+        );
+        // The check can fail: continuing with samples 0, 1 again (a restart at index 0) would
+        // give first2 + other2, which differs from the expectation in most pixels.
+        let restart_matches =
+            (0..sums.len()).filter(|&i| (a[i] + b2[i] - expected[i]).abs() <= tolerance(expected[i])).count();
+        assert!(restart_matches < sums.len() / 2, "samples 2-3 look like samples 0-1: {restart_matches}");
+    }
+}
+
+/// The environment of a machine without any adapter: no Vulkan driver (a missing ICD file)
+/// and wgpu limited to Vulkan (otherwise it finds Mesa's OpenGL llvmpipe through EGL).
+const NO_ADAPTER: [(&str, &str); 3] = [
+    ("VK_ICD_FILENAMES", "/nonexistent/furnace-no-icd.json"),
+    ("VK_DRIVER_FILES", "/nonexistent/furnace-no-icd.json"),
+    ("WGPU_BACKEND", "vulkan"),
+];
+
+#[test]
+fn no_adapter_is_one_line_and_auto_falls_back_to_the_cpu() {
+    let dir = temp_dir("no_adapter");
+    let run = |backend: &str, name: &str| {
+        Command::new(env!("CARGO_BIN_EXE_furnace"))
+            .args(["render", "--backend", backend, "--width", "8", "--height", "8", "--spp", "1", "--out"])
+            .arg(dir.join(name))
+            .envs(NO_ADAPTER)
+            .output()
+            .unwrap()
+    };
+    let o = run("gpu", "g");
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.starts_with("error: no GPU adapter found"), "{err}");
+    assert!(err.contains("install a Vulkan driver"), "the error says what to do: {err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!dir.join("g.exr").exists() && !dir.join("g.png").exists());
+
+    // auto: no hardware adapter, so the CPU integrator, without a word about GPUs.
+    let o = run("auto", "a");
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_on(&o, "cpu");
+    assert!(!stderr(&o).contains("error"), "{}", stderr(&o));
+    assert!(dir.join("a.exr").is_file() && dir.join("a.png").is_file());
+}
