@@ -367,7 +367,14 @@ fn cpu_surface_point(scene: &Scene, t: usize, b1: f32, b2: f32, uv: Vec2, direct
     let position = (1.0 - b1 - b2) * v0 + b1 * v1 + b2 * v2;
     let c = (v1 - v0).cross(v2 - v0);
     let cross_condition = (v1 - v0).length() * (v2 - v0).length() / c.length();
-    let mut geometric = c.normalize_or_zero();
+    // furnace-cpu's `geometric_normal` (private there).
+    let mut geometric = match c.normalize_or_zero() {
+        n if n != Vec3::ZERO || !c.is_finite() => n,
+        _ => {
+            let m = c.abs().max_element();
+            if m > 0.0 { (c / m).normalize_or_zero() } else { Vec3::ZERO }
+        }
+    };
     let mut shading = g.shading_normal(t, b1, b2).filter(|n| *n != Vec3::ZERO).unwrap_or(geometric);
     let (mut perturbed_len, mut tangent_perp_len) = (1.0, 1.0);
     if let Some(normal_map) = &material.normal_texture

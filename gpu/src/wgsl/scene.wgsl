@@ -24,7 +24,9 @@
 //   missing texture is opaque white).
 // * `scene_material_evaluate` → `MaterialSample`: `Material::evaluate`.
 // * `scene_surface_point`: furnace-cpu's `Renderer::surface_point`: position, geometric normal
-//   `normalize_or_zero(cross(v1 − v0, v2 − v0))`, interpolated shading normal (geometric when
+//   `normalize_or_zero(cross(v1 − v0, v2 − v0))` (furnace-cpu's `geometric_normal`: the cross
+//   product divided by its largest component first where |cross|² over- or underflows f32),
+//   interpolated shading normal (geometric when
 //   zero), the glTF normal map in the frame (T ⟂ N, B = w·N×T, N), and the orientation: on the
 //   back (dot(geometric, direction) > 0) a double-sided material flips both normals, a
 //   single-sided one gives no surface (`valid == 0`).
@@ -153,6 +155,24 @@ fn scene_normalize_or(v: vec3<f32>, fallback: vec3<f32>) -> vec3<f32> {
 
 fn scene_normalize_or_zero(v: vec3<f32>) -> vec3<f32> {
     return scene_normalize_or(v, vec3<f32>(0.0));
+}
+
+// furnace-cpu's `geometric_normal`: `normalize_or_zero(cross(v1 − v0, v2 − v0))`, except where
+// that is zero for a finite, non-zero cross product (|cross|² overflows f32 for edges beyond
+// ~4e9, underflows below ~1e-10): then the cross product is divided by its largest component
+// first. Bit-identical to the plain form wherever that is not zero.
+fn scene_geometric_normal(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>) -> vec3<f32> {
+    let c = scene_cross(v1 - v0, v2 - v0);
+    let n = scene_normalize_or_zero(c);
+    let exponent = bitcast<vec3<u32>>(c) & vec3<u32>(0x7f800000u);
+    if any(n != vec3<f32>(0.0)) || any(exponent == vec3<u32>(0x7f800000u)) {
+        return n;
+    }
+    let m = max(max(abs(c.x), abs(c.y)), abs(c.z));
+    if m > 0.0 {
+        return scene_normalize_or_zero(c / m);
+    }
+    return vec3<f32>(0.0);
 }
 
 // (1 − b1 − b2)·a + b1·b + b2·c, glam's order.
@@ -357,7 +377,7 @@ fn scene_surface_point(triangle: u32, b1: f32, b2: f32, uv: vec2<f32>, direction
     let v1 = scene_vertices[t.i1].position;
     let v2 = scene_vertices[t.i2].position;
     let position = scene_interpolate3(v0, v1, v2, b1, b2);
-    var geometric = scene_normalize_or_zero(scene_cross(v1 - v0, v2 - v0));
+    var geometric = scene_geometric_normal(v0, v1, v2);
     var shading = scene_shading_normal(triangle, b1, b2);
     if all(shading == vec3<f32>(0.0)) {
         shading = geometric;
