@@ -60,3 +60,30 @@ fn scaled_cornell_box_renders_the_same_image_on_the_gpu() {
         assert!((ratio - 1.0).abs() < 1e-3, "channel {c}: mean at 1e10 / mean at 1 = {ratio} ({means:?})");
     }
 }
+
+/// A fixed-N sampler used past its design on the GPU, as on the CPU
+/// (`furnace-cpu`'s `tests/samplers.rs`): Hammersley and CMJ built for N = 4 render samples
+/// 0…3, refuse a pass that reaches sample 4 with the sampler's error (naming N), and the refused
+/// pass adds nothing to the film.
+#[test]
+fn fixed_n_sampler_refuses_to_run_past_n_on_the_gpu() {
+    for sampler in [SamplerKind::Hammersley, SamplerKind::Cmj] {
+        let Some(ctx) = test_context() else { return };
+        let settings = RenderSettings {
+            width: 8,
+            height: 8,
+            sampler,
+            sample_count: Some(4),
+            ..RenderSettings::default()
+        };
+        let scene =
+            furnace_scene::builtin::furnace_sphere(furnace_scene::builtin::lambert(glam::Vec3::ONE), 8);
+        let camera = scene.default_camera();
+        let mut gpu = GpuRenderer::new(ctx, &scene, &camera, settings).expect("N given");
+        gpu.render_pass(0, 4).expect("samples 0…3 are within N");
+        let err = gpu.render_pass(4, 1).expect_err("sample 4 of N = 4").to_string();
+        assert!(err.contains("N = 4") && err.contains("sample 4"), "{sampler}: {err}");
+        let film = gpu.film().expect("the film");
+        assert!(film.count.iter().all(|&c| c == 4), "{sampler}: the refused pass added samples");
+    }
+}
