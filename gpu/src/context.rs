@@ -70,9 +70,16 @@ pub struct GpuContext {
     lost: Arc<Mutex<Option<String>>>,
 }
 
-/// All adapters of all backends wgpu was built with (`WGPU_BACKEND` narrows them).
+/// The adapters of Vulkan, Metal and DX12 — the backends furnace supports (`WGPU_BACKEND`
+/// chooses others). Not OpenGL: wgpu would fall back to Mesa's GL llvmpipe where no Vulkan
+/// driver is installed (200× slower than lavapipe, chosen silently), and probing GL on a
+/// headless machine prints driver noise on stderr.
 fn instance() -> wgpu::Instance {
-    wgpu::Instance::new(wgpu::InstanceDescriptor::new_without_display_handle_from_env())
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    if std::env::var_os("WGPU_BACKEND").is_none() {
+        desc.backends = wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12;
+    }
+    wgpu::Instance::new(desc)
 }
 
 /// Preference order of device types (lower is better).

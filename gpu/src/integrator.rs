@@ -37,7 +37,6 @@ use furnace_accel::{BuildOptions, Bvh};
 use furnace_cpu::RenderSettings;
 use furnace_sampling::AnySampler;
 use furnace_scene::{AlphaMode, Camera, Projection, Scene};
-use wgpu::util::DeviceExt;
 
 /// `FrameParams.flags`: Russian roulette on.
 pub const FRAME_RUSSIAN_ROULETTE: u32 = 1;
@@ -202,14 +201,10 @@ pub fn shader_source(precision: FilmPrecision) -> String {
     ])
 }
 
-fn storage_buffer(ctx: &GpuContext, label: &str, words: &[u32]) -> wgpu::Buffer {
+fn storage_buffer(ctx: &GpuContext, label: &str, words: &[u32]) -> Result<wgpu::Buffer, GpuError> {
     let mut v = words.to_vec();
     v.resize(v.len().max(4), 0);
-    ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-        label: Some(label),
-        contents: bytemuck::cast_slice(&v),
-        usage: wgpu::BufferUsages::STORAGE,
-    })
+    ctx.buffer_init(label, bytemuck::cast_slice(&v), wgpu::BufferUsages::STORAGE)
 }
 
 fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
@@ -246,15 +241,15 @@ impl GpuRenderer {
         let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
         let bvh_words = BvhBuffers::new(&bvh, limit)?;
         let [nodes, tris] = bvh_words.extra();
-        let bvh = [storage_buffer(&ctx, "bvh nodes", nodes), storage_buffer(&ctx, "bvh triangles", tris)];
+        let bvh = [storage_buffer(&ctx, "bvh nodes", nodes)?, storage_buffer(&ctx, "bvh triangles", tris)?];
         let bvh_bytes = bvh.iter().map(wgpu::Buffer::size).sum();
         let gpu_scene = GpuScene::upload(&ctx, scene)?;
-        let ray_counter = ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("ray counter"),
-            contents: bytemuck::cast_slice(&[0u32; COUNTER_WORDS]),
-            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-        });
-        let turquin = storage_buffer(&ctx, "turquin", bytemuck::cast_slice(&brdf::turquin_table()));
+        let ray_counter = ctx.buffer_init(
+            "ray counter",
+            bytemuck::cast_slice(&[0u32; COUNTER_WORDS]),
+            wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+        )?;
+        let turquin = storage_buffer(&ctx, "turquin", bytemuck::cast_slice(&brdf::turquin_table()))?;
         let precision = FilmPrecision::for_context(&ctx);
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
         let base = frame_params(scene, camera, &settings, sampler_params);
@@ -513,11 +508,7 @@ impl GpuRenderer {
             bytes[k * SLOT as usize..][..size_of::<FrameParams>()].copy_from_slice(bytemuck::bytes_of(&p));
         }
         let device = &self.ctx.device;
-        let params = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-            label: Some("frame params"),
-            contents: &bytes,
-            usage: wgpu::BufferUsages::UNIFORM,
-        });
+        let params = self.ctx.buffer_init("frame params", &bytes, wgpu::BufferUsages::UNIFORM)?;
         let mut entries = vec![wgpu::BindGroupEntry {
             binding: 0,
             resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {

@@ -33,7 +33,6 @@
 
 use bytemuck::{Pod, Zeroable};
 use furnace_scene::{AlphaMode, ColorSpace, Scene, Texture, TextureRef, WrapMode, srgb_to_linear};
-use wgpu::util::DeviceExt;
 
 use crate::{GpuContext, GpuError};
 
@@ -482,13 +481,15 @@ impl GpuScene {
         ];
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let words = packed.extra();
-        let buffers = std::array::from_fn(|k| {
-            ctx.device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(names[k]),
-                contents: bytemuck::cast_slice(words[k]),
-                usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
-            })
-        });
+        let mut made = Vec::with_capacity(names.len());
+        for (name, w) in names.iter().zip(words) {
+            made.push(ctx.buffer_init(
+                name,
+                bytemuck::cast_slice(w),
+                wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
+            )?);
+        }
+        let buffers: [wgpu::Buffer; 6] = made.try_into().expect("one buffer per name");
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Wgpu(e.to_string()));
         }

@@ -4,9 +4,10 @@
 //! - **Device loss**: `wgpu::Device::destroy` loses the device the way a driver reset does
 //!   (wgpu marks it invalid and calls the device-lost callback at its next poll). After it,
 //!   every call must return `Err(GpuError::DeviceLost)` — the first and all later ones — within
-//!   seconds, not panic or hang; each runs on its own thread with a time limit. Reading the film
-//!   passes; rendering a pass panics inside `wgpu::util::DeviceExt::create_buffer_init` (see
-//!   [`rendering_on_a_lost_device_is_device_lost`], ignored until `integrator.rs` is fixed).
+//!   seconds, not panic or hang; each runs on its own thread with a time limit — reading the
+//!   film and rendering a pass ([`rendering_on_a_lost_device_is_device_lost`]: it panicked in
+//!   `wgpu::util::DeviceExt::create_buffer_init` until the renderer used
+//!   `GpuContext::buffer_init`).
 //! - **Too large**: the checks run before anything is allocated, so they are provoked at no
 //!   cost: a film of one row more than the largest storage binding holds (any adapter), and a
 //!   scene whose vertex buffer is 16 bytes over it (built in host memory, so only where the
@@ -100,12 +101,11 @@ fn buffer_init_holds_its_contents() {
     }
 }
 
-/// Fails until `GpuRenderer::render_pass` stops using `wgpu::util::DeviceExt::create_buffer_init`
-/// for its uniform buffer: on a lost device that buffer cannot be mapped at creation and wgpu's
-/// helper panics ("Failed to get mapped range for buffer created with mapped_at_creation").
-/// The fix: `self.ctx.buffer_init("frame params", &bytes, wgpu::BufferUsages::UNIFORM)?`.
+/// Rendering on a lost device is `DeviceLost`. It failed (a panic) while `render_pass` made its
+/// uniform buffer with `wgpu::util::DeviceExt::create_buffer_init`: on a lost device that
+/// buffer cannot be mapped at creation ("Failed to get mapped range for buffer created with
+/// mapped_at_creation"); the renderer now uses `GpuContext::buffer_init`.
 #[test]
-#[ignore = "render_pass panics on a lost device until integrator.rs uses GpuContext::buffer_init"]
 fn rendering_on_a_lost_device_is_device_lost() {
     // Loss not yet noticed (destroy, then render at once), and noticed (after a read).
     for noticed in [false, true] {
