@@ -308,3 +308,52 @@ fn random_sampling_converges_at_minus_one_half() {
 /// about 3× (RMSE) and 2× (relMSE) the largest deviation seen over seeds, so that the test
 /// fails on correlated or biased sampling (slope towards 0), not on a change of random numbers.
 const TOLERANCE: f64 = 0.05;
+
+/// `--backends cpu,gpu`: the GPU rows exist, the adapter is recorded, and since both backends
+/// trace the same paths (images equal to float rounding: RMSE ~1e-8 between them on lavapipe),
+/// their errors against the reference agree to 1e-6 at every checkpoint (triangle inequality:
+/// |e_gpu − e_cpu| ≤ RMSE(gpu image, cpu image)). Needs a GPU adapter (lavapipe is enough);
+/// `FURNACE_SKIP_GPU_TESTS=1` skips it.
+#[test]
+fn gpu_rows_match_the_cpu_rows() {
+    if std::env::var("FURNACE_SKIP_GPU_TESTS").is_ok_and(|v| v == "1") {
+        eprintln!("FURNACE_SKIP_GPU_TESTS=1: skipping a GPU test");
+        return;
+    }
+    let dir = temp_dir("gpu");
+    let reference = reference(&dir, 8, 64);
+    let out = dir.join("study");
+    let o = furnace(&[
+        "chart",
+        "--reference",
+        reference.to_str().unwrap(),
+        "--samplers",
+        "sobol",
+        "--sampling",
+        "caps",
+        "--backends",
+        "cpu,gpu",
+        "--spp",
+        "2",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc = json(&out.join("chart.json"));
+    assert!(doc["machine"]["gpu_adapter"].is_string(), "{}", doc["machine"]);
+    let rmse = |backend: &str, spp: u64| {
+        doc["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["backend"] == backend && r["spp"] == spp)
+            .unwrap_or_else(|| panic!("no {backend} row at {spp} spp"))["rmse"]
+            .as_f64()
+            .unwrap()
+    };
+    for spp in [1, 2] {
+        let (c, g) = (rmse("cpu", spp), rmse("gpu", spp));
+        assert!((c - g).abs() <= 1e-6, "spp {spp}: cpu {c}, gpu {g}");
+    }
+}
