@@ -110,7 +110,8 @@ pub struct ChartArgs {
     /// BRDF (GGX) sampling methods, comma-separated: ndf, vndf, caps.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "caps,vndf,ndf")]
     pub sampling: Vec<SamplingArg>,
-    /// Energy compensation, comma-separated: on, off [default: the reference's].
+    /// Energy compensation, comma-separated: on, off [default: the reference's; with
+    /// --reference-compensated, off and on].
     #[arg(long, value_enum, value_delimiter = ',')]
     pub compensation: Vec<Switch>,
     /// Backends, comma-separated: cpu, gpu.
@@ -343,7 +344,10 @@ impl Study {
 
     fn compensations(&self) -> Vec<Switch> {
         if self.args.compensation.is_empty() {
-            vec![self.reference.compensation]
+            // Default: the references' models (both, when a compensated one is given).
+            let mut v = vec![self.reference.compensation];
+            v.extend(self.compensated.as_ref().map(|r| r.compensation));
+            dedup(&v)
         } else {
             dedup(&self.args.compensation)
         }
