@@ -74,12 +74,20 @@ pub struct GpuContext {
 /// chooses others). Not OpenGL: wgpu would fall back to Mesa's GL llvmpipe where no Vulkan
 /// driver is installed (200× slower than lavapipe, chosen silently), and probing GL on a
 /// headless machine prints driver noise on stderr.
-fn instance() -> wgpu::Instance {
-    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
-    if std::env::var_os("WGPU_BACKEND").is_none() {
-        desc.backends = wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12;
-    }
-    wgpu::Instance::new(desc)
+///
+/// One instance per process, shared by every context: NVIDIA's Vulkan driver (580, H100) finds
+/// no adapter after about 30 instances were created and dropped in a process (measured:
+/// `examples/ctx_churn.rs`, the 31st `GpuContext::new` failed; a `furnace chart` study makes a
+/// renderer per configuration and checkpoint).
+fn instance() -> &'static wgpu::Instance {
+    static INSTANCE: std::sync::OnceLock<wgpu::Instance> = std::sync::OnceLock::new();
+    INSTANCE.get_or_init(|| {
+        let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+        if std::env::var_os("WGPU_BACKEND").is_none() {
+            desc.backends = wgpu::Backends::VULKAN | wgpu::Backends::METAL | wgpu::Backends::DX12;
+        }
+        wgpu::Instance::new(desc)
+    })
 }
 
 /// Preference order of device types (lower is better).

@@ -59,3 +59,32 @@ fn naga_reflection_reports_wgsl_offsets() {
         std::panic::catch_unwind(|| common::assert_layout(src, "S", 32, &[("a", 0), ("b", 4), ("c", 16)]));
     assert!(mismatch.is_err(), "a wrong offset must fail");
 }
+
+/// Many contexts, one after another, in one process: each works. NVIDIA's Vulkan driver (580,
+/// H100) found no adapter at the 31st `GpuContext::new` when every context created its own
+/// `wgpu::Instance` (a `furnace chart` study makes a renderer per configuration and
+/// checkpoint); contexts now share one instance. Lavapipe never failed, so in CI this checks
+/// only that shared-instance contexts stay independent and usable.
+#[test]
+fn forty_contexts_in_one_process_all_work() {
+    if test_context().is_none() {
+        return;
+    }
+    let src = format!(
+        "{}\n{}",
+        kernel::PREAMBLE,
+        r#"
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = invocation_index(gid, groups);
+    if i >= params.x { return; }
+    output[i] = input[i] + 1u;
+}
+"#
+    );
+    for k in 0..40u32 {
+        let ctx = test_context().unwrap_or_else(|| panic!("context {k}: no adapter"));
+        let out = kernel::run(&ctx, &src, &[k], 1, 1).unwrap();
+        assert_eq!(out, [k + 1], "context {k}");
+    }
+}
