@@ -808,6 +808,9 @@ fn fmt_slope(k: f64) -> String {
     format!("{k:.2}").replace('-', "−")
 }
 
+/// How long the first configuration of each backend in a process warms up (see `make_backend`).
+const WARM_UP_SECONDS: f64 = 1.0;
+
 /// The integrator of `config`, fresh (an empty film), and for a GPU its adapter in one line;
 /// `n` is N for a fixed-N sampler.
 fn make_backend(
@@ -825,18 +828,40 @@ fn make_backend(
         },
         ..study.settings
     };
+    // Untimed warm-up passes, then discarded: the first passes of a process pay costs that are
+    // not the method's — the driver compiling the pipeline on first dispatch, rayon starting
+    // its threads, and above all an idle GPU's clocks ramping up (on the H100 the first
+    // configuration's checkpoints took 3–5× the same work later, and a 1-spp warm-up did not
+    // help): every configuration renders one pass, the first of each backend in the process
+    // passes for WARM_UP_SECONDS.
+    let warm_up = |pass: &mut dyn FnMut() -> Result<(), String>| -> Result<(), String> {
+        static WARM: [std::sync::atomic::AtomicBool; 2] =
+            [std::sync::atomic::AtomicBool::new(false), std::sync::atomic::AtomicBool::new(false)];
+        let first = !WARM[c.backend as usize].swap(true, std::sync::atomic::Ordering::Relaxed);
+        let start = Instant::now();
+        pass()?;
+        while first && start.elapsed().as_secs_f64() < WARM_UP_SECONDS {
+            pass()?;
+        }
+        Ok(())
+    };
     match c.backend {
         ChartBackend::Cpu => {
             let renderer = Renderer::new(study.scene.clone(), settings).map_err(|e| e.to_string())?;
-            let film = renderer.new_film();
+            let mut film = renderer.new_film();
+            warm_up(&mut || renderer.render_pass(&mut film, 0, 1).map_err(|e| e.to_string()))?;
+            film.clear();
             Ok((Box::new(CpuBackend::new(renderer, film)), None))
         }
         ChartBackend::Gpu => {
             let choice = study.args.adapter.clone().map_or(AdapterChoice::Best, AdapterChoice::Named);
             let ctx = GpuContext::new(&choice).map_err(|e| e.to_string())?;
             let camera = study.scene.default_camera();
-            let renderer =
+            let mut renderer =
                 GpuRenderer::new(ctx, &study.scene, &camera, settings).map_err(|e| e.to_string())?;
+            warm_up(&mut || renderer.render_pass(0, 1).map_err(|e| e.to_string()))?;
+            let (w, h) = (settings.width, settings.height);
+            renderer.load_film(&furnace_gpu::film::FilmData::zero(w, h)).map_err(|e| e.to_string())?;
             let backend = GpuBackend::new(renderer, None)?;
             let adapter = backend.describe();
             Ok((Box::new(backend), Some(adapter)))

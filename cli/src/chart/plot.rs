@@ -230,7 +230,11 @@ where
 
     // The legend: a line segment with its marker, then the label, one entry per row.
     let legend = legend_area.margin(50, 10, 8, 10);
-    let row = 22i32.min(((SIZE.1 as i32 - 120) / series.len().max(1) as i32).max(12));
+    // Rows shrink so that the entries and the note below them fit the height (the note was
+    // drawn past the bottom, its lines piled on each other, with 30 series).
+    let note_lines = wrap(&labels.note, 46);
+    let room = SIZE.1 as i32 - 58 - 14 - 17 * note_lines.len() as i32;
+    let row = 22i32.min((room / series.len().max(1) as i32).max(10));
     let font = ("sans-serif", if row >= 18 { 14 } else { 11 }).into_font();
     for (i, s) in series.iter().enumerate() {
         let y = i as i32 * row + row / 2;
@@ -248,7 +252,7 @@ where
     }
     let note_y = series.len() as i32 * row + 14;
     let note_font = ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90));
-    for (k, line) in wrap(&labels.note, 46).iter().enumerate() {
+    for (k, line) in note_lines.iter().enumerate() {
         legend.draw(&Text::new(line.clone(), (0, note_y + 17 * k as i32), note_font.clone())).map_err(err)?;
     }
     Ok(())
