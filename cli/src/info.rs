@@ -34,7 +34,7 @@ fn describe(scene: &Scene) -> String {
     line("scene", scene.name.clone());
     line("triangles", s.triangles.to_string());
     line("vertices", s.vertices.to_string());
-    line("dropped", format!("{} degenerate or non-finite triangles", s.dropped_triangles));
+    line("dropped", format!("{} zero-area triangles (they cannot be hit)", s.dropped_triangles));
     line("materials", format!("{} (including glTF's default material)", s.materials));
     line(
         "textures",
