@@ -9,6 +9,13 @@
 //! Binder instead move the point by a fixed number of **ULPs** along the normal, done in integer
 //! arithmetic on the bit pattern, which scales with the coordinate's own precision; close to the
 //! origin, where ULPs become tiny (and subnormal), a small fixed float offset takes over.
+//!
+//! That float offset (2⁻¹⁶ below |p| = 1/32) assumes a scene of about unit size: in a scene
+//! 1e-4 across it is a sixth of the scene and light leaks through corners (measured:
+//! `cpu/tests/stability.rs`). [`offset_ray_origin_scaled`] multiplies both constants by the
+//! scene's [`offset_scale`] — the power of two at or above its extent, at most 1 — so a scene
+//! scaled by a power of two gets exactly scaled offsets, and scenes of unit size or more keep
+//! the paper's constants bit for bit.
 
 use glam::Vec3;
 
@@ -40,16 +47,54 @@ pub const INT_SCALE: f32 = 256.0;
 /// ```
 #[inline]
 pub fn offset_ray_origin(p: Vec3, n: Vec3) -> Vec3 {
-    Vec3::new(offset_coord(p.x, n.x), offset_coord(p.y, n.y), offset_coord(p.z, n.z))
+    offset_ray_origin_scaled(p, n, 1.0)
+}
+
+/// [`offset_ray_origin`] for a scene of length scale `scale` ([`offset_scale`] of its extent):
+/// coordinates below `ORIGIN · scale` move by `FLOAT_SCALE · scale · n_i`; the others by
+/// `256 · n_i` ULPs as before. `scale = 1` is exactly [`offset_ray_origin`].
+///
+/// ```
+/// use furnace_accel::{offset_ray_origin_scaled, offset_scale};
+/// use glam::Vec3;
+/// // A scene 1e-4 across: the offset is a few hundred ULPs, not a sixth of the scene.
+/// let s = offset_scale(1e-4);
+/// let q = offset_ray_origin_scaled(Vec3::new(2e-6, 5e-5, 0.0), Vec3::Z, s);
+/// assert!(q.z > 0.0 && q.z < 1e-8);
+/// ```
+#[inline]
+pub fn offset_ray_origin_scaled(p: Vec3, n: Vec3, scale: f32) -> Vec3 {
+    let (origin, float_scale) = (ORIGIN * scale, FLOAT_SCALE * scale);
+    Vec3::new(
+        offset_coord(p.x, n.x, origin, float_scale),
+        offset_coord(p.y, n.y, origin, float_scale),
+        offset_coord(p.z, n.z, origin, float_scale),
+    )
+}
+
+/// The length scale of [`offset_ray_origin_scaled`] for a scene whose coordinates all lie within
+/// `±extent`: the smallest power of two ≥ `extent`, at most 1 (larger scenes keep the paper's
+/// constants: their coordinates above 1/32 take integer offsets anyway) and at least 2⁻¹⁰⁰ (so
+/// the float step stays a normal float). Not finite or ≥ 1 → 1.
+pub fn offset_scale(extent: f32) -> f32 {
+    const MIN: f32 = 7.888609e-31; // 2^-100
+    if !(extent < 1.0) {
+        return 1.0;
+    }
+    if !(extent > MIN) {
+        return MIN;
+    }
+    let pow = f32::from_bits(extent.to_bits() & 0x7f80_0000); // 2^floor(log2 extent)
+    if pow == extent { pow } else { 2.0 * pow }
 }
 
 #[inline]
-fn offset_coord(p: f32, n: f32) -> f32 {
+fn offset_coord(p: f32, n: f32, origin: f32, float_scale: f32) -> f32 {
     if !p.is_finite() || !n.is_finite() {
         return p;
     }
-    if p.abs() < ORIGIN {
-        return p + FLOAT_SCALE * n;
+    if p.abs() < origin {
+        return p + float_scale * n;
     }
     // Integer offset in ULPs; `as i32` truncates toward zero like the paper's `int(...)`.
     let of_i = (INT_SCALE * n) as i32;
@@ -65,6 +110,23 @@ fn offset_coord(p: f32, n: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn offset_scale_is_the_power_of_two_at_or_above_the_extent() {
+        assert_eq!(offset_scale(1.0), 1.0);
+        assert_eq!(offset_scale(250.0), 1.0);
+        assert_eq!(offset_scale(f32::NAN), 1.0);
+        assert_eq!(offset_scale(f32::INFINITY), 1.0);
+        assert_eq!(offset_scale(0.5), 0.5);
+        assert_eq!(offset_scale(0.6), 1.0);
+        assert_eq!(offset_scale(1e-4), 1.0 / 8192.0);
+        assert_eq!(offset_scale(0.0), 7.888609e-31);
+        // Scaled by a power of two, offsets scale exactly.
+        let (p, n) = (Vec3::new(0.01, -0.3, 0.02), Vec3::new(0.6, 0.0, -0.8));
+        let k = 2f32.powi(-20);
+        assert_eq!(offset_ray_origin_scaled(p * k, n, k) / k, offset_ray_origin_scaled(p, n, 1.0));
+        assert_eq!(offset_ray_origin_scaled(p, n, 1.0), offset_ray_origin(p, n));
+    }
 
     #[test]
     fn moves_along_the_normal_at_every_scale() {

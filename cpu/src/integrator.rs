@@ -2,7 +2,7 @@
 
 use crate::film::Film;
 use crate::settings::RenderSettings;
-use furnace_accel::{BuildOptions, Bvh, Hit, offset_ray_origin};
+use furnace_accel::{BuildOptions, Bvh, Hit, offset_ray_origin_scaled, offset_scale};
 use furnace_brdf::{Bsdf, MetallicRoughness, MetallicRoughnessParams, SpecularOptions};
 use furnace_sampling::{AnySampler, Sampler, SamplerError};
 use furnace_scene::{AlphaMode, Camera, Material, MaterialSample, Scene, oct_decode};
@@ -36,6 +36,16 @@ pub struct Renderer {
     normals: Vec<Vec3>,
     /// Whether any material is alpha-masked (otherwise rays skip the mask callback).
     any_masked: bool,
+    /// The ray offsets' length scale ([`scene_offset_scale`]).
+    offset_scale: f32,
+}
+
+/// The length scale of the scene's ray offsets: `furnace_accel::offset_scale` of the largest
+/// coordinate magnitude (1 for scenes of unit size or more: the paper's constants).
+pub fn scene_offset_scale(scene: &Scene) -> f32 {
+    let (lo, hi) = scene.geometry.bounds();
+    let extent = lo.abs().max(hi.abs()).max_element();
+    offset_scale(if extent.is_finite() { extent } else { 1.0 })
 }
 
 /// A material's emission and BSDF, when they are the same everywhere on its surface.
@@ -96,6 +106,7 @@ impl Renderer {
             })
             .collect();
         let normals = g.normals.iter().map(|&e| oct_decode(e)).collect();
+        let offset_scale = scene_offset_scale(&scene);
         Ok(Self {
             scene,
             settings,
@@ -106,6 +117,7 @@ impl Renderer {
             constant_materials,
             normals,
             any_masked,
+            offset_scale,
         })
     }
 
@@ -227,7 +239,7 @@ impl Renderer {
             };
             let frame = Frame::new(surface.shading);
             let wo = frame.to_local(-direction);
-            let leave = offset_ray_origin(surface.position, surface.geometric);
+            let leave = offset_ray_origin_scaled(surface.position, surface.geometric, self.offset_scale);
 
             // The sun, a delta light: gathered by a shadow ray only.
             if let Some(sun) = scene.sun {

@@ -97,5 +97,5 @@ mod integrator;
 mod settings;
 
 pub use film::{Film, FilmSizeError};
-pub use integrator::{DIM_FIRST_BOUNCE, DIM_PIXEL, DIMS_PER_BOUNCE, Renderer};
+pub use integrator::{DIM_FIRST_BOUNCE, DIM_PIXEL, DIMS_PER_BOUNCE, Renderer, scene_offset_scale};
 pub use settings::RenderSettings;

@@ -49,7 +49,7 @@ pub const FRAME_HAS_SUN: u32 = 8;
 /// `FrameParams.flags`: add the rays traced to the ray counter (binding 12).
 pub const FRAME_COUNT_RAYS: u32 = 16;
 
-/// The uniform block of one dispatch (176 bytes), twin of `integrator.wgsl`'s `FrameParams`.
+/// The uniform block of one dispatch (192 bytes), twin of `integrator.wgsl`'s `FrameParams`.
 #[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
 #[repr(C)]
 pub struct FrameParams {
@@ -95,9 +95,13 @@ pub struct FrameParams {
     pub group_samples: u32,
     /// Width in pixels of a workgroup's tile of `64 / group_samples` pixels.
     pub tile_width: u32,
+    /// The ray offsets' length scale ([`furnace_cpu::scene_offset_scale`]).
+    pub offset_scale: f32,
+    /// Padding.
+    pub pad: [u32; 3],
 }
 
-const _: () = assert!(size_of::<FrameParams>() == 176);
+const _: () = assert!(size_of::<FrameParams>() == 192);
 
 /// Words of the counter buffer (binding 12): rays, nodes and triangles as 64-bit pairs, then
 /// fallbacks and the deepest stack.
@@ -619,5 +623,7 @@ fn frame_params(scene: &Scene, camera: &Camera, s: &RenderSettings, sampler: Sam
         aspect: w / h,
         group_samples: 1,
         tile_width: 8,
+        offset_scale: furnace_cpu::scene_offset_scale(scene),
+        pad: [0; 3],
     }
 }

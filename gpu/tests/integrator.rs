@@ -65,7 +65,7 @@ fn frame_params_layout_matches_wgsl() {
     macro_rules! off {
         ($($f:ident),*) => { [$((stringify!($f), std::mem::offset_of!(FrameParams, $f))),*] };
     }
-    let members = off!(
+    let mut members = off!(
         cam_x,
         cam_y,
         cam_z,
@@ -85,9 +85,11 @@ fn frame_params_layout_matches_wgsl() {
         fov_scale,
         aspect,
         group_samples,
-        tile_width
+        tile_width,
+        offset_scale
     )
     .to_vec();
+    members.extend([("pad0", 180), ("pad1", 184), ("pad2", 188)]);
     common::assert_layout(&src, "FrameParams", size_of::<FrameParams>(), &members);
 }
 

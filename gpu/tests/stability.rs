@@ -3,7 +3,10 @@
 //! scale 1. Before the geometric normal was formed robustly (`scene_geometric_normal` in
 //! `src/wgsl/scene.wgsl`, twin of furnace-cpu's `geometric_normal`), |cross|² overflowed f32,
 //! the normal came out zero and every large triangle ended its path: the image lost half its
-//! light (measured on the CPU twin: mean ratio 0.50–0.65).
+//! light (measured on the CPU twin: mean ratio 0.50–0.65). And scaled by 1e-8: before the ray
+//! offsets scaled with the scene (`offset_ray_origin_scaled`, twin of furnace-accel's), their
+//! absolute 2⁻¹⁶ step near the origin was larger than the whole box and light leaked (CPU twin
+//! at 1e-6: mean ratio 1.65).
 //!
 //! 32×32 pixels, 4 Sobol samples, same seed at both scales; the image means must agree within
 //! 1e-3 relative (the same-sample GPU/CPU parity bar of `tests/integrator.rs`: most paths are
@@ -35,7 +38,7 @@ fn scaled_cornell_box_renders_the_same_image_on_the_gpu() {
         ..RenderSettings::default()
     };
     let mut means = vec![];
-    for s in [1.0f32, 1e10] {
+    for s in [1.0f32, 1e10, 1e-8] {
         // A renderer owns its context: one per scale.
         let Some(ctx) = test_context() else { return };
         let scene = scaled_cbox(s);
@@ -55,9 +58,11 @@ fn scaled_cornell_box_renders_the_same_image_on_the_gpu() {
         eprintln!("s = {s:e}: image mean {m:?}");
         means.push(m);
     }
-    for c in 0..3 {
-        let ratio = means[1][c] / means[0][c];
-        assert!((ratio - 1.0).abs() < 1e-3, "channel {c}: mean at 1e10 / mean at 1 = {ratio} ({means:?})");
+    for (k, s) in [(1, "1e10"), (2, "1e-8")] {
+        for c in 0..3 {
+            let ratio = means[k][c] / means[0][c];
+            assert!((ratio - 1.0).abs() < 1e-3, "channel {c}: mean at {s} / mean at 1 = {ratio} ({means:?})");
+        }
     }
 }
 

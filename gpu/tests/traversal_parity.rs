@@ -34,7 +34,10 @@ use common::Rng;
 
 use std::time::Instant;
 
-use furnace_accel::{Bvh, GpuCwbvhNode, GpuTriangle, intersect_triangle, offset_ray_origin};
+use furnace_accel::{
+    Bvh, GpuCwbvhNode, GpuTriangle, intersect_triangle, offset_ray_origin, offset_ray_origin_scaled,
+    offset_scale,
+};
 use furnace_gpu::traverse::{self, BvhBuffers};
 use furnace_gpu::{GpuContext, kernel, test_context, wgsl};
 use glam::{DVec3, Vec2, Vec3};
@@ -765,23 +768,27 @@ fn deep_tree_overflows_the_default_stack_without_losing_hits() {
     }
 }
 
-/// `offset_ray_origin` in WGSL against accel's, bit for bit, at every scale and sign.
+/// `offset_ray_origin_scaled` in WGSL against accel's, bit for bit, at every scale and sign,
+/// with the offset scale 1 (the paper's constants) and that of a scene of |p|'s size.
 #[test]
 fn offset_ray_origin_is_bit_exact() {
     let Some(ctx) = test_context() else { return };
     let mut rng = Rng(7);
-    let mut cases: Vec<(Vec3, Vec3)> = Vec::new();
+    let mut cases: Vec<(Vec3, Vec3, f32)> = Vec::new();
     for e in -8..8 {
-        for _ in 0..256 {
+        for k in 0..256 {
             let p = rng.sphere() * 10f32.powi(e) * rng.range(0.5, 2.0);
-            cases.push((p, rng.sphere()));
+            let scale =
+                if k % 2 == 0 { 1.0 } else { offset_scale(p.abs().max_element() * rng.range(1.0, 4.0)) };
+            cases.push((p, rng.sphere(), scale));
         }
     }
-    cases.push((Vec3::new(f32::MAX, -f32::MAX, 0.0), Vec3::new(1.0, -1.0, 0.0)));
-    cases.push((Vec3::new(f32::NAN, f32::INFINITY, 1.0), Vec3::X));
-    cases.push((Vec3::ONE, Vec3::new(f32::NAN, 0.0, -0.0)));
+    cases.push((Vec3::new(f32::MAX, -f32::MAX, 0.0), Vec3::new(1.0, -1.0, 0.0), 1.0));
+    cases.push((Vec3::new(f32::NAN, f32::INFINITY, 1.0), Vec3::X, 1.0));
+    cases.push((Vec3::ONE, Vec3::new(f32::NAN, 0.0, -0.0), 1.0));
+    cases.push((Vec3::splat(1e-35), Vec3::Z, offset_scale(0.0)));
     let input: Vec<u32> =
-        cases.iter().flat_map(|(p, n)| [p.to_array(), n.to_array()]).flatten().map(f32::to_bits).collect();
+        cases.iter().flat_map(|(p, n, s)| [p.x, p.y, p.z, n.x, n.y, n.z, *s]).map(f32::to_bits).collect();
     let src = wgsl::compose(&[
         kernel::PREAMBLE,
         &traverse::bindings(0, 3),
@@ -792,10 +799,13 @@ fn offset_ray_origin_is_bit_exact() {
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = invocation_index(gid, groups);
     if i >= params.x { return; }
-    let b = 6u * i;
+    let b = 7u * i;
     let p = vec3<f32>(bitcast<f32>(input[b]), bitcast<f32>(input[b + 1u]), bitcast<f32>(input[b + 2u]));
     let n = vec3<f32>(bitcast<f32>(input[b + 3u]), bitcast<f32>(input[b + 4u]), bitcast<f32>(input[b + 5u]));
-    let q = offset_ray_origin(p, n);
+    var q = offset_ray_origin_scaled(p, n, bitcast<f32>(input[b + 6u]));
+    if bitcast<f32>(input[b + 6u]) == 1.0 {
+        q = offset_ray_origin(p, n);
+    }
     output[3u * i] = bitcast<u32>(q.x);
     output[3u * i + 1u] = bitcast<u32>(q.y);
     output[3u * i + 2u] = bitcast<u32>(q.z);
@@ -806,9 +816,12 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let buffers = BvhBuffers::new(&bvh, ctx.max_storage_binding()).unwrap();
     let out =
         kernel::run_with(&ctx, &src, &input, &buffers.extra(), 3 * cases.len(), cases.len() as u32).unwrap();
-    for (k, (p, n)) in cases.iter().enumerate() {
-        let want = offset_ray_origin(*p, *n).to_array().map(f32::to_bits);
-        assert_eq!(&out[3 * k..3 * k + 3], &want, "offset_ray_origin({p}, {n})");
+    for (k, (p, n, s)) in cases.iter().enumerate() {
+        let want = offset_ray_origin_scaled(*p, *n, *s).to_array().map(f32::to_bits);
+        assert_eq!(&out[3 * k..3 * k + 3], &want, "offset_ray_origin_scaled({p}, {n}, {s})");
+        if *s == 1.0 {
+            assert_eq!(offset_ray_origin(*p, *n).to_array().map(f32::to_bits), want);
+        }
     }
 }
 

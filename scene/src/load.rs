@@ -443,11 +443,13 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
 /// (`furnace-cpu`'s `tests/stability.rs`); 2⁴² ≈ 4.4e12.
 pub const MAX_COORDINATE: f32 = 4_398_046_511_104.0;
 
-/// Below this largest coordinate magnitude the whole scene sits where ray offsets are an
-/// absolute 2⁻¹⁶ (`furnace_accel::offset`, for coordinates under 1/32): ≥ 1.5% of the scene,
-/// enough to leak light through corners. The Cornell box renders its s = 1 image scaled by 1e-3
-/// (|coordinates| ≤ 2e-3) and visibly differs at 1e-4; 2⁻¹⁰ ≈ 9.8e-4.
-pub const MIN_COORDINATE: f32 = 1.0 / 1024.0;
+/// Smallest largest-coordinate magnitude of a scene that f32 ray tracing handles: below it the
+/// Möller–Trumbore triple products (three lengths multiplied, (2e-13)³ < 1.2e-38) become
+/// subnormal and hits lose their precision. Ray offsets scale with the scene
+/// (`furnace_accel::offset_scale`), so they are not the limit: the Cornell box renders its
+/// s = 1 image scaled by 1e-12 (|coordinates| ≤ 2e-12) and breaks at 1e-13
+/// (`furnace-cpu`'s `tests/stability.rs`); 2⁻³⁹ ≈ 1.8e-12.
+pub const MIN_COORDINATE: f32 = 1.818_989_4e-12;
 
 /// Warns when the scene's coordinates lie outside what the renderer measured to be scale
 /// invariant ([`MIN_COORDINATE`] … [`MAX_COORDINATE`]).
@@ -466,8 +468,8 @@ fn check_scale(ctx: &mut Ctx<'_>, geo: &Geometry) {
         ctx.warn(
             "",
             format!(
-                "all coordinates within ±{max:e}: ray offsets (2^-16 near the origin) are a sizeable fraction of \
-                 the scene and light may leak; scale the scene up"
+                "all coordinates within ±{max:e}: below ~{MIN_COORDINATE:.1e} f32 ray–triangle tests lose \
+                 precision (subnormal products) and hits are lost; scale the scene up"
             ),
         );
     }

@@ -49,6 +49,11 @@ struct FrameParams {
     // Invocations per pixel in a workgroup (a power of two ≤ 64), and the tile's width in pixels.
     group_samples: u32,
     tile_width: u32,
+    // The ray offsets' length scale (furnace_cpu::scene_offset_scale).
+    offset_scale: f32,
+    pad0: u32,
+    pad1: u32,
+    pad2: u32,
 }
 
 // The alpha-mask callback of traverse.wgsl: masked materials' cut-outs are not hits.
@@ -147,7 +152,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
                                ms.specular_color, params.bsdf_flags);
         let frame = frame_new(surface.shading);
         let wo = frame_to_local(frame, -direction);
-        let leave = offset_ray_origin(surface.position, surface.geometric);
+        let leave = offset_ray_origin_scaled(surface.position, surface.geometric, params.offset_scale);
 
         // The sun, a delta light: gathered by a shadow ray only.
         if (params.flags & FRAME_HAS_SUN) != 0u {

@@ -159,13 +159,14 @@ fn trv_dot(a: vec3<f32>, b: vec3<f32>) -> f32 {
     return (a.x * b.x) + (a.y * b.y) + (a.z * b.z);
 }
 
-/// `furnace_accel::offset_ray_origin` for one coordinate.
-fn trv_offset_coord(p: f32, n: f32) -> f32 {
+/// `furnace_accel::offset_ray_origin_scaled` for one coordinate (`origin`, `float_scale`: the
+/// constants times the scene's offset scale).
+fn trv_offset_coord(p: f32, n: f32, origin: f32, float_scale: f32) -> f32 {
     if !trv_is_finite(p) || !trv_is_finite(n) {
         return p;
     }
-    if abs(p) < TRV_ORIGIN {
-        return p + TRV_FLOAT_SCALE * n;
+    if abs(p) < origin {
+        return p + float_scale * n;
     }
     // i32(f) truncates toward zero like Rust's `as i32` (|256 n| is small for a unit normal;
     // WGSL saturates out-of-range values as Rust does).
@@ -176,10 +177,22 @@ fn trv_offset_coord(p: f32, n: f32) -> f32 {
 }
 
 /// Moves a surface point `p` along the geometric normal `n` (pointing to the side the new ray
-/// leaves to) so that the ray does not hit the surface it leaves: Wächter & Binder 2019,
-/// twin of `furnace_accel::offset_ray_origin` (bit-exact).
+/// leaves to) so that the ray does not hit the surface it leaves: Wächter & Binder 2019 with
+/// the constants scaled by `scale` (`furnace_accel::offset_scale` of the scene's extent), twin
+/// of `furnace_accel::offset_ray_origin_scaled` (bit-exact).
+fn offset_ray_origin_scaled(p: vec3<f32>, n: vec3<f32>, scale: f32) -> vec3<f32> {
+    let origin = TRV_ORIGIN * scale;
+    let float_scale = TRV_FLOAT_SCALE * scale;
+    return vec3<f32>(
+        trv_offset_coord(p.x, n.x, origin, float_scale),
+        trv_offset_coord(p.y, n.y, origin, float_scale),
+        trv_offset_coord(p.z, n.z, origin, float_scale),
+    );
+}
+
+/// `furnace_accel::offset_ray_origin`: [`offset_ray_origin_scaled`] at scale 1.
 fn offset_ray_origin(p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(trv_offset_coord(p.x, n.x), trv_offset_coord(p.y, n.y), trv_offset_coord(p.z, n.z));
+    return offset_ray_origin_scaled(p, n, 1.0);
 }
 
 /// Result of the ray-triangle test; `t < 0` means no hit.
