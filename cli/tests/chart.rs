@@ -1,24 +1,11 @@
 //! End-to-end tests of `furnace chart`: the files a study writes, resuming, refusing other
 //! settings, and the convergence rate it measures for independent random sampling.
 
+mod common;
+
+use common::*;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn furnace(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_furnace")).args(args).output().expect("the furnace binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A fresh, empty directory for one test.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("furnace-chart").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use std::process::Output;
 
 /// Renders the built-in Cornell box at `side`² with `spp` samples (Sobol, seed 7, compensation
 /// on, height-correlated masking: `furnace render`'s defaults) to `dir/ref.exr`.

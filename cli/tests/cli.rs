@@ -1,23 +1,10 @@
 //! End-to-end tests of the `furnace` binary.
 
+mod common;
+
+use common::*;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn furnace(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_furnace")).args(args).output().expect("the furnace binary runs")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// A fresh, empty directory for one test.
-fn temp_dir(name: &str) -> PathBuf {
-    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("furnace-cli").join(name);
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
-}
+use std::process::Command;
 
 fn data(path: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scene/tests/data").join(path).display().to_string()
@@ -272,24 +259,6 @@ fn render_ok(dir: &Path, name: &str, size: u32, args: &[&str]) -> PathBuf {
     let o = furnace(&all);
     assert!(o.status.success(), "{all:?}: {}", stderr(&o));
     dir.join(format!("{name}.exr"))
-}
-
-/// Asserts that two furnace EXRs hold the same film and image, bit for bit (everything but
-/// the render time, which is a measurement).
-fn assert_same_render(a: &Path, b: &Path) {
-    let ra = furnace_post::read_exr_with_state(a).unwrap();
-    let rb = furnace_post::read_exr_with_state(b).unwrap();
-    assert_eq!((ra.width, ra.height), (rb.width, rb.height));
-    let bits = |v: &[glam::Vec3]| v.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
-    assert!(bits(&ra.pixels) == bits(&rb.pixels), "RGB differs: {} vs {}", a.display(), b.display());
-    let (sa, sb) = (ra.state.unwrap(), rb.state.unwrap());
-    let sum_bits = |v: &[f64]| v.iter().map(|s| s.to_bits()).collect::<Vec<_>>();
-    assert!(sum_bits(&sa.sums) == sum_bits(&sb.sums), "film sums differ: {} vs {}", a.display(), b.display());
-    assert_eq!(sa.counts, sb.counts);
-    let (mut ma, mut mb) = (ra.metadata, rb.metadata);
-    ma.render_time_s = None;
-    mb.render_time_s = None;
-    assert_eq!(ma, mb);
 }
 
 #[test]

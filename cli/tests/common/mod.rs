@@ -1,0 +1,43 @@
+//! Helpers shared by the `furnace` binary's end-to-end tests (`cli.rs`, `gpu.rs`, `chart.rs`);
+//! each test file uses some of them.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Runs the `furnace` binary with `args`.
+pub fn furnace(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_furnace")).args(args).output().expect("the furnace binary runs")
+}
+
+/// A run's standard error as text.
+pub fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A fresh, empty directory for one test (under the test binary's own folder).
+pub fn temp_dir(name: &str) -> PathBuf {
+    let dir =
+        Path::new(env!("CARGO_TARGET_TMPDIR")).join("furnace-cli").join(env!("CARGO_CRATE_NAME")).join(name);
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// The two EXRs hold the same render: RGB and film sums bit for bit, the same counts and
+/// metadata (render time aside).
+pub fn assert_same_render(a: &Path, b: &Path) {
+    let ra = furnace_post::read_exr_with_state(a).unwrap();
+    let rb = furnace_post::read_exr_with_state(b).unwrap();
+    assert_eq!((ra.width, ra.height), (rb.width, rb.height));
+    let bits = |v: &[glam::Vec3]| v.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
+    assert!(bits(&ra.pixels) == bits(&rb.pixels), "RGB differs: {} vs {}", a.display(), b.display());
+    let (sa, sb) = (ra.state.unwrap(), rb.state.unwrap());
+    let sum_bits = |v: &[f64]| v.iter().map(|s| s.to_bits()).collect::<Vec<_>>();
+    assert!(sum_bits(&sa.sums) == sum_bits(&sb.sums), "film sums differ: {} vs {}", a.display(), b.display());
+    assert_eq!(sa.counts, sb.counts);
+    let (mut ma, mut mb) = (ra.metadata, rb.metadata);
+    ma.render_time_s = None;
+    mb.render_time_s = None;
+    assert_eq!(ma, mb);
+}
