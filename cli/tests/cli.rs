@@ -526,12 +526,6 @@ fn start_long_render(
 }
 
 #[cfg(unix)]
-fn sigint(child: &std::process::Child) {
-    let ok = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success();
-    assert!(ok, "kill -INT failed");
-}
-
-#[cfg(unix)]
 #[test]
 fn ctrl_c_saves_a_partial_render_that_resumes_exactly() {
     use std::io::Read;

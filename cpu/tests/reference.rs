@@ -67,21 +67,7 @@ const MAX_RATIO_ERROR: f64 = 5e-3;
 const Z_STD_RANGE: (f64, f64) = (0.9, 1.15);
 
 fn row(stem: &str, passes: u32, c: &Comparison, seconds: f64) -> String {
-    let r = c.ratio();
-    format!(
-        "| {stem} | {passes} × 1 | {:.4}, {:.4}, {:.4} (± {:.4}) | {:+.3} | {:.3} | {:.4} | {:.1} at ({}, {}) | {} | {seconds:.1} s |",
-        r.x,
-        r.y,
-        r.z,
-        c.ratio_se.max_element(),
-        c.z_mean,
-        c.z_std,
-        c.z_over_3,
-        c.z_max.0,
-        c.z_max.1,
-        c.z_max.2,
-        c.z_count
-    )
+    format!("| {stem} | {passes} × 1 | {} | {seconds:.1} s |", c.cells())
 }
 
 fn compare(stem: &str, bounces: u32, passes: u32) {

@@ -41,3 +41,10 @@ pub fn assert_same_render(a: &Path, b: &Path) {
     mb.render_time_s = None;
     assert_eq!(ma, mb);
 }
+
+/// Sends SIGINT (Ctrl-C) to `child`.
+#[cfg(unix)]
+pub fn sigint(child: &std::process::Child) {
+    let ok = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success();
+    assert!(ok, "kill -INT failed");
+}

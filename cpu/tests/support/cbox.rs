@@ -201,6 +201,26 @@ impl Comparison {
     pub fn ratio(&self) -> DVec3 {
         self.ours / self.reference
     }
+
+    /// The table cells `ratio R, G, B (± se) | z mean | z std | |z| > 3 | max |z| | z values`
+    /// (shared by the reference tests and their budget example).
+    pub fn cells(&self) -> String {
+        let r = self.ratio();
+        format!(
+            "{:.4}, {:.4}, {:.4} (± {:.4}) | {:+.3} | {:.3} | {:.4} | {:.1} at ({}, {}) | {}",
+            r.x,
+            r.y,
+            r.z,
+            self.ratio_se.max_element(),
+            self.z_mean,
+            self.z_std,
+            self.z_over_3,
+            self.z_max.0,
+            self.z_max.1,
+            self.z_max.2,
+            self.z_count
+        )
+    }
 }
 
 pub fn compare(candidate: &Estimate, reference: &Reference) -> Comparison {
