@@ -571,12 +571,24 @@ fn second_ctrl_c_exits_at_once() {
     use std::io::Read;
     let dir = temp_dir("ctrl_c_twice");
     let out = dir.join("q");
-    // 1024×1024: a pass is 1 spp of 2²⁰ pixels and saving takes longer still, so the second
-    // signal, sent right after the first, lands while the process works.
+    // 1024×1024: a pass is 1 spp of 2²⁰ pixels (≈ 0.7 s on 2 cores) and saving takes longer
+    // still, so the second signal lands while the process works. It is sent only once the first
+    // has been handled: two SIGINTs sent back to back can reach the process as one (the kernel
+    // keeps one pending signal of a kind), which made this test flaky in CI.
     let (mut child, mut reader) = start_long_render(&out, 1024);
     sigint(&child);
-    sigint(&child);
     let mut rest = String::new();
+    loop {
+        use std::io::BufRead;
+        let mut line = String::new();
+        let n = reader.read_line(&mut line).unwrap();
+        rest.push_str(&line);
+        assert!(n > 0, "furnace ended before it reported the first Ctrl-C:\n{rest}");
+        if line.starts_with("interrupted: ") {
+            break;
+        }
+    }
+    sigint(&child);
     reader.read_to_string(&mut rest).unwrap();
     let status = child.wait().unwrap();
     assert_eq!(status.code(), Some(130), "{rest}");
