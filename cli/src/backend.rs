@@ -28,6 +28,11 @@ pub trait Backend {
     /// progress bar moves, `--time-limit` stops promptly and Ctrl-C is answered within about a
     /// fifth of a second.
     fn pass_samples(&self, pixels: u64) -> u32;
+
+    /// What computes the samples, for the record (`furnace.backend`): `cpu: ` and the target,
+    /// or `gpu: ` and the adapter's name, type, API and driver. Two backends that describe
+    /// themselves alike give bit-identical films.
+    fn describe(&self) -> String;
 }
 
 /// The CPU reference integrator (`furnace_cpu`, rayon over rows).
@@ -66,6 +71,12 @@ impl Backend for CpuBackend {
     fn pass_samples(&self, pixels: u64) -> u32 {
         (262_144 / pixels.max(1)).clamp(1, 4) as u32
     }
+
+    /// `cpu: ` and the target (`x86_64-linux`): the math library's `sin`, `exp`, … may round
+    /// differently elsewhere.
+    fn describe(&self) -> String {
+        format!("cpu: {}-{}", std::env::consts::ARCH, std::env::consts::OS)
+    }
 }
 
 /// The wgpu integrator (`furnace_gpu`); the film is read back when asked for.
@@ -91,10 +102,6 @@ impl GpuBackend {
     }
 
     /// The adapter, in one line.
-    pub fn describe(&self) -> String {
-        self.renderer.context().describe()
-    }
-
     /// The renderer (`furnace bench` turns ray counting on and reads the count and sizes).
     pub fn renderer_mut(&mut self) -> &mut GpuRenderer {
         &mut self.renderer
@@ -122,6 +129,10 @@ impl Backend for GpuBackend {
         let target: u64 =
             if furnace_gpu::context::is_hardware(&self.renderer.context().info) { 1 << 24 } else { 1 << 16 };
         (target / pixels.max(1)).clamp(1, 64) as u32
+    }
+
+    fn describe(&self) -> String {
+        format!("gpu: {}", self.renderer.context().describe())
     }
 }
 

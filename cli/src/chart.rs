@@ -862,8 +862,8 @@ fn make_backend(
             warm_up(&mut || renderer.render_pass(0, 1).map_err(|e| e.to_string()))?;
             let (w, h) = (settings.width, settings.height);
             renderer.load_film(&furnace_gpu::film::FilmData::zero(w, h)).map_err(|e| e.to_string())?;
+            let adapter = renderer.context().describe();
             let backend = GpuBackend::new(renderer, None)?;
-            let adapter = backend.describe();
             Ok((Box::new(backend), Some(adapter)))
         }
     }

@@ -78,6 +78,8 @@ struct Saved {
     film: Film,
     spp: u32,
     render_time_s: f64,
+    /// Its [`resume::BACKEND`] record (`None` in files from before the record).
+    backend: Option<String>,
 }
 
 pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
@@ -158,12 +160,22 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             a.sampler, a.spp
         );
     }
-    let (film, first, previous_time) = match saved {
-        Some(s) => (Some(s.film), s.spp, s.render_time_s),
-        None => (None, 0, 0.0),
+    let (film, first, previous_time, previous_backend) = match saved {
+        Some(s) => (Some(s.film), s.spp, s.render_time_s, s.backend),
+        None => (None, 0, 0.0, None),
     };
     let mut backend = make_backend(a, scene, settings, film)?;
     let backend = backend.as_mut();
+    let (backend_record, backend_changed) =
+        resume::backend_record(previous_backend.as_deref(), &backend.describe());
+    if backend_changed && !a.quiet {
+        eprintln!(
+            "note: continuing a render made on {} with {}: the same sample indices, so the same image \
+             statistically, but not bit for bit an uninterrupted render on either",
+            previous_backend.unwrap_or_default(),
+            backend.describe()
+        );
+    }
     let pass = render_passes(backend, &job, first, interrupt)?;
     if pass.done == first {
         // Ctrl-C before the first pass: nothing new; leave every file as it was.
@@ -174,7 +186,8 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     let film = backend.film()?;
     let (png_path, exr_path) = output_paths(&a.out);
     let render_time = previous_time + pass.seconds;
-    let metadata = job.metadata(pass.done, render_time, film.rejected());
+    let mut metadata = job.metadata(pass.done, render_time, film.rejected());
+    metadata.extra.insert(resume::BACKEND.to_string(), backend_record);
     write_outputs(&film, &metadata, a, &exr_path, &png_path)?;
 
     let stopped_by_user = pass.stop == Stop::Interrupt;
@@ -358,7 +371,12 @@ fn restore(path: &Path, file: ExrWithState) -> Result<Saved, String> {
              after furnace wrote it"
         ));
     }
-    Ok(Saved { film, spp, render_time_s: meta.render_time_s.unwrap_or(0.0) })
+    Ok(Saved {
+        film,
+        spp,
+        render_time_s: meta.render_time_s.unwrap_or(0.0),
+        backend: meta.extra.get(resume::BACKEND).cloned(),
+    })
 }
 
 /// Makes camera `index` the scene's default camera (the renderer renders that one); returns the

@@ -11,11 +11,12 @@
 //! without `f64` shaders, whose film sums each pass in `f32`, only where the pass boundaries
 //! agree, as after Ctrl-C or `--time-limit`).
 //!
-//! The backend is not part of the record: a render started on the CPU may be continued on a
-//! GPU, or the reverse. Both integrators trace the same sample indices, so the continuation adds
-//! exactly the missing samples, computed by the other backend: an unbiased estimate of the same
-//! image, equal to an uninterrupted render to the float rounding of each path, not bit for bit
-//! (`tests/gpu.rs` checks it).
+//! The backend is recorded (`furnace.backend`, [`backend_record`]) but does not decide the
+//! film: a render started on the CPU may be continued on a GPU, or the reverse. Both integrators
+//! trace the same sample indices, so the continuation adds exactly the missing samples, computed
+//! by the other backend: an unbiased estimate of the same image, equal to an uninterrupted
+//! render to the float rounding of each path, not bit for bit (`tests/gpu.rs` checks it). The
+//! record keeps every backend that added samples, and `--resume` says when it changes.
 
 use crate::args::{MaskingArg, RenderArgs, SamplingArg, Switch};
 use clap::ValueEnum;
@@ -47,6 +48,13 @@ pub const TARGET_SPP: &str = "furnace.target_spp";
 pub const TONEMAP: &str = "furnace.tonemap";
 /// `--exposure` (PNG only; free to change on resume).
 pub const EXPOSURE: &str = "furnace.exposure_ev";
+
+/// Every backend that added samples, in order, separated by [`BACKEND_SEPARATOR`]: `cpu: ` and
+/// the target (`x86_64-linux`), or `gpu: ` and the adapter (name, type, API, driver).
+/// Provenance only: not part of the identity.
+pub const BACKEND: &str = "furnace.backend";
+/// Separates the backends of [`BACKEND`] when a render was continued on another one.
+pub const BACKEND_SEPARATOR: &str = " → ";
 
 /// The `--camera` value recorded for a scene without cameras.
 pub const FRAMED: &str = "framed";
@@ -156,6 +164,17 @@ pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, 
         out.push(("sample count N of the fixed-N sampler (--spp)", extra(TARGET_SPP)));
     }
     out
+}
+
+/// The [`BACKEND`] record of a render continued (or begun, `recorded` = `None`) on `now`, and
+/// whether the backend changed: the record grows by `now` only when `now` differs from the last
+/// backend recorded, so resuming on the same backend keeps the record as it was.
+pub fn backend_record(recorded: Option<&str>, now: &str) -> (String, bool) {
+    match recorded.filter(|r| !r.is_empty()) {
+        None => (now.to_string(), false),
+        Some(r) if r.rsplit(BACKEND_SEPARATOR).next() == Some(now) => (r.to_string(), false),
+        Some(r) => (format!("{r}{BACKEND_SEPARATOR}{now}"), true),
+    }
 }
 
 /// `Err` listing every setting that differs between the file's record and this render's, with
@@ -327,5 +346,22 @@ mod tests {
         let m = Metadata { scene: Some("scenes/a.glb".into()), ..Metadata::default() };
         let n = Metadata { scene: Some("./../x/scenes/a.glb".into()), ..Metadata::default() };
         assert_eq!(identity(&m, 1, 1), identity(&n, 1, 1));
+    }
+
+    #[test]
+    fn backend_record_grows_only_when_the_backend_changes() {
+        let gpu = "gpu: NVIDIA H100 80GB HBM3 (DiscreteGpu, Vulkan, driver NVIDIA 580)";
+        assert_eq!(backend_record(None, "cpu"), ("cpu".to_string(), false));
+        // Files written before the record existed, or with an empty value.
+        assert_eq!(backend_record(Some(""), "cpu"), ("cpu".to_string(), false));
+        assert_eq!(backend_record(Some("cpu"), "cpu"), ("cpu".to_string(), false));
+        let both = format!("cpu{BACKEND_SEPARATOR}{gpu}");
+        assert_eq!(backend_record(Some("cpu"), gpu), (both.clone(), true));
+        assert_eq!(backend_record(Some(&both), gpu), (both.clone(), false));
+        let back = format!("{both}{BACKEND_SEPARATOR}cpu");
+        assert_eq!(backend_record(Some(&both), "cpu"), (back, true));
+        // Another adapter, or another driver, is another backend (not bit for bit the same).
+        let other = gpu.replace("580", "581");
+        assert!(backend_record(Some(gpu), &other).1);
     }
 }

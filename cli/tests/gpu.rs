@@ -44,7 +44,19 @@ fn render_ok(dir: &Path, name: &str, size: u32, backend: &str, args: &[&str]) ->
     let o = furnace(&all);
     assert!(o.status.success(), "{all:?}: {}", stderr(&o));
     assert_on(&o, backend);
-    dir.join(format!("{name}.exr"))
+    let exr = dir.join(format!("{name}.exr"));
+    let record = backend_record(&exr);
+    assert!(record.starts_with(&format!("{backend}: ")) && !record.contains(" → "), "{record}");
+    exr
+}
+
+/// The file's `furnace.backend` record.
+fn backend_record(exr: &Path) -> String {
+    let meta = furnace_post::read_exr(exr).unwrap().3;
+    meta.extra
+        .get("furnace.backend")
+        .cloned()
+        .unwrap_or_else(|| panic!("{}: no furnace.backend", exr.display()))
 }
 
 /// `furnace render --backend BACKEND --resume FILE --spp SPP --out DIR/NAME`; asserts success
@@ -55,7 +67,17 @@ fn resume_ok(dir: &Path, name: &str, file: &Path, backend: &str, spp: &str) -> P
     let o = Command::new(env!("CARGO_BIN_EXE_furnace")).args(args).arg(&out).output().unwrap();
     assert!(o.status.success(), "{args:?}: {}", stderr(&o));
     assert_on(&o, backend);
-    dir.join(format!("{name}.exr"))
+    // The record grows by this backend only when it differs from the last one, and then the
+    // user is told that the result is no longer bit for bit an uninterrupted render.
+    let exr = dir.join(format!("{name}.exr"));
+    let (before, after) = (backend_record(file), backend_record(&exr));
+    let last = after.rsplit(" → ").next().unwrap();
+    assert!(last.starts_with(&format!("{backend}: ")), "{after}");
+    let changed = before.rsplit(" → ").next() != Some(last);
+    let expected = if changed { format!("{before} → {last}") } else { before };
+    assert_eq!(after, expected);
+    assert_eq!(stderr(&o).contains("note: continuing a render made on "), changed, "{}", stderr(&o));
+    exr
 }
 
 /// The summary line names the backend that rendered (`…, gpu backend: …`).
@@ -169,6 +191,11 @@ fn resume_across_backends_adds_the_missing_samples_of_the_other_backend() {
         [("cpu", "gpu", (&cpu2, &cpu4), (&gpu2, &gpu4)), ("gpu", "cpu", (&gpu2, &gpu4), (&cpu2, &cpu4))]
     {
         let resumed = resume_ok(&dir, &format!("{start}2_{end}4"), first2, end, "4");
+        let record = backend_record(&resumed);
+        assert!(
+            record.starts_with(&format!("{start}: ")) && record.contains(&format!(" → {end}: ")),
+            "{record}"
+        );
         let (sums, counts) = film(&resumed);
         assert!(counts.iter().all(|&c| c == 4), "{start} → {end}: counts {counts:?}");
         assert_eq!(furnace_post::read_exr(&resumed).unwrap().3.spp, Some(4));
