@@ -185,9 +185,14 @@ pub struct BenchArgs {
     /// software included).
     #[arg(long)]
     pub no_rays: bool,
-    /// GPU: invocations per pixel in a workgroup (a power of two, 1–64) instead of the
-    /// renderer's choice (16 on hardware, 1 on software adapters) — for occupancy studies.
-    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u32).range(1..=64))]
+    /// GPU: invocations per pixel in a workgroup (a power of two, 1–256: up to the workgroup's
+    /// size) instead of the renderer's choice (16 on hardware, 1 on software adapters) — for
+    /// occupancy studies.
+    #[arg(
+        long,
+        value_name = "N",
+        value_parser = clap::value_parser!(u32).range(1..=i64::from(furnace_gpu::integrator::GROUP_SIZE))
+    )]
     pub group_samples: Option<u32>,
     /// No progress line on stderr.
     #[arg(long, short)]

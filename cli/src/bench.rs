@@ -109,7 +109,11 @@ impl Report {
     /// The GPU profile as text lines (empty on the CPU).
     fn profile_lines(&self) -> String {
         let Some(p) = self.profile else { return String::new() };
-        let mut s = format!("GPU: {} invocation(s) per pixel in a workgroup of 64", p.group_samples);
+        let mut s = format!(
+            "GPU: {} invocation(s) per pixel in a workgroup of {}",
+            p.group_samples,
+            furnace_gpu::integrator::GROUP_SIZE
+        );
         if let Some(g) = p.gpu_seconds {
             let _ = write!(
                 s,

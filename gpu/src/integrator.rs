@@ -8,12 +8,13 @@
 //!
 //! A pass of `n` samples per pixel is cut into dispatches of a few rows × a few samples, each
 //! bounded to about [`GpuRenderer::samples_per_dispatch`] samples, so that no dispatch runs long
-//! enough to trip a driver watchdog. A workgroup of 64 invocations covers a tile of pixels with
-//! [`GpuRenderer::group_samples`] invocations per pixel: with 1, an invocation owns its pixel and
-//! adds its samples in index order; with more, each computes one sample and the pixel's first
+//! enough to trip a driver watchdog. A workgroup of [`GROUP_SIZE`] invocations covers a tile of
+//! pixels with [`GpuRenderer::group_samples`] invocations per pixel: with 1, an invocation owns
+//! its pixel and adds its samples in index order; with more, each computes one sample and the pixel's first
 //! invocation adds them, after a barrier, in index order — the same additions in the same order,
 //! so the film does not depend on the grouping, bit for bit. Grouping keeps a large GPU busy on
-//! small images and lets short invocations replace each other (+13% at 1080p on the H100).
+//! small images and lets short invocations replace each other (+17 % at 1080p, +94 % at 256² on
+//! the H100).
 //!
 //! Bindings (group 0): 0 the [`FrameParams`] uniform (dynamic offset, one slot per dispatch),
 //! 1–2 the film, 3–4 the BVH, 5–10 the scene, 11 the Turquin table, 12 the ray counter — twelve
@@ -89,11 +90,11 @@ pub struct FrameParams {
     pub fov_scale: f32,
     /// `width / height` as the CPU computes it.
     pub aspect: f32,
-    /// Invocations per pixel in a workgroup of 64 (a power of two): 1 — an invocation owns a
+    /// Invocations per pixel in a workgroup of [`GROUP_SIZE`] (a power of two): 1 — an invocation owns a
     /// pixel and loops over `samples`; more — each computes one sample and the workgroup adds them
     /// in index order (small images: more of the GPU busy).
     pub group_samples: u32,
-    /// Width in pixels of a workgroup's tile of `64 / group_samples` pixels.
+    /// Width in pixels of a workgroup's tile of `GROUP_SIZE / group_samples` pixels.
     pub tile_width: u32,
     /// The ray offsets' length scale ([`furnace_cpu::scene_offset_scale`]).
     pub offset_scale: f32,
@@ -119,18 +120,20 @@ struct Dispatch {
     samples: u32,
 }
 
-/// Invocations in a workgroup (`integrator.wgsl`'s `GROUP_SIZE`).
-const GROUP_SIZE: u32 = 64;
+/// Invocations in a workgroup (`integrator.wgsl`'s `GROUP_SIZE`, checked by
+/// `tests/integrator.rs`).
+pub const GROUP_SIZE: u32 = 64;
 
 /// Invocations per pixel on hardware adapters. Measured on the H100 (`furnace bench --backend
-/// gpu --no-rays --group-samples N`, cbox, 4 bounces; Msamples/s for N = 1, 2, 4, 8, 16, 32,
-/// 64): 256² 142, 182, 209, 223, 225, 225, 224 (65 536 pixels alone fill a quarter of the
-/// GPU); 1920×1080 373, 414, 422, –, 421, –, 421 (one short invocation per sample retires and
-/// is replaced sooner than a loop of 8 whose warp waits for its slowest path each time).
+/// gpu --no-rays --group-samples N`, cbox, 4 bounces, Owen-Sobol, workgroups of 256;
+/// Msamples/s for N = 1, 2, 4, 8, 16, 32, 64): 256² 139, 179, 233, 263, 270, 272, 272 (65 536
+/// pixels alone fill a quarter of the GPU); 1920×1080 431, 495, 503, 504, 503, 504, 504 (one
+/// short invocation per sample retires and is replaced sooner than a loop of 8 whose warp waits
+/// for its slowest path each time).
 const HARDWARE_GROUP_SAMPLES: u32 = 16;
 
 /// The tile of a workgroup with `group_samples` invocations per pixel: (width, height) pixels,
-/// as square as powers of two allow (8×8 for one invocation per pixel).
+/// as square as powers of two allow (width ≥ height).
 pub fn tile(group_samples: u32) -> (u32, u32) {
     let pixels = GROUP_SIZE / group_samples;
     let width = 1 << pixels.trailing_zeros().div_ceil(2);
@@ -394,7 +397,7 @@ impl GpuRenderer {
 
     /// Invocations per pixel in a workgroup: `None` (the default) chooses — 16 on hardware
     /// (measured best at every size, see `HARDWARE_GROUP_SAMPLES`), 1 on software adapters;
-    /// `Some(n)` forces `n` (rounded down to a power of two in 1..=64). The film does not depend
+    /// `Some(n)` forces `n` (rounded down to a power of two in 1..=[`GROUP_SIZE`]). The film does not depend
     /// on it, bit for bit.
     pub fn set_group_samples(&mut self, n: Option<u32>) {
         self.group_samples = n.map(|n| 1 << n.clamp(1, GROUP_SIZE).ilog2());
@@ -454,7 +457,10 @@ impl GpuRenderer {
         self.film.precision()
     }
 
-    fn dispatches(&self, first: u32, n: u32, group_samples: u32) -> Vec<Dispatch> {
+    /// The dispatches of a pass; each covers whole tiles of `tile_height` rows (the shader
+    /// checks a pixel against the image, not against its dispatch's rows, so a dispatch must not
+    /// end inside a tile).
+    fn dispatches(&self, first: u32, n: u32, group_samples: u32, tile_height: u32) -> Vec<Dispatch> {
         let (w, h) = (self.settings.width.max(1), self.settings.height.max(1));
         // Samples per pixel in one dispatch: a loop of up to max_samples_per_invocation, or one
         // per invocation of a group.
@@ -463,9 +469,11 @@ impl GpuRenderer {
         } else {
             n.min(self.max_samples_per_invocation).max(1)
         };
+        // At least one row, at most the image (an image shorter than a tile is one dispatch: the
+        // `clamp(8, h)` here before panicked for images under 8 rows), whole tiles.
         let rows =
-            (self.samples_per_dispatch / (u64::from(w) * u64::from(per_invocation))).clamp(8, u64::from(h));
-        let rows = (rows as u32).div_ceil(8) * 8;
+            (self.samples_per_dispatch / (u64::from(w) * u64::from(per_invocation))).clamp(1, u64::from(h));
+        let rows = (rows as u32).div_ceil(tile_height) * tile_height;
         let mut v = Vec::new();
         let mut s = 0;
         while s < n {
@@ -498,7 +506,7 @@ impl GpuRenderer {
         let end = first_sample.saturating_add(samples_per_pixel);
         let group_samples = self.group_samples(end - first_sample);
         let (tile_width, tile_height) = tile(group_samples);
-        let dispatches = self.dispatches(first_sample, end - first_sample, group_samples);
+        let dispatches = self.dispatches(first_sample, end - first_sample, group_samples, tile_height);
         let mut bytes = vec![0u8; dispatches.len() * SLOT as usize];
         for (k, d) in dispatches.iter().enumerate() {
             let p = FrameParams {

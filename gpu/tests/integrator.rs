@@ -12,7 +12,7 @@
 mod common;
 
 use furnace_cpu::{RenderSettings, Renderer};
-use furnace_gpu::integrator::{FrameParams, shader_source};
+use furnace_gpu::integrator::{FrameParams, GROUP_SIZE, shader_source, tile};
 use furnace_gpu::{GpuRenderer, film::FilmPrecision, test_context};
 use furnace_sampling::SamplerKind;
 use furnace_scene::builtin;
@@ -57,6 +57,54 @@ fn channel_means(img: &[[f64; 3]]) -> [f64; 3] {
         }
     }
     m
+}
+
+#[test]
+fn workgroup_size_matches_wgsl() {
+    let src = shader_source(FilmPrecision::F64);
+    let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+    let main = module.entry_points.iter().find(|e| e.name == "main").expect("entry point main");
+    assert_eq!(main.workgroup_size, [GROUP_SIZE, 1, 1]);
+    for g in (0..=GROUP_SIZE.ilog2()).map(|k| 1 << k) {
+        let (w, h) = tile(g);
+        assert!(w * h * g == GROUP_SIZE && w >= h && w <= 2 * h, "group_samples {g}: tile {w}×{h}");
+    }
+}
+
+/// Passes cut into several dispatches of whole tiles (300 × 260 = 78 000 pixels: two or more
+/// dispatches of rows on a software adapter, whose dispatches hold 2¹⁶ samples), and images
+/// smaller than a tile (they panicked below 8 rows), add each sample to each pixel exactly once,
+/// for every grouping.
+#[test]
+fn dispatches_cover_every_pixel_once() {
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    for (width, height) in [(300, 260), (1, 1), (8, 4), (3, 1), (1, 5)] {
+        let Some(ctx) = test_context() else { return };
+        let s = RenderSettings { width, height, bounces: 0, ..RenderSettings::default() };
+        let mut r = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
+        let mut first = 0;
+        // Every grouping on the small images; 1, 2, 16 on the large one (lavapipe time).
+        let groups = if width * height > 64 { &[1, 2, 16][..] } else { &[1, 2, 16, GROUP_SIZE][..] };
+        for &g in groups {
+            r.set_group_samples(Some(g));
+            r.render_pass(first, g).unwrap();
+            first += g;
+            let film = r.film().unwrap();
+            let wrong: Vec<_> = film
+                .count
+                .iter()
+                .enumerate()
+                .filter(|&(_, &c)| c != u64::from(first))
+                .take(5)
+                .map(|(i, c)| (i as u32 % width, i as u32 / width, *c))
+                .collect();
+            assert!(
+                wrong.is_empty(),
+                "{width}×{height}, group_samples {g}: (x, y, count) not {first}: {wrong:?}"
+            );
+        }
+    }
 }
 
 #[test]

@@ -46,7 +46,7 @@ struct FrameParams {
     // computed on the CPU exactly as furnace-scene's Camera::generate_ray does.
     fov_scale: f32,
     aspect: f32,
-    // Invocations per pixel in a workgroup (a power of two ≤ 64), and the tile's width in pixels.
+    // Invocations per pixel in a workgroup (a power of two ≤ GROUP_SIZE), and the tile's width in pixels.
     group_samples: u32,
     tile_width: u32,
     // The ray offsets' length scale (furnace_cpu::scene_offset_scale).
@@ -214,20 +214,21 @@ fn counter_add(k: u32, v: u32) {
     }
 }
 
-// Invocations of a workgroup (FrameParams.group_samples × pixels of a tile).
+// Invocations of a workgroup (FrameParams.group_samples × pixels of a tile); integrator.rs's
+// GROUP_SIZE (checked by its tests).
 const GROUP_SIZE: u32 = 64u;
 
 // One sample per invocation when a workgroup shares its pixels' samples (group_samples > 1).
 var<workgroup> group_values: array<vec4<f32>, GROUP_SIZE>;
 
-// A workgroup covers a tile of (64 / group_samples) pixels, tile_width wide; each pixel's
+// A workgroup covers a tile of (GROUP_SIZE / group_samples) pixels, tile_width wide; each pixel's
 // group_samples invocations are consecutive. With group_samples = 1 an invocation owns its pixel
 // and adds `samples` samples in index order; with more, invocation `sub` computes sample
 // first_sample + sub and the pixel's first invocation adds the group's values in index order
 // after a barrier — the same additions in the same order either way, so the film does not
 // depend on the grouping (tests/integrator.rs); grouping only spreads a small image over more
 // of the GPU.
-@compute @workgroup_size(64)
+@compute @workgroup_size(GROUP_SIZE)
 fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l: u32) {
     let sg = params.group_samples;
     let tw = params.tile_width;
