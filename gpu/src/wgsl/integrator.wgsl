@@ -216,7 +216,7 @@ fn counter_add(k: u32, v: u32) {
 
 // Invocations of a workgroup (FrameParams.group_samples × pixels of a tile); integrator.rs's
 // GROUP_SIZE (checked by its tests).
-const GROUP_SIZE: u32 = 64u;
+const GROUP_SIZE: u32 = 256u;
 
 // One sample per invocation when a workgroup shares its pixels' samples (group_samples > 1).
 var<workgroup> group_values: array<vec4<f32>, GROUP_SIZE>;
