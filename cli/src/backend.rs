@@ -101,7 +101,6 @@ impl GpuBackend {
         Ok(Self { renderer })
     }
 
-    /// The adapter, in one line.
     /// The renderer (`furnace bench` turns ray counting on and reads the count and sizes).
     pub fn renderer_mut(&mut self) -> &mut GpuRenderer {
         &mut self.renderer

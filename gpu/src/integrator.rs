@@ -10,11 +10,11 @@
 //! bounded to about [`GpuRenderer::samples_per_dispatch`] samples, so that no dispatch runs long
 //! enough to trip a driver watchdog. A workgroup of [`GROUP_SIZE`] invocations covers a tile of
 //! pixels with [`GpuRenderer::group_samples`] invocations per pixel: with 1, an invocation owns
-//! its pixel and adds its samples in index order; with more, each computes one sample and the pixel's first
-//! invocation adds them, after a barrier, in index order — the same additions in the same order,
-//! so the film does not depend on the grouping, bit for bit. Grouping keeps a large GPU busy on
-//! small images and lets short invocations replace each other (+17 % at 1080p, +94 % at 256² on
-//! the H100).
+//! its pixel and adds its samples in index order; with more, each computes one sample and the
+//! pixel's first invocation adds them, after a barrier, in index order — the same additions in
+//! the same order, so the film does not depend on the grouping (nor on the workgroup size), bit
+//! for bit. Grouping keeps a large GPU busy on small images and lets short invocations replace
+//! each other (+17 % at 1080p, +94 % at 256² on the H100).
 //!
 //! Bindings (group 0): 0 the [`FrameParams`] uniform (dynamic offset, one slot per dispatch),
 //! 1–2 the film, 3–4 the BVH, 5–10 the scene, 11 the Turquin table, 12 the ray counter — twelve
@@ -90,9 +90,9 @@ pub struct FrameParams {
     pub fov_scale: f32,
     /// `width / height` as the CPU computes it.
     pub aspect: f32,
-    /// Invocations per pixel in a workgroup of [`GROUP_SIZE`] (a power of two): 1 — an invocation owns a
-    /// pixel and loops over `samples`; more — each computes one sample and the workgroup adds them
-    /// in index order (small images: more of the GPU busy).
+    /// Invocations per pixel in a workgroup of [`GROUP_SIZE`] (a power of two): 1 — an
+    /// invocation owns a pixel and loops over `samples`; more — each computes one sample and the
+    /// workgroup adds them in index order (small images: more of the GPU busy).
     pub group_samples: u32,
     /// Width in pixels of a workgroup's tile of `GROUP_SIZE / group_samples` pixels.
     pub tile_width: u32,
@@ -402,8 +402,8 @@ impl GpuRenderer {
 
     /// Invocations per pixel in a workgroup: `None` (the default) chooses — 16 on hardware
     /// (measured best at every size, see `HARDWARE_GROUP_SAMPLES`), 1 on software adapters;
-    /// `Some(n)` forces `n` (rounded down to a power of two in 1..=[`GROUP_SIZE`]). The film does not depend
-    /// on it, bit for bit.
+    /// `Some(n)` forces `n` (rounded down to a power of two in 1..=[`GROUP_SIZE`]). The film
+    /// does not depend on it, bit for bit.
     pub fn set_group_samples(&mut self, n: Option<u32>) {
         self.group_samples = n.map(|n| 1 << n.clamp(1, GROUP_SIZE).ilog2());
     }
