@@ -4,7 +4,6 @@ mod common;
 
 use common::*;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 fn data(path: &str) -> String {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../scene/tests/data").join(path).display().to_string()
@@ -498,40 +497,12 @@ fn info_lists_the_cameras() {
 /// Starts a long render of the Cornell box with stderr piped, waits for its first progress
 /// line (printed after the first pass when stderr is not a terminal), and returns the child.
 #[cfg(unix)]
-// The caller waits for the child; on a failed read the test panics and the child, its stderr
-// closed, ends at its next progress line.
-#[allow(clippy::zombie_processes)]
-fn start_long_render(
-    out: &Path,
-    size: u32,
-) -> (std::process::Child, std::io::BufReader<std::process::ChildStderr>) {
-    use std::io::BufRead;
-    let size = size.to_string();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_furnace"))
-        .args(["render", "--width", &size, "--height", &size, "--spp", "1000000", "--out"])
-        .arg(out)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut reader = std::io::BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    loop {
-        line.clear();
-        let n = reader.read_line(&mut line).unwrap();
-        assert!(n > 0, "furnace ended before its first pass: {:?}", child.wait());
-        if line.starts_with("progress: ") {
-            return (child, reader);
-        }
-    }
-}
-
-#[cfg(unix)]
 #[test]
 fn ctrl_c_saves_a_partial_render_that_resumes_exactly() {
     use std::io::Read;
     let dir = temp_dir("ctrl_c");
     let out = dir.join("p");
-    let (mut child, mut reader) = start_long_render(&out, 32);
+    let (mut child, mut reader, _) = start_long_render(&out, 32, &[]);
     sigint(&child);
     let mut rest = String::new();
     reader.read_to_string(&mut rest).unwrap();
@@ -575,19 +546,10 @@ fn second_ctrl_c_exits_at_once() {
     // still, so the second signal lands while the process works. It is sent only once the first
     // has been handled: two SIGINTs sent back to back can reach the process as one (the kernel
     // keeps one pending signal of a kind), which made this test flaky in CI.
-    let (mut child, mut reader) = start_long_render(&out, 1024);
+    let (mut child, mut reader, _) = start_long_render(&out, 1024, &[]);
     sigint(&child);
     let mut rest = String::new();
-    loop {
-        use std::io::BufRead;
-        let mut line = String::new();
-        let n = reader.read_line(&mut line).unwrap();
-        rest.push_str(&line);
-        assert!(n > 0, "furnace ended before it reported the first Ctrl-C:\n{rest}");
-        if line.starts_with("interrupted: ") {
-            break;
-        }
-    }
+    read_until(&mut reader, "interrupted: ", &mut rest, "it reported the first Ctrl-C");
     sigint(&child);
     reader.read_to_string(&mut rest).unwrap();
     let status = child.wait().unwrap();

@@ -104,40 +104,6 @@ fn gpu_resume_two_plus_two_is_bit_identical_to_four() {
     assert_eq!(furnace_post::read_exr(&resumed).unwrap().3.spp, Some(4));
 }
 
-/// Starts a long GPU render with stderr piped, waits for its first progress line (printed
-/// after the first pass when stderr is not a terminal), and returns the child.
-#[cfg(unix)]
-// The caller waits for the child; on a failed read the test panics and the child, its stderr
-// closed, ends at its next progress line.
-#[allow(clippy::zombie_processes)]
-fn start_long_gpu_render(
-    out: &Path,
-    size: u32,
-) -> (std::process::Child, std::io::BufReader<std::process::ChildStderr>) {
-    use std::io::BufRead;
-    let size = size.to_string();
-    let mut child = Command::new(env!("CARGO_BIN_EXE_furnace"))
-        .args(["render", "--backend", "gpu", "--width", &size, "--height", &size, "--spp", "1000000"])
-        .arg("--out")
-        .arg(out)
-        .stderr(std::process::Stdio::piped())
-        .spawn()
-        .unwrap();
-    let mut reader = std::io::BufReader::new(child.stderr.take().unwrap());
-    let mut line = String::new();
-    let mut seen = String::new();
-    loop {
-        line.clear();
-        let n = reader.read_line(&mut line).unwrap();
-        assert!(n > 0, "furnace ended before its first pass: {:?}\n{seen}", child.wait());
-        seen.push_str(&line);
-        if line.starts_with("progress: ") {
-            assert!(seen.contains("rendering on "), "not on a GPU: {seen}");
-            return (child, reader);
-        }
-    }
-}
-
 #[cfg(unix)]
 #[test]
 fn gpu_ctrl_c_saves_a_partial_render_that_resumes_exactly() {
@@ -146,7 +112,8 @@ fn gpu_ctrl_c_saves_a_partial_render_that_resumes_exactly() {
         return;
     }
     let dir = temp_dir("ctrl_c");
-    let (mut child, mut reader) = start_long_gpu_render(&dir.join("p"), 8);
+    let (mut child, mut reader, seen) = start_long_render(&dir.join("p"), 8, &["--backend", "gpu"]);
+    assert!(seen.contains("rendering on "), "not on a GPU: {seen}");
     sigint(&child);
     let mut rest = String::new();
     reader.read_to_string(&mut rest).unwrap();

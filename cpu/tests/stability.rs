@@ -37,17 +37,11 @@ use std::fmt::Write as _;
 const SIZE: u32 = 48;
 const PASSES: u32 = 128;
 
-/// The Cornell box with every length multiplied by `s`: positions and camera positions (the
-/// cameras are pinholes with no near plane; directions, sun direction and radiance do not
-/// scale).
+/// The Cornell box with every length multiplied by `s` ([`Scene::scale_lengths`]; its cameras
+/// are pinholes with no near plane, so the image does not change).
 fn scaled_cbox(s: f32) -> Scene {
     let mut scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
-    for p in &mut scene.geometry.positions {
-        *p *= s;
-    }
-    for c in &mut scene.cameras {
-        c.world_from_camera.translation *= s;
-    }
+    scene.scale_lengths(s);
     scene
 }
 

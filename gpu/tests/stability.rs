@@ -19,12 +19,7 @@ use furnace_scene::Scene;
 
 fn scaled_cbox(s: f32) -> Scene {
     let mut scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
-    for p in &mut scene.geometry.positions {
-        *p *= s;
-    }
-    for c in &mut scene.cameras {
-        c.world_from_camera.translation *= s;
-    }
+    scene.scale_lengths(s);
     scene
 }
 

@@ -145,6 +145,27 @@ impl Scene {
         })
     }
 
+    /// Multiplies every length of the scene by `s` (> 0): vertex positions, camera positions and
+    /// orthographic cameras' extents. Directions (normals, tangents, camera orientations, the
+    /// sun's), fields of view and radiometry do not change, so a renderer with scale-robust ray
+    /// offsets renders the same image (the stability suites check it from 1e-12 to 1e12).
+    ///
+    /// # Panics
+    /// If `s` is not finite and positive (a mirror or a collapse is not a change of unit).
+    pub fn scale_lengths(&mut self, s: f32) {
+        assert!(s.is_finite() && s > 0.0, "scale_lengths: the factor must be finite and > 0, got {s}");
+        for p in &mut self.geometry.positions {
+            *p *= s;
+        }
+        for c in &mut self.cameras {
+            c.world_from_camera.translation *= s;
+            if let Projection::Orthographic { xmag, ymag } = &mut c.projection {
+                *xmag *= s;
+                *ymag *= s;
+            }
+        }
+    }
+
     /// Sizes and bytes per triangle.
     pub fn stats(&self) -> SceneStats {
         let g = &self.geometry;

@@ -237,3 +237,30 @@ fn sunlit_interior_has_the_requested_size_and_lets_the_sun_in_only_through_windo
     let fraction = lit as f64 / total as f64;
     assert!(fraction > 0.02 && fraction < 0.5, "sunlit floor fraction {fraction}");
 }
+
+#[test]
+fn scale_lengths_scales_lengths_only() {
+    let mut scene = builtin::cornell_box().unwrap();
+    let mut ortho = scene.cameras[0];
+    ortho.projection = Projection::Orthographic { xmag: 1.5, ymag: 1.0 };
+    scene.cameras.push(ortho);
+    let before = scene.clone();
+    // A power of two: every product is exact, so equality is exact.
+    scene.scale_lengths(4.0);
+    let g = (&scene.geometry, &before.geometry);
+    assert!(g.0.positions.iter().zip(&g.1.positions).all(|(a, b)| *a == 4.0 * *b));
+    assert_eq!(g.0.normals, g.1.normals);
+    assert_eq!(g.0.tangents, g.1.tangents);
+    assert_eq!(g.0.triangles, g.1.triangles);
+    for (a, b) in scene.cameras.iter().zip(&before.cameras) {
+        assert_eq!(a.world_from_camera.translation, 4.0 * b.world_from_camera.translation);
+        assert_eq!(a.world_from_camera.matrix3, b.world_from_camera.matrix3);
+    }
+    assert_eq!(scene.cameras[0].projection, before.cameras[0].projection);
+    assert_eq!(scene.cameras[1].projection, Projection::Orthographic { xmag: 6.0, ymag: 4.0 });
+    assert_eq!((scene.sun, scene.sky), (before.sun, before.sky));
+    for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
+        let r = std::panic::catch_unwind(|| builtin::cornell_box().unwrap().scale_lengths(bad));
+        assert!(r.is_err(), "scale_lengths({bad}) must refuse");
+    }
+}

@@ -48,3 +48,44 @@ pub fn sigint(child: &std::process::Child) {
     let ok = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap().success();
     assert!(ok, "kill -INT failed");
 }
+
+/// Reads `reader` line by line, appending to `seen`, until a line starts with `prefix`; panics
+/// with everything read if the stream ends first (`what`: what was awaited).
+#[cfg(unix)]
+pub fn read_until(reader: &mut impl std::io::BufRead, prefix: &str, seen: &mut String, what: &str) {
+    loop {
+        let mut line = String::new();
+        let n = reader.read_line(&mut line).unwrap();
+        seen.push_str(&line);
+        assert!(n > 0, "furnace ended before {what}:\n{seen}");
+        if line.starts_with(prefix) {
+            return;
+        }
+    }
+}
+
+/// Starts `furnace render ARGS --width S --height S --spp 1000000 --out OUT` with stderr piped
+/// and returns once it reports its first pass (a `progress: ` line), with what it printed so far.
+#[cfg(unix)]
+// The caller waits for the child; on a failed read the test panics and the child, its stderr
+// closed, ends at its next progress line.
+#[allow(clippy::zombie_processes)]
+pub fn start_long_render(
+    out: &Path,
+    size: u32,
+    args: &[&str],
+) -> (std::process::Child, std::io::BufReader<std::process::ChildStderr>, String) {
+    let size = size.to_string();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_furnace"))
+        .arg("render")
+        .args(args)
+        .args(["--width", &size, "--height", &size, "--spp", "1000000", "--out"])
+        .arg(out)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut reader = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut seen = String::new();
+    read_until(&mut reader, "progress: ", &mut seen, "its first pass");
+    (child, reader, seen)
+}
