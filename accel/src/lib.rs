@@ -76,5 +76,8 @@ mod triangle;
 
 pub use bvh::{BuildOptions, BuildQuality, Bvh, Hit, Layout, MAX_BUILD_COORDINATE};
 pub use gpu::{GpuCwbvhNode, GpuTriangle};
-pub use offset::{FLOAT_SCALE, INT_SCALE, ORIGIN, offset_ray_origin, offset_ray_origin_scaled, offset_scale};
+pub use offset::{
+    FLOAT_SCALE, INT_SCALE, ORIGIN, offset_ray_origin, offset_ray_origin_scaled, offset_scale,
+    offset_scale_of_bounds,
+};
 pub use triangle::{TriangleHit, intersect_triangle};

@@ -88,6 +88,12 @@ pub fn offset_scale(extent: f32) -> f32 {
     if pow == extent { pow } else { 2.0 * pow }
 }
 
+/// [`offset_scale`] of a scene within the bounding box `(lo, hi)`: of its largest coordinate
+/// magnitude (what both integrators use).
+pub fn offset_scale_of_bounds(lo: Vec3, hi: Vec3) -> f32 {
+    offset_scale(lo.abs().max(hi.abs()).max_element())
+}
+
 #[inline]
 fn offset_coord(p: f32, n: f32, origin: f32, float_scale: f32) -> f32 {
     if !p.is_finite() || !n.is_finite() {

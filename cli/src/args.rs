@@ -55,7 +55,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 4)]
     pub bounces: u32,
     /// Sampler: random, hammersley, cmj, pmj02, sobol.
-    #[arg(long, default_value_t = furnace_cpu::RenderSettings::default().sampler)]
+    #[arg(long, default_value_t = furnace_render::RenderSettings::default().sampler)]
     pub sampler: SamplerKind,
     /// Seed of the sampler's scrambling.
     #[arg(long, default_value_t = 0)]
@@ -175,7 +175,7 @@ pub struct BenchArgs {
     #[arg(long, default_value_t = 4)]
     pub bounces: u32,
     /// Sampler: random, hammersley, cmj, pmj02, sobol (the fixed-N ones need --spp).
-    #[arg(long, default_value_t = furnace_cpu::RenderSettings::default().sampler)]
+    #[arg(long, default_value_t = furnace_render::RenderSettings::default().sampler)]
     pub sampler: SamplerKind,
     /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
     #[arg(long, value_name = "PATH")]
@@ -256,6 +256,16 @@ pub enum BackendArg {
     Gpu,
     /// A hardware GPU if present, else the CPU.
     Auto,
+}
+
+impl From<BackendArg> for furnace_cli::backend::BackendChoice {
+    fn from(b: BackendArg) -> Self {
+        match b {
+            BackendArg::Cpu => Self::Cpu,
+            BackendArg::Gpu => Self::Gpu,
+            BackendArg::Auto => Self::Auto,
+        }
+    }
 }
 
 /// `--masking`.
@@ -342,7 +352,7 @@ mod tests {
         assert_eq!(Masking::from(a.masking), spec.masking);
         assert_eq!(SpecularSampling::from(a.specular_sampling), spec.sampling);
         assert_eq!(a.compensation == Switch::On, spec.compensation);
-        assert_eq!(a.sampler, furnace_cpu::RenderSettings::default().sampler);
+        assert_eq!(a.sampler, furnace_render::RenderSettings::default().sampler);
         assert_eq!(a.tonemap, Tonemap::Aces);
         assert_eq!((a.spp, a.bounces, a.exposure), (64, 4, 0.0));
     }

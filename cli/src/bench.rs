@@ -4,7 +4,7 @@
 //! * Time to first frame: from the start of setup (adapter, scene build or load, BVH, upload,
 //!   pipeline) to the end of the first pass of one sample per pixel. That pass is a warm-up and
 //!   is not part of the measured passes.
-//! * Then passes of the backend's own size (`Backend::pass_samples`) until `--min-seconds` have
+//! * Then passes of the backend's own size (`Integrator::pass_samples`) until `--min-seconds` have
 //!   passed, or exactly `--spp` samples per pixel.
 //! * Rays (closest-hit and shadow): on the GPU, counted during the measured passes (one atomic
 //!   per invocation, `GpuRenderer::set_count_rays`). The CPU integrator has no counter: its rays
@@ -12,15 +12,16 @@
 //!   image of the same aspect ratio (the two backends trace the same paths), when an adapter is
 //!   available; the output says which.
 
-use crate::args::{BackendArg, BenchArgs, SceneArg};
-use crate::backend::{Backend, CpuBackend, GpuBackend};
+use crate::args::{BenchArgs, SceneArg};
 use crate::render::image_size;
-use furnace_cpu::{RenderSettings, Renderer};
+use furnace_cli::backend::{self, Backend};
 use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
+use furnace_render::{Budget, Integrator, RenderSettings, Session};
 use furnace_scene::{Scene, builtin};
 use std::fmt::Write as _;
 use std::io::Write as _;
 use std::path::Path;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Pixels and samples per pixel of the render on which CPU rays per sample are counted on a
@@ -194,91 +195,46 @@ impl Report {
     }
 
     fn json(&self) -> String {
-        let num = |x: Option<f64>| match x {
-            Some(v) if v.is_finite() => format!("{v}"),
-            _ => "null".to_string(),
-        };
+        let finite = |x: Option<f64>| x.filter(|v| v.is_finite());
         let g = self.gpu;
-        let fields: Vec<(&str, String)> = vec![
-            ("backend", json_string(self.backend)),
-            ("adapter", json_string(&self.adapter)),
-            ("scene", json_string(&self.scene)),
-            ("triangles", self.triangles.to_string()),
-            ("width", self.width.to_string()),
-            ("height", self.height.to_string()),
-            ("bounces", self.bounces.to_string()),
-            ("sampler", json_string(&self.sampler)),
-            ("spp", self.spp.to_string()),
-            ("seconds", num(Some(self.seconds))),
-            ("msamples_per_s", num(Some(self.msamples_per_s()))),
-            ("mrays_per_s", num(self.mrays_per_s())),
-            ("rays_per_sample", num(self.rays_per_sample())),
-            ("rays_counted", json_string(&self.rays_note())),
-            ("ms_per_frame", num(Some(self.ms_per_frame()))),
-            ("time_to_first_frame_s", num(Some(self.time_to_first_frame_s))),
-            ("gpu_bytes_per_triangle", num(g.map(|g| g.bytes_per_triangle))),
-            ("gpu_bvh_bytes_per_triangle", num(g.map(|g| g.bvh_bytes as f64 / self.triangles.max(1) as f64))),
-            ("gpu_scene_bytes", g.map_or_else(|| "null".to_string(), |g| g.scene_bytes.to_string())),
-            ("gpu_bvh_bytes", g.map_or_else(|| "null".to_string(), |g| g.bvh_bytes.to_string())),
-        ];
         let p = self.profile;
         let counts = p.and_then(|p| p.counts);
         let per_ray = |f: fn(&furnace_gpu::integrator::TraceCounts) -> u64| {
-            num(counts.map(|c| f(&c) as f64 / c.rays.max(1) as f64))
+            finite(counts.map(|c| f(&c) as f64 / c.rays.max(1) as f64))
         };
-        let mut fields = fields;
-        fields.extend([
-            ("gpu_group_samples", p.map_or_else(|| "null".to_string(), |p| p.group_samples.to_string())),
-            ("gpu_timestamp_seconds", num(p.and_then(|p| p.gpu_seconds))),
-            (
-                "gpu_timestamp_ms_per_frame",
-                num(p.and_then(|p| p.gpu_seconds).map(|g| g * 1e3 / f64::from(self.spp.max(1)))),
-            ),
-            ("nodes_per_ray", per_ray(|c| c.nodes)),
-            ("triangles_per_ray", per_ray(|c| c.triangles)),
-            ("max_stack_depth", counts.map_or_else(|| "null".to_string(), |c| c.max_stack_depth.to_string())),
-            ("fallback_sweeps", counts.map_or_else(|| "null".to_string(), |c| c.fallbacks.to_string())),
-        ]);
-        let body: Vec<String> = fields.iter().map(|(k, v)| format!("  \"{k}\": {v}")).collect();
-        format!("{{\n{}\n}}\n", body.join(",\n"))
-    }
-}
-
-/// `s` as a JSON string literal.
-fn json_string(s: &str) -> String {
-    let mut out = String::with_capacity(s.len() + 2);
-    out.push('"');
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            '\r' => out.push_str("\\r"),
-            '\t' => out.push_str("\\t"),
-            c if (c as u32) < 0x20 => {
-                let _ = write!(out, "\\u{:04x}", c as u32);
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
-}
-
-/// The backend being measured (one, built once: the size difference of the variants does not
-/// matter).
-#[allow(clippy::large_enum_variant)]
-enum Engine {
-    Cpu(CpuBackend),
-    Gpu(GpuBackend),
-}
-
-impl Engine {
-    fn backend(&mut self) -> &mut dyn Backend {
-        match self {
-            Engine::Cpu(b) => b,
-            Engine::Gpu(b) => b,
-        }
+        let value = serde_json::json!({
+            "backend": self.backend,
+            "adapter": self.adapter,
+            "scene": self.scene,
+            "triangles": self.triangles,
+            "width": self.width,
+            "height": self.height,
+            "bounces": self.bounces,
+            "sampler": self.sampler,
+            "spp": self.spp,
+            "seconds": finite(Some(self.seconds)),
+            "msamples_per_s": finite(Some(self.msamples_per_s())),
+            "mrays_per_s": finite(self.mrays_per_s()),
+            "rays_per_sample": finite(self.rays_per_sample()),
+            "rays_counted": self.rays_note(),
+            "ms_per_frame": finite(Some(self.ms_per_frame())),
+            "time_to_first_frame_s": finite(Some(self.time_to_first_frame_s)),
+            "gpu_bytes_per_triangle": finite(g.map(|g| g.bytes_per_triangle)),
+            "gpu_bvh_bytes_per_triangle": finite(g.map(|g| g.bvh_bytes as f64 / self.triangles.max(1) as f64)),
+            "gpu_scene_bytes": g.map(|g| g.scene_bytes),
+            "gpu_bvh_bytes": g.map(|g| g.bvh_bytes),
+            "gpu_group_samples": p.map(|p| p.group_samples),
+            "gpu_timestamp_seconds": finite(p.and_then(|p| p.gpu_seconds)),
+            "gpu_timestamp_ms_per_frame":
+                finite(p.and_then(|p| p.gpu_seconds).map(|g| g * 1e3 / f64::from(self.spp.max(1)))),
+            "nodes_per_ray": per_ray(|c| c.nodes),
+            "triangles_per_ray": per_ray(|c| c.triangles),
+            "max_stack_depth": counts.map(|c| c.max_stack_depth),
+            "fallback_sweeps": counts.map(|c| c.fallbacks),
+        });
+        let mut text = serde_json::to_string_pretty(&value).unwrap_or_default();
+        text.push('\n');
+        text
     }
 }
 
@@ -290,18 +246,6 @@ fn load(scene: &SceneArg) -> Result<Scene, String> {
     }
 }
 
-/// The GPU context `--backend` and `--adapter` ask for (`None`: the CPU).
-fn gpu_context(a: &BenchArgs) -> Result<Option<GpuContext>, String> {
-    Ok(match (a.backend, &a.adapter) {
-        (BackendArg::Cpu, _) => None,
-        (BackendArg::Gpu | BackendArg::Auto, Some(name)) => {
-            Some(GpuContext::new(&AdapterChoice::Named(name.clone())).map_err(|e| e.to_string())?)
-        }
-        (BackendArg::Gpu, None) => Some(GpuContext::new(&AdapterChoice::Best).map_err(|e| e.to_string())?),
-        (BackendArg::Auto, None) => GpuContext::new(&AdapterChoice::Hardware).ok(),
-    })
-}
-
 pub fn run(a: &BenchArgs) -> Result<(), String> {
     if a.sampler.needs_sample_count() && a.spp.is_none() {
         return Err(format!(
@@ -310,15 +254,15 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         ));
     }
     let start = Instant::now();
-    let ctx = gpu_context(a)?;
     let scene = load(&a.scene)?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
+    let camera = scene.default_camera();
     let (width, height) = match (a.width, a.height, &a.scene) {
         // The issue's reference size for the Cornell box.
         (None, None, SceneArg::Cbox) => (256, 256),
-        (w, h, _) => image_size(&scene, w, h)?,
+        (w, h, _) => image_size(&camera, w, h)?,
     };
     let settings = RenderSettings {
         width,
@@ -336,59 +280,47 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         SceneArg::Interior(n) => format!("interior:{n}"),
         SceneArg::File(p) => p.display().to_string(),
     };
-    let (mut engine, adapter) = match ctx {
-        Some(ctx) => {
-            let adapter = ctx.info.name.clone();
-            let camera = scene.default_camera();
-            let renderer = GpuRenderer::new(ctx, &scene, &camera, settings).map_err(|e| e.to_string())?;
-            (Engine::Gpu(GpuBackend::new(renderer, None)?), adapter)
-        }
-        None => {
-            let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
-            let renderer = Renderer::new(scene, settings).map_err(|e| e.to_string())?;
-            let film = renderer.new_film();
-            (Engine::Cpu(CpuBackend::new(renderer, film)), format!("{threads} threads"))
+    let scene = Arc::new(scene);
+    let mut engine = backend::open(a.backend.into(), a.adapter.as_deref(), scene.clone(), &camera, settings)
+        .map_err(|e| e.to_string())?;
+    let adapter = match &mut engine {
+        Backend::Gpu(g) => g.context().info.name.clone(),
+        Backend::Cpu(_) => {
+            format!("{} threads", std::thread::available_parallelism().map_or(1, |n| n.get()))
         }
     };
-    let backend_name = engine.backend().name();
+    let backend_name = engine.name();
     if !a.quiet {
         eprintln!(
             "benchmarking {scene_name} ({triangles} triangles) at {width}×{height} on {backend_name} ({adapter})"
         );
     }
-    engine.backend().render_pass(0, 1)?;
+    engine.render_pass(0, 1).map_err(|e| e.to_string())?;
     let time_to_first_frame_s = start.elapsed().as_secs_f64();
 
     let mut timing = false;
-    if let Engine::Gpu(g) = &mut engine {
-        let r = g.renderer_mut();
+    if let Some(r) = engine.gpu() {
         r.set_count_rays(!a.no_rays);
         r.take_trace_counts().map_err(|e| e.to_string())?;
         r.set_group_samples(a.group_samples);
         timing = r.set_timing(true);
     }
-    let mut gpu_seconds = 0.0;
-    let per_pass = engine.backend().pass_samples(u64::from(width) * u64::from(height)).max(1);
-    let mut done = 0u32;
+    let per_pass = engine.pass_samples().max(1);
     let timer = Instant::now();
-    loop {
-        let n = match a.spp {
-            Some(total) if done >= total => break,
-            Some(total) => per_pass.min(total - done),
-            None if done > 0 && timer.elapsed().as_secs_f64() >= a.min_seconds => break,
-            None => per_pass,
-        };
-        engine.backend().render_pass(1 + done, n)?;
-        if let Engine::Gpu(g) = &mut engine {
-            gpu_seconds += g.renderer_mut().last_pass_gpu_seconds().unwrap_or(0.0);
-        }
-        done += n;
-    }
+    // Passes from sample 1 (after the warm-up frame): exactly --spp, or until --min-seconds.
+    let budget = match a.spp {
+        Some(n) => Budget::spp(n.saturating_add(1)),
+        None => Budget { min_seconds: Some(a.min_seconds), ..Budget::spp(u32::MAX) },
+    };
+    let (done, gpu_seconds) = {
+        let mut session = Session::new(&mut engine, 1);
+        session.run(&budget, &|| false, &mut |_| {}).map_err(|e| e.to_string())?;
+        (session.done() - 1, session.timing().device)
+    };
     let seconds = timer.elapsed().as_secs_f64();
 
     let (rays, gpu, profile) = match &mut engine {
-        Engine::Gpu(g) => {
-            let r = g.renderer_mut();
+        Backend::Gpu(r) => {
             r.set_count_rays(false);
             r.set_timing(false);
             let counts = r.take_trace_counts().map_err(|e| e.to_string())?;
@@ -406,8 +338,8 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
                 if a.no_rays { Rays::None("--no-rays".to_string()) } else { Rays::Counted(counts.rays) };
             (rays, Some(memory), Some(profile))
         }
-        Engine::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None, None),
-        Engine::Cpu(c) => (estimate_rays(a, c.renderer().scene(), settings), None, None),
+        Backend::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None, None),
+        Backend::Cpu(_) => (estimate_rays(a, &scene, &camera, settings), None, None),
     };
     let report = Report {
         backend: backend_name,
@@ -442,7 +374,12 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
 
 /// CPU rays per sample, counted by a GPU render of the same scene and settings on a small image
 /// of the same aspect ratio ([`ESTIMATE`], [`ESTIMATE_SOFTWARE`]).
-fn estimate_rays(a: &BenchArgs, scene: &Scene, settings: RenderSettings) -> Rays {
+fn estimate_rays(
+    a: &BenchArgs,
+    scene: &Scene,
+    camera: &furnace_scene::Camera,
+    settings: RenderSettings,
+) -> Rays {
     let choice = match &a.adapter {
         Some(name) => AdapterChoice::Named(name.clone()),
         None => AdapterChoice::Best,
@@ -468,8 +405,7 @@ fn estimate_rays(a: &BenchArgs, scene: &Scene, settings: RenderSettings) -> Rays
     };
     let adapter = ctx.info.name.clone();
     let count = || -> Result<u64, String> {
-        let mut r =
-            GpuRenderer::new(ctx, scene, &scene.default_camera(), small).map_err(|e| e.to_string())?;
+        let mut r = GpuRenderer::new(ctx, scene, camera, small).map_err(|e| e.to_string())?;
         r.set_count_rays(true);
         r.render_pass(0, spp).map_err(|e| e.to_string())?;
         r.take_ray_count().map_err(|e| e.to_string())
@@ -485,26 +421,7 @@ fn estimate_rays(a: &BenchArgs, scene: &Scene, settings: RenderSettings) -> Rays
     }
 }
 
-/// Writes `bytes` to a temporary file beside `path` and renames it over `path`.
+/// Writes `bytes` to `path` atomically (`furnace_post::write_bytes_atomic`).
 fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let name = path.file_name().ok_or_else(|| format!("{}: not a file path", path.display()))?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".tmp{}", std::process::id()));
-    let tmp = path.with_file_name(tmp_name);
-    let result = std::fs::write(&tmp, bytes).and_then(|()| std::fs::rename(&tmp, path));
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("{}: {e}", path.display())
-    })
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn json_strings_are_escaped() {
-        assert_eq!(json_string("a\"b\\c\nd\u{1}"), r#""a\"b\\c\nd\u0001""#);
-    }
+    furnace_post::write_bytes_atomic(path, bytes).map_err(|e| e.to_string())
 }

@@ -33,7 +33,6 @@ mod data;
 mod plot;
 
 use crate::args::{MaskingArg, SamplingArg, SceneArg, Switch};
-use crate::backend::{Backend, CpuBackend, GpuBackend};
 use crate::compare::score;
 use crate::interrupt::Interrupt;
 use crate::render::Outcome;
@@ -41,8 +40,8 @@ use crate::resume;
 use clap::{Args, ValueEnum};
 use data::{ExternalPoint, Row};
 use furnace_brdf::SpecularOptions;
-use furnace_cpu::{Film, RenderSettings, Renderer};
-use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
+use furnace_cli::backend::{self, Backend, BackendChoice};
+use furnace_render::{Budget, Film, Integrator, RenderSettings, Session, Stop, Timing};
 use furnace_sampling::SamplerKind;
 use furnace_scene::{Scene, builtin};
 use glam::Vec3;
@@ -298,7 +297,7 @@ fn dedup<T: PartialEq + Copy>(v: &[T]) -> Vec<T> {
 /// Everything a study's numbers depend on: a resumed study must have the same.
 struct Study {
     args: ChartArgs,
-    scene: Scene,
+    scene: std::sync::Arc<Scene>,
     scene_name: String,
     settings: RenderSettings,
     masking: MaskingArg,
@@ -323,7 +322,7 @@ impl Study {
         let names = |v: Vec<String>| Value::from(v);
         json!({
             "scene": self.scene_name,
-            "scene_hash": resume::scene_hash(&self.scene),
+            "scene_hash": self.scene.content_hash(),
             "width": self.settings.width,
             "height": self.settings.height,
             "bounces": self.settings.bounces,
@@ -408,7 +407,7 @@ fn prepare(a: &ChartArgs) -> Result<Study, String> {
             ));
         }
     }
-    let scene_hash = resume::scene_hash(&scene);
+    let scene_hash = scene.content_hash();
     let mut recorded_bounces = None;
     for r in std::iter::once(&reference).chain(&compensated) {
         let p = r.path.display();
@@ -489,7 +488,7 @@ fn prepare(a: &ChartArgs) -> Result<Study, String> {
     };
     let mut study = Study {
         args: a.clone(),
-        scene,
+        scene: std::sync::Arc::new(scene),
         scene_name,
         settings,
         masking,
@@ -564,21 +563,9 @@ fn load_saved(dir: &Path, now: &Value) -> Result<Vec<Row>, String> {
     rows.iter().map(|r| data::row_from_json(r).map_err(|e| format!("{p}: {e}"))).collect()
 }
 
-/// Writes `bytes` to a temporary file beside `path`, syncs it and renames it over `path`.
+/// Writes `bytes` to `path` atomically (`furnace_post::write_bytes_atomic`).
 pub(crate) fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    use std::io::Write as _;
-    let name = path.file_name().ok_or_else(|| format!("{}: not a file path", path.display()))?;
-    let tmp = path.with_file_name(format!(".{}.{}.tmp", name.to_string_lossy(), std::process::id()));
-    let write = || -> std::io::Result<()> {
-        let mut f = std::fs::File::create(&tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&tmp, path)
-    };
-    write().map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("{}: {e}", path.display())
-    })
+    furnace_post::write_bytes_atomic(path, bytes).map_err(|e| e.to_string())
 }
 
 /// Rows of `config`, ordered by spp.
@@ -813,11 +800,7 @@ const WARM_UP_SECONDS: f64 = 1.0;
 
 /// The integrator of `config`, fresh (an empty film), and for a GPU its adapter in one line;
 /// `n` is N for a fixed-N sampler.
-fn make_backend(
-    study: &Study,
-    c: &Config,
-    n: Option<u32>,
-) -> Result<(Box<dyn Backend>, Option<String>), String> {
+fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, Option<String>), String> {
     let settings = RenderSettings {
         sampler: c.sampler,
         sample_count: n,
@@ -828,52 +811,34 @@ fn make_backend(
         },
         ..study.settings
     };
+    let choice = match c.backend {
+        ChartBackend::Cpu => BackendChoice::Cpu,
+        ChartBackend::Gpu => BackendChoice::Gpu,
+    };
+    let camera = study.scene.default_camera();
+    let adapter = if choice == BackendChoice::Gpu { study.args.adapter.as_deref() } else { None };
+    let mut backend =
+        backend::open(choice, adapter, study.scene.clone(), &camera, settings).map_err(|e| e.to_string())?;
     // Untimed warm-up passes, then discarded: the first passes of a process pay costs that are
     // not the method's — the driver compiling the pipeline on first dispatch, rayon starting
     // its threads, and above all an idle GPU's clocks ramping up (on the H100 the first
     // configuration's checkpoints took 3–5× the same work later, and a 1-spp warm-up did not
     // help): every configuration renders one pass, the first of each backend in the process
     // passes for WARM_UP_SECONDS.
-    let warm_up = |pass: &mut dyn FnMut() -> Result<(), String>| -> Result<(), String> {
-        static WARM: [std::sync::atomic::AtomicBool; 2] =
-            [std::sync::atomic::AtomicBool::new(false), std::sync::atomic::AtomicBool::new(false)];
-        let first = !WARM[c.backend as usize].swap(true, std::sync::atomic::Ordering::Relaxed);
-        let start = Instant::now();
-        pass()?;
-        while first && start.elapsed().as_secs_f64() < WARM_UP_SECONDS {
-            pass()?;
-        }
-        Ok(())
-    };
-    match c.backend {
-        ChartBackend::Cpu => {
-            let renderer = Renderer::new(study.scene.clone(), settings).map_err(|e| e.to_string())?;
-            let mut film = renderer.new_film();
-            warm_up(&mut || renderer.render_pass(&mut film, 0, 1).map_err(|e| e.to_string()))?;
-            film.clear();
-            Ok((Box::new(CpuBackend::new(renderer, film)), None))
-        }
-        ChartBackend::Gpu => {
-            let choice = study.args.adapter.clone().map_or(AdapterChoice::Best, AdapterChoice::Named);
-            let ctx = GpuContext::new(&choice).map_err(|e| e.to_string())?;
-            let camera = study.scene.default_camera();
-            let mut renderer =
-                GpuRenderer::new(ctx, &study.scene, &camera, settings).map_err(|e| e.to_string())?;
-            warm_up(&mut || renderer.render_pass(0, 1).map_err(|e| e.to_string()))?;
-            let (w, h) = (settings.width, settings.height);
-            renderer.load_film(&furnace_gpu::film::FilmData::zero(w, h)).map_err(|e| e.to_string())?;
-            let adapter = renderer.context().describe();
-            let backend = GpuBackend::new(renderer, None)?;
-            Ok((Box::new(backend), Some(adapter)))
-        }
+    static WARM: [std::sync::atomic::AtomicBool; 2] =
+        [std::sync::atomic::AtomicBool::new(false), std::sync::atomic::AtomicBool::new(false)];
+    let first = !WARM[c.backend as usize].swap(true, std::sync::atomic::Ordering::Relaxed);
+    let start = Instant::now();
+    backend.render_pass(0, 1).map_err(|e| e.to_string())?;
+    while first && start.elapsed().as_secs_f64() < WARM_UP_SECONDS {
+        backend.render_pass(0, 1).map_err(|e| e.to_string())?;
     }
-}
-
-/// Time spent in render passes: wall and process CPU seconds.
-#[derive(Debug, Clone, Copy)]
-struct Timing {
-    wall: f64,
-    cpu: f64,
+    backend.set_film(&Film::new(settings.width, settings.height)).map_err(|e| e.to_string())?;
+    let adapter = match &mut backend {
+        Backend::Gpu(g) => Some(g.context().describe()),
+        Backend::Cpu(_) => None,
+    };
+    Ok((backend, adapter))
 }
 
 /// The error of `film` against `reference` (the metrics of `furnace compare`).
@@ -912,36 +877,28 @@ impl Progress {
 }
 
 /// Renders `config` from sample 0 up to each of `targets` (ascending), timing the passes;
-/// `at(spp, seconds, film)` is called at each. Returns `false` if Ctrl-C stopped it.
+/// `at(spp, time, film)` is called at each. Returns `false` if Ctrl-C stopped it.
 fn render_to(
-    backend: &mut dyn Backend,
+    backend: &mut dyn Integrator,
     targets: &[u32],
-    pixels: u64,
     interrupt: &Interrupt,
     progress: &Progress,
     name: &str,
     mut at: impl FnMut(u32, Timing, &Film) -> Result<(), String>,
 ) -> Result<bool, String> {
-    let mut done = 0u32;
-    let mut time = Timing { wall: 0.0, cpu: 0.0 };
+    let last = targets.last().copied().unwrap_or(0);
+    let mut session = Session::new(backend, 0);
     for &target in targets {
-        while done < target {
-            if interrupt.requested() {
-                return Ok(false);
-            }
-            let n = backend.pass_samples(pixels).min(target - done);
-            let (t, cpu) = (Instant::now(), data::process_cpu_seconds());
-            backend.render_pass(done, n)?;
-            time.wall += t.elapsed().as_secs_f64();
-            time.cpu += match (cpu, data::process_cpu_seconds()) {
-                (Some(a), Some(b)) => b - a,
-                _ => f64::NAN,
-            };
-            done += n;
-            progress.advance(n, format!("{name} {done}/{}", targets.last().copied().unwrap_or(0)));
+        let stop = session
+            .run(&Budget::spp(target), &|| interrupt.requested(), &mut |p| {
+                progress.advance(p.pass, format!("{name} {}/{last}", p.done));
+            })
+            .map_err(|e| e.to_string())?;
+        if stop == Stop::Cancelled {
+            return Ok(false);
         }
-        let film = backend.film()?;
-        at(target, time, &film)?;
+        let film = session.film().map_err(|e| e.to_string())?;
+        at(target, session.timing(), &film)?;
     }
     Ok(true)
 }
@@ -1033,15 +990,9 @@ pub fn run(a: &ChartArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             for &n in left {
                 let (mut backend, adapter) = make_backend(&study, c, Some(n))?;
                 note_adapter(&mut machine, adapter);
-                let complete = render_to(
-                    backend.as_mut(),
-                    &[n],
-                    pixels,
-                    interrupt,
-                    &progress,
-                    &name,
-                    |spp, t, film| on_checkpoint(spp, t, film, &mut rows, &machine),
-                )?;
+                let complete = render_to(&mut backend, &[n], interrupt, &progress, &name, |spp, t, film| {
+                    on_checkpoint(spp, t, film, &mut rows, &machine)
+                })?;
                 if !complete {
                     interrupted = true;
                     break 'configs;
@@ -1050,10 +1001,9 @@ pub fn run(a: &ChartArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         } else {
             let (mut backend, adapter) = make_backend(&study, c, None)?;
             note_adapter(&mut machine, adapter);
-            let complete =
-                render_to(backend.as_mut(), left, pixels, interrupt, &progress, &name, |spp, t, film| {
-                    on_checkpoint(spp, t, film, &mut rows, &machine)
-                })?;
+            let complete = render_to(&mut backend, left, interrupt, &progress, &name, |spp, t, film| {
+                on_checkpoint(spp, t, film, &mut rows, &machine)
+            })?;
             if !complete {
                 interrupted = true;
                 break 'configs;

@@ -26,7 +26,7 @@ fn describe_camera(camera: &Camera) -> String {
     format!("{projection}, at {}", v3(Vec3::from(camera.world_from_camera.translation)))
 }
 
-/// The report, one `key: value` line per item, then the warnings.
+/// The report, one `key: value` line per item (a line per light), then the warnings.
 fn describe(scene: &Scene) -> String {
     let s = scene.stats();
     let mut out = String::new();
@@ -45,14 +45,12 @@ fn describe(scene: &Scene) -> String {
             s.texture_bytes
         ),
     );
-    line(
-        "sun",
-        match scene.sun {
-            Some(sun) => format!("travelling {}, irradiance {} W/m²", v3(sun.direction), v3(sun.irradiance)),
-            None => "none".into(),
-        },
-    );
-    line("sky", format!("radiance {}", v3(scene.sky)));
+    if scene.lights.is_empty() {
+        line("lights", "none (black sky)".into());
+    }
+    for light in &scene.lights {
+        line("light", light.to_string());
+    }
     if scene.cameras.is_empty() {
         let camera = describe_camera(&scene.default_camera());
         line("camera", format!("none in the file; framed around the geometry: {camera}"));
@@ -87,7 +85,8 @@ mod tests {
     fn describes_the_cornell_box() {
         let text = describe(&furnace_scene::builtin::cornell_box().unwrap());
         assert!(text.contains("triangles       20516"), "{text}");
-        assert!(text.contains("sun             travelling"), "{text}");
+        assert!(text.contains("light           sun travelling"), "{text}");
+        assert!(text.contains("light           sky of radiance"), "{text}");
         assert!(text.contains("perspective, yfov 45.00°"), "{text}");
     }
 

@@ -9,8 +9,8 @@
 //!   (`furnace_post`).
 //!   `--resume PATH.exr` continues a saved render bit-identically (the EXR carries the film's
 //!   exact sums and counts, `resume.rs`); Ctrl-C finishes the current pass, saves, and exits
-//!   with code 130 (`interrupt.rs`). The loop drives a [`backend::Backend`], so that the GPU
-//!   integrator plugs in beside the CPU one.
+//!   with code 130 (`interrupt.rs`). The loop drives a `furnace_render::Session` over the
+//!   integrator that `furnace_cli::backend::open` chooses (CPU or GPU).
 //! * `furnace info SCENE` prints a scene's sizes, lights, cameras (with their `--camera` index)
 //!   and loader warnings.
 //! * `furnace compare CANDIDATE.exr REFERENCE.exr [--stderr …]` scores a render against a
@@ -26,7 +26,6 @@
 //! exit code is 1; no user input panics.
 
 mod args;
-mod backend;
 mod bench;
 mod chart;
 mod compare;

@@ -1,19 +1,18 @@
 //! `furnace render`: load, render in passes with a progress bar, write EXR + PNG.
 
-use crate::args::BackendArg;
 use crate::args::{MAX_SIDE, RenderArgs, Switch};
-use crate::backend::{Backend, CpuBackend, GpuBackend};
 use crate::interrupt::Interrupt;
 use crate::resume;
 use furnace_brdf::SpecularOptions;
-use furnace_cpu::{Film, RenderSettings, Renderer};
-use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
+use furnace_cli::backend;
 use furnace_post::{ExrWithState, Metadata, read_exr_with_state, to_srgb8, write_exr_with_state, write_png};
-use furnace_scene::{Projection, Scene, builtin};
-use glam::{DVec3, Vec3};
+use furnace_render::{Budget, Film, Integrator, RenderSettings, SAMPLER_LAYOUT_VERSION, Session, Stop};
+use furnace_scene::{Camera, Projection, Scene, builtin};
+use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Default image width (and height for a square camera such as the built-in Cornell box's).
@@ -57,6 +56,7 @@ impl Job {
             rejected_samples: Some(rejected),
             extra: [
                 (resume::SCENE_HASH, self.scene_hash.clone()),
+                (resume::SAMPLER_LAYOUT, SAMPLER_LAYOUT_VERSION.to_string()),
                 (resume::MASKING, resume::cli_name(&a.masking)),
                 (resume::COMPENSATION, resume::cli_name(&a.compensation)),
                 (resume::SPECULAR_SAMPLING, resume::cli_name(&a.specular_sampling)),
@@ -101,7 +101,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         None => None,
     };
 
-    let mut scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
+    let scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
         // The scene came from the file's record: say so, and how to point at it.
         (Some(file), None) => {
             format!("{e} (the scene {} was rendered from; give its path after `render`)", file.display())
@@ -111,9 +111,9 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
-    let scene_hash = resume::scene_hash(&scene);
-    let camera = select_camera(&mut scene, args.camera)?;
-    let (width, height) = image_size(&scene, args.width, args.height)?;
+    let scene_hash = scene.content_hash();
+    let (camera, view) = select_camera(&scene, args.camera)?;
+    let (width, height) = image_size(&view, args.width, args.height)?;
     let settings = RenderSettings {
         width,
         height,
@@ -136,7 +136,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             let path = a.resume.clone().unwrap_or_default();
             let recorded = resume::identity(&file.metadata, file.width, file.height);
             let now = resume::identity(&job.metadata(0, 0.0, 0), width, height);
-            resume::check_same(&path, &recorded, &now)?;
+            resume::check_same(&path, &file.metadata, &recorded, &now)?;
             let saved = restore(&path, file)?;
             if saved.spp >= a.spp {
                 eprintln!(
@@ -164,10 +164,16 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         Some(s) => (Some(s.film), s.spp, s.render_time_s, s.backend),
         None => (None, 0, 0.0, None),
     };
-    let mut backend = make_backend(a, scene, settings, film)?;
-    let backend = backend.as_mut();
+    let mut backend = backend::open(a.backend.into(), a.adapter.as_deref(), Arc::new(scene), &view, settings)
+        .map_err(|e| e.to_string())?;
+    if let Some(film) = &film {
+        backend.set_film(film).map_err(|e| e.to_string())?;
+    }
+    if backend.name() == "gpu" && !a.quiet {
+        eprintln!("rendering on {}", backend.describe());
+    }
     let (backend_record, backend_changed) =
-        resume::backend_record(previous_backend.as_deref(), &backend.describe());
+        furnace_render::resume::backend_record(previous_backend.as_deref(), &backend.describe());
     if backend_changed && !a.quiet {
         eprintln!(
             "note: continuing a render made on {} with {}: the same sample indices, so the same image \
@@ -176,21 +182,21 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             backend.describe()
         );
     }
-    let pass = render_passes(backend, &job, first, interrupt)?;
+    let pass = render_passes(&mut backend, &job, first, interrupt)?;
     if pass.done == first {
         // Ctrl-C before the first pass: nothing new; leave every file as it was.
         eprintln!("interrupted before the first pass: nothing rendered, nothing written");
         return Ok(Outcome::Interrupted);
     }
 
-    let film = backend.film()?;
+    let film = backend.film().map_err(|e| e.to_string())?;
     let (png_path, exr_path) = output_paths(&a.out);
     let render_time = previous_time + pass.seconds;
     let mut metadata = job.metadata(pass.done, render_time, film.rejected());
     metadata.extra.insert(resume::BACKEND.to_string(), backend_record);
     write_outputs(&film, &metadata, a, &exr_path, &png_path)?;
 
-    let stopped_by_user = pass.stop == Stop::Interrupt;
+    let stopped_by_user = pass.stop == Stop::Cancelled;
     if !a.quiet || stopped_by_user {
         let rendered = u64::from(pass.done - first);
         let rate = (u64::from(width) * u64::from(height) * rendered) as f64 / pass.seconds.max(1e-9) / 1e6;
@@ -198,7 +204,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         let stopped = match pass.stop {
             Stop::Finished => String::new(),
             Stop::TimeLimit => format!(" (stopped by --time-limit; asked {})", a.spp),
-            Stop::Interrupt => format!(" (interrupted; asked {})", a.spp),
+            Stop::Cancelled => format!(" (interrupted; asked {})", a.spp),
         };
         eprintln!(
             "{}: {width}×{height}, {} spp{from}{stopped}, {} bounces, {} sampler, {} backend: {:.2} s ({rate:.2} Msamples/s)",
@@ -224,49 +230,6 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     Ok(if stopped_by_user { Outcome::Interrupted } else { Outcome::Done })
 }
 
-/// The integrator `--backend` and `--adapter` ask for, holding `film` if one is restored.
-fn make_backend(
-    a: &RenderArgs,
-    scene: Scene,
-    settings: RenderSettings,
-    film: Option<Film>,
-) -> Result<Box<dyn Backend>, String> {
-    let gpu_context = match (a.backend, &a.adapter) {
-        (BackendArg::Cpu, _) => None,
-        (BackendArg::Gpu | BackendArg::Auto, Some(name)) => {
-            Some(GpuContext::new(&AdapterChoice::Named(name.clone())).map_err(|e| e.to_string())?)
-        }
-        (BackendArg::Gpu, None) => Some(GpuContext::new(&AdapterChoice::Best).map_err(|e| e.to_string())?),
-        // auto: a hardware adapter if there is one; without, the CPU integrator (software
-        // adapters are slower than it).
-        (BackendArg::Auto, None) => GpuContext::new(&AdapterChoice::Hardware).ok(),
-    };
-    match gpu_context {
-        Some(ctx) => {
-            let camera = scene.default_camera();
-            let renderer = GpuRenderer::new(ctx, &scene, &camera, settings).map_err(|e| e.to_string())?;
-            let backend = GpuBackend::new(renderer, film.as_ref())?;
-            if !a.quiet {
-                eprintln!("rendering on {}", backend.describe());
-            }
-            Ok(Box::new(backend))
-        }
-        None => {
-            let renderer = Renderer::new(scene, settings).map_err(|e| e.to_string())?;
-            let film = film.unwrap_or_else(|| renderer.new_film());
-            Ok(Box::new(CpuBackend::new(renderer, film)))
-        }
-    }
-}
-
-/// Why the pass loop ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Stop {
-    Finished,
-    TimeLimit,
-    Interrupt,
-}
-
 /// What the pass loop did.
 struct Passes {
     /// Samples per pixel in the film now (the next sample index).
@@ -278,55 +241,36 @@ struct Passes {
 
 /// Renders passes from sample index `first` up to the job's `--spp`, until done, the time limit
 /// or Ctrl-C, with a progress bar (or, when stderr is not a terminal, a progress line after the
-/// first pass and then every 10 s).
+/// first pass and then every 10 s). A pass that fails leaves the film with the passes before it,
+/// which are saved.
 fn render_passes(
-    backend: &mut dyn Backend,
+    backend: &mut dyn Integrator,
     job: &Job,
     first: u32,
     interrupt: &Interrupt,
 ) -> Result<Passes, String> {
     let a = &job.args;
-    let pixels = u64::from(job.settings.width) * u64::from(job.settings.height);
     let bar = progress_bar(a.quiet, a.spp, first);
     let log_lines = !a.quiet && bar.is_hidden();
     let mut last_log: Option<Instant> = None;
     let start = Instant::now();
-    let mut done = first;
-    let mut stop = Stop::Finished;
-    while done < a.spp {
-        if interrupt.requested() {
-            stop = Stop::Interrupt;
-            break;
-        }
-        if let Some(limit) = a.time_limit
-            && done > first
-        {
-            // Stop before a pass that would, at the mean pass time so far, end past the limit.
-            let elapsed = start.elapsed().as_secs_f64();
-            let passes = f64::from(done - first) / f64::from(backend.pass_samples(pixels));
-            if elapsed + elapsed / passes.max(1.0) > limit {
-                stop = Stop::TimeLimit;
-                break;
+    let mut session = Session::new(backend, first);
+    let budget = Budget { time_limit: a.time_limit, ..Budget::spp(a.spp) };
+    let stop = session
+        .run(&budget, &|| interrupt.requested(), &mut |p| {
+            bar.set_position(u64::from(p.done));
+            bar.set_message(format!("{:.2} Msamples/s", p.msamples_per_s));
+            if log_lines && last_log.is_none_or(|t| t.elapsed().as_secs_f64() >= 10.0) {
+                eprintln!(
+                    "progress: {}/{} spp, {:.1} s, {:.2} Msamples/s",
+                    p.done, p.target, p.elapsed, p.msamples_per_s
+                );
+                last_log = Some(Instant::now());
             }
-        }
-        let n = backend.pass_samples(pixels).min(a.spp - done);
-        backend.render_pass(done, n)?;
-        done += n;
-        let elapsed = start.elapsed().as_secs_f64();
-        let rate = (pixels * u64::from(done - first)) as f64 / elapsed.max(1e-9) / 1e6;
-        bar.set_position(u64::from(done));
-        bar.set_message(format!("{rate:.2} Msamples/s"));
-        if log_lines && last_log.is_none_or(|t| t.elapsed().as_secs_f64() >= 10.0) {
-            eprintln!("progress: {done}/{} spp, {elapsed:.1} s, {rate:.2} Msamples/s", a.spp);
-            last_log = Some(Instant::now());
-        }
-    }
-    if done == a.spp && interrupt.requested() {
-        // Ctrl-C during the last pass: the render is complete anyway.
-        stop = Stop::Finished;
-    }
+        })
+        .map_err(|e| e.to_string())?;
     bar.finish_and_clear();
-    Ok(Passes { done, seconds: start.elapsed().as_secs_f64(), stop })
+    Ok(Passes { done: session.done(), seconds: start.elapsed().as_secs_f64(), stop })
 }
 
 /// Writes the EXR (RGB, metadata and the resume state) and the tone-mapped PNG, each atomically.
@@ -339,9 +283,7 @@ fn write_outputs(
 ) -> Result<(), String> {
     let (width, height) = (film.width(), film.height());
     let radiance: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
-    let sums: Vec<f64> = film.sums().iter().flat_map(|s| s.to_array()).collect();
-    write_exr_with_state(exr_path, width, height, &radiance, metadata, &sums, film.counts())
-        .map_err(|e| e.to_string())?;
+    write_exr_with_state(exr_path, film, metadata).map_err(|e| e.to_string())?;
     let srgb = to_srgb8(&radiance, a.exposure, a.tonemap);
     write_png(png_path, width, height, &srgb).map_err(|e| e.to_string())
 }
@@ -350,15 +292,13 @@ fn write_outputs(
 /// pixel's `f32(sum / count)`), which catches a file edited after furnace wrote it.
 fn restore(path: &Path, file: ExrWithState) -> Result<Saved, String> {
     let p = path.display();
-    let state = file.state.unwrap_or_default();
     let meta = &file.metadata;
     let spp = meta.spp.ok_or_else(|| format!("{p}: no 'furnace.spp' attribute; it cannot be resumed"))?;
-    let rejected = meta
-        .rejected_samples
-        .ok_or_else(|| format!("{p}: no 'furnace.rejectedSamples' attribute; it cannot be resumed"))?;
-    let sums = state.sums.chunks_exact(3).map(DVec3::from_slice).collect();
-    let film = Film::from_parts(file.width, file.height, sums, state.counts, rejected)
-        .map_err(|e| format!("{p}: {e}"))?;
+    if meta.rejected_samples.is_none() {
+        return Err(format!("{p}: no 'furnace.rejectedSamples' attribute; it cannot be resumed"));
+    }
+    // The film's rejected samples are the metadata's (read_exr_with_state).
+    let film = file.state.ok_or_else(|| format!("{p}: no furnace resume state"))?;
     if let Some(c) = film.counts().iter().find(|&&c| c > u64::from(spp)) {
         return Err(format!("{p}: a pixel has {c} samples but the file says {spp} spp; it was modified"));
     }
@@ -379,12 +319,12 @@ fn restore(path: &Path, file: ExrWithState) -> Result<Saved, String> {
     })
 }
 
-/// Makes camera `index` the scene's default camera (the renderer renders that one); returns the
-/// index used, `None` for a scene without cameras.
-fn select_camera(scene: &mut Scene, index: Option<u32>) -> Result<Option<u32>, String> {
+/// Camera `index` of the scene (the first without one) and the index used, `None` for a scene
+/// without cameras (framed around its geometry).
+fn select_camera(scene: &Scene, index: Option<u32>) -> Result<(Option<u32>, Camera), String> {
     let n = scene.cameras.len();
     match index {
-        None => Ok((n > 0).then_some(0)),
+        None => Ok(((n > 0).then_some(0), scene.default_camera())),
         Some(_) if n == 0 => Err(format!(
             "{} has no cameras (without --camera the view is framed around its geometry)",
             scene.name
@@ -395,10 +335,7 @@ fn select_camera(scene: &mut Scene, index: Option<u32>) -> Result<Option<u32>, S
             if n == 1 { "" } else { "s" },
             n - 1
         )),
-        Some(i) => {
-            scene.cameras.swap(0, i as usize);
-            Ok(Some(i))
-        }
+        Some(i) => Ok((Some(i), scene.cameras[i as usize])),
     }
 }
 
@@ -437,11 +374,11 @@ pub fn output_paths(out: &Path) -> (PathBuf, PathBuf) {
 /// The image size: given sides win; a missing side follows the camera's aspect ratio (the
 /// file's `aspectRatio`, or `xmag/ymag` of an orthographic camera; square without one).
 pub(crate) fn image_size(
-    scene: &Scene,
+    camera: &Camera,
     width: Option<u32>,
     height: Option<u32>,
 ) -> Result<(u32, u32), String> {
-    let aspect = match scene.default_camera().projection {
+    let aspect = match camera.projection {
         Projection::Perspective { aspect_ratio, .. } => aspect_ratio.unwrap_or(1.0),
         Projection::Orthographic { xmag, ymag } => xmag / ymag,
     };
@@ -490,9 +427,9 @@ mod tests {
 
     #[test]
     fn cornell_box_defaults_to_512_square() {
-        let scene = builtin::cornell_box().unwrap();
-        assert_eq!(image_size(&scene, None, None).unwrap(), (512, 512));
-        assert_eq!(image_size(&scene, Some(64), None).unwrap(), (64, 64));
-        assert!(image_size(&scene, Some(16_384), Some(16_384)).is_err());
+        let camera = builtin::cornell_box().unwrap().default_camera();
+        assert_eq!(image_size(&camera, None, None).unwrap(), (512, 512));
+        assert_eq!(image_size(&camera, Some(64), None).unwrap(), (64, 64));
+        assert!(image_size(&camera, Some(16_384), Some(16_384)).is_err());
     }
 }

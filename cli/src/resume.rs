@@ -11,7 +11,7 @@
 //! without `f64` shaders, whose film sums each pass in `f32`, only where the pass boundaries
 //! agree, as after Ctrl-C or `--time-limit`).
 //!
-//! The backend is recorded (`furnace.backend`, [`backend_record`]) but does not decide the
+//! The backend is recorded (`furnace.backend`, `furnace_render::resume::backend_record`) but does not decide the
 //! film: a render started on the CPU may be continued on a GPU, or the reverse. Both integrators
 //! trace the same sample indices, so the continuation adds exactly the missing samples, computed
 //! by the other backend: an unbiased estimate of the same image, equal to an uninterrupted
@@ -21,8 +21,8 @@
 use crate::args::{MaskingArg, RenderArgs, SamplingArg, Switch};
 use clap::ValueEnum;
 use furnace_post::Metadata;
+use furnace_render::resume;
 use furnace_sampling::SamplerKind;
-use furnace_scene::Scene;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
@@ -30,8 +30,12 @@ use std::str::FromStr;
 /// render` without a file).
 pub const BUILTIN_CBOX: &str = "<built-in cbox>";
 
-/// Hex hash of the scene's loaded content (`scene_hash`).
+/// Hex hash of the scene's loaded content (`Scene::content_hash`).
 pub const SCENE_HASH: &str = "furnace.scene_hash";
+/// The sampler-dimension layout version the paths were traced with
+/// (`furnace_render::SAMPLER_LAYOUT_VERSION`; absent in files of layout 1 written before it was
+/// recorded).
+pub const SAMPLER_LAYOUT: &str = "furnace.sampler_layout";
 /// `--masking`.
 pub const MASKING: &str = "furnace.masking";
 /// `--compensation`.
@@ -49,12 +53,10 @@ pub const TONEMAP: &str = "furnace.tonemap";
 /// `--exposure` (PNG only; free to change on resume).
 pub const EXPOSURE: &str = "furnace.exposure_ev";
 
-/// Every backend that added samples, in order, separated by [`BACKEND_SEPARATOR`]: `cpu: ` and
-/// the target (`x86_64-linux`), or `gpu: ` and the adapter (name, type, API, driver).
-/// Provenance only: not part of the identity.
+/// Every backend that added samples, in order, separated by
+/// `furnace_render::resume::BACKEND_SEPARATOR`: `cpu: ` and the target (`x86_64-linux`), or
+/// `gpu: ` and the adapter (name, type, API, driver). Provenance only: not part of the identity.
 pub const BACKEND: &str = "furnace.backend";
-/// Separates the backends of [`BACKEND`] when a render was continued on another one.
-pub const BACKEND_SEPARATOR: &str = " → ";
 
 /// The `--camera` value recorded for a scene without cameras.
 pub const FRAMED: &str = "framed";
@@ -62,77 +64,6 @@ pub const FRAMED: &str = "framed";
 /// A clap value's command-line spelling (`height-correlated`).
 pub fn cli_name(v: &impl ValueEnum) -> String {
     v.to_possible_value().map(|p| p.get_name().to_string()).unwrap_or_default()
-}
-
-/// A 64-bit hash of everything the renderer reads from a scene (geometry, materials, textures,
-/// images, cameras, sun, sky), as 16 hex digits: two loads of the same content give the same
-/// hash, any change to what is rendered changes it (with probability 1 − 2⁻⁶⁴). Not
-/// cryptographic: it guards against resuming with an edited scene, not against forgery.
-pub fn scene_hash(scene: &Scene) -> String {
-    let mut h = WordHash::default();
-    let g = &scene.geometry;
-    h.len(g.positions.len());
-    for p in &g.positions {
-        p.to_array().iter().for_each(|c| h.word(c.to_bits()));
-    }
-    h.len(g.normals.len());
-    g.normals.iter().for_each(|&n| h.word(n));
-    h.len(g.uvs.len());
-    for uv in &g.uvs {
-        uv.to_array().iter().for_each(|c| h.word(c.to_bits()));
-    }
-    h.len(g.tangents.len());
-    for t in &g.tangents {
-        t.iter().for_each(|&c| h.word(u32::from(c as u16)));
-    }
-    h.len(g.triangles.len());
-    g.triangles.iter().flatten().for_each(|&i| h.word(i));
-    h.len(g.triangle_materials.len());
-    g.triangle_materials.iter().for_each(|&m| h.word(m));
-    for image in &scene.images {
-        h.word(image.width);
-        h.word(image.height);
-        h.len(image.texels.len());
-        image.texels.iter().for_each(|&t| h.word(u32::from_le_bytes(t)));
-    }
-    // The small parts by their Debug text: every field, floats in round-trip precision.
-    let small = format!(
-        "{:?}|{:?}|{:?}|{:?}|{:?}",
-        scene.materials, scene.textures, scene.cameras, scene.sun, scene.sky
-    );
-    h.len(small.len());
-    small.bytes().for_each(|b| h.word(u32::from(b)));
-    format!("{:016x}", h.finish())
-}
-
-/// A multiply–xorshift hash over 32-bit words (stable across platforms and Rust versions,
-/// unlike `std`'s `DefaultHasher`).
-struct WordHash(u64);
-
-impl Default for WordHash {
-    fn default() -> Self {
-        Self(0x243f_6a88_85a3_08d3)
-    }
-}
-
-impl WordHash {
-    fn word(&mut self, w: u32) {
-        self.0 = (self.0 ^ u64::from(w)).wrapping_mul(0x9e37_79b9_7f4a_7c15);
-        self.0 ^= self.0 >> 29;
-    }
-
-    fn len(&mut self, n: usize) {
-        self.word(n as u32);
-        self.word((n as u64 >> 32) as u32);
-    }
-
-    fn finish(&self) -> u64 {
-        let mut x = self.0;
-        x ^= x >> 33;
-        x = x.wrapping_mul(0xff51_afd7_ed55_8ccd);
-        x ^= x >> 33;
-        x
-    }
 }
 
 /// The settings that decide the film, as `(setting, value)` pairs read from `meta` and the
@@ -166,35 +97,18 @@ pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, 
     out
 }
 
-/// The [`BACKEND`] record of a render continued (or begun, `recorded` = `None`) on `now`, and
-/// whether the backend changed: the record grows by `now` only when `now` differs from the last
-/// backend recorded, so resuming on the same backend keeps the record as it was.
-pub fn backend_record(recorded: Option<&str>, now: &str) -> (String, bool) {
-    match recorded.filter(|r| !r.is_empty()) {
-        None => (now.to_string(), false),
-        Some(r) if r.rsplit(BACKEND_SEPARATOR).next() == Some(now) => (r.to_string(), false),
-        Some(r) => (format!("{r}{BACKEND_SEPARATOR}{now}"), true),
-    }
-}
-
-/// `Err` listing every setting that differs between the file's record and this render's, with
-/// both values.
+/// `Err` naming `file` and, for each setting that differs between its record and this
+/// render's, both values; or, if the file's paths used another sampler-dimension layout, why it
+/// cannot be continued.
 pub fn check_same(
     file: &Path,
-    recorded: &[(&str, Option<String>)],
-    now: &[(&str, Option<String>)],
+    meta: &Metadata,
+    recorded: &[(&'static str, Option<String>)],
+    now: &[(&'static str, Option<String>)],
 ) -> Result<(), String> {
-    let show = |v: &Option<String>| v.clone().unwrap_or_else(|| "(not recorded)".into());
-    let diffs: Vec<String> = recorded
-        .iter()
-        .zip(now)
-        .filter(|((_, a), (_, b))| a != b)
-        .map(|((name, a), (_, b))| format!("{name} is {} in the file but {} now", show(a), show(b)))
-        .collect();
-    if diffs.is_empty() {
-        return Ok(());
-    }
-    Err(format!("{}: cannot resume with different settings: {}", file.display(), diffs.join("; ")))
+    resume::check_layout(meta.extra.get(SAMPLER_LAYOUT).map(String::as_str))
+        .and_then(|()| resume::check_same(recorded, now))
+        .map_err(|e| format!("{}: {e}", file.display()))
 }
 
 /// Fills every film-deciding argument that was not given on the command line from the file's
@@ -291,23 +205,6 @@ mod tests {
     }
 
     #[test]
-    fn scene_hash_is_stable_and_sees_changes() {
-        let a = builtin::cornell_box().unwrap();
-        let h = scene_hash(&a);
-        assert_eq!(h.len(), 16);
-        assert_eq!(scene_hash(&builtin::cornell_box().unwrap()), h);
-        let mut b = a.clone();
-        b.geometry.positions[7].x = f32::from_bits(b.geometry.positions[7].x.to_bits() ^ 1);
-        assert_ne!(scene_hash(&b), h, "one ulp of one vertex");
-        let mut c = a.clone();
-        c.sky.z += 0.5;
-        assert_ne!(scene_hash(&c), h, "the sky");
-        let mut d = a;
-        d.materials[0].roughness_factor *= 0.5;
-        assert_ne!(scene_hash(&d), h, "a material");
-    }
-
-    #[test]
     fn mismatches_name_the_setting_and_both_values() {
         let mut m = Metadata { bounces: Some(4), sampler: Some("sobol".into()), ..Metadata::default() };
         m.extra.insert(CAMERA.into(), "0".into());
@@ -315,8 +212,8 @@ mod tests {
         n.bounces = Some(2);
         n.extra.insert(CAMERA.into(), "1".into());
         let file = Path::new("dir/r.exr");
-        assert!(check_same(file, &identity(&m, 8, 8), &identity(&m, 8, 8)).is_ok());
-        let e = check_same(file, &identity(&m, 8, 8), &identity(&n, 8, 6)).unwrap_err();
+        assert!(check_same(file, &m, &identity(&m, 8, 8), &identity(&m, 8, 8)).is_ok());
+        let e = check_same(file, &m, &identity(&m, 8, 8), &identity(&n, 8, 6)).unwrap_err();
         assert_eq!(
             e,
             "dir/r.exr: cannot resume with different settings: height is 8 in the file but 6 now; \
@@ -325,12 +222,20 @@ mod tests {
     }
 
     #[test]
+    fn another_sampler_layout_is_refused() {
+        let mut m = Metadata { bounces: Some(4), ..Metadata::default() };
+        m.extra.insert(SAMPLER_LAYOUT.into(), "2".into());
+        let e = check_same(Path::new("old.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8)).unwrap_err();
+        assert!(e.starts_with("old.exr: its samples were drawn with sampler dimension layout 2"), "{e}");
+    }
+
+    #[test]
     fn fixed_n_samplers_record_n() {
         let mut m = Metadata { sampler: Some("hammersley".into()), ..Metadata::default() };
         m.extra.insert(TARGET_SPP.into(), "64".into());
         let mut n = m.clone();
         n.extra.insert(TARGET_SPP.into(), "128".into());
-        let e = check_same(Path::new("h.exr"), &identity(&m, 4, 4), &identity(&n, 4, 4)).unwrap_err();
+        let e = check_same(Path::new("h.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4)).unwrap_err();
         assert!(
             e.contains("sample count N of the fixed-N sampler (--spp) is 64 in the file but 128 now"),
             "{e}"
@@ -338,7 +243,7 @@ mod tests {
         // A progressive sampler's target may change.
         m.sampler = Some("sobol".into());
         n.sampler = Some("sobol".into());
-        assert!(check_same(Path::new("s.exr"), &identity(&m, 4, 4), &identity(&n, 4, 4)).is_ok());
+        assert!(check_same(Path::new("s.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4)).is_ok());
     }
 
     #[test]
@@ -346,22 +251,5 @@ mod tests {
         let m = Metadata { scene: Some("scenes/a.glb".into()), ..Metadata::default() };
         let n = Metadata { scene: Some("./../x/scenes/a.glb".into()), ..Metadata::default() };
         assert_eq!(identity(&m, 1, 1), identity(&n, 1, 1));
-    }
-
-    #[test]
-    fn backend_record_grows_only_when_the_backend_changes() {
-        let gpu = "gpu: NVIDIA H100 80GB HBM3 (DiscreteGpu, Vulkan, driver NVIDIA 580)";
-        assert_eq!(backend_record(None, "cpu"), ("cpu".to_string(), false));
-        // Files written before the record existed, or with an empty value.
-        assert_eq!(backend_record(Some(""), "cpu"), ("cpu".to_string(), false));
-        assert_eq!(backend_record(Some("cpu"), "cpu"), ("cpu".to_string(), false));
-        let both = format!("cpu{BACKEND_SEPARATOR}{gpu}");
-        assert_eq!(backend_record(Some("cpu"), gpu), (both.clone(), true));
-        assert_eq!(backend_record(Some(&both), gpu), (both.clone(), false));
-        let back = format!("{both}{BACKEND_SEPARATOR}cpu");
-        assert_eq!(backend_record(Some(&both), "cpu"), (back, true));
-        // Another adapter, or another driver, is another backend (not bit for bit the same).
-        let other = gpu.replace("580", "581");
-        assert!(backend_record(Some(gpu), &other).1);
     }
 }

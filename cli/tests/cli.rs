@@ -440,11 +440,15 @@ fn resume_refuses_files_without_furnace_state() {
 fn resume_detects_a_modified_image() {
     let dir = temp_dir("resume_modified");
     let file = render_ok(&dir, "e", 4, &["--spp", "2"]);
-    let mut r = furnace_post::read_exr_with_state(&file).unwrap();
-    let state = r.state.take().unwrap();
-    r.pixels[5].y += 1.0;
-    furnace_post::write_exr_with_state(&file, 4, 4, &r.pixels, &r.metadata, &state.sums, &state.counts)
-        .unwrap();
+    // Change pixel 5's G channel in the file, leaving the resume state as it was.
+    let mut image = exr::prelude::read_all_flat_layers_from_file(&file).unwrap();
+    let layer = &mut image.layer_data[0];
+    let g = layer.channel_data.list.iter_mut().find(|c| c.name.eq("G")).unwrap();
+    match &mut g.sample_data {
+        exr::prelude::FlatSamples::F32(v) => v[5] += 1.0,
+        other => panic!("G is not f32: {other:?}"),
+    }
+    exr::prelude::WritableImage::write(&image).to_file(&file).unwrap();
     let o = furnace(&["render", "--quiet", "--resume", file.to_str().unwrap(), "--spp", "4"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("does not match the image at pixel (1, 1)"), "{}", stderr(&o));

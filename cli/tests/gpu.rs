@@ -140,7 +140,7 @@ fn gpu_ctrl_c_saves_a_partial_render_that_resumes_exactly() {
 /// Per-pixel `f64` sums (r, g, b) and counts of a furnace EXR's film.
 fn film(path: &Path) -> (Vec<f64>, Vec<u64>) {
     let s = furnace_post::read_exr_with_state(path).unwrap().state.unwrap();
-    (s.sums, s.counts)
+    (s.sums().iter().flat_map(|v| v.to_array()).collect(), s.counts().to_vec())
 }
 
 #[test]

@@ -15,7 +15,8 @@
 //! `--threads 1 --size 64 --spp 4 --passes 1 --sampler sobol` counts the instructions of
 //! rendering alone (not the BVH build), deterministically (`BENCHMARKS.md`).
 
-use furnace_cpu::{RenderSettings, Renderer};
+use furnace_cpu::CpuRenderer;
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use std::time::Instant;
 
@@ -38,13 +39,13 @@ fn main() {
     for sampler in samplers {
         let scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
         let settings = RenderSettings { width: size, height: size, bounces, sampler, ..Default::default() };
-        let renderer = Renderer::new(scene, settings).expect("a progressive sampler");
+        let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");
         let mut film = renderer.new_film();
-        pool.install(|| renderer.render_pass(&mut film, 0, 1)).expect("render");
+        pool.install(|| renderer.render_into(&mut film, 0, 1)).expect("render");
         let mut best = 0.0f64;
         for pass in 0..passes {
             let start = Instant::now();
-            pool.install(|| renderer.render_pass(&mut film, 1 + pass * spp, spp)).expect("render");
+            pool.install(|| renderer.render_into(&mut film, 1 + pass * spp, spp)).expect("render");
             let samples = f64::from(settings.width * settings.height * spp);
             best = best.max(samples / start.elapsed().as_secs_f64() / 1e6);
         }

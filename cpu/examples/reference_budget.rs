@@ -17,7 +17,8 @@ mod cbox;
 
 use cbox::{BatchEstimator, Estimate, Image, Reference};
 use furnace_brdf::SpecularOptions;
-use furnace_cpu::{RenderSettings, Renderer};
+use furnace_cpu::CpuRenderer;
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
@@ -66,7 +67,7 @@ fn main() {
             ..Default::default()
         };
         let scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
-        let renderer = Renderer::new(scene, settings).expect("a progressive sampler");
+        let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");
         let start = Instant::now();
         // For each pixel, (mean, se) of every config, in `configs` order.
         let per_pixel: Vec<Vec<(Vec3, Vec3)>> = (0..w * h)

@@ -25,7 +25,8 @@ mod cbox;
 
 use cbox::Reference;
 use furnace_brdf::SpecularOptions;
-use furnace_cpu::{RenderSettings, Renderer};
+use furnace_cpu::CpuRenderer;
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -65,7 +66,7 @@ fn errors(image: &[DVec3], reference: &[DVec3]) -> (f64, f64) {
 
 /// Renders samples `0..spp` of every pixel and returns the running means after each count in
 /// `checkpoints` (ascending, the last = spp), pixel-major.
-fn render(renderer: &Renderer, checkpoints: &[u32]) -> Vec<Vec<DVec3>> {
+fn render(renderer: &CpuRenderer, checkpoints: &[u32]) -> Vec<Vec<DVec3>> {
     let spp = *checkpoints.last().expect("a checkpoint");
     let per_pixel: Vec<Vec<DVec3>> = (0..SIZE * SIZE)
         .into_par_iter()
@@ -139,7 +140,8 @@ fn main() {
                 .expect("writing to a String");
             };
             if kind.is_progressive() {
-                let renderer = Renderer::new(scene.clone(), settings(kind, seed, None)).expect("a sampler");
+                let renderer = CpuRenderer::with_default_camera(scene.clone(), settings(kind, seed, None))
+                    .expect("a sampler");
                 let start = Instant::now();
                 let images = render(&renderer, &spps);
                 let seconds = start.elapsed().as_secs_f64();
@@ -150,7 +152,8 @@ fn main() {
             } else {
                 for (k, &n) in spps.iter().enumerate() {
                     let renderer =
-                        Renderer::new(scene.clone(), settings(kind, seed, Some(n))).expect("a sampler");
+                        CpuRenderer::with_default_camera(scene.clone(), settings(kind, seed, Some(n)))
+                            .expect("a sampler");
                     let start = Instant::now();
                     let image = render(&renderer, &[n]).pop().expect("one image");
                     record(k, &image, start.elapsed().as_secs_f64());

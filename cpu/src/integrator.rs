@@ -1,28 +1,26 @@
-//! [`Renderer`]: the path tracer.
+//! [`CpuRenderer`]: the path tracer.
 
-use crate::film::Film;
-use crate::settings::RenderSettings;
-use furnace_accel::{BuildOptions, Bvh, Hit, offset_ray_origin_scaled, offset_scale};
+use furnace_accel::{BuildOptions, Bvh, Hit, offset_ray_origin_scaled, offset_scale_of_bounds};
 use furnace_brdf::{Bsdf, MetallicRoughness, MetallicRoughnessParams, SpecularOptions};
-use furnace_sampling::{AnySampler, Sampler, SamplerError};
+use furnace_render::layout::{
+    self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
+};
+use furnace_render::{Film, Integrator, RenderError, RenderSettings};
+use furnace_sampling::{AnySampler, Sampler};
 use furnace_scene::{AlphaMode, Camera, Material, MaterialSample, Scene, oct_decode};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
+use std::sync::Arc;
 
-/// Sampler dimensions of the camera ray: the position inside the pixel.
-pub const DIM_PIXEL: u32 = 0;
-/// First sampler dimension of the first scattering event.
-pub const DIM_FIRST_BOUNCE: u32 = 2;
-/// Sampler dimensions used per scattering event: BSDF direction (2), lobe choice (1), Russian
-/// roulette (1).
-pub const DIMS_PER_BOUNCE: u32 = 4;
-
-/// A scene prepared for rendering: its BVH, per-triangle material indices, camera and sampler.
+/// A scene prepared for rendering through one camera: its BVH, per-triangle material indices,
+/// sampler, and the film that [`Integrator::render_pass`] adds to.
 ///
-/// See the [crate docs](crate) for the algorithm and the sampler dimension layout.
-pub struct Renderer {
-    scene: Scene,
+/// See the [crate docs](crate) for the algorithm; the sampler dimensions are
+/// [`furnace_render::layout`]'s.
+pub struct CpuRenderer {
+    scene: Arc<Scene>,
     settings: RenderSettings,
+    film: Film,
     bvh: Bvh,
     sampler: AnySampler,
     camera: Camera,
@@ -36,16 +34,12 @@ pub struct Renderer {
     normals: Vec<Vec3>,
     /// Whether any material is alpha-masked (otherwise rays skip the mask callback).
     any_masked: bool,
-    /// The ray offsets' length scale ([`scene_offset_scale`]).
+    /// The ray offsets' length scale (`furnace_accel::offset_scale_of_bounds`).
     offset_scale: f32,
-}
-
-/// The length scale of the scene's ray offsets: `furnace_accel::offset_scale` of the largest
-/// coordinate magnitude (1 for scenes of unit size or more: the paper's constants).
-pub fn scene_offset_scale(scene: &Scene) -> f32 {
-    let (lo, hi) = scene.geometry.bounds();
-    let extent = lo.abs().max(hi.abs()).max_element();
-    offset_scale(if extent.is_finite() { extent } else { 1.0 })
+    /// The scene's directional lights ([`Scene::suns`]).
+    suns: Vec<furnace_scene::Sun>,
+    /// Radiance of an escaping ray ([`Scene::sky`]).
+    sky: Vec3,
 }
 
 /// A material's emission and BSDF, when they are the same everywhere on its surface.
@@ -60,9 +54,9 @@ enum Shading<'a> {
     Evaluated(MaterialSample),
 }
 
-impl std::fmt::Debug for Renderer {
+impl std::fmt::Debug for CpuRenderer {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Renderer")
+        f.debug_struct("CpuRenderer")
             .field("scene", &self.scene.name)
             .field("triangles", &self.triangle_materials.len())
             .field("settings", &self.settings)
@@ -79,13 +73,18 @@ struct SurfacePoint {
     shading: Vec3,
 }
 
-impl Renderer {
-    /// Builds the BVH over the scene's triangles and the sampler of `settings`. The camera is
-    /// the scene's [`Scene::default_camera`].
+impl CpuRenderer {
+    /// Builds the BVH over the scene's triangles and the sampler of `settings`, to render the
+    /// scene through `camera` (often [`Scene::default_camera`]) into an empty film.
     ///
     /// # Errors
-    /// The sampler's: a fixed-N sampler without [`RenderSettings::sample_count`].
-    pub fn new(scene: Scene, settings: RenderSettings) -> Result<Self, SamplerError> {
+    /// [`RenderError::Sampler`]: a fixed-N sampler without [`RenderSettings::sample_count`].
+    pub fn new(
+        scene: impl Into<Arc<Scene>>,
+        camera: &Camera,
+        settings: RenderSettings,
+    ) -> Result<Self, RenderError> {
+        let scene = scene.into();
         let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
@@ -94,7 +93,6 @@ impl Renderer {
             .map(|t| g.triangle_materials.get(t).copied().unwrap_or(last).min(last))
             .collect();
         let any_masked = scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }));
-        let camera = scene.default_camera();
         let constant_materials = scene
             .materials
             .iter()
@@ -106,13 +104,17 @@ impl Renderer {
             })
             .collect();
         let normals = g.normals.iter().map(|&e| oct_decode(e)).collect();
-        let offset_scale = scene_offset_scale(&scene);
+        let (lo, hi) = g.bounds();
+        let offset_scale = offset_scale_of_bounds(lo, hi);
         Ok(Self {
+            suns: scene.suns().copied().collect(),
+            sky: scene.sky(),
+            film: Film::new(settings.width, settings.height),
             scene,
             settings,
             bvh,
             sampler,
-            camera,
+            camera: *camera,
             triangle_materials,
             constant_materials,
             normals,
@@ -121,14 +123,28 @@ impl Renderer {
         })
     }
 
+    /// [`CpuRenderer::new`] through the scene's [`Scene::default_camera`] (its first camera, or a
+    /// view framing its geometry).
+    ///
+    /// # Errors
+    /// As [`CpuRenderer::new`].
+    pub fn with_default_camera(
+        scene: impl Into<Arc<Scene>>,
+        settings: RenderSettings,
+    ) -> Result<Self, RenderError> {
+        let scene = scene.into();
+        let camera = scene.default_camera();
+        Self::new(scene, &camera, settings)
+    }
+
     /// The scene being rendered.
     pub fn scene(&self) -> &Scene {
         &self.scene
     }
 
-    /// The settings it was built with.
-    pub fn settings(&self) -> &RenderSettings {
-        &self.settings
+    /// The camera it renders through.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
     }
 
     /// An empty film of the settings' size.
@@ -136,30 +152,31 @@ impl Renderer {
         Film::new(self.settings.width, self.settings.height)
     }
 
+    /// The film of [`Integrator::render_pass`].
+    pub fn film_ref(&self) -> &Film {
+        &self.film
+    }
+
     /// Adds samples `first_sample .. first_sample + samples_per_pixel` of every pixel to `film`,
     /// rows in parallel on the current rayon pool. Each pixel's samples are added in index
     /// order by one task, so the film is bit-identical for any number of threads. Non-finite
     /// samples are rejected and counted ([`Film::rejected`]).
     ///
-    /// # Errors
-    /// For a fixed-N sampler, [`SamplerError`] when the pass would run past N (the pattern
-    /// would repeat); nothing is rendered then.
+    /// This is [`Integrator::render_pass`] into a film the caller holds (which the renderer
+    /// does not keep).
     ///
-    /// # Panics
-    /// If `film` is not `settings.width × settings.height`.
-    pub fn render_pass(
+    /// # Errors
+    /// [`RenderError::FilmSize`] if `film` is not `settings.width × settings.height`; for a
+    /// fixed-N sampler, [`RenderError::Sampler`] when the pass would run past N (the pattern
+    /// would repeat). Nothing is rendered then.
+    pub fn render_into(
         &self,
         film: &mut Film,
         first_sample: u32,
         samples_per_pixel: u32,
-    ) -> Result<(), SamplerError> {
+    ) -> Result<(), RenderError> {
         let (w, h) = (self.settings.width, self.settings.height);
-        assert!(
-            film.width() == w && film.height() == h,
-            "film is {}×{}, settings {w}×{h}",
-            film.width(),
-            film.height()
-        );
+        RenderError::check_film(film, &self.settings)?;
         if samples_per_pixel == 0 || w == 0 || h == 0 {
             return Ok(());
         }
@@ -168,6 +185,7 @@ impl Renderer {
         let end = first_sample.saturating_add(samples_per_pixel);
         let rejected: u64 = film
             .rows_mut()
+            .into_par_iter()
             .enumerate()
             .map(|(y, mut row)| {
                 let mut rejected = 0;
@@ -204,7 +222,7 @@ impl Renderer {
         loop {
             let Some(hit) = self.closest_hit(origin, direction) else {
                 // The ray leaves the scene: the sky is gathered here and only here.
-                radiance += throughput * scene.sky;
+                radiance += throughput * self.sky;
                 break;
             };
             let material_index = self.triangle_materials[hit.triangle as usize] as usize;
@@ -241,8 +259,8 @@ impl Renderer {
             let wo = frame.to_local(-direction);
             let leave = offset_ray_origin_scaled(surface.position, surface.geometric, self.offset_scale);
 
-            // The sun, a delta light: gathered by a shadow ray only.
-            if let Some(sun) = scene.sun {
+            // Suns, delta lights: gathered by a shadow ray only.
+            for sun in &self.suns {
                 let to_sun = -sun.direction;
                 if to_sun.dot(surface.geometric) > 0.0 {
                     let f = bsdf.eval(wo, frame.to_local(to_sun));
@@ -253,10 +271,10 @@ impl Renderer {
             }
 
             // Continue the path by sampling the BSDF.
-            let dim = DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE * event;
-            let [u1, u2] = self.sampler.value_2d(pixel, index, dim);
+            let dim = layout::bounce(event);
+            let [u1, u2] = self.sampler.value_2d(pixel, index, dim + BOUNCE_BSDF_DIRECTION);
             // The lobe choice `uc` is drawn only where the material has two lobes.
-            let uc = || self.sampler.value(pixel, index, dim + 2);
+            let uc = || self.sampler.value(pixel, index, dim + BOUNCE_BSDF_LOBE);
             let Some(s) = bsdf.sample_lazy(wo, Vec2::new(u1, u2), uc) else { break };
             let wi = frame.to_world(s.wi);
             if !(wi.dot(surface.geometric) > 0.0) {
@@ -268,7 +286,7 @@ impl Renderer {
             event += 1;
             if self.settings.russian_roulette && event >= 3 {
                 let survive = throughput.max_element().min(1.0);
-                if !(self.sampler.value(pixel, index, dim + 3) < survive) {
+                if !(self.sampler.value(pixel, index, dim + BOUNCE_RUSSIAN_ROULETTE) < survive) {
                     break;
                 }
                 throughput /= survive;
@@ -353,6 +371,45 @@ impl Renderer {
         } else {
             self.bvh.occluded(origin, direction, f32::INFINITY)
         }
+    }
+}
+
+impl Integrator for CpuRenderer {
+    fn name(&self) -> &'static str {
+        "cpu"
+    }
+
+    /// `cpu: ` and the target (`x86_64-linux`): the math library's `sin`, `exp`, … may round
+    /// differently elsewhere.
+    fn describe(&self) -> String {
+        format!("cpu: {}-{}", std::env::consts::ARCH, std::env::consts::OS)
+    }
+
+    fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    fn render_pass(&mut self, first_sample: u32, samples_per_pixel: u32) -> Result<(), RenderError> {
+        let mut film = std::mem::replace(&mut self.film, Film::new(0, 0));
+        let result = self.render_into(&mut film, first_sample, samples_per_pixel);
+        self.film = film;
+        result
+    }
+
+    fn film(&mut self) -> Result<Film, RenderError> {
+        Ok(self.film.clone())
+    }
+
+    fn set_film(&mut self, film: &Film) -> Result<(), RenderError> {
+        RenderError::check_film(film, &self.settings)?;
+        self.film.clone_from(film);
+        Ok(())
+    }
+
+    /// At most 4, and about 2¹⁸ samples per pass (a fifth of a second on two cores).
+    fn pass_samples(&self) -> u32 {
+        let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
+        (262_144 / pixels.max(1)).clamp(1, 4) as u32
     }
 }
 

@@ -3,9 +3,9 @@
 //! The reference CPU integrator of furnace: a unidirectional path tracer (Kajiya, "The
 //! Rendering Equation", SIGGRAPH 1986) with next-event estimation of the sun, BSDF sampling of
 //! the glTF metallic-roughness material (`furnace_brdf`), rows rendered in parallel with rayon
-//! and accumulated in `f64` ([`Film`]). It is meant to be read: the GPU integrator is its twin.
+//! and accumulated in `f64` ([`furnace_render::Film`]). It is meant to be read: the GPU integrator is its twin.
 //!
-//! ## The algorithm ([`Renderer::sample`])
+//! ## The algorithm ([`CpuRenderer::sample`])
 //!
 //! For sample `index` of pixel `(x, y)`:
 //!
@@ -38,21 +38,13 @@
 //!
 //! ## Sampler dimensions
 //!
-//! | dimensions | use |
-//! |---|---|
-//! | 0, 1 | position in the pixel ([`DIM_PIXEL`]) |
-//! | `2 + 4k`, `3 + 4k` | BSDF direction `u` of scattering event `k = 0, 1, …` |
-//! | `4 + 4k` | BSDF lobe choice `uc` of event `k` |
-//! | `5 + 4k` | Russian roulette of event `k` (unused without it) |
-//!
-//! Pairs start on even dimensions, so the 2-D samplers (Hammersley, CMJ, PMJ02) stratify
-//! the pixel position and each BSDF direction jointly; Owen-Sobol's groups of four put the
-//! first BSDF direction with the pixel position.
+//! The path reads the sampler dimensions of [`furnace_render::layout`]: the pixel position
+//! first, then four per scattering event (BSDF direction, lobe choice, Russian roulette).
 //!
 //! ## Determinism
 //!
 //! A sample depends only on `(pixel, index, dimension, seed)` and each pixel's samples are added
-//! in index order by one task, so a [`Film`] is bit-identical for any thread count
+//! in index order by one task, so a [`furnace_render::Film`] is bit-identical for any thread count
 //! (`tests/determinism.rs`).
 //!
 //! ## Tests
@@ -76,26 +68,24 @@
 //! ## Example
 //!
 //! ```
-//! use furnace_cpu::{RenderSettings, Renderer};
+//! use furnace_cpu::CpuRenderer;
+//! use furnace_render::{Integrator, RenderSettings};
 //! use furnace_scene::builtin;
 //! use glam::Vec3;
 //!
 //! // A white furnace: a Lambert sphere of albedo 1 under a sky of radiance 1 looks like the sky.
 //! let scene = builtin::furnace_sphere(builtin::lambert(Vec3::ONE), 16);
+//! let camera = scene.default_camera();
 //! let settings = RenderSettings { width: 16, height: 16, ..Default::default() };
-//! let renderer = Renderer::new(scene, settings)?;
-//! let mut film = renderer.new_film();
-//! renderer.render_pass(&mut film, 0, 4)?;
+//! let mut renderer = CpuRenderer::new(scene, &camera, settings)?;
+//! renderer.render_pass(0, 4)?;
+//! let film = renderer.film()?;
 //! let centre = film.pixel(8, 8);
 //! assert!((centre - glam::DVec3::ONE).abs().max_element() < 1e-3);
 //! assert_eq!(film.rejected(), 0);
-//! # Ok::<(), furnace_sampling::SamplerError>(())
+//! # Ok::<(), furnace_render::RenderError>(())
 //! ```
 
-mod film;
 mod integrator;
-mod settings;
 
-pub use film::{Film, FilmSizeError};
-pub use integrator::{DIM_FIRST_BOUNCE, DIM_PIXEL, DIMS_PER_BOUNCE, Renderer, scene_offset_scale};
-pub use settings::RenderSettings;
+pub use integrator::CpuRenderer;

@@ -19,7 +19,8 @@
 #[path = "support/gltf.rs"]
 mod gltf;
 
-use furnace_cpu::{RenderSettings, Renderer};
+use furnace_cpu::CpuRenderer;
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use furnace_scene::Scene;
 use glam::{DVec3, Vec2, Vec3};
@@ -122,9 +123,9 @@ fn render(camera: usize, bounces: u32, spp: u32) -> (Vec<DVec3>, Scene, Quad) {
         seed: 5,
         ..Default::default()
     };
-    let renderer = Renderer::new(scene.clone(), settings).expect("a progressive sampler");
+    let renderer = CpuRenderer::with_default_camera(scene.clone(), settings).expect("a progressive sampler");
     let mut film = renderer.new_film();
-    renderer.render_pass(&mut film, 0, spp).expect("render");
+    renderer.render_into(&mut film, 0, spp).expect("render");
     assert_eq!(film.rejected(), 0);
     let pixels = (0..SIZE * SIZE).map(|i| film.pixel(i % SIZE, i / SIZE)).collect();
     (pixels, scene, quad)

@@ -1,6 +1,6 @@
 //! [`Film`] accumulation: no drift over a million frames, rejection of non-finite samples.
 
-use furnace_cpu::Film;
+use furnace_render::Film;
 use glam::{DVec3, Vec3};
 
 /// Accumulates 10⁶ frames of `0.1 + tiny variation` into every pixel of a small film and checks

@@ -16,9 +16,10 @@
 //! fifth of the tolerance, so that a failure means bias, not noise.
 
 use furnace_brdf::{Masking, SpecularOptions};
-use furnace_cpu::{Film, RenderSettings, Renderer};
+use furnace_cpu::CpuRenderer;
+use furnace_render::{Film, RenderSettings};
 use furnace_sampling::SamplerKind;
-use furnace_scene::{Camera, Geometry, Material, Scene, Sun, builtin, oct_encode};
+use furnace_scene::{Camera, Geometry, Light, Material, Scene, Sun, builtin, oct_encode};
 use glam::{Vec2, Vec3};
 
 /// Sphere tessellation: `4·n·(n−1)` triangles. The flat triangles lie within
@@ -57,13 +58,13 @@ fn masks(camera: &Camera) -> (Vec<Pixel>, Vec<Pixel>) {
 
 /// `(mean, standard error)` of the mean channel over `pixels`, from `PASSES` independent passes
 /// of `spp` samples each (random sampler), and the accumulated film.
-fn render_stats(renderer: &Renderer, pixels: &[(u32, u32)], spp: u32) -> (f64, f64, Film) {
+fn render_stats(renderer: &CpuRenderer, pixels: &[(u32, u32)], spp: u32) -> (f64, f64, Film) {
     let mut total = renderer.new_film();
     let mut means = Vec::new();
     for pass in 0..PASSES {
         let mut film = renderer.new_film();
-        renderer.render_pass(&mut film, pass * spp, spp).expect("render");
-        renderer.render_pass(&mut total, pass * spp, spp).expect("render");
+        renderer.render_into(&mut film, pass * spp, spp).expect("render");
+        renderer.render_into(&mut total, pass * spp, spp).expect("render");
         means.push(
             pixels.iter().map(|&(x, y)| film.pixel(x, y).element_sum() / 3.0).sum::<f64>()
                 / pixels.len() as f64,
@@ -76,7 +77,7 @@ fn render_stats(renderer: &Renderer, pixels: &[(u32, u32)], spp: u32) -> (f64, f
     (mean, (var / n).sqrt(), total)
 }
 
-fn furnace(material: Material, specular: SpecularOptions, bounces: u32) -> Renderer {
+fn furnace(material: Material, specular: SpecularOptions, bounces: u32) -> CpuRenderer {
     let scene = builtin::furnace_sphere(material, SPHERE_N);
     let settings = RenderSettings {
         width: SIZE,
@@ -87,7 +88,7 @@ fn furnace(material: Material, specular: SpecularOptions, bounces: u32) -> Rende
         specular,
         ..Default::default()
     };
-    Renderer::new(scene, settings).expect("a progressive sampler")
+    CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler")
 }
 
 #[test]
@@ -196,7 +197,7 @@ fn ggx_alpha_one_with_compensation_is_invisible() {
 }
 
 /// The camera inside a sphere of albedo ½ and emission ½.
-fn glowing_interior(bounces: u32, russian_roulette: bool) -> Renderer {
+fn glowing_interior(bounces: u32, russian_roulette: bool) -> CpuRenderer {
     let mut material = builtin::lambert(Vec3::splat(0.5));
     material.emissive = Vec3::splat(0.5);
     let mut scene = builtin::furnace_sphere(material, 64);
@@ -210,7 +211,7 @@ fn glowing_interior(bounces: u32, russian_roulette: bool) -> Renderer {
         russian_roulette,
         ..Default::default()
     };
-    Renderer::new(scene, settings).expect("a progressive sampler")
+    CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler")
 }
 
 #[test]
@@ -262,15 +263,14 @@ fn sunlit_lambert_floor() {
         textures: Vec::new(),
         images: Vec::new(),
         cameras: vec![Camera::look_at(Vec3::Y, Vec3::ZERO, Vec3::Z, 0.5)],
-        sun: Some(Sun { direction: -Vec3::new(theta.sin(), theta.cos(), 0.0), irradiance }),
-        sky: Vec3::ZERO,
+        lights: vec![Light::Sun(Sun { direction: -Vec3::new(theta.sin(), theta.cos(), 0.0), irradiance })],
         warnings: Vec::new(),
         dropped_triangles: 0,
     };
     let settings = RenderSettings { width: 8, height: 8, bounces: 1, ..Default::default() };
-    let renderer = Renderer::new(scene, settings).expect("a progressive sampler");
+    let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");
     let mut film = renderer.new_film();
-    renderer.render_pass(&mut film, 0, 4).expect("render");
+    renderer.render_into(&mut film, 0, 4).expect("render");
     let expected = (albedo / std::f32::consts::PI * irradiance * theta.cos()).as_dvec3();
     for y in 0..8 {
         for x in 0..8 {

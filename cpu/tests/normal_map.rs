@@ -20,7 +20,8 @@
 #[path = "support/gltf.rs"]
 mod gltf;
 
-use furnace_cpu::{RenderSettings, Renderer};
+use furnace_cpu::CpuRenderer;
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use glam::{DVec3, Vec3, Vec4};
 use gltf::{MaterialDesc, Quad, SceneDesc, TopCamera};
@@ -99,9 +100,9 @@ impl Case {
             seed: 9,
             ..Default::default()
         };
-        let renderer = Renderer::new(scene, settings).expect("a progressive sampler");
+        let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");
         let mut film = renderer.new_film();
-        renderer.render_pass(&mut film, 0, 4).expect("render");
+        renderer.render_into(&mut film, 0, 4).expect("render");
         assert_eq!(film.rejected(), 0);
         let first = film.pixel(0, 0);
         for y in 0..SIZE {

@@ -58,7 +58,8 @@ mod cbox;
 
 use cbox::{Comparison, Reference};
 use furnace_brdf::SpecularOptions;
-use furnace_cpu::{RenderSettings, Renderer};
+use furnace_cpu::CpuRenderer;
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use std::time::Instant;
 
@@ -82,7 +83,7 @@ fn compare(stem: &str, bounces: u32, passes: u32) {
         specular: SpecularOptions::mitsuba(),
         ..Default::default()
     };
-    let renderer = Renderer::new(scene, settings).expect("a progressive sampler");
+    let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");
     let start = Instant::now();
     let candidate = cbox::render_passes(&renderer, passes, 1);
     let seconds = start.elapsed().as_secs_f64();

@@ -27,7 +27,8 @@ mod cbox;
 
 use cbox::{Estimate, Reference};
 use furnace_accel::{BuildOptions, Bvh, offset_ray_origin_scaled};
-use furnace_cpu::{RenderSettings, Renderer, scene_offset_scale};
+use furnace_cpu::CpuRenderer;
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use furnace_scene::Scene;
 use glam::{Vec2, Vec3};
@@ -54,7 +55,7 @@ fn render(scene: &Scene) -> Estimate {
         seed: 7,
         ..Default::default()
     };
-    let renderer = Renderer::new(scene.clone(), settings).expect("a progressive sampler");
+    let renderer = CpuRenderer::with_default_camera(scene.clone(), settings).expect("a progressive sampler");
     cbox::render_passes(&renderer, PASSES, 1)
 }
 
@@ -84,7 +85,10 @@ fn self_hit_fraction(scene: &Scene) -> f64 {
             // 45° from the normal, towards a fixed tangent direction.
             let d = (n + n.any_orthonormal_vector()).normalize();
             hits += 1;
-            let origin = offset_ray_origin_scaled(p, n, scene_offset_scale(scene));
+            let origin = offset_ray_origin_scaled(p, n, {
+                let (lo, hi) = scene.geometry.bounds();
+                furnace_accel::offset_scale_of_bounds(lo, hi)
+            });
             let again = bvh.closest_hit(origin, d, f32::INFINITY);
             self_hits += u32::from(again.is_some_and(|h| h.triangle == hit.triangle));
         }
@@ -208,10 +212,13 @@ fn scaled_cornell_box_renders_the_same_image() {
 /// The Cornell box with its sun and sky (and any emission) multiplied by `k`.
 fn brighter_cbox(k: f32) -> Scene {
     let mut scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
-    if let Some(sun) = &mut scene.sun {
-        sun.irradiance *= k;
+    for light in &mut scene.lights {
+        match light {
+            furnace_scene::Light::Sun(sun) => sun.irradiance *= k,
+            furnace_scene::Light::Sky(sky) => sky.radiance *= k,
+            other => panic!("a light the test does not scale: {other:?}"),
+        }
     }
-    scene.sky *= k;
     for m in &mut scene.materials {
         m.emissive *= k;
     }
@@ -220,11 +227,11 @@ fn brighter_cbox(k: f32) -> Scene {
 
 /// Renders `scene` at 32×32, 8 Sobol samples per pixel, and writes the film through
 /// `furnace_post::write_exr`; returns the film and the EXR's pixels as read back.
-fn render_to_exr(scene: Scene, name: &str) -> (furnace_cpu::Film, Vec<Vec3>) {
+fn render_to_exr(scene: Scene, name: &str) -> (furnace_render::Film, Vec<Vec3>) {
     let settings = RenderSettings { width: 32, height: 32, ..Default::default() };
-    let renderer = Renderer::new(scene, settings).expect("a progressive sampler");
+    let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");
     let mut film = renderer.new_film();
-    renderer.render_pass(&mut film, 0, 8).expect("render");
+    renderer.render_into(&mut film, 0, 8).expect("render");
     let rgb = film.to_rgb_f32();
     let pixels: Vec<Vec3> = rgb.chunks_exact(3).map(Vec3::from_slice).collect();
     let path = cbox::output_dir().join(format!("stability_radiance_{name}.exr"));
@@ -327,9 +334,9 @@ fn extreme_radiance_stays_finite_and_scales_exactly() {
 fn bad_geometry_renders_without_nan_or_panic() {
     let settings = RenderSettings { width: 32, height: 32, ..Default::default() };
     let render = |scene: Scene| {
-        let renderer = Renderer::new(scene, settings).expect("a progressive sampler");
+        let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");
         let mut film = renderer.new_film();
-        renderer.render_pass(&mut film, 0, 4).expect("render");
+        renderer.render_into(&mut film, 0, 4).expect("render");
         film
     };
     let clean_scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");

@@ -16,8 +16,9 @@ mod cbox;
 
 use cbox::{BatchEstimator, Estimate, Image, Reference};
 use furnace_brdf::SpecularOptions;
-use furnace_cpu::{RenderSettings, Renderer};
+use furnace_cpu::CpuRenderer;
 use furnace_gpu::{GpuRenderer, test_context};
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use glam::DVec3;
 use rayon::prelude::*;
@@ -114,15 +115,15 @@ fn main() {
         let mut gpu_renderer = gpu.then(|| {
             GpuRenderer::new(test_context().unwrap(), &scene, &scene.default_camera(), settings).unwrap()
         });
-        let cpu_renderer = Renderer::new(scene.clone(), settings).unwrap();
-        let mut prev = furnace_gpu::film::FilmData::zero(size, size);
+        let cpu_renderer = CpuRenderer::with_default_camera(scene.clone(), settings).unwrap();
+        let mut prev = furnace_render::Film::new(size, size);
         for k in 0..max_spp {
             if let Some(g) = gpu_renderer.as_mut() {
                 g.render_pass(k, 1).unwrap();
                 let now = g.film().unwrap();
-                assert_eq!(now.rejected, 0);
+                assert_eq!(now.rejected(), 0);
                 for (i, e) in estimators.iter_mut().enumerate() {
-                    e.push(DVec3::from_array(std::array::from_fn(|c| now.sum[i][c] - prev.sum[i][c])));
+                    e.push(DVec3::from_array(std::array::from_fn(|c| now.sums()[i][c] - prev.sums()[i][c])));
                 }
                 prev = now;
             } else {

@@ -33,6 +33,36 @@ pub enum GpuError {
         /// The adapter's limit.
         limit: u64,
     },
+    /// Something in the scene this integrator does not render.
+    #[error("{0}")]
+    Unsupported(String),
+    /// The sampler's: a fixed-N sampler without N, or run past N (nothing was rendered).
+    #[error(transparent)]
+    Sampler(#[from] furnace_sampling::SamplerError),
+    /// A film of another size than the render's.
+    #[error("a {film_width}×{film_height} film cannot be loaded into a {width}×{height} render")]
+    FilmSize {
+        /// The film's width.
+        film_width: u32,
+        /// The film's height.
+        film_height: u32,
+        /// The render's width.
+        width: u32,
+        /// The render's height.
+        height: u32,
+    },
+}
+
+impl From<GpuError> for furnace_render::RenderError {
+    fn from(e: GpuError) -> Self {
+        match e {
+            GpuError::Sampler(e) => Self::Sampler(e),
+            GpuError::FilmSize { film_width, film_height, width, height } => {
+                Self::FilmSize { film_width, film_height, width, height }
+            }
+            e => Self::Device(Box::new(e)),
+        }
+    }
 }
 
 /// Which adapter to use.

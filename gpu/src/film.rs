@@ -1,6 +1,6 @@
 //! [`GpuFilm`]: progressive accumulation on the GPU that does not drift.
 //!
-//! The twin of furnace-cpu's `Film`: per pixel a sum of accepted samples and the counts of
+//! Accumulates what a [`furnace_render::Film`] holds: per pixel a sum of accepted samples and the counts of
 //! accepted and rejected (non-finite) samples; the estimate `sum / count` is formed only when
 //! read back. Two precisions, chosen by what the adapter offers ([`FilmPrecision::for_context`]):
 //!
@@ -20,6 +20,8 @@
 //! buffers with [`FilmPrecision::bindings`].
 
 use crate::{GpuContext, GpuError};
+use furnace_render::Film;
+use glam::DVec3;
 use wgpu::util::DeviceExt;
 
 /// How the film sums samples on the GPU.
@@ -68,48 +70,6 @@ impl FilmPrecision {
     }
 }
 
-/// A film read back from (or written to) the GPU: what resuming and image output need.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FilmData {
-    /// Width in pixels.
-    pub width: u32,
-    /// Height in pixels.
-    pub height: u32,
-    /// Per pixel (row-major, row 0 at the top): the sum of accepted samples, linear RGB.
-    pub sum: Vec<[f64; 3]>,
-    /// Per pixel: accepted samples.
-    pub count: Vec<u64>,
-    /// Rejected (non-finite) samples, all pixels together.
-    pub rejected: u64,
-}
-
-impl FilmData {
-    /// An all-zero film.
-    pub fn zero(width: u32, height: u32) -> Self {
-        let n = width as usize * height as usize;
-        Self { width, height, sum: vec![[0.0; 3]; n], count: vec![0; n], rejected: 0 }
-    }
-
-    /// Adds `other`'s sums and counts into these (same size).
-    fn add(&mut self, other: &FilmData) {
-        for (a, b) in self.sum.iter_mut().zip(&other.sum) {
-            for k in 0..3 {
-                a[k] += b[k];
-            }
-        }
-        for (a, b) in self.count.iter_mut().zip(&other.count) {
-            *a += b;
-        }
-        self.rejected += other.rejected;
-    }
-
-    /// Pixel `i`'s mean (0 without samples).
-    pub fn mean(&self, i: usize) -> [f64; 3] {
-        let n = self.count[i];
-        if n == 0 { [0.0; 3] } else { self.sum[i].map(|s| s / n as f64) }
-    }
-}
-
 /// The film's two storage buffers on the device.
 #[derive(Debug)]
 pub struct GpuFilm {
@@ -121,7 +81,7 @@ pub struct GpuFilm {
     /// `(accepted, rejected)` as `vec2<u32>` per pixel.
     pub count: wgpu::Buffer,
     /// [`FilmPrecision::F32Pass`]: the `f64` sums of the passes folded so far.
-    host: Option<FilmData>,
+    host: Option<Film>,
 }
 
 impl GpuFilm {
@@ -152,7 +112,7 @@ impl GpuFilm {
                 mapped_at_creation: false,
             })
         };
-        let host = (precision == FilmPrecision::F32Pass).then(|| FilmData::zero(width, height));
+        let host = (precision == FilmPrecision::F32Pass).then(|| Film::new(width, height));
         Ok(Self {
             width,
             height,
@@ -208,7 +168,7 @@ impl GpuFilm {
     /// Zeroes every pixel.
     pub fn clear(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
         if let Some(h) = &mut self.host {
-            *h = FilmData::zero(self.width, self.height);
+            *h = Film::new(self.width, self.height);
         }
         self.clear_device(ctx)
     }
@@ -230,57 +190,57 @@ impl GpuFilm {
         }
         let pass = self.read_device(ctx)?;
         if let Some(h) = &mut self.host {
-            h.add(&pass);
+            h.add_film(&pass).map_err(|e| GpuError::Wgpu(e.to_string()))?;
         }
         self.clear_device(ctx)
     }
 
     /// The film: sums in `f64`, counts, and the total of rejected samples (for `F32Pass`, the
     /// folded passes plus the pass in progress).
-    pub fn read(&self, ctx: &GpuContext) -> Result<FilmData, GpuError> {
+    pub fn read(&self, ctx: &GpuContext) -> Result<Film, GpuError> {
         let device = self.read_device(ctx)?;
         Ok(match &self.host {
             None => device,
             Some(h) => {
                 let mut total = h.clone();
-                total.add(&device);
+                total.add_film(&device).map_err(|e| GpuError::Wgpu(e.to_string()))?;
                 total
             }
         })
     }
 
-    fn read_device(&self, ctx: &GpuContext) -> Result<FilmData, GpuError> {
+    fn read_device(&self, ctx: &GpuContext) -> Result<Film, GpuError> {
         let sum_words: Vec<u32> = read_buffer(ctx, &self.sum)?;
         let count_words: Vec<u32> = read_buffer(ctx, &self.count)?;
         let n = self.pixels();
         let sum = match self.precision {
             FilmPrecision::F64 => {
                 let v: &[f64] = bytemuck::cast_slice(&sum_words[..n * 8]);
-                v.chunks_exact(4).map(|c| [c[0], c[1], c[2]]).collect()
+                v.chunks_exact(4).map(|c| DVec3::new(c[0], c[1], c[2])).collect()
             }
             FilmPrecision::F32Pass => {
                 let v: &[f32] = bytemuck::cast_slice(&sum_words[..n * 4]);
-                v.chunks_exact(4).map(|c| [c[0], c[1], c[2]].map(f64::from)).collect()
+                v.chunks_exact(4).map(|c| DVec3::new(c[0].into(), c[1].into(), c[2].into())).collect()
             }
         };
         let count = count_words[..2 * n].chunks_exact(2).map(|c| u64::from(c[0])).collect();
         let rejected = count_words[..2 * n].chunks_exact(2).map(|c| u64::from(c[1])).sum();
-        Ok(FilmData { width: self.width, height: self.height, sum, count, rejected })
+        Film::from_parts(self.width, self.height, sum, count, rejected)
+            .map_err(|e| GpuError::Wgpu(e.to_string()))
     }
 
     /// Loads a film (to resume a render). `F64`: uploaded as is (rejected samples are
     /// attributed to pixel 0, only their total is kept); `F32Pass`: kept on the host, the GPU
     /// zeroed. Errors if the size differs or, for `F64`, a count exceeds `u32::MAX`.
-    pub fn write(&mut self, ctx: &GpuContext, data: &FilmData) -> Result<(), GpuError> {
+    pub fn write(&mut self, ctx: &GpuContext, data: &Film) -> Result<(), GpuError> {
         let n = self.pixels();
-        if (data.width, data.height) != (self.width, self.height)
-            || data.sum.len() != n
-            || data.count.len() != n
-        {
-            return Err(GpuError::Wgpu(format!(
-                "a film of {}×{} cannot be loaded into a {}×{} film",
-                data.width, data.height, self.width, self.height
-            )));
+        if (data.width(), data.height()) != (self.width, self.height) {
+            return Err(GpuError::FilmSize {
+                film_width: data.width(),
+                film_height: data.height(),
+                width: self.width,
+                height: self.height,
+            });
         }
         if let Some(h) = &mut self.host {
             *h = data.clone();
@@ -292,11 +252,11 @@ impl GpuFilm {
             })
         };
         let mut counts = Vec::with_capacity(2 * n);
-        for (i, &c) in data.count.iter().enumerate() {
+        for (i, &c) in data.counts().iter().enumerate() {
             counts.push(too_many(c)?);
-            counts.push(if i == 0 { too_many(data.rejected)? } else { 0 });
+            counts.push(if i == 0 { too_many(data.rejected())? } else { 0 });
         }
-        let v: Vec<f64> = data.sum.iter().flat_map(|s| [s[0], s[1], s[2], 0.0]).collect();
+        let v: Vec<f64> = data.sums().iter().flat_map(|s| [s.x, s.y, s.z, 0.0]).collect();
         ctx.queue.write_buffer(&self.sum, 0, bytemuck::cast_slice(&v));
         ctx.queue.write_buffer(&self.count, 0, bytemuck::cast_slice(&counts));
         ctx.queue.submit([]);

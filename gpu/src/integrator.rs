@@ -28,14 +28,14 @@
 //! ≈ 5% at 1080p on the H100: 353 vs 373 Msamples/s). [`GpuRenderer::set_timing`] records GPU
 //! timestamps around each pass where the adapter has `TIMESTAMP_QUERY`.
 
-use crate::film::{FilmData, FilmPrecision, GpuFilm};
+use crate::film::{FilmPrecision, GpuFilm};
 use crate::sampling::SamplerParams;
 use crate::scene::GpuScene;
 use crate::traverse::BvhBuffers;
 use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
 use bytemuck::{Pod, Zeroable};
-use furnace_accel::{BuildOptions, Bvh};
-use furnace_cpu::RenderSettings;
+use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
+use furnace_render::{Film, Integrator, RenderError, RenderSettings};
 use furnace_sampling::AnySampler;
 use furnace_scene::{AlphaMode, Camera, Projection, Scene};
 
@@ -96,7 +96,7 @@ pub struct FrameParams {
     pub group_samples: u32,
     /// Width in pixels of a workgroup's tile of `GROUP_SIZE / group_samples` pixels.
     pub tile_width: u32,
-    /// The ray offsets' length scale ([`furnace_cpu::scene_offset_scale`]).
+    /// The ray offsets' length scale ([`furnace_accel::offset_scale_of_bounds`] of the scene).
     pub offset_scale: f32,
     /// Padding.
     pub pad: [u32; 3],
@@ -202,7 +202,9 @@ pub fn shader_source(precision: FilmPrecision) -> String {
         traverse::bindings(0, 3),
         scene::bindings(0, 5),
     );
+    let layout = furnace_render::layout::wgsl();
     wgsl::compose(&[
+        &layout,
         wgsl::SAMPLING,
         wgsl::BRDF,
         wgsl::SCENE,
@@ -237,17 +239,23 @@ impl GpuRenderer {
     ///
     /// # Errors
     /// The sampler's (fixed-N samplers need `sample_count`), [`GpuError::TooLarge`] when a
-    /// buffer exceeds the adapter's limits, or a pipeline error.
+    /// buffer exceeds the adapter's limits, [`GpuError::Unsupported`] for more than one
+    /// directional light, or a pipeline error.
     pub fn new(
         ctx: GpuContext,
         scene: &Scene,
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
-        let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)
-            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
-        let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)
-            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        let suns = scene.suns().count();
+        if suns > 1 {
+            return Err(GpuError::Unsupported(format!(
+                "the scene has {suns} directional lights; the GPU integrator renders one (the CPU \
+                 integrator renders any number)"
+            )));
+        }
+        let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
+        let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
@@ -505,9 +513,7 @@ impl GpuRenderer {
         if samples_per_pixel == 0 || self.settings.width == 0 || self.settings.height == 0 {
             return Ok(());
         }
-        self.sampler
-            .check_index(first_sample.saturating_add(samples_per_pixel - 1))
-            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        self.sampler.check_index(first_sample.saturating_add(samples_per_pixel - 1))?;
         let end = first_sample.saturating_add(samples_per_pixel);
         let group_samples = self.group_samples(end - first_sample);
         let (tile_width, tile_height) = tile(group_samples);
@@ -580,14 +586,52 @@ impl GpuRenderer {
         self.film.fold(&self.ctx)
     }
 
-    /// The film so far (sums in `f64`, counts, rejected samples).
-    pub fn film(&self) -> Result<FilmData, GpuError> {
+    /// The film so far (sums in `f64`, counts, rejected samples), read back.
+    pub fn film(&self) -> Result<Film, GpuError> {
         self.film.read(&self.ctx)
     }
 
-    /// Replaces the film (to resume a saved render).
-    pub fn load_film(&mut self, data: &FilmData) -> Result<(), GpuError> {
+    /// Replaces the film (to resume a saved render, or with an empty film to start again).
+    pub fn load_film(&mut self, data: &Film) -> Result<(), GpuError> {
         self.film.write(&self.ctx, data)
+    }
+}
+
+impl Integrator for GpuRenderer {
+    fn name(&self) -> &'static str {
+        "gpu"
+    }
+
+    fn describe(&self) -> String {
+        format!("gpu: {}", self.ctx.describe())
+    }
+
+    fn settings(&self) -> &RenderSettings {
+        &self.settings
+    }
+
+    fn render_pass(&mut self, first_sample: u32, samples_per_pixel: u32) -> Result<(), RenderError> {
+        Ok(GpuRenderer::render_pass(self, first_sample, samples_per_pixel)?)
+    }
+
+    fn film(&mut self) -> Result<Film, RenderError> {
+        Ok(GpuRenderer::film(self)?)
+    }
+
+    fn set_film(&mut self, film: &Film) -> Result<(), RenderError> {
+        Ok(self.load_film(film)?)
+    }
+
+    /// About 2²⁴ samples per pass on hardware (tens of milliseconds on a large GPU), 2¹⁶ on a
+    /// software adapter; 1 to 64 samples per pixel.
+    fn pass_samples(&self) -> u32 {
+        let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
+        let target: u64 = if crate::context::is_hardware(&self.ctx.info) { 1 << 24 } else { 1 << 16 };
+        (target / pixels.max(1)).clamp(1, 64) as u32
+    }
+
+    fn last_pass_device_seconds(&self) -> Option<f64> {
+        self.last_pass_gpu_seconds()
     }
 }
 
@@ -608,7 +652,7 @@ fn frame_params(scene: &Scene, camera: &Camera, s: &RenderSettings, sampler: Sam
     if any_masked {
         flags |= FRAME_ANY_MASKED;
     }
-    let (sun_direction, sun_irradiance) = match scene.sun {
+    let (sun_direction, sun_irradiance) = match scene.sun() {
         Some(sun) => {
             flags |= FRAME_HAS_SUN;
             (sun.direction.extend(0.0).to_array(), sun.irradiance.extend(0.0).to_array())
@@ -622,7 +666,7 @@ fn frame_params(scene: &Scene, camera: &Camera, s: &RenderSettings, sampler: Sam
         cam_t: v4(m.translation),
         sun_direction,
         sun_irradiance,
-        sky: scene.sky.extend(0.0).to_array(),
+        sky: scene.sky().extend(0.0).to_array(),
         sampler,
         width: s.width,
         height: s.height,
@@ -636,7 +680,10 @@ fn frame_params(scene: &Scene, camera: &Camera, s: &RenderSettings, sampler: Sam
         aspect: w / h,
         group_samples: 1,
         tile_width: 8,
-        offset_scale: furnace_cpu::scene_offset_scale(scene),
+        offset_scale: {
+            let (lo, hi) = scene.geometry.bounds();
+            offset_scale_of_bounds(lo, hi)
+        },
         pad: [0; 3],
     }
 }

@@ -6,18 +6,18 @@
 //! on the same inputs.
 //!
 //! [`GpuContext`] picks an adapter and opens a device; [`GpuRenderer`] renders a scene into a
-//! drift-free [`film::GpuFilm`]; [`kernel`] runs small compute kernels over `u32` buffers (what
+//! drift-free [`film::GpuFilm`], read back as a [`furnace_render::Film`]; [`kernel`] runs small compute kernels over `u32` buffers (what
 //! the parity tests use).
 //!
 //! ```no_run
 //! use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
 //! let scene = furnace_scene::builtin::cornell_box()?;
 //! let ctx = GpuContext::new(&AdapterChoice::Best)?;
-//! let settings = furnace_cpu::RenderSettings::default(); // 256², 4 bounces, Owen-Sobol
+//! let settings = furnace_render::RenderSettings::default(); // 256², 4 bounces, Owen-Sobol
 //! let mut gpu = GpuRenderer::new(ctx, &scene, &scene.default_camera(), settings)?;
 //! gpu.render_pass(0, 64)?; // samples 0..64 of every pixel
 //! let film = gpu.film()?; // f64 sums and counts, read back
-//! println!("pixel 0: {:?}", film.mean(0));
+//! println!("pixel (0, 0): {:?}", film.pixel(0, 0));
 //! # Ok::<(), Box<dyn std::error::Error>>(())
 //! ```
 //!

@@ -24,9 +24,9 @@
 //!
 //! Like every GPU test, these fail without an adapter unless `FURNACE_SKIP_GPU_TESTS=1`.
 
-use furnace_cpu::RenderSettings;
 use furnace_gpu::film::FilmPrecision;
 use furnace_gpu::{GpuContext, GpuError, GpuRenderer, test_context};
+use furnace_render::RenderSettings;
 use furnace_scene::{Scene, builtin};
 use std::sync::mpsc;
 use std::time::Duration;
@@ -55,7 +55,7 @@ fn working_renderer(ctx: GpuContext) -> GpuRenderer {
     let settings = RenderSettings { width: 8, height: 8, ..RenderSettings::default() };
     let mut r = GpuRenderer::new(ctx, &scene, &scene.default_camera(), settings).unwrap();
     r.render_pass(0, 1).unwrap();
-    assert!(r.film().unwrap().count.iter().all(|&c| c == 1));
+    assert!(r.film().unwrap().counts().iter().all(|&c| c == 1));
     r
 }
 
@@ -81,7 +81,7 @@ fn reading_a_lost_device_is_device_lost_every_time() {
         assert_lost("buffer_init()", buffer);
         r
     });
-    let zero = furnace_gpu::film::FilmData::zero(8, 8);
+    let zero = furnace_render::Film::new(8, 8);
     within("load_film() after destroy", LIMIT, move || assert_lost("load_film()", r.load_film(&zero)));
 }
 

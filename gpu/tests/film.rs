@@ -4,8 +4,9 @@
 //! The samples are made from integer hashes by perturbing the mantissa of 0.1f32, so the GPU and
 //! the CPU see bit-identical inputs and the CPU can form the exact mean in `f64`.
 
-use furnace_gpu::film::{FilmData, FilmPrecision, GpuFilm, uniform};
+use furnace_gpu::film::{FilmPrecision, GpuFilm, uniform};
 use furnace_gpu::{GpuContext, test_context};
+use furnace_render::Film;
 
 const FRAMES: u32 = 1_000_000;
 const PIXELS: u32 = 64;
@@ -71,7 +72,7 @@ fn film_add(pixel: u32, value: vec3<f32>) {
 }
 "#;
 
-fn accumulate(ctx: &GpuContext, precision: FilmPrecision, module: &str, fold: bool) -> FilmData {
+fn accumulate(ctx: &GpuContext, precision: FilmPrecision, module: &str, fold: bool) -> Film {
     let mut film = GpuFilm::new(ctx, PIXELS, 1, precision).unwrap();
     let source = format!("{}{}{}", precision.bindings(0, 0), module, SHADER);
     let d = &ctx.device;
@@ -155,11 +156,11 @@ fn exact() -> Vec<([f64; 3], u64)> {
 }
 
 /// Worst relative error of the film's means against the exact ones.
-fn worst(data: &FilmData, exact: &[([f64; 3], u64)], mean_is_stored: bool) -> f64 {
+fn worst(data: &Film, exact: &[([f64; 3], u64)], mean_is_stored: bool) -> f64 {
     let mut worst = 0.0f64;
     for (i, (m, n)) in exact.iter().enumerate() {
-        assert_eq!(data.count[i], *n, "pixel {i}: accepted count");
-        let got = if mean_is_stored { data.sum[i] } else { data.mean(i) };
+        assert_eq!(data.counts()[i], *n, "pixel {i}: accepted count");
+        let got = if mean_is_stored { data.sums()[i] } else { data.mean(i) };
         for k in 0..3 {
             worst = worst.max(((got[k] - m[k]) / m[k]).abs());
         }
@@ -192,7 +193,7 @@ fn million_frames_do_not_drift() {
         if !(w < 1e-5) {
             failures.push(format!("{precision:?} drifted: {w:e}"));
         }
-        assert_eq!(data.rejected, expected_rejected, "{precision:?}: rejected samples");
+        assert_eq!(data.rejected(), expected_rejected, "{precision:?}: rejected samples");
     }
     assert!(failures.is_empty(), "{} on {}", failures.join("; "), ctx.describe());
     let naive = accumulate(&ctx, FilmPrecision::F32Pass, NAIVE, false);
@@ -206,13 +207,14 @@ fn million_frames_do_not_drift() {
 fn write_then_read_round_trips() {
     let Some(ctx) = test_context() else { return };
     let (w, h) = (7, 5);
-    let data = FilmData {
-        width: w,
-        height: h,
-        sum: (0..w * h).map(|i| [f64::from(i) / 3.0, 1e7 + f64::from(i) * 1e-3, 0.1]).collect(),
-        count: (0..u64::from(w * h)).map(|i| i * 1000 + 1).collect(),
-        rejected: 42,
-    };
+    let data = Film::from_parts(
+        w,
+        h,
+        (0..w * h).map(|i| glam::DVec3::new(f64::from(i) / 3.0, 1e7 + f64::from(i) * 1e-3, 0.1)).collect(),
+        (0..u64::from(w * h)).map(|i| i * 1000 + 1).collect(),
+        42,
+    )
+    .unwrap();
     for precision in [FilmPrecision::F64, FilmPrecision::F32Pass] {
         if precision == FilmPrecision::F64 && !ctx.shader_f64 {
             continue;
@@ -220,10 +222,10 @@ fn write_then_read_round_trips() {
         let mut film = GpuFilm::new(&ctx, w, h, precision).unwrap();
         film.write(&ctx, &data).unwrap();
         let back = film.read(&ctx).unwrap();
-        assert_eq!((back.count.clone(), back.rejected), (data.count.clone(), data.rejected));
-        assert_eq!(back.sum, data.sum, "{precision:?}");
+        assert_eq!((back.counts(), back.rejected()), (data.counts(), data.rejected()));
+        assert_eq!(back.sums(), data.sums(), "{precision:?}");
         film.clear(&ctx).unwrap();
         let zero = film.read(&ctx).unwrap();
-        assert!(zero.count.iter().all(|&c| c == 0) && zero.rejected == 0);
+        assert!(zero.counts().iter().all(|&c| c == 0) && zero.rejected() == 0);
     }
 }

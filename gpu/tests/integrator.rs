@@ -11,9 +11,10 @@
 
 mod common;
 
-use furnace_cpu::{RenderSettings, Renderer};
+use furnace_cpu::CpuRenderer;
 use furnace_gpu::integrator::{FrameParams, GROUP_SIZE, shader_source, tile};
 use furnace_gpu::{GpuRenderer, film::FilmPrecision, test_context};
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use furnace_scene::builtin;
 
@@ -92,7 +93,7 @@ fn dispatches_cover_every_pixel_once() {
             first += g;
             let film = r.film().unwrap();
             let wrong: Vec<_> = film
-                .count
+                .counts()
                 .iter()
                 .enumerate()
                 .filter(|&(_, &c)| c != u64::from(first))
@@ -148,19 +149,19 @@ fn same_samples_give_the_same_image() {
     let camera = scene.default_camera();
     let s = settings(SamplerKind::Sobol, 3);
     const SPP: u32 = 16;
-    let cpu = Renderer::new(scene.clone(), s).unwrap();
+    let cpu = CpuRenderer::with_default_camera(scene.clone(), s).unwrap();
     let mut film = cpu.new_film();
-    cpu.render_pass(&mut film, 0, SPP).unwrap();
+    cpu.render_into(&mut film, 0, SPP).unwrap();
     let mut gpu = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
     eprintln!("adapter {}, film {:?}", gpu.context().describe(), gpu.film_precision());
     gpu.render_pass(0, SPP).unwrap();
     let g = gpu.film().unwrap();
-    assert_eq!(g.rejected, 0);
+    assert_eq!(g.rejected(), 0);
     let n = (SIZE * SIZE) as usize;
     let mut close = 0;
     let (mut gm, mut cm) = ([0.0f64; 3], [0.0f64; 3]);
     for i in 0..n {
-        assert_eq!(g.count[i], u64::from(SPP), "pixel {i} sample count");
+        assert_eq!(g.counts()[i], u64::from(SPP), "pixel {i} sample count");
         let gp = g.mean(i);
         let cp = film.pixel(i as u32 % SIZE, i as u32 / SIZE).to_array();
         let rel = (0..3).map(|c| (gp[c] - cp[c]).abs() / cp[c].abs().max(1e-3)).fold(0.0, f64::max);
@@ -185,12 +186,12 @@ fn independent_estimates_agree_within_noise() {
     let scene = builtin::cornell_box().unwrap();
     let camera = scene.default_camera();
     const PASSES: u32 = 128;
-    let cpu = Renderer::new(scene.clone(), settings(SamplerKind::Random, 1)).unwrap();
+    let cpu = CpuRenderer::with_default_camera(scene.clone(), settings(SamplerKind::Random, 1)).unwrap();
     let mut film = cpu.new_film();
     let (cm, cv) = per_sample_stats(
         |k| {
             film.clear();
-            cpu.render_pass(&mut film, k, 1).unwrap();
+            cpu.render_into(&mut film, k, 1).unwrap();
             (0..SIZE * SIZE).map(|i| film.pixel(i % SIZE, i / SIZE).to_array()).collect()
         },
         PASSES,
@@ -202,7 +203,7 @@ fn independent_estimates_agree_within_noise() {
             gpu.render_pass(k, 1).unwrap();
             let now = gpu.film().unwrap();
             let v = (0..(SIZE * SIZE) as usize)
-                .map(|i| std::array::from_fn(|c| now.sum[i][c] - prev.sum[i][c]))
+                .map(|i| std::array::from_fn(|c| now.sums()[i][c] - prev.sums()[i][c]))
                 .collect();
             prev = now;
             v
@@ -244,7 +245,7 @@ fn grouping_samples_does_not_change_a_bit() {
     // sample count) invocations per pixel; uneven passes.
     for (group, passes) in [(1, vec![8]), (4, vec![8]), (64, vec![8]), (2, vec![3, 5]), (8, vec![1, 7])] {
         gpu.set_group_samples(Some(group));
-        gpu.load_film(&furnace_gpu::film::FilmData::zero(s.width, s.height)).unwrap();
+        gpu.load_film(&furnace_render::Film::new(s.width, s.height)).unwrap();
         let mut first = 0;
         for n in passes {
             gpu.render_pass(first, n).unwrap();
@@ -253,10 +254,13 @@ fn grouping_samples_does_not_change_a_bit() {
         films.push((group, gpu.film().unwrap()));
     }
     let (_, reference) = &films[0];
-    assert!(reference.count.iter().all(|&c| c == 8));
+    assert!(reference.counts().iter().all(|&c| c == 8));
     for (group, f) in &films[1..] {
-        let same = f.count == reference.count
-            && f.sum.iter().zip(&reference.sum).all(|(a, b)| a.map(f64::to_bits) == b.map(f64::to_bits));
+        let same = f.counts() == reference.counts()
+            && f.sums()
+                .iter()
+                .zip(reference.sums())
+                .all(|(a, b)| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits));
         assert!(same, "group_samples {group}: the film differs from one invocation per pixel");
     }
 }

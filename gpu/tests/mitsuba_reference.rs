@@ -83,9 +83,9 @@ mod cbox;
 
 use cbox::{BatchEstimator, Comparison, Estimate, Image, Reference};
 use furnace_brdf::SpecularOptions;
-use furnace_cpu::RenderSettings;
-use furnace_gpu::film::FilmData;
 use furnace_gpu::{GpuRenderer, test_context};
+use furnace_render::Film;
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use glam::DVec3;
 use std::path::{Path, PathBuf};
@@ -159,16 +159,16 @@ fn render(bounces: u32, specular: SpecularOptions, passes: u32) -> Option<Estima
     let mut gpu = GpuRenderer::new(ctx, &scene, &scene.default_camera(), settings).expect("a GPU renderer");
     let n = (SIZE * SIZE) as usize;
     let mut estimators = vec![BatchEstimator::new(1); n];
-    let mut before = FilmData::zero(SIZE, SIZE);
+    let mut before = Film::new(SIZE, SIZE);
     for pass in 0..passes {
         gpu.render_pass(pass, 1).expect("a GPU pass");
         let after = gpu.film().expect("reading the film");
-        assert_eq!(after.rejected, 0, "pass {pass}: non-finite samples");
+        assert_eq!(after.rejected(), 0, "pass {pass}: non-finite samples");
         for (i, e) in estimators.iter_mut().enumerate() {
-            assert_eq!(after.count[i], u64::from(pass) + 1, "pixel {i}: sample count");
+            assert_eq!(after.counts()[i], u64::from(pass) + 1, "pixel {i}: sample count");
             // This pass's one sample: the sums' difference (exact: the sums are f64 sums of
             // f32 samples, far from f64's precision).
-            e.push(DVec3::from_array(std::array::from_fn(|c| after.sum[i][c] - before.sum[i][c])));
+            e.push(DVec3::from_array(std::array::from_fn(|c| after.sums()[i][c] - before.sums()[i][c])));
         }
         before = after;
     }

@@ -12,8 +12,8 @@
 //! 1e-3 relative (the same-sample GPU/CPU parity bar of `tests/integrator.rs`: most paths are
 //! the same paths, rounding moves a few).
 
-use furnace_cpu::RenderSettings;
 use furnace_gpu::{GpuRenderer, test_context};
+use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
 use furnace_scene::Scene;
 
@@ -41,8 +41,8 @@ fn scaled_cornell_box_renders_the_same_image_on_the_gpu() {
         let mut gpu = GpuRenderer::new(ctx, &scene, &camera, settings).expect("a renderer");
         gpu.render_pass(0, 4).expect("a pass");
         let film = gpu.film().expect("the film");
-        assert_eq!(film.rejected, 0, "s = {s:e}: non-finite samples");
-        let n = film.count.len();
+        assert_eq!(film.rejected(), 0, "s = {s:e}: non-finite samples");
+        let n = film.counts().len();
         let mut m = [0.0f64; 3];
         for i in 0..n {
             let p = film.mean(i);
@@ -84,6 +84,6 @@ fn fixed_n_sampler_refuses_to_run_past_n_on_the_gpu() {
         let err = gpu.render_pass(4, 1).expect_err("sample 4 of N = 4").to_string();
         assert!(err.contains("N = 4") && err.contains("sample 4"), "{sampler}: {err}");
         let film = gpu.film().expect("the film");
-        assert!(film.count.iter().all(|&c| c == 4), "{sampler}: the refused pass added samples");
+        assert!(film.counts().iter().all(|&c| c == 4), "{sampler}: the refused pass added samples");
     }
 }

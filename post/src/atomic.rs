@@ -38,7 +38,10 @@ impl Drop for TempGuard {
 /// Writes `path` atomically: `write` fills a fresh temporary file in the same directory, which
 /// is then synced and renamed to `path`. On any error (including a panic inside `write`) the
 /// temporary file is removed and `path` is left as it was.
-pub(crate) fn write_atomic(
+///
+/// # Errors
+/// [`PostError::Io`] naming `path`, or what `write` returns.
+pub fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut File) -> Result<(), PostError>,
 ) -> Result<(), PostError> {
@@ -55,6 +58,18 @@ pub(crate) fn write_atomic(
     fs::rename(&guard.path, path).map_err(io_err)?;
     guard.armed = false;
     Ok(())
+}
+
+/// Writes `bytes` to `path` atomically ([`write_atomic`]): a JSON report, a CSV, an SVG.
+///
+/// # Errors
+/// [`PostError::Io`] naming `path`.
+pub fn write_bytes_atomic(path: impl AsRef<Path>, bytes: &[u8]) -> Result<(), PostError> {
+    use std::io::Write as _;
+    let path = path.as_ref();
+    write_atomic(path, |f| {
+        f.write_all(bytes).map_err(|source| PostError::Io { path: path.to_path_buf(), source })
+    })
 }
 
 #[cfg(test)]

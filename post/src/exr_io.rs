@@ -7,7 +7,8 @@ use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer, LayerAttributes,
     ReadChannels, ReadLayers, SmallVec, SpecificChannels, Text, Vec2, WritableImage, read,
 };
-use glam::Vec3;
+use furnace_render::Film;
+use glam::{DVec3, Vec3};
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
 use std::io::{BufWriter, Write};
@@ -302,16 +303,6 @@ const SUM_CHANNELS: [[&str; 2]; 3] = [
     ["furnace.resume.sumB.hi", "furnace.resume.sumB.lo"],
 ];
 
-/// The exact accumulation state of a progressive render (see [`RESUME_LAYER`]).
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct FilmState {
-    /// Per-pixel `f64` sums of the accepted samples, interleaved R, G, B, row-major from the
-    /// top (`3·width·height` values).
-    pub sums: Vec<f64>,
-    /// Per-pixel counts of accepted samples, row-major from the top (`width·height` values).
-    pub counts: Vec<u64>,
-}
-
 /// A furnace EXR as read by [`read_exr_with_state`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExrWithState {
@@ -323,38 +314,30 @@ pub struct ExrWithState {
     pub pixels: Vec<Vec3>,
     /// The text attributes.
     pub metadata: Metadata,
-    /// The accumulation state, if the file has the [`RESUME_LAYER`] channels.
-    pub state: Option<FilmState>,
+    /// The accumulation state, if the file has the [`RESUME_LAYER`] channels: the film's sums
+    /// and counts, and as its rejected samples the metadata's `rejected_samples` (0 if absent).
+    pub state: Option<Film>,
 }
 
-/// Writes what [`write_exr`] writes — 32-bit float `R`, `G`, `B` and `metadata`, atomically —
-/// plus the accumulation state `sums` (3 per pixel) and `counts` (1 per pixel) as the
-/// [`RESUME_LAYER`] channels, exactly.
+/// Writes what [`write_exr`] writes — 32-bit float `R`, `G`, `B` (the film's means,
+/// [`Film::to_rgb_f32`]) and `metadata`, atomically — plus the film's accumulation state, its
+/// sums (3 per pixel) and counts (1 per pixel), as the [`RESUME_LAYER`] channels, exactly. The
+/// film's rejected samples are not written: record them in `metadata.rejected_samples`.
 ///
 /// # Errors
-/// As [`write_exr`]; [`PostError::FilmState`] if `sums` or `counts` have the wrong length or a
-/// count exceeds `u32::MAX`. All name `path`.
+/// As [`write_exr`]; [`PostError::FilmState`] if a count exceeds `u32::MAX`. All name `path`.
 pub fn write_exr_with_state(
     path: impl AsRef<Path>,
-    width: u32,
-    height: u32,
-    pixels: &[Vec3],
+    film: &Film,
     metadata: &Metadata,
-    sums: &[f64],
-    counts: &[u64],
 ) -> Result<(), PostError> {
     let path = path.as_ref();
+    let (width, height) = (film.width(), film.height());
+    let pixels: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
     check_size(path, width, height, pixels.len())?;
-    let n = pixels.len();
     let bad = |reason: String| PostError::FilmState { path: path.to_path_buf(), reason };
-    if sums.len() != 3 * n || counts.len() != n {
-        return Err(bad(format!(
-            "{width}×{height} pixels need {} sums and {n} counts, got {} and {}",
-            3 * n,
-            sums.len(),
-            counts.len()
-        )));
-    }
+    let sums: Vec<f64> = film.sums().iter().flat_map(|s| s.to_array()).collect();
+    let counts = film.counts();
     let counts: Vec<u32> = counts
         .iter()
         .map(|&c| u32::try_from(c))
@@ -428,16 +411,19 @@ pub fn read_exr_with_state(path: impl AsRef<Path>) -> Result<ExrWithState, PostE
         }
         let get = |i: usize| found[i].1.map_or(&[][..], |v| v.as_slice());
         let counts = get(0).iter().map(|&c| u64::from(c)).collect();
-        let mut sums = vec![0.0; 3 * n];
+        let mut sums = vec![DVec3::ZERO; n];
         for c in 0..3 {
             let (hi, lo) = (get(1 + 2 * c), get(2 + 2 * c));
-            for (i, (&h, &l)) in hi.iter().zip(lo).enumerate() {
-                sums[3 * i + c] = f64::from_bits(u64::from(h) << 32 | u64::from(l));
+            for (sum, (&h, &l)) in sums.iter_mut().zip(hi.iter().zip(lo)) {
+                sum[c] = f64::from_bits(u64::from(h) << 32 | u64::from(l));
             }
         }
-        Some(FilmState { sums, counts })
+        let rejected = metadata.rejected_samples.unwrap_or(0);
+        // The exr crate limits sizes to i32 range, so these fit.
+        let film = Film::from_parts(layer.size.0 as u32, layer.size.1 as u32, sums, counts, rejected)
+            .map_err(|e| bad(e.to_string()))?;
+        Some(film)
     };
-    // The exr crate limits sizes to i32 range, so these fit.
     Ok(ExrWithState { width: layer.size.0 as u32, height: layer.size.1 as u32, pixels, metadata, state })
 }
 
@@ -457,7 +443,6 @@ mod tests {
         let dir = scratch("round_trip");
         let path = dir.join("s.exr");
         let (w, h) = (3, 2);
-        let pixels: Vec<Vec3> = (0..6).map(|i| Vec3::new(i as f32, 0.5, -1.25)).collect();
         // Values whose low 32 bits matter, signed zero, a subnormal, the largest finite, NaN
         // with a payload: every bit of every sum must survive.
         let mut sums = vec![
@@ -470,21 +455,34 @@ mod tests {
         ];
         sums.extend((0..12).map(|i| (i as f64).sqrt() * 1e10 + 1e-7));
         let counts = vec![0, 1, 7, u64::from(u32::MAX), 123_456, 42];
-        let meta = Metadata { spp: Some(7), scene: Some("x".into()), ..Metadata::default() };
-        write_exr_with_state(&path, w, h, &pixels, &meta, &sums, &counts).unwrap();
+        let film =
+            Film::from_parts(w, h, sums.chunks_exact(3).map(DVec3::from_slice).collect(), counts.clone(), 5)
+                .unwrap();
+        let meta = Metadata {
+            spp: Some(7),
+            scene: Some("x".into()),
+            rejected_samples: Some(5),
+            ..Metadata::default()
+        };
+        write_exr_with_state(&path, &film, &meta).unwrap();
 
         let back = read_exr_with_state(&path).unwrap();
         assert_eq!((back.width, back.height), (w, h));
-        assert_eq!(back.pixels, pixels);
+        let f32_bits = |v: &[f32]| v.iter().map(|s| s.to_bits()).collect::<Vec<_>>();
+        let rgb: Vec<f32> = back.pixels.iter().flat_map(|p| p.to_array()).collect();
+        assert_eq!(f32_bits(&rgb), f32_bits(&film.to_rgb_f32()), "R, G, B are the film's means");
         assert_eq!(back.metadata, meta);
         let state = back.state.expect("the state channels were written");
-        let bits = |v: &[f64]| v.iter().map(|s| s.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&state.sums), bits(&sums));
-        assert_eq!(state.counts, counts);
+        let bits =
+            |f: &Film| f.sums().iter().flat_map(|s| s.to_array().map(f64::to_bits)).collect::<Vec<_>>();
+        assert_eq!(bits(&state), bits(&film));
+        assert_eq!(state.counts(), &counts[..]);
+        assert_eq!(state.rejected(), 5, "from the metadata");
 
         // Readers that only want the image still see R, G, B.
-        let (rw, rh, rgb, m) = read_exr(&path).unwrap();
-        assert_eq!((rw, rh, rgb, m), (w, h, pixels, meta));
+        let (rw, rh, rgb2, m) = read_exr(&path).unwrap();
+        assert_eq!((rw, rh, m), (w, h, meta));
+        assert_eq!(f32_bits(&rgb2.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>()), f32_bits(&rgb));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 
@@ -512,13 +510,10 @@ mod tests {
     fn bad_state_is_an_error_naming_the_file() {
         let dir = scratch("bad");
         let path = dir.join("bad.exr");
-        let pixels = vec![Vec3::ZERO; 2];
-        let m = Metadata::default();
-        let short = write_exr_with_state(&path, 2, 1, &pixels, &m, &[0.0; 5], &[0, 0]).unwrap_err();
-        assert!(matches!(short, PostError::FilmState { .. }), "{short}");
-        assert!(short.to_string().contains("bad.exr") && short.to_string().contains("6 sums"), "{short}");
-        let big = write_exr_with_state(&path, 2, 1, &pixels, &m, &[0.0; 6], &[1 << 32, 0]).unwrap_err();
-        assert!(big.to_string().contains("exceeds"), "{big}");
+        let film = Film::from_parts(2, 1, vec![DVec3::ZERO; 2], vec![1 << 32, 0], 0).unwrap();
+        let big = write_exr_with_state(&path, &film, &Metadata::default()).unwrap_err();
+        assert!(matches!(big, PostError::FilmState { .. }), "{big}");
+        assert!(big.to_string().contains("bad.exr") && big.to_string().contains("exceeds"), "{big}");
         assert!(!path.exists());
         std::fs::remove_dir_all(&dir).unwrap();
     }

@@ -20,7 +20,7 @@
 //! [`write_exr`] stores the *linear* image as 32-bit float RGB with the render's [`Metadata`]
 //! as text attributes; [`read_exr`] reads it back bit-identically and also reads other
 //! renderers' EXRs (e.g. Mitsuba 3's `B,G,R` float references). [`write_exr_with_state`] adds a
-//! progressive render's exact accumulation state (per-pixel `f64` sums and counts, in the
+//! progressive render's exact accumulation state (a `furnace_render::Film`'s per-pixel `f64` sums and counts, in the
 //! [`RESUME_LAYER`] channels) so that it can be resumed bit-identically; [`read_exr_with_state`]
 //! reads it back. [`write_png`] stores the 8-bit sRGB image. All writers are **atomic**: they
 //! write a temporary file in the target's directory and rename it into place, so an
@@ -59,10 +59,10 @@ mod png_io;
 mod srgb;
 mod tonemap;
 
+pub use atomic::{write_atomic, write_bytes_atomic};
 pub use error::PostError;
 pub use exr_io::{
-    ExrWithState, FilmState, Metadata, RESUME_LAYER, read_exr, read_exr_with_state, write_exr,
-    write_exr_with_state,
+    ExrWithState, Metadata, RESUME_LAYER, read_exr, read_exr_with_state, write_exr, write_exr_with_state,
 };
 pub use png_io::write_png;
 pub use srgb::{linear_to_srgb, pixel_to_srgb8, quantize_unorm8, srgb_to_linear, srgb8_to_linear, to_srgb8};

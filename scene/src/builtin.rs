@@ -29,8 +29,7 @@ pub fn furnace_sphere(material: Material, n: u32) -> Scene {
         textures: Vec::new(),
         images: Vec::new(),
         cameras: vec![Camera::look_at(Vec3::new(0.0, 0.0, 4.0), Vec3::ZERO, Vec3::Y, crate::DEFAULT_YFOV)],
-        sun: None,
-        sky: Vec3::ONE,
+        lights: vec![crate::Light::Sky(crate::Sky { radiance: Vec3::ONE })],
         warnings: Vec::new(),
         dropped_triangles: 0,
     }
@@ -164,11 +163,10 @@ pub fn sunlit_interior(target_triangles: u32) -> Scene {
         textures: Vec::new(),
         images: Vec::new(),
         cameras: vec![Camera::look_at(eye, Vec3::new(x1, 1.2, -1.0), Vec3::Y, 1.0)],
-        sun: Some(crate::Sun {
+        lights: vec![crate::Light::Sun(crate::Sun {
             direction: Vec3::new(-1.0, -0.7, 0.15).normalize(),
             irradiance: Vec3::new(1000.0, 950.0, 850.0),
-        }),
-        sky: Vec3::ZERO,
+        })],
         warnings: Vec::new(),
         dropped_triangles: 0,
     }

@@ -31,7 +31,7 @@
 //! let camera = scene.default_camera();
 //! let ray = camera.generate_ray(glam::Vec2::new(128.0, 128.0), 256, 256);
 //! assert!(ray.direction.is_normalized());
-//! assert!(scene.sun.is_some());
+//! assert!(scene.sun().is_some());
 //! # Ok::<(), furnace_scene::SceneError>(())
 //! ```
 
@@ -40,6 +40,8 @@ pub mod builtin;
 mod camera;
 mod error;
 mod geometry;
+mod hash;
+mod light;
 mod load;
 mod material;
 mod texture;
@@ -47,26 +49,16 @@ mod texture;
 pub use camera::{Camera, DEFAULT_YFOV, Projection, Ray};
 pub use error::{SceneError, Warning};
 pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, oct_decode, oct_encode};
+pub use light::{Light, Sky, Sun};
 pub use load::{MAX_COORDINATE, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
 pub use material::{AlphaMode, Material, MaterialSample};
 pub use texture::{ColorSpace, Image, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear};
 
-use glam::Vec3;
 use std::path::Path;
 
-/// A directional light ("sun"): parallel light of constant irradiance.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Sun {
-    /// Unit direction the light **travels** (the light node's −Z in world space). The
-    /// direction towards the sun is `-direction`.
-    pub direction: Vec3,
-    /// Irradiance on a surface facing the sun, W/m² per channel (`color × intensity`, no
-    /// photometric conversion).
-    pub irradiance: Vec3,
-}
-
 /// A scene ready to render: world-space triangles, materials, textures, cameras, sun and sky.
-/// All fields are public: override the sun, sky or camera by assigning them.
+/// All fields are public: override the lights or cameras by assigning them ([`Scene::set_sun`],
+/// [`Scene::set_sky`]).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Scene {
     /// The file it came from, or `<built-in NAME>`.
@@ -81,10 +73,9 @@ pub struct Scene {
     pub images: Vec<Image>,
     /// Cameras in node traversal order (depth-first, children in file order).
     pub cameras: Vec<Camera>,
-    /// The first KHR_lights_punctual directional light, if any.
-    pub sun: Option<Sun>,
-    /// Constant radiance of every ray that leaves the scene (linear RGB); black by default.
-    pub sky: Vec3,
+    /// The lights: the first KHR_lights_punctual directional light as a [`Light::Sun`], the
+    /// scene's `extras.background_radiance_rgb` as a [`Light::Sky`] (none: black sky).
+    pub lights: Vec<Light>,
     /// What the loader ignored or repaired, each reported once.
     pub warnings: Vec<Warning>,
     /// Degenerate (zero-area) triangles dropped while loading (non-finite positions are an

@@ -7,7 +7,7 @@ use crate::error::{SceneError, Warning};
 use crate::geometry::{Geometry, encode_tangent, generate_tangents, oct_encode};
 use crate::material::{AlphaMode, Material};
 use crate::texture::{ColorSpace, Image, Texture, TextureRef, TextureTransform, WrapMode};
-use crate::{Scene, Sun};
+use crate::{Light, Scene, Sky, Sun};
 use glam::{Affine3A, Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::accessor::Dimensions;
 use std::collections::HashSet;
@@ -344,6 +344,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
     let mut geo = Geometry::default();
     let mut cameras = Vec::new();
     let mut sun: Option<Sun> = None;
+    let mut lights = Vec::new();
     let mut dropped = 0usize;
     let mut visited = vec![false; doc.nodes().len()];
     let mut stack: Vec<(gltf::Node<'_>, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
@@ -371,19 +372,13 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
         }
         if let Some(light) = node.light() {
             let lpath = format!("KHR_lights_punctual.lights[{}]", light.index());
-            match light.kind() {
-                gltf::khr_lights_punctual::Kind::Directional => {
-                    let dir = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
-                    let c = Vec3::from(light.color()) * light.intensity();
-                    if dir == Vec3::ZERO || !c.is_finite() {
-                        ctx.warn(lpath, "degenerate directional light: ignored");
-                    } else if sun.is_some() {
-                        ctx.warn(lpath, "only the first directional light is used as the sun");
-                    } else {
-                        sun = Some(Sun { direction: dir, irradiance: c });
-                    }
+            match crate::light::punctual(&light, world) {
+                Ok(Light::Sun(_)) if sun.is_some() => {
+                    ctx.warn(lpath, "only the first directional light is used as the sun");
                 }
-                _ => ctx.warn("KHR_lights_punctual", "point and spot lights are not supported: ignored"),
+                Ok(Light::Sun(s)) => sun = Some(s),
+                Ok(other) => lights.push(other),
+                Err((path, why)) => ctx.warn(if path.is_empty() { lpath } else { path.to_string() }, why),
             }
         }
         if let Some(mesh) = node.mesh() {
@@ -430,8 +425,11 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
         textures,
         images,
         cameras,
-        sun,
-        sky,
+        lights: sun
+            .map(Light::Sun)
+            .into_iter()
+            .chain((sky != Vec3::ZERO).then_some(Light::Sky(Sky { radiance: sky })))
+            .collect(),
         warnings: ctx.warnings,
         dropped_triangles: dropped,
     })

@@ -26,10 +26,10 @@ fn cbox_matches_the_file() {
     assert_eq!(s.geometry.triangle_count(), 20_516);
     assert_eq!(s.dropped_triangles, 0);
     // Sky: scenes[0].extras.background_radiance_rgb, exactly.
-    assert_eq!(s.sky, Vec3::new(0.35, 0.5, 0.8));
+    assert_eq!(s.sky(), Vec3::new(0.35, 0.5, 0.8));
     // Sun: irradiance colour × intensity = (1, 0.95, 0.85) × 3; direction of travel as the
     // file's extras record it (tolerance: f32 quaternion rotation, ~1e-7 per component).
-    let sun = s.sun.expect("a sun");
+    let sun = *s.sun().expect("a sun");
     assert!((sun.irradiance - Vec3::new(3.0, 2.85, 2.55)).abs().max_element() < 1e-6);
     let travel = Vec3::new(-0.240_007_68, -0.960_030_7, -0.144_004_6);
     assert!((sun.direction - travel).length() < 1e-5, "{:?}", sun.direction);
@@ -56,7 +56,7 @@ fn cbox_matches_the_file() {
     // The embedded GLB is the same scene.
     let b = builtin::cornell_box().expect("built-in cbox");
     assert_eq!(b.geometry, s.geometry);
-    assert_eq!((b.sun, b.sky, b.cameras.clone()), (s.sun, s.sky, s.cameras.clone()));
+    assert_eq!((&b.lights, b.cameras.clone()), (&s.lights, s.cameras.clone()));
     println!("cbox: {:?}", s.stats());
 }
 
@@ -157,8 +157,8 @@ fn large_and_lenient_scenes() {
 #[test]
 fn furnace_sphere_is_a_closed_unit_sphere() {
     let s = builtin::furnace_sphere(builtin::lambert(Vec3::ONE), 32);
-    assert_eq!(s.sky, Vec3::ONE);
-    assert!(s.sun.is_none());
+    assert_eq!(s.sky(), Vec3::ONE);
+    assert!(s.sun().is_none());
     assert_eq!(s.geometry.triangle_count(), 64 * 62);
     for (i, p) in s.geometry.positions.iter().enumerate() {
         // Tolerance: f32 sin/cos products.
@@ -212,7 +212,7 @@ fn sunlit_interior_has_the_requested_size_and_lets_the_sun_in_only_through_windo
     // Light enters only through the windows: from a grid of floor points, look towards the sun
     // through the room shell (brute force). Some floor must be sunlit, most must not, and every
     // escaping ray must leave through a window opening in the +x wall.
-    let sun = shell.sun.expect("a sun");
+    let sun = *shell.sun().expect("a sun");
     let to_sun = -sun.direction;
     let walls: Vec<[Vec3; 3]> = (0..shell_tris).filter_map(|t| shell.geometry.triangle(t)).collect();
     let (mut lit, mut total) = (0, 0);
@@ -258,7 +258,7 @@ fn scale_lengths_scales_lengths_only() {
     }
     assert_eq!(scene.cameras[0].projection, before.cameras[0].projection);
     assert_eq!(scene.cameras[1].projection, Projection::Orthographic { xmag: 6.0, ymag: 4.0 });
-    assert_eq!((scene.sun, scene.sky), (before.sun, before.sky));
+    assert_eq!(scene.lights, before.lights);
     for bad in [0.0, -1.0, f32::NAN, f32::INFINITY] {
         let r = std::panic::catch_unwind(|| builtin::cornell_box().unwrap().scale_lengths(bad));
         assert!(r.is_err(), "scale_lengths({bad}) must refuse");

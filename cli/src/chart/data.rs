@@ -200,18 +200,6 @@ pub fn parse_external(path: &Path, text: &str) -> Result<Vec<ExternalPoint>, Str
     Ok(points)
 }
 
-/// CPU time of this process so far (user + system, all threads), in seconds at the kernel's
-/// `USER_HZ` resolution of 1/100 s, from `/proc/self/stat`; `None` where that does not exist.
-pub fn process_cpu_seconds() -> Option<f64> {
-    let stat = std::fs::read_to_string("/proc/self/stat").ok()?;
-    // Fields after the parenthesised command name: state is field 3, utime 14, stime 15.
-    let rest = &stat[stat.rfind(')')? + 1..];
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |i: usize| f.get(i - 3).and_then(|v| v.parse::<u64>().ok());
-    // USER_HZ is 100 on every Linux architecture's /proc ABI.
-    Some((ticks(14)? + ticks(15)?) as f64 / 100.0)
-}
-
 /// The first key under which `recorded` and `now` differ, with both values (`None`: equal).
 pub fn first_difference(recorded: &Value, now: &Value) -> Option<(String, String, String)> {
     let show = |v: Option<&Value>| v.map_or_else(|| "(absent)".to_string(), Value::to_string);
@@ -309,20 +297,6 @@ mod tests {
         assert!(e.contains("e.csv:2") && e.contains("4 fields"), "{e}");
         let e = bad("label,spp,seconds,rmse,relmse\nx,1,2,-3,\n");
         assert!(e.contains("e.csv:2") && e.contains("rmse"), "{e}");
-    }
-
-    #[test]
-    fn process_cpu_time_grows_with_work() {
-        let Some(t0) = process_cpu_seconds() else { return };
-        // Spin for 200 ms of wall time: the process's CPU time cannot fall, and grows by at
-        // least one 10 ms tick even if a busy machine gives us a tenth of a core.
-        let start = std::time::Instant::now();
-        let mut x = 0u64;
-        while start.elapsed().as_millis() < 200 {
-            x = std::hint::black_box(x.wrapping_add(1));
-        }
-        let t1 = process_cpu_seconds().unwrap();
-        assert!(t1 >= t0 + 0.01, "{t0} {t1}");
     }
 
     #[test]

@@ -33,9 +33,11 @@ pub fn assert_same_render(a: &Path, b: &Path) {
     let bits = |v: &[glam::Vec3]| v.iter().flat_map(|p| p.to_array().map(f32::to_bits)).collect::<Vec<_>>();
     assert!(bits(&ra.pixels) == bits(&rb.pixels), "RGB differs: {} vs {}", a.display(), b.display());
     let (sa, sb) = (ra.state.unwrap(), rb.state.unwrap());
-    let sum_bits = |v: &[f64]| v.iter().map(|s| s.to_bits()).collect::<Vec<_>>();
-    assert!(sum_bits(&sa.sums) == sum_bits(&sb.sums), "film sums differ: {} vs {}", a.display(), b.display());
-    assert_eq!(sa.counts, sb.counts);
+    let sum_bits = |f: &furnace_render::Film| {
+        f.sums().iter().flat_map(|s| s.to_array().map(f64::to_bits)).collect::<Vec<_>>()
+    };
+    assert!(sum_bits(&sa) == sum_bits(&sb), "film sums differ: {} vs {}", a.display(), b.display());
+    assert_eq!(sa.counts(), sb.counts());
     let (mut ma, mut mb) = (ra.metadata, rb.metadata);
     ma.render_time_s = None;
     mb.render_time_s = None;

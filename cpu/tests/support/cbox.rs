@@ -5,7 +5,7 @@
 //! Items unused by one of the includers are allowed to be dead there.
 #![allow(dead_code)]
 
-use furnace_cpu::Renderer;
+use furnace_cpu::CpuRenderer;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
@@ -151,13 +151,13 @@ pub struct Estimate {
 ///
 /// # Panics
 /// If a sample was rejected as non-finite (it would bias the estimate without showing).
-pub fn render_passes(renderer: &Renderer, passes: u32, spp_per_pass: u32) -> Estimate {
+pub fn render_passes(renderer: &CpuRenderer, passes: u32, spp_per_pass: u32) -> Estimate {
     let mut film = renderer.new_film();
     let (w, h) = (film.width() as usize, film.height() as usize);
     let mut estimators = vec![BatchEstimator::new(1); w * h];
     for pass in 0..passes {
         film.clear();
-        renderer.render_pass(&mut film, pass * spp_per_pass, spp_per_pass).expect("render");
+        renderer.render_into(&mut film, pass * spp_per_pass, spp_per_pass).expect("render");
         assert_eq!(film.rejected(), 0, "pass {pass}: non-finite samples");
         estimators
             .par_iter_mut()

@@ -1,4 +1,4 @@
-// furnace-gpu: the path tracer, twin of furnace-cpu's Renderer::sample / trace.
+// furnace-gpu: the path tracer, twin of furnace-cpu's CpuRenderer::sample / trace.
 //
 // Requires (composed before it by furnace_gpu::integrator): sampling.wgsl, brdf.wgsl,
 // scene.wgsl, traverse.wgsl, a film module, and the bindings of the params uniform, the film,
@@ -6,10 +6,8 @@
 //
 // Each pixel's samples are added to the film in index order, as the CPU adds them (see `main`).
 
-// Sampler dimensions: furnace_cpu::{DIM_PIXEL, DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE}.
-const DIM_PIXEL: u32 = 0u;
-const DIM_FIRST_BOUNCE: u32 = 2u;
-const DIMS_PER_BOUNCE: u32 = 4u;
+// Sampler dimensions: DIM_PIXEL, DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE and BOUNCE_* are declared by
+// the composing shader from furnace_render::layout.
 
 // FrameParams.flags.
 const FRAME_RUSSIAN_ROULETTE: u32 = 1u;
@@ -49,7 +47,7 @@ struct FrameParams {
     // Invocations per pixel in a workgroup (a power of two ≤ GROUP_SIZE), and the tile's width in pixels.
     group_samples: u32,
     tile_width: u32,
-    // The ray offsets' length scale (furnace_cpu::scene_offset_scale).
+    // The ray offsets' length scale (furnace_accel::offset_scale_of_bounds of the scene).
     offset_scale: f32,
     pad0: u32,
     pad1: u32,
@@ -170,8 +168,8 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
 
         // Continue the path by sampling the BSDF.
         let dim = DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE * event;
-        let u = sampler_value_2d(params.sampler, pixel, index, dim);
-        let uc = sampler_value(params.sampler, pixel, index, dim + 2u);
+        let u = sampler_value_2d(params.sampler, pixel, index, dim + BOUNCE_BSDF_DIRECTION);
+        let uc = sampler_value(params.sampler, pixel, index, dim + BOUNCE_BSDF_LOBE);
         let s = bsdf_sample(bsdf, wo, uc, u);
         if s.lobe == BSDF_LOBE_NONE {
             break;
@@ -185,7 +183,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         event += 1u;
         if (params.flags & FRAME_RUSSIAN_ROULETTE) != 0u && event >= 3u {
             let survive = min(max(max(throughput.x, throughput.y), throughput.z), 1.0);
-            if !(sampler_value(params.sampler, pixel, index, dim + 3u) < survive) {
+            if !(sampler_value(params.sampler, pixel, index, dim + BOUNCE_RUSSIAN_ROULETTE) < survive) {
                 break;
             }
             throughput /= survive;

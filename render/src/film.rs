@@ -8,7 +8,7 @@ use glam::{DVec3, Vec3};
 /// `f64` keeps the relative rounding error of `n` additions below `n·2⁻⁵³` (≈ 10⁻¹⁰ after 10⁶
 /// samples); the running mean `(N·prev + new)/(N + 1)` in `f32` that the thesis used drifted
 /// visibly after ~2000 frames, because every frame re-rounded the mean
-/// (`tests/film.rs::million_frames_do_not_drift`).
+/// (furnace-cpu's `tests/film.rs::million_frames_do_not_drift`).
 ///
 /// Samples with a non-finite channel are rejected: not added, not counted, but tallied in
 /// [`Film::rejected`].
@@ -93,7 +93,15 @@ impl Film {
     /// # Panics
     /// If `(x, y)` is outside the film.
     pub fn pixel(&self, x: u32, y: u32) -> DVec3 {
-        let i = self.index(x, y);
+        self.mean(self.index(x, y))
+    }
+
+    /// The mean of the accepted samples of pixel `i` in row-major order (0 without samples):
+    /// [`Film::pixel`] by index.
+    ///
+    /// # Panics
+    /// If `i` is not below `width × height`.
+    pub fn mean(&self, i: usize) -> DVec3 {
         if self.count[i] == 0 { DVec3::ZERO } else { self.sum[i] / self.count[i] as f64 }
     }
 
@@ -136,19 +144,45 @@ impl Film {
         y as usize * self.width as usize + x as usize
     }
 
-    /// The film as mutable rows, for parallel rendering; `add_rejected` adds to the rejection
-    /// count afterwards.
-    pub(crate) fn rows_mut(&mut self) -> impl rayon::iter::IndexedParallelIterator<Item = FilmRow<'_>> {
-        use rayon::prelude::*;
+    /// The film as mutable rows (row 0 first), for rendering rows in parallel: each row adds its
+    /// samples with [`FilmRow::add_sample`], and the caller adds the rows' rejections with
+    /// [`Film::add_rejected`] afterwards.
+    pub fn rows_mut(&mut self) -> Vec<FilmRow<'_>> {
         let w = self.width.max(1) as usize;
         self.sum
-            .par_chunks_mut(w)
-            .zip(self.count.par_chunks_mut(w))
+            .chunks_mut(w)
+            .zip(self.count.chunks_mut(w))
             .map(|(sum, count)| FilmRow { sum, count })
+            .collect()
     }
 
-    pub(crate) fn add_rejected(&mut self, n: u64) {
+    /// Adds `n` to the count of rejected samples (samples that [`FilmRow::add_sample`] refused).
+    pub fn add_rejected(&mut self, n: u64) {
         self.rejected += n;
+    }
+
+    /// Adds `other`'s sums, counts and rejections into this film, pixel by pixel: the film of
+    /// two disjoint sets of samples.
+    ///
+    /// # Errors
+    /// [`FilmSizeError`] if `other` is not of this film's size.
+    pub fn add_film(&mut self, other: &Film) -> Result<(), FilmSizeError> {
+        if (other.width, other.height) != (self.width, self.height) {
+            return Err(FilmSizeError {
+                width: self.width,
+                height: self.height,
+                sums: other.sum.len(),
+                counts: other.count.len(),
+            });
+        }
+        for (a, b) in self.sum.iter_mut().zip(&other.sum) {
+            *a += *b;
+        }
+        for (a, b) in self.count.iter_mut().zip(&other.count) {
+            *a += b;
+        }
+        self.rejected += other.rejected;
+        Ok(())
     }
 }
 
@@ -178,16 +212,20 @@ impl std::fmt::Display for FilmSizeError {
 
 impl std::error::Error for FilmSizeError {}
 
-/// One row of a [`Film`], borrowed mutably by one rendering task.
-pub(crate) struct FilmRow<'a> {
+/// One row of a [`Film`], borrowed mutably by one rendering task ([`Film::rows_mut`]).
+#[derive(Debug)]
+pub struct FilmRow<'a> {
     sum: &'a mut [DVec3],
     count: &'a mut [u64],
 }
 
 impl FilmRow<'_> {
     /// Adds a sample to pixel `x` of the row; `false` if it was rejected as non-finite.
+    ///
+    /// # Panics
+    /// If `x` is outside the row.
     #[inline]
-    pub(crate) fn add_sample(&mut self, x: usize, value: Vec3) -> bool {
+    pub fn add_sample(&mut self, x: usize, value: Vec3) -> bool {
         accumulate(&mut self.sum[x], &mut self.count[x], value)
     }
 }
@@ -220,6 +258,32 @@ mod tests {
         a.add_sample(2, 1, Vec3::splat(0.7));
         b.add_sample(2, 1, Vec3::splat(0.7));
         assert_eq!(a, b);
+    }
+
+    #[test]
+    fn add_film_sums_disjoint_samples() {
+        let (mut a, mut b, mut both) = (Film::new(2, 1), Film::new(2, 1), Film::new(2, 1));
+        for (film, v) in [(&mut a, 0.25), (&mut b, 4.0)] {
+            film.add_sample(1, 0, Vec3::splat(v));
+            film.add_sample(1, 0, Vec3::NAN);
+        }
+        both.add_sample(1, 0, Vec3::splat(0.25));
+        both.add_sample(1, 0, Vec3::splat(4.0));
+        both.add_rejected(2);
+        a.add_film(&b).unwrap();
+        assert_eq!(a, both);
+        assert!(a.add_film(&Film::new(1, 2)).is_err());
+    }
+
+    #[test]
+    fn rows_cover_the_film_in_order() {
+        let mut film = Film::new(3, 2);
+        for (y, mut row) in film.rows_mut().into_iter().enumerate() {
+            assert!(row.add_sample(2, Vec3::splat(y as f32)));
+        }
+        assert_eq!(film.pixel(2, 1), DVec3::ONE);
+        assert_eq!(film.sample_count(2, 0), 1);
+        assert_eq!(film.sample_count(0, 0), 0);
     }
 
     #[test]

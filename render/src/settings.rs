@@ -7,7 +7,7 @@ use furnace_sampling::SamplerKind;
 /// the glTF material model (height-correlated masking, spherical-cap sampling, Turquin
 /// compensation), no Russian roulette.
 ///
-/// Sobol is the default by measurement (`examples/sampler_study.rs`, BENCHMARKS.md "Sampler
+/// Sobol is the default by measurement (furnace-cpu's `examples/sampler_study.rs`, BENCHMARKS.md "Sampler
 /// choice (cbox)"): on the Cornell box it has the lowest error at equal time of the progressive
 /// samplers, within 1% of PMJ02 at equal samples (a difference within the seeds' spread) and
 /// 2–3× below random over 16–256 spp; Hammersley's ~9% lower error needs N in advance, which
@@ -21,7 +21,7 @@ pub struct RenderSettings {
     /// Number of surface scattering events per path (Mitsuba's `max_depth` − 1): light is
     /// gathered at each of them; 0 shows only what the camera sees directly (sky, emitters).
     pub bounces: u32,
-    /// Which sampler drives the path (see [`crate`] for the dimension layout).
+    /// Which sampler drives the path (see [`crate::layout`] for the dimension layout).
     pub sampler: SamplerKind,
     /// Seed of the sampler's scrambling.
     pub seed: u32,

@@ -1,0 +1,98 @@
+//! [`Integrator`]: what every backend (the CPU reference, the wgpu integrator) offers the code
+//! that drives a render, and [`RenderError`], what it can fail with.
+
+use crate::{Film, RenderSettings};
+use furnace_sampling::SamplerError;
+
+/// A renderer of one scene, through one camera, with one [`RenderSettings`], accumulating into a
+/// film it holds.
+///
+/// Contract: after passes `(0, n₀)`, `(n₀, n₁)`, … the film holds, for every pixel, the `f64`
+/// sum and count of the accepted samples with indices `0..n₀+n₁+…`, **added in index order**,
+/// whatever the pass boundaries. An integrator given a saved film ([`Integrator::set_film`])
+/// thus ends bit-identical to one that rendered every pass itself, and a render can be cut into
+/// passes however the caller likes ([`crate::Session`] does).
+///
+/// Implementors build themselves from a scene, a camera and the settings (`CpuRenderer::new`,
+/// `GpuRenderer::new`, which also takes the device); everything after that goes through this
+/// trait.
+pub trait Integrator {
+    /// A short name for messages: `cpu`, `gpu`.
+    fn name(&self) -> &'static str;
+
+    /// What computes the samples, for the record: `cpu: ` and the target, or `gpu: ` and the
+    /// adapter's name, type, API and driver. Two integrators that describe themselves alike give
+    /// bit-identical films from the same settings.
+    fn describe(&self) -> String;
+
+    /// The settings it renders with.
+    fn settings(&self) -> &RenderSettings;
+
+    /// Adds samples `first_sample .. first_sample + samples_per_pixel` of every pixel to the
+    /// film.
+    ///
+    /// # Errors
+    /// [`RenderError::Sampler`] when a fixed-N sampler would run past N (nothing is added then);
+    /// [`RenderError::Device`] for a device's failure.
+    fn render_pass(&mut self, first_sample: u32, samples_per_pixel: u32) -> Result<(), RenderError>;
+
+    /// The film so far (a device integrator reads it back here).
+    ///
+    /// # Errors
+    /// [`RenderError::Device`] if it cannot be read back.
+    fn film(&mut self) -> Result<Film, RenderError>;
+
+    /// Replaces the film, to continue a saved render (or, with an empty film, to start again).
+    ///
+    /// # Errors
+    /// [`RenderError::FilmSize`] if `film` is not of the settings' size; a device's errors.
+    fn set_film(&mut self, film: &Film) -> Result<(), RenderError>;
+
+    /// Samples per pixel per pass for this image: small enough that progress shows, a time
+    /// limit stops promptly and cancellation is answered within about a fifth of a second.
+    fn pass_samples(&self) -> u32;
+
+    /// The device time of the last pass, where the backend measures it (GPU timestamps).
+    fn last_pass_device_seconds(&self) -> Option<f64> {
+        None
+    }
+}
+
+/// What rendering can fail with.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum RenderError {
+    /// The sampler's: a fixed-N sampler without N, or run past N.
+    #[error(transparent)]
+    Sampler(#[from] SamplerError),
+    /// A film of another size than the render's.
+    #[error("a {film_width}×{film_height} film cannot hold a {width}×{height} render")]
+    FilmSize {
+        /// The film's width.
+        film_width: u32,
+        /// The film's height.
+        film_height: u32,
+        /// The render's width.
+        width: u32,
+        /// The render's height.
+        height: u32,
+    },
+    /// The backend's device failed (a GPU's validation error, out of memory, device lost, …).
+    #[error(transparent)]
+    Device(Box<dyn std::error::Error + Send + Sync>),
+}
+
+impl RenderError {
+    /// [`RenderError::FilmSize`] unless `film` is `settings.width × settings.height`.
+    pub fn check_film(film: &Film, settings: &RenderSettings) -> Result<(), RenderError> {
+        if (film.width(), film.height()) == (settings.width, settings.height) {
+            return Ok(());
+        }
+        Err(RenderError::FilmSize {
+            film_width: film.width(),
+            film_height: film.height(),
+            width: settings.width,
+            height: settings.height,
+        })
+    }
+}

@@ -1,0 +1,70 @@
+//! # furnace-render
+//!
+//! The contract between furnace's integrators and the code that drives them, in one small crate
+//! that the CPU reference (`furnace-cpu`), the wgpu integrator (`furnace-gpu`), the image
+//! output (`furnace-post`) and the `furnace` binary share:
+//!
+//! * [`RenderSettings`] — image size, path length, sampler, material-model switches;
+//! * [`Film`] — the one accumulation buffer: per-pixel `f64` sums and counts, rejected samples;
+//! * [`layout`] — which sampler dimension each random decision of a path reads, with its
+//!   version ([`SAMPLER_LAYOUT_VERSION`]), recorded with saved renders;
+//! * [`Integrator`] — what every backend offers (passes of samples into its film), with typed
+//!   errors ([`RenderError`]);
+//! * [`Session`] — a progressive render: passes until a [`Budget`] (spp, time limit) is spent
+//!   or the caller cancels, with progress reports and pass timing;
+//! * [`resume`] — the identity of a saved render and the checks that decide whether it may be
+//!   continued.
+//!
+//! ## Example
+//!
+//! An integrator whose samples are constant, driven by a session:
+//!
+//! ```
+//! use furnace_render::{Budget, Film, Integrator, RenderError, RenderSettings, Session};
+//! use glam::Vec3;
+//!
+//! struct Grey { settings: RenderSettings, film: Film }
+//!
+//! impl Integrator for Grey {
+//!     fn name(&self) -> &'static str { "grey" }
+//!     fn describe(&self) -> String { "grey: 18 %".into() }
+//!     fn settings(&self) -> &RenderSettings { &self.settings }
+//!     fn render_pass(&mut self, first: u32, n: u32) -> Result<(), RenderError> {
+//!         for _ in first..first + n {
+//!             for mut row in self.film.rows_mut() {
+//!                 (0..self.settings.width as usize).for_each(|x| { row.add_sample(x, Vec3::splat(0.18)); });
+//!             }
+//!         }
+//!         Ok(())
+//!     }
+//!     fn film(&mut self) -> Result<Film, RenderError> { Ok(self.film.clone()) }
+//!     fn set_film(&mut self, film: &Film) -> Result<(), RenderError> {
+//!         RenderError::check_film(film, &self.settings)?;
+//!         self.film = film.clone();
+//!         Ok(())
+//!     }
+//!     fn pass_samples(&self) -> u32 { 4 }
+//! }
+//!
+//! let settings = RenderSettings { width: 8, height: 4, ..Default::default() };
+//! let mut grey = Grey { settings, film: Film::new(8, 4) };
+//! let mut session = Session::new(&mut grey, 0);
+//! session.run(&Budget::spp(10), &|| false, &mut |p| println!("{}/{} spp", p.done, p.target))?;
+//! let film = session.film()?;
+//! assert_eq!(film.sample_count(7, 3), 10);
+//! assert!((film.pixel(0, 0).x - 0.18).abs() < 1e-7);
+//! # Ok::<(), RenderError>(())
+//! ```
+
+mod film;
+mod integrator;
+pub mod layout;
+pub mod resume;
+mod session;
+mod settings;
+
+pub use film::{Film, FilmRow, FilmSizeError};
+pub use integrator::{Integrator, RenderError};
+pub use layout::SAMPLER_LAYOUT_VERSION;
+pub use session::{Budget, Progress, Session, Stop, Timing, process_cpu_seconds};
+pub use settings::RenderSettings;
