@@ -412,7 +412,7 @@ impl Bvh {
 /// The helpers are not called because in builds with debug assertions (`cargo test`) they end
 /// with obvhs's validators, which assert that a CWBVH is less than 32 levels deep
 /// (`CwBvh::validate`; obvhs's traversal stack size): a valid but deep tree, such as the one over
-/// a few thousand concentric triangles, panicked there. [`validate_if_shallow`] runs the same
+/// a few thousand concentric triangles, would panic there. [`validate_if_shallow`] runs the same
 /// validators where they hold.
 fn build_ploc(triangles: &[Triangle], config: &BvhBuildParams) -> Bvh2 {
     let mut bvh2 = if config.pre_split {

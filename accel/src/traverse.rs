@@ -142,11 +142,10 @@ impl NodeRay {
 /// children, box-tested against the current cull distance, so no hit is lost: the closest hit
 /// has the same `t` as with an unbounded stack (a tie between triangles at the same `t` may
 /// resolve differently) and an any-hit query finds a hit if there is one. This is the GPU
-/// twin's behaviour (`gpu/src/wgsl/traverse.wgsl`, "Traversal stack and its overflow").
-/// obvhs's `StackStack`, which this replaced, overwrote its top entry when full and silently
-/// lost every hit below it. Cost on trees that never overflow: +0.25% instructions of a whole
-/// render (callgrind, `BENCHMARKS.md`'s 64² Sobol command: 135.11 M → 135.45 M), images
-/// bit-identical; a heap spill instead of the sweep (exact too) cost +2.5%.
+/// twin's behaviour (`gpu/src/wgsl/traverse.wgsl`, "Traversal stack and its overflow"). A fixed
+/// stack that overwrites its top entry when full (obvhs's `StackStack`) would lose every hit
+/// below it; the sweep costs almost nothing on trees that never overflow, less than a heap
+/// spill (BENCHMARKS.md, "Traversal").
 #[inline(always)]
 fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> ControlFlow<(), f32>) {
     if nodes.is_empty() {
@@ -160,9 +159,9 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
     let (mut top, mut bottom) = (0usize, 0usize);
     // Whether a group was dropped from the full stack (then the sweep runs at the end).
     let mut overflowed = false;
-    // The sweep's next node, and the inner-child mask: all of them, none in the sweep. The sweep runs in this loop rather than in a
-    // function of its own: a second call site of `leaf` kept the caller's closure state (the
-    // best hit so far) in memory on the common path too, +2.3% instructions of a render.
+    // The sweep's next node, and the inner-child mask: all of them, none in the sweep. The sweep
+    // runs in this loop rather than in a function of its own: a second call site of `leaf` keeps
+    // the caller's closure state (the best hit so far) in memory on the common path too.
     let mut sweep_next = 0usize;
     let mut follow_inner = 0xff00_0000u32;
     let mut current = (0u32, 0x8000_0000u32);
@@ -279,8 +278,8 @@ mod tests {
     /// `gpu/tests/traversal_parity.rs`'s deep-tree test): chain node k has two inner children
     /// whose boxes cover the whole scene, a leaf holder with triangles 3k..3k+3 and chain node
     /// k + 1. Rays whose octant visits the chain child first push one group per level, so the
-    /// stack reaches `levels` groups; the old fixed 32-entry stack overwrote its top entry from
-    /// there on and lost the holders' triangles.
+    /// stack reaches `levels` groups; a fixed 32-entry stack that overwrote its top entry would
+    /// lose the holders' triangles from there on.
     fn chain(levels: usize, tris: &[[Vec3; 3]]) -> Vec<WideNode> {
         let (lo, hi) = tris
             .iter()

@@ -4,7 +4,7 @@
 //! against a reference image; writes the data as CSV and JSON and draws error-vs-spp and
 //! error-vs-time charts (PNG and SVG).
 //!
-//! * **Error**: [`crate::compare::score`] (the metrics of `furnace compare` and
+//! * **Error**: `furnace_post::metrics::score` (the metrics of `furnace compare` and
 //!   `shared/oracle/compare.py`): RMSE over all channel values, and relative MSE
 //!   `mean((x − r)² / (r² + ε))` over all pixels and channels with ε = 1e-2.
 //! * **Time**: the wall time of the `render_pass` calls that produced the image, nothing else —
@@ -33,7 +33,6 @@ mod data;
 mod plot;
 
 use crate::args::{MaskingArg, SamplingArg, SceneArg, Switch};
-use crate::compare::score;
 use crate::interrupt::Interrupt;
 use crate::render::Outcome;
 use crate::resume;
@@ -41,6 +40,7 @@ use clap::{Args, ValueEnum};
 use data::{ExternalPoint, Row};
 use furnace_brdf::SpecularOptions;
 use furnace_cli::backend::{self, Backend, BackendChoice};
+use furnace_post::metrics::score;
 use furnace_render::{Budget, Film, Integrator, RenderSettings, Session, Stop, Timing};
 use furnace_sampling::SamplerKind;
 use furnace_scene::{Scene, builtin};
@@ -844,7 +844,7 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
 /// The error of `film` against `reference` (the metrics of `furnace compare`).
 fn measure(film: &Film, reference: &[Vec3]) -> Result<(f64, f64), String> {
     let rgb: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
-    let s = score(&rgb, reference, None, None)?;
+    let s = score(&rgb, reference, None, None).map_err(|e| e.to_string())?;
     Ok((s.rmse, s.rel_mse))
 }
 
@@ -888,6 +888,7 @@ fn render_to(
 ) -> Result<bool, String> {
     let last = targets.last().copied().unwrap_or(0);
     let mut session = Session::new(backend, 0);
+    session.measure_cpu_time(true);
     for &target in targets {
         let stop = session
             .run(&Budget::spp(target), &|| interrupt.requested(), &mut |p| {

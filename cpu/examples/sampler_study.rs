@@ -52,16 +52,13 @@ fn downsampled(reference: &Reference) -> (Vec<DVec3>, Vec<DVec3>) {
     (mean, var)
 }
 
-/// `(MSE, relative MSE)` of `image` against `reference`.
+/// `(MSE, relative MSE)` of `image` against `reference` (`furnace_post::metrics`).
 fn errors(image: &[DVec3], reference: &[DVec3]) -> (f64, f64) {
-    let (mut mse, mut rel) = (0.0, 0.0);
+    let mut e = furnace_post::metrics::ErrorSum::default();
     for (x, r) in image.iter().zip(reference) {
-        let d = *x - *r;
-        mse += d.length_squared();
-        rel += (d * d / (*r * *r + DVec3::splat(1e-4))).element_sum();
+        e.add_rgb(x.to_array(), r.to_array());
     }
-    let n = 3.0 * image.len() as f64;
-    (mse / n, rel / n)
+    (e.mse(), e.rel_mse())
 }
 
 /// Renders samples `0..spp` of every pixel and returns the running means after each count in
@@ -105,7 +102,7 @@ fn main() {
     let rel_floor = ref_var
         .iter()
         .zip(&ref_mean)
-        .map(|(v, r)| (*v / (*r * *r + DVec3::splat(1e-4))).element_sum())
+        .map(|(v, r)| (*v / (*r * *r + DVec3::splat(furnace_post::metrics::REL_MSE_EPSILON))).element_sum())
         .sum::<f64>()
         / (3 * ref_var.len()) as f64;
     let spps: Vec<u32> = (0..=16).map(|k| 1u32 << k).filter(|&n| n <= max_spp).collect();

@@ -416,12 +416,11 @@ impl Integrator for CpuRenderer {
 /// The unit normal `(v1 − v0) × (v2 − v0)` of a triangle, or zero if it has none.
 ///
 /// `normalize_or_zero` squares the cross product's length, which overflows `f32` once the
-/// edges pass ~4e9 (|cross|² > 3.4e38) and underflows below ~1e-10 (|cross|² < 1e-45): the
-/// normal came out zero, the path ended at every large or tiny triangle and the scene went
-/// dark (`tests/stability.rs::scaled_cornell_box_renders_the_same_image`, at scale 1e10 the
-/// Cornell box lost half its light). Then the cross product is first divided by its largest
-/// component, which is exact enough for a direction; elsewhere the result is bit-identical to
-/// `normalize_or_zero` (the GPU twin's).
+/// edges pass ~4e9 (|cross|² > 3.4e38) and underflows below ~1e-10 (|cross|² < 1e-45), giving a
+/// zero normal that would end every path at such a triangle
+/// (`tests/stability.rs::scaled_cornell_box_renders_the_same_image`). Then the cross product is
+/// first divided by its largest component, which is exact enough for a direction; elsewhere the
+/// result is bit-identical to `normalize_or_zero` (the GPU twin's).
 #[inline]
 fn geometric_normal(v0: Vec3, v1: Vec3, v2: Vec3) -> Vec3 {
     let c = (v1 - v0).cross(v2 - v0);

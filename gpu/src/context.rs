@@ -105,10 +105,9 @@ pub struct GpuContext {
 /// driver is installed (200× slower than lavapipe, chosen silently), and probing GL on a
 /// headless machine prints driver noise on stderr.
 ///
-/// One instance per process, shared by every context: NVIDIA's Vulkan driver (580, H100) finds
-/// no adapter after about 30 instances were created and dropped in a process (measured:
-/// `examples/ctx_churn.rs`, the 31st `GpuContext::new` failed; a `furnace chart` study makes a
-/// renderer per configuration and checkpoint).
+/// One instance per process, shared by every context: NVIDIA's Vulkan driver finds no adapter
+/// once about 30 instances have been created and dropped in a process, and a `furnace chart`
+/// study makes a renderer per configuration and checkpoint (`tests/kernel.rs` opens forty).
 fn instance() -> &'static wgpu::Instance {
     static INSTANCE: std::sync::OnceLock<wgpu::Instance> = std::sync::OnceLock::new();
     INSTANCE.get_or_init(|| {

@@ -10,10 +10,10 @@
 //! | [`FilmPrecision::F32Pass`] | `film_f32.wgsl` | 16 + 8 (+ 32 on the host) | one pass's f32 error, not growing with passes |
 //!
 //! With `F64` the sums live on the GPU and are bit-identical to the CPU's `f64` sums of the same
-//! samples in the same order (measured: 0 difference after 10⁶ frames on lavapipe and on an
-//! H100). With `F32Pass` the GPU sums one pass in `f32` and [`GpuFilm::fold`] adds it into `f64`
-//! sums on the host after each pass. A compensated (Neumaier) `f32` film was tried first and
-//! rejected: NVIDIA's compiler removed its error term (see `film_f32.wgsl`).
+//! samples in the same order (`tests/film.rs`). With `F32Pass` the GPU sums one pass in `f32`
+//! and [`GpuFilm::fold`] adds it into `f64` sums on the host after each pass. There is no
+//! compensated (Neumaier) `f32` film: a GPU compiler may remove its error term (see
+//! `film_f32.wgsl`).
 //!
 //! Both pass the 10⁶-frame drift test (`tests/film.rs`), which the thesis's `f32` running mean
 //! fails. A shader that accumulates composes [`FilmPrecision::wgsl`] and declares the film's

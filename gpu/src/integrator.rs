@@ -2,7 +2,7 @@
 //!
 //! The shader is the concatenation of the twins — [`wgsl::SAMPLING`], [`wgsl::BRDF`],
 //! [`wgsl::SCENE`], [`wgsl::TRAVERSE`], the film module — and `integrator.wgsl`, a line-for-line
-//! twin of `Renderer::trace` (same sampler dimensions, same branches), so the GPU estimates the
+//! twin of `CpuRenderer::trace` (same sampler dimensions, same branches), so the GPU estimates the
 //! same integral with the same sample points; images agree with the CPU's within noise
 //! (`tests/integrator.rs`).
 //!
@@ -14,7 +14,7 @@
 //! pixel's first invocation adds them, after a barrier, in index order — the same additions in
 //! the same order, so the film does not depend on the grouping (nor on the workgroup size), bit
 //! for bit. Grouping keeps a large GPU busy on small images and lets short invocations replace
-//! each other (+17 % at 1080p, +94 % at 256² on the H100).
+//! each other (measured in BENCHMARKS.md, "GPU integrator").
 //!
 //! Bindings (group 0): 0 the [`FrameParams`] uniform (dynamic offset, one slot per dispatch),
 //! 1–2 the film, 3–4 the BVH, 5–10 the scene, 11 the Turquin table, 12 the ray counter — twelve
@@ -24,8 +24,8 @@
 //! Counting (for `furnace bench`): with [`GpuRenderer::set_count_rays`] on, every invocation
 //! adds the rays it traced (closest-hit and shadow), the BVH nodes and triangles it tested, its
 //! fallback sweeps and its deepest stack to 64-bit counters with a few atomics
-//! ([`GpuRenderer::take_trace_counts`]); off — the default — no atomic runs (the counters cost
-//! ≈ 5% at 1080p on the H100: 353 vs 373 Msamples/s). [`GpuRenderer::set_timing`] records GPU
+//! ([`GpuRenderer::take_trace_counts`]); off — the default — no atomic runs (the counters cost a
+//! few per cent of throughput). [`GpuRenderer::set_timing`] records GPU
 //! timestamps around each pass where the adapter has `TIMESTAMP_QUERY`.
 
 use crate::film::{FilmPrecision, GpuFilm};
@@ -122,19 +122,14 @@ struct Dispatch {
 
 /// Invocations in a workgroup (`integrator.wgsl`'s `GROUP_SIZE`, checked by
 /// `tests/integrator.rs`): 256, the largest that every WebGPU device accepts
-/// (`max_compute_invocations_per_workgroup`'s default). Measured on the H100 (`furnace bench
-/// --backend gpu --no-rays`, cbox, 4 bounces, 16 invocations per pixel; Msamples/s, 64 / 128 /
-/// 256 invocations): 1920×1080 random 499 / 511 / 562, Owen-Sobol 436 / 449 / 503; 256² random
-/// 270 / 275 / 302, Owen-Sobol 235 / 241 / 269; 32: 2–4 % below 64. The film is the same, bit
-/// for bit, for every size.
+/// (`max_compute_invocations_per_workgroup`'s default), and the fastest size measured
+/// (BENCHMARKS.md, "GPU integrator"). The film is the same, bit for bit, for every size.
 pub const GROUP_SIZE: u32 = 256;
 
-/// Invocations per pixel on hardware adapters. Measured on the H100 (`furnace bench --backend
-/// gpu --no-rays --group-samples N`, cbox, 4 bounces, Owen-Sobol, workgroups of 256;
-/// Msamples/s for N = 1, 2, 4, 8, 16, 32, 64): 256² 139, 179, 233, 263, 270, 272, 272 (65 536
-/// pixels alone fill a quarter of the GPU); 1920×1080 431, 495, 503, 504, 503, 504, 504 (one
-/// short invocation per sample retires and is replaced sooner than a loop of 8 whose warp waits
-/// for its slowest path each time).
+/// Invocations per pixel on hardware adapters: 16, where throughput stops growing at every
+/// image size measured (`furnace bench --group-samples N`, BENCHMARKS.md "Occupancy"). Small
+/// images alone do not fill a large GPU, and one short invocation per sample retires and is
+/// replaced sooner than a loop whose warp waits for its slowest path each time.
 const HARDWARE_GROUP_SAMPLES: u32 = 16;
 
 /// The tile of a workgroup with `group_samples` invocations per pixel: (width, height) pixels,

@@ -15,6 +15,11 @@
 //! 4. **Quantise** — round to nearest 8-bit code ([`quantize_unorm8`]); every code survives
 //!    code → linear → code.
 //!
+//! ## Metrics
+//!
+//! [`metrics`]: RMSE, relative MSE (one ε, 1e-2), mean ratio and z-scores of a render against a
+//! reference — what `furnace compare`, `furnace chart` and the reference tests report.
+//!
 //! ## Files
 //!
 //! [`write_exr`] stores the *linear* image as 32-bit float RGB with the render's [`Metadata`]
@@ -55,6 +60,7 @@
 mod atomic;
 mod error;
 mod exr_io;
+pub mod metrics;
 mod png_io;
 mod srgb;
 mod tonemap;

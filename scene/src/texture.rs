@@ -123,10 +123,9 @@ fn srgb_table() -> &'static [f32; 256] {
     })
 }
 
-/// The exact sRGB electro-optical transfer function (IEC 61966-2-1), for `c` in `[0, 1]`.
-pub fn srgb_to_linear(c: f32) -> f32 {
-    if c <= 0.04045 { c / 12.92 } else { ((c + 0.055) / 1.055).powf(2.4) }
-}
+/// The exact sRGB electro-optical transfer function (IEC 61966-2-1): furnace-post's, the one
+/// implementation (textures are decoded with it, images encoded with its inverse).
+pub use furnace_post::srgb_to_linear;
 
 impl Image {
     /// Texel `(x, y)` decoded to linear RGBA (alpha is always linear).

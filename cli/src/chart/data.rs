@@ -28,7 +28,7 @@ pub struct Row {
     pub cpu_seconds: f64,
     /// Root mean squared error against the reference.
     pub rmse: f64,
-    /// Relative MSE against the reference (`compare::score`'s, ε = 1e-2).
+    /// Relative MSE against the reference (`furnace_post::metrics`, ε = 1e-2).
     pub relmse: f64,
     /// Whether the reference was rendered with this configuration's model (masking,
     /// compensation); `false`: the error has a bias floor that is not the method's.

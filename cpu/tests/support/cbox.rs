@@ -190,7 +190,7 @@ pub struct Comparison {
     /// Largest |z| and its pixel.
     pub z_max: (f64, usize, usize),
     /// Root-mean-square error over pixels and channels, and relative MSE
-    /// `mean((ours − ref)²/(ref² + 1e-4))`.
+    /// (`furnace_post::metrics`, ε = 1e-2).
     pub rmse: f64,
     pub rel_mse: f64,
     /// The z image (0 where undefined).
@@ -230,15 +230,14 @@ pub fn compare(candidate: &Estimate, reference: &Reference) -> Comparison {
     let mut z_image = vec![DVec3::ZERO; w * h];
     let mut z_max = (0.0, 0, 0);
     let (mut var_ours, mut var_ref) = (DVec3::ZERO, DVec3::ZERO);
-    let (mut se2, mut rel) = (0.0, 0.0);
+    let mut errors = furnace_post::metrics::ErrorSum::default();
     for (i, z_pixel) in z_image.iter_mut().enumerate() {
         let (m, s) = (candidate.mean.pixels[i], candidate.stderr.pixels[i]);
         let (r, sr) = (reference.mean.pixels[i], reference.stderr.pixels[i]);
         var_ours += s * s;
         var_ref += sr * sr;
         let d = m - r;
-        se2 += d.length_squared();
-        rel += (d * d / (r * r + DVec3::splat(1e-4))).element_sum();
+        errors.add_rgb(m.to_array(), r.to_array());
         let denominator = (s * s + sr * sr).map(f64::sqrt);
         for c in 0..3 {
             if denominator[c] > 0.0 {
@@ -269,8 +268,8 @@ pub fn compare(candidate: &Estimate, reference: &Reference) -> Comparison {
         z_over_3,
         z_count: zs.len(),
         z_max,
-        rmse: (se2 / (3.0 * p)).sqrt(),
-        rel_mse: rel / (3.0 * p),
+        rmse: errors.rmse(),
+        rel_mse: errors.rel_mse(),
         z_image: Image { width: w, height: h, pixels: z_image },
     }
 }

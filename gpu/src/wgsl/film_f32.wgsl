@@ -2,9 +2,8 @@
 // without SHADER_F64). See furnace_gpu::film::GpuFilm::fold.
 //
 // Plain f32 additions only, on purpose: compensated (Kahan/Neumaier) f32 summation is not safe
-// here — NVIDIA's Vulkan compiler (driver 580, H100) simplified its error term away and such a
-// film drifted exactly like a plain f32 sum (9.8e-3 after 10⁶ frames), even with the
-// intermediate results fenced through opaque bit operations. Instead the GPU sums at most one
+// here — a GPU compiler may simplify its error term away (NVIDIA's Vulkan compiler does, even
+// through opaque bit operations), leaving a plain f32 sum that drifts. Instead the GPU sums at most one
 // pass of samples per pixel in f32 (a bounded, small error relative to that pass), and the host
 // adds each pass into f64 and clears the GPU sums.
 //

@@ -45,7 +45,7 @@
 // rays that needed it. Tested in gpu/tests/traversal_parity.rs with stacks of 1 and 2 on the
 // Cornell box and with a hand-built 100-level chain at the default size, against the CPU and
 // brute force; with the sweep disabled those tests fail. The CPU twin (accel/src/traverse.rs)
-// does the same since 5985e74 (it used to overwrite its top entry and lose hits).
+// does the same.
 // The Rust side can shrink the stack (`furnace_gpu::traverse::module_with_stack_size`) to test
 // this path.
 //
