@@ -24,7 +24,7 @@ pub enum Command {
     Render(RenderArgs),
     /// Print a scene's triangles, materials, textures, lights, camera and loader warnings.
     Info(InfoArgs),
-    /// Score a candidate EXR against a reference EXR (as shared/oracle/compare.py): RMSE,
+    /// Score a candidate EXR against a reference EXR (furnace_post::metrics): RMSE,
     /// relative MSE, per-channel mean ratio and, with --stderr, per-pixel z-score statistics.
     Compare(CompareArgs),
     /// Measure a backend on a scene: Msamples/s, Mrays/s, ms per frame, time to first frame and

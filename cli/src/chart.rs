@@ -4,8 +4,7 @@
 //! against a reference image; writes the data as CSV and JSON and draws error-vs-spp and
 //! error-vs-time charts (PNG and SVG).
 //!
-//! * **Error**: `furnace_post::metrics::score` (the metrics of `furnace compare` and
-//!   `shared/oracle/compare.py`): RMSE over all channel values, and relative MSE
+//! * **Error**: `furnace_post::metrics::score` (the metrics of `furnace compare`): RMSE over all channel values, and relative MSE
 //!   `mean((x − r)² / (r² + ε))` over all pixels and channels with ε = 1e-2.
 //! * **Time**: the wall time of the `render_pass` calls that produced the image, nothing else —
 //!   not the scene load, BVH build, upload or pipeline creation, not reading the film back and
@@ -66,8 +65,7 @@ Fixed-N samplers (hammersley, cmj) need the sample count in advance: each checkp
 as its own render with N = that checkpoint (how they are meant to be used), so they cost about \
 twice the samples of a progressive sampler, and their time at a checkpoint is that render's.
 
-Errors, against the reference, over all pixels and channels (as `furnace compare` and \
-shared/oracle/compare.py): RMSE = sqrt(mean (x − r)²); relative MSE = mean (x − r)² / (r² + ε), \
+Errors, against the reference, over all pixels and channels (as `furnace compare`): RMSE = sqrt(mean (x − r)²); relative MSE = mean (x − r)² / (r² + ε), \
 ε = 1e-2. Slopes: least squares of ln(error) against ln(spp) over the checkpoints.
 
 Time is the wall time of the render passes only: no scene load, BVH build, upload, pipeline \
@@ -611,7 +609,7 @@ fn save_data(study: &Study, rows: &mut [Row], machine: &Value) -> Result<(), Str
         "reference_compensated_path": study.compensated.as_ref().map(|r| r.path.display().to_string()),
         "machine": machine,
         "metrics": "rmse: sqrt(mean over pixels and channels of (x - r)^2); relmse: mean over pixels and channels \
-                    of (x - r)^2 / (r^2 + 0.01) (furnace compare, shared/oracle/compare.py)",
+                    of (x - r)^2 / (r^2 + 0.01) (furnace compare)",
         "timing": "seconds: wall time of the render passes that produced the image (progressive samplers: all \
                    passes up to the checkpoint; fixed-N samplers: the passes of that checkpoint's own N-sample \
                    render); excludes scene load, BVH build, upload, pipeline creation, film read-back and metrics. \

@@ -14,7 +14,7 @@
 //! * `furnace info SCENE` prints a scene's sizes, lights, cameras (with their `--camera` index)
 //!   and loader warnings.
 //! * `furnace compare CANDIDATE.exr REFERENCE.exr [--stderr …]` scores a render against a
-//!   reference as `shared/oracle/compare.py` does (RMSE, relative MSE, mean ratio, z-scores).
+//!   reference with `furnace_post::metrics` (RMSE, relative MSE, mean ratio, z-scores).
 //! * `furnace bench [--backend …] [--scene cbox|interior:N|PATH]` measures a backend:
 //!   Msamples/s, Mrays/s, ms per frame, time to first frame, GPU bytes per triangle, as a
 //!   Markdown table and JSON (`bench.rs`).

@@ -7,7 +7,7 @@ use furnace_render::layout::{
 };
 use furnace_render::{Film, Integrator, RenderError, RenderSettings};
 use furnace_sampling::{AnySampler, Sampler};
-use furnace_scene::{AlphaMode, Camera, Material, MaterialSample, Scene, oct_decode};
+use furnace_scene::{AlphaMode, Camera, MaterialSample, Scene, oct_decode};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -62,15 +62,6 @@ impl std::fmt::Debug for CpuRenderer {
             .field("settings", &self.settings)
             .finish_non_exhaustive()
     }
-}
-
-/// Where a ray hit a surface, in world space, with normals oriented towards the incoming ray.
-struct SurfacePoint {
-    position: Vec3,
-    /// Geometric normal (for ray offsets and the geometric side test).
-    geometric: Vec3,
-    /// Shading normal (interpolated, normal-mapped): the z axis of the BSDF frame.
-    shading: Vec3,
 }
 
 impl CpuRenderer {
@@ -235,7 +226,11 @@ impl CpuRenderer {
                     (uv, Shading::Evaluated(material.evaluate(uv, &scene.textures, &scene.images)))
                 }
             };
-            let Some(surface) = self.surface_point(&hit, material, uv, direction) else {
+            let t = hit.triangle as usize;
+            let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
+            let interpolated = self.shading_normal(t, b1, b2);
+            let Some(surface) = scene.surface_point(t, (b1, b2), material, uv, direction, interpolated)
+            else {
                 // The back of a single-sided surface: black, like a one-sided BSDF.
                 break;
             };
@@ -297,46 +292,6 @@ impl CpuRenderer {
         radiance
     }
 
-    /// The surface at a hit: position from the barycentrics, geometric and (normal-mapped)
-    /// shading normals turned towards the incoming ray for double-sided materials; `None` on
-    /// the back of a single-sided one.
-    fn surface_point(
-        &self,
-        hit: &Hit,
-        material: &Material,
-        uv: Vec2,
-        direction: Vec3,
-    ) -> Option<SurfacePoint> {
-        let g = &self.scene.geometry;
-        let t = hit.triangle as usize;
-        let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
-        let [v0, v1, v2] = g.triangle(t)?;
-        let position = (1.0 - b1 - b2) * v0 + b1 * v1 + b2 * v2;
-        let mut geometric = geometric_normal(v0, v1, v2);
-        let mut shading = self.shading_normal(t, b1, b2).filter(|n| *n != Vec3::ZERO).unwrap_or(geometric);
-        if let Some(normal_map) = &material.normal_texture
-            && let Some(tangent) = g.tangent(t, b1, b2)
-        {
-            // glTF normal map: tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame
-            // (T, B = w·N×T, N), with T made orthogonal to the shading normal N.
-            let m = normal_map.sample_bilinear(uv, &self.scene.textures, &self.scene.images).truncate();
-            let m = (2.0 * m - Vec3::ONE) * Vec3::new(material.normal_scale, material.normal_scale, 1.0);
-            let tn = (tangent.truncate() - shading * shading.dot(tangent.truncate())).normalize_or_zero();
-            if tn != Vec3::ZERO {
-                let bn = tangent.w * shading.cross(tn);
-                shading = (m.x * tn + m.y * bn + m.z * shading).normalize_or(shading);
-            }
-        }
-        if geometric.dot(direction) > 0.0 {
-            if !material.double_sided {
-                return None;
-            }
-            geometric = -geometric;
-            shading = -shading;
-        }
-        Some(SurfacePoint { position, geometric, shading })
-    }
-
     /// `Geometry::shading_normal` over the pre-decoded normals (same arithmetic, same bits).
     #[inline]
     fn shading_normal(&self, t: usize, b1: f32, b2: f32) -> Option<Vec3> {
@@ -347,14 +302,7 @@ impl CpuRenderer {
 
     fn alpha_passes(&self, triangle: u32, barycentrics: Vec2) -> bool {
         let material = &self.scene.materials[self.triangle_materials[triangle as usize] as usize];
-        if !matches!(material.alpha_mode, AlphaMode::Mask { .. }) {
-            return true;
-        }
-        let uv = self.scene.geometry.uv(triangle as usize, barycentrics.x, barycentrics.y);
-        let texture = material.base_color_texture.as_ref();
-        let alpha = material.base_color_factor.w
-            * texture.map_or(1.0, |t| t.sample_bilinear(uv, &self.scene.textures, &self.scene.images).w);
-        material.alpha_test(alpha)
+        self.scene.alpha_passes(triangle as usize, (barycentrics.x, barycentrics.y), material)
     }
 
     fn closest_hit(&self, origin: Vec3, direction: Vec3) -> Option<Hit> {
@@ -411,25 +359,6 @@ impl Integrator for CpuRenderer {
         let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
         (262_144 / pixels.max(1)).clamp(1, 4) as u32
     }
-}
-
-/// The unit normal `(v1 − v0) × (v2 − v0)` of a triangle, or zero if it has none.
-///
-/// `normalize_or_zero` squares the cross product's length, which overflows `f32` once the
-/// edges pass ~4e9 (|cross|² > 3.4e38) and underflows below ~1e-10 (|cross|² < 1e-45), giving a
-/// zero normal that would end every path at such a triangle
-/// (`tests/stability.rs::scaled_cornell_box_renders_the_same_image`). Then the cross product is
-/// first divided by its largest component, which is exact enough for a direction; elsewhere the
-/// result is bit-identical to `normalize_or_zero` (the GPU twin's).
-#[inline]
-fn geometric_normal(v0: Vec3, v1: Vec3, v2: Vec3) -> Vec3 {
-    let c = (v1 - v0).cross(v2 - v0);
-    let n = c.normalize_or_zero();
-    if n != Vec3::ZERO || !c.is_finite() {
-        return n;
-    }
-    let m = c.abs().max_element();
-    if m > 0.0 { (c / m).normalize_or_zero() } else { Vec3::ZERO }
 }
 
 /// The BSDF of evaluated material parameters.

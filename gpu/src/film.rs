@@ -19,6 +19,7 @@
 //! fails. A shader that accumulates composes [`FilmPrecision::wgsl`] and declares the film's
 //! buffers with [`FilmPrecision::bindings`].
 
+use crate::shared::{Binding, BindingTable};
 use crate::{GpuContext, GpuError};
 use furnace_render::Film;
 use glam::DVec3;
@@ -47,18 +48,19 @@ impl FilmPrecision {
         }
     }
 
-    /// WGSL declarations of `film_sum` and `film_count` at `@group(group)`, bindings `first` and
-    /// `first + 1` (both `read_write` storage).
-    pub fn bindings(self, group: u32, first: u32) -> String {
+    /// The film's two bindings, `film_sum` and `film_count` (both `read_write` storage).
+    pub fn binding_list(self) -> Vec<Binding> {
         let sum_ty = match self {
             Self::F64 => "array<vec4<f64>>",
             Self::F32Pass => "array<vec4<f32>>",
         };
-        format!(
-            "@group({group}) @binding({first}) var<storage, read_write> film_sum: {sum_ty};\n\
-             @group({group}) @binding({}) var<storage, read_write> film_count: array<vec2<u32>>;\n",
-            first + 1
-        )
+        vec![Binding::read_write("film_sum", sum_ty), Binding::read_write("film_count", "array<vec2<u32>>")]
+    }
+
+    /// WGSL declarations of [`FilmPrecision::binding_list`] at `@group(group)`, bindings `first`
+    /// and `first + 1`.
+    pub fn bindings(self, group: u32, first: u32) -> String {
+        BindingTable::new(group, first, self.binding_list()).wgsl()
     }
 
     /// Bytes of the GPU sum buffer per pixel (the count buffer adds 8).
@@ -143,26 +145,18 @@ impl GpuFilm {
     }
 
     /// Bind group layout entries of the two buffers at bindings `first`, `first + 1`.
-    pub fn layout_entries(first: u32) -> [wgpu::BindGroupLayoutEntry; 2] {
-        let e = |binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: false },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        };
-        [e(first), e(first + 1)]
+    pub fn layout_entries(first: u32) -> Vec<wgpu::BindGroupLayoutEntry> {
+        BindingTable::new(0, first, FilmPrecision::F64.binding_list()).layout_entries()
+    }
+
+    /// The buffers of [`FilmPrecision::binding_list`], in its order.
+    pub fn resources(&self) -> Vec<wgpu::BindingResource<'_>> {
+        vec![self.sum.as_entire_binding(), self.count.as_entire_binding()]
     }
 
     /// Bind group entries matching [`GpuFilm::layout_entries`].
-    pub fn bind_entries(&self, first: u32) -> [wgpu::BindGroupEntry<'_>; 2] {
-        [
-            wgpu::BindGroupEntry { binding: first, resource: self.sum.as_entire_binding() },
-            wgpu::BindGroupEntry { binding: first + 1, resource: self.count.as_entire_binding() },
-        ]
+    pub fn bind_entries(&self, first: u32) -> Vec<wgpu::BindGroupEntry<'_>> {
+        BindingTable::new(0, first, self.precision.binding_list()).bind_entries(self.resources())
     }
 
     /// Zeroes every pixel.

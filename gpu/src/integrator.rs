@@ -31,75 +31,81 @@
 use crate::film::{FilmPrecision, GpuFilm};
 use crate::sampling::SamplerParams;
 use crate::scene::GpuScene;
+use crate::shared::{Binding, BindingKind, BindingTable, GpuStruct, WgslType, wgsl_struct};
 use crate::traverse::BvhBuffers;
 use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
-use bytemuck::{Pod, Zeroable};
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
 use furnace_render::{Film, Integrator, RenderError, RenderSettings};
 use furnace_sampling::AnySampler;
 use furnace_scene::{AlphaMode, Camera, Projection, Scene};
 
-/// `FrameParams.flags`: Russian roulette on.
-pub const FRAME_RUSSIAN_ROULETTE: u32 = 1;
-/// `FrameParams.flags`: orthographic camera.
-pub const FRAME_ORTHOGRAPHIC: u32 = 2;
-/// `FrameParams.flags`: some material is alpha-masked (rays call the alpha test).
-pub const FRAME_ANY_MASKED: u32 = 4;
-/// `FrameParams.flags`: the scene has a sun.
-pub const FRAME_HAS_SUN: u32 = 8;
-/// `FrameParams.flags`: add the rays traced to the ray counter (binding 12).
-pub const FRAME_COUNT_RAYS: u32 = 16;
+crate::wgsl_consts! {
+    /// The `FRAME_*` flags as WGSL `const` declarations (composed into the integrator shader).
+    fn frame_flags_wgsl;
+    /// `FrameParams.flags`: Russian roulette on.
+    pub const FRAME_RUSSIAN_ROULETTE: u32 = 1;
+    /// `FrameParams.flags`: orthographic camera.
+    pub const FRAME_ORTHOGRAPHIC: u32 = 2;
+    /// `FrameParams.flags`: some material is alpha-masked (rays call the alpha test).
+    pub const FRAME_ANY_MASKED: u32 = 4;
+    /// `FrameParams.flags`: the scene has a sun.
+    pub const FRAME_HAS_SUN: u32 = 8;
+    /// `FrameParams.flags`: add the rays traced to the ray counter.
+    pub const FRAME_COUNT_RAYS: u32 = 16;
+}
 
-/// The uniform block of one dispatch (192 bytes), twin of `integrator.wgsl`'s `FrameParams`.
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-#[repr(C)]
-pub struct FrameParams {
-    /// Camera-to-world rotation/scale columns (xyz) and translation.
-    pub cam_x: [f32; 4],
-    /// See `cam_x`.
-    pub cam_y: [f32; 4],
-    /// See `cam_x`.
-    pub cam_z: [f32; 4],
-    /// See `cam_x`.
-    pub cam_t: [f32; 4],
-    /// Direction sunlight travels (xyz).
-    pub sun_direction: [f32; 4],
-    /// Sun irradiance (rgb).
-    pub sun_irradiance: [f32; 4],
-    /// Sky radiance (rgb).
-    pub sky: [f32; 4],
-    /// The sampler.
-    pub sampler: SamplerParams,
-    /// Image width.
-    pub width: u32,
-    /// Image height.
-    pub height: u32,
-    /// First sample index of this dispatch.
-    pub first_sample: u32,
-    /// Samples per pixel in this dispatch.
-    pub samples: u32,
-    /// Scattering events per path.
-    pub bounces: u32,
-    /// `FRAME_*` bits.
-    pub flags: u32,
-    /// [`brdf::options_flags`] of the settings' specular options.
-    pub bsdf_flags: u32,
-    /// First image row of this dispatch.
-    pub row_offset: u32,
-    /// `tan(yfov/2)` or `ymag`.
-    pub fov_scale: f32,
-    /// `width / height` as the CPU computes it.
-    pub aspect: f32,
-    /// Invocations per pixel in a workgroup of [`GROUP_SIZE`] (a power of two): 1 — an
-    /// invocation owns a pixel and loops over `samples`; more — each computes one sample and the
-    /// workgroup adds them in index order (small images: more of the GPU busy).
-    pub group_samples: u32,
-    /// Width in pixels of a workgroup's tile of `GROUP_SIZE / group_samples` pixels.
-    pub tile_width: u32,
-    /// The ray offsets' length scale ([`furnace_accel::offset_scale_of_bounds`] of the scene).
-    pub offset_scale: f32,
-    /// Padding.
-    pub pad: [u32; 3],
+crate::gpu_struct! {
+    /// The uniform block of one dispatch (192 bytes); its WGSL declaration is generated from this
+    /// one ([`crate::shared::wgsl_struct`]).
+    pub struct FrameParams {
+        /// Camera-to-world rotation/scale columns (xyz) and translation.
+        pub cam_x: [f32; 4] => WgslType::VEC4_F32,
+        /// See `cam_x`.
+        pub cam_y: [f32; 4] => WgslType::VEC4_F32,
+        /// See `cam_x`.
+        pub cam_z: [f32; 4] => WgslType::VEC4_F32,
+        /// See `cam_x`.
+        pub cam_t: [f32; 4] => WgslType::VEC4_F32,
+        /// Direction sunlight travels (xyz).
+        pub sun_direction: [f32; 4] => WgslType::VEC4_F32,
+        /// Sun irradiance (rgb).
+        pub sun_irradiance: [f32; 4] => WgslType::VEC4_F32,
+        /// Sky radiance (rgb).
+        pub sky: [f32; 4] => WgslType::VEC4_F32,
+        /// The sampler.
+        pub sampler: SamplerParams => SamplerParams::wgsl_type(),
+        /// Image width.
+        pub width: u32 => WgslType::U32,
+        /// Image height.
+        pub height: u32 => WgslType::U32,
+        /// First sample index of this dispatch.
+        pub first_sample: u32 => WgslType::U32,
+        /// Samples per pixel in this dispatch.
+        pub samples: u32 => WgslType::U32,
+        /// Scattering events per path.
+        pub bounces: u32 => WgslType::U32,
+        /// `FRAME_*` bits.
+        pub flags: u32 => WgslType::U32,
+        /// [`brdf::options_flags`] of the settings' specular options.
+        pub bsdf_flags: u32 => WgslType::U32,
+        /// First image row of this dispatch.
+        pub row_offset: u32 => WgslType::U32,
+        /// `tan(yfov/2)` (perspective) or `ymag` (orthographic), computed as furnace-scene's
+        /// `Camera::generate_ray` does.
+        pub fov_scale: f32 => WgslType::F32,
+        /// `width / height` as the CPU computes it.
+        pub aspect: f32 => WgslType::F32,
+        /// Invocations per pixel in a workgroup of [`GROUP_SIZE`] (a power of two): 1 — an
+        /// invocation owns a pixel and loops over `samples`; more — each computes one sample and
+        /// the workgroup adds them in index order (small images: more of the GPU busy).
+        pub group_samples: u32 => WgslType::U32,
+        /// Width in pixels of a workgroup's tile of `GROUP_SIZE / group_samples` pixels.
+        pub tile_width: u32 => WgslType::U32,
+        /// The ray offsets' length scale ([`furnace_accel::offset_scale_of_bounds`] of the scene).
+        pub offset_scale: f32 => WgslType::F32,
+        /// Rust-only padding to 192 bytes (WGSL rounds the struct up by itself).
+        pub pad: [u32; 3] => WgslType::PAD,
+    }
 }
 
 const _: () = assert!(size_of::<FrameParams>() == 192);
@@ -187,25 +193,42 @@ struct Timer {
     last: Option<f64>,
 }
 
-/// The composed WGSL of the integrator for a film precision (for tests and tools).
+/// The integrator's bindings, group 0 from binding 0: the [`FrameParams`] uniform (dynamic
+/// offset, one slot per dispatch), the film, the BVH, the scene, the Turquin table and the ray
+/// counter. One table gives the shader's declarations, the layout and the bind group.
+pub fn binding_table(precision: FilmPrecision) -> BindingTable {
+    let params = Binding {
+        name: "params",
+        ty: FrameParams::NAME.to_string(),
+        kind: BindingKind::Uniform { dynamic: true, min_size: size_of::<FrameParams>() as u64 },
+    };
+    let mut bindings = vec![params];
+    bindings.extend(precision.binding_list());
+    bindings.extend(traverse::binding_list());
+    bindings.extend(scene::binding_list());
+    bindings.push(Binding::read("turquin_table", "array<f32>"));
+    bindings.push(Binding::read_write("ray_counter", &format!("array<atomic<u32>, {COUNTER_WORDS}>")));
+    BindingTable::new(0, 0, bindings)
+}
+
+/// The composed WGSL of the integrator for a film precision (for tests and tools): the
+/// generated declarations (sampler layout, `FRAME_*` flags, [`FrameParams`], the bindings of
+/// [`binding_table`]), the twins, and `integrator.wgsl`.
 pub fn shader_source(precision: FilmPrecision) -> String {
-    let decls = format!(
-        "@group(0) @binding(0) var<uniform> params: FrameParams;\n{}{}{}\
-         @group(0) @binding(11) var<storage, read> turquin_table: array<f32>;\n\
-         @group(0) @binding(12) var<storage, read_write> ray_counter: array<atomic<u32>, 8>;\n",
-        precision.bindings(0, 1),
-        traverse::bindings(0, 3),
-        scene::bindings(0, 5),
-    );
-    let layout = furnace_render::layout::wgsl();
+    let generated = [
+        furnace_render::layout::wgsl(),
+        frame_flags_wgsl(),
+        wgsl_struct::<FrameParams>(true),
+        binding_table(precision).wgsl(),
+    ]
+    .concat();
     wgsl::compose(&[
-        &layout,
+        &generated,
         wgsl::SAMPLING,
         wgsl::BRDF,
         wgsl::SCENE,
         wgsl::TRAVERSE,
         precision.wgsl(),
-        &decls,
         include_str!("wgsl/integrator.wgsl"),
     ])
 }
@@ -214,19 +237,6 @@ fn storage_buffer(ctx: &GpuContext, label: &str, words: &[u32]) -> Result<wgpu::
     let mut v = words.to_vec();
     v.resize(v.len().max(4), 0);
     ctx.buffer_init(label, bytemuck::cast_slice(&v), wgpu::BufferUsages::STORAGE)
-}
-
-fn storage_entry(binding: u32, read_only: bool) -> wgpu::BindGroupLayoutEntry {
-    wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    }
 }
 
 impl GpuRenderer {
@@ -269,22 +279,7 @@ impl GpuRenderer {
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
         let base = frame_params(scene, camera, &settings, sampler_params);
 
-        let mut entries = vec![wgpu::BindGroupLayoutEntry {
-            binding: 0,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Uniform,
-                has_dynamic_offset: true,
-                min_binding_size: wgpu::BufferSize::new(size_of::<FrameParams>() as u64),
-            },
-            count: None,
-        }];
-        entries.extend(GpuFilm::layout_entries(1));
-        entries.push(storage_entry(3, true));
-        entries.push(storage_entry(4, true));
-        entries.extend(GpuScene::layout_entries(5));
-        entries.push(storage_entry(11, true));
-        entries.push(storage_entry(12, false));
+        let entries = binding_table(precision).layout_entries();
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -527,20 +522,17 @@ impl GpuRenderer {
         }
         let device = &self.ctx.device;
         let params = self.ctx.buffer_init("frame params", &bytes, wgpu::BufferUsages::UNIFORM)?;
-        let mut entries = vec![wgpu::BindGroupEntry {
-            binding: 0,
-            resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
-                buffer: &params,
-                offset: 0,
-                size: wgpu::BufferSize::new(size_of::<FrameParams>() as u64),
-            }),
-        }];
-        entries.extend(self.film.bind_entries(1));
-        entries.push(wgpu::BindGroupEntry { binding: 3, resource: self.bvh[0].as_entire_binding() });
-        entries.push(wgpu::BindGroupEntry { binding: 4, resource: self.bvh[1].as_entire_binding() });
-        entries.extend(self.scene.bind_entries(5));
-        entries.push(wgpu::BindGroupEntry { binding: 11, resource: self.turquin.as_entire_binding() });
-        entries.push(wgpu::BindGroupEntry { binding: 12, resource: self.ray_counter.as_entire_binding() });
+        let mut resources = vec![wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+            buffer: &params,
+            offset: 0,
+            size: wgpu::BufferSize::new(size_of::<FrameParams>() as u64),
+        })];
+        resources.extend(self.film.resources());
+        resources.extend(self.bvh.iter().map(wgpu::Buffer::as_entire_binding));
+        resources.extend(self.scene.resources());
+        resources.push(self.turquin.as_entire_binding());
+        resources.push(self.ray_counter.as_entire_binding());
+        let entries = binding_table(self.film.precision()).bind_entries(resources);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("integrator"),
             layout: &self.layout,

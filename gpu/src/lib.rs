@@ -43,6 +43,7 @@ pub mod integrator;
 pub mod kernel;
 pub mod sampling;
 pub mod scene;
+pub mod shared;
 pub mod traverse;
 pub mod wgsl;
 

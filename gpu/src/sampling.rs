@@ -43,7 +43,7 @@
 //! and the dimension layout are the integrator's (furnace-cpu: `y * width + x`, dimensions 0–1
 //! for the pixel, then four per bounce).
 
-use bytemuck::{Pod, Zeroable};
+use crate::shared::{WgslType, wgsl_struct};
 use furnace_sampling::{AnySampler, PMJ02_XORS, SOBOL_DIRECTIONS, SamplerError, SamplerKind};
 use std::fmt::Write as _;
 
@@ -64,25 +64,29 @@ pub fn kind_from_code(code: u32) -> Option<SamplerKind> {
     SamplerKind::ALL.into_iter().find(|&k| kind_code(k) == code)
 }
 
-/// A sampler as a shader receives it: `struct SamplerParams` of `sampling.wgsl`, 16 bytes,
-/// usable in a uniform or storage buffer.
-///
-/// Build it with [`SamplerParams::new`] from the same `(kind, seed, sample_count)` that
-/// furnace-cpu passes to [`AnySampler::new`] (its `RenderSettings::sampler`, `seed` and
-/// `sample_count`): the WGSL `sampler_bits(params, pixel, index, dim)` then equals
-/// `AnySampler::new(kind, seed, sample_count)?.bits(pixel, index, dim)` bit for bit.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
-pub struct SamplerParams {
-    /// [`kind_code`] of the sampler.
-    pub kind: u32,
-    /// The seed (different seeds give independent images).
-    pub seed: u32,
-    /// N, the total samples per pixel, for the fixed-N kinds (Hammersley, CMJ; `1 ..= 2^30`);
-    /// 0 for the progressive kinds, which ignore it.
-    pub sample_count: u32,
-    /// Padding to 16 bytes (uniform buffers round structs up to 16); 0.
-    pub pad: u32,
+crate::gpu_struct! {
+    /// A sampler as a shader receives it: `struct SamplerParams` of `sampling.wgsl`, 16 bytes,
+    /// usable in a uniform or storage buffer.
+    ///
+    /// Build it with [`SamplerParams::new`] from the same `(kind, seed, sample_count)` that
+    /// furnace-cpu passes to [`AnySampler::new`] (its `RenderSettings::sampler`, `seed` and
+    /// `sample_count`): the WGSL `sampler_bits(params, pixel, index, dim)` then equals
+    /// `AnySampler::new(kind, seed, sample_count)?.bits(pixel, index, dim)` bit for bit.
+    ///
+    /// (Its WGSL declaration is generated from this one: [`wgsl_generated`].)
+    #[derive(Eq)]
+    pub struct SamplerParams {
+        /// [`kind_code`] of the sampler.
+        pub kind: u32 => WgslType::U32,
+        /// The seed (different seeds give independent images).
+        pub seed: u32 => WgslType::U32,
+        /// N, the total samples per pixel, for the fixed-N kinds (Hammersley, CMJ; `1 ..= 2^30`);
+        /// 0 for the progressive kinds, which ignore it.
+        pub sample_count: u32 => WgslType::U32,
+        /// Rust-only padding to 16 bytes (a uniform buffer rounds structs up to 16; the WGSL
+        /// declaration gets its own); 0.
+        pub pad: u32 => WgslType::PAD,
+    }
 }
 
 const _: () = assert!(size_of::<SamplerParams>() == 16);
@@ -133,13 +137,13 @@ impl SamplerParams {
 }
 
 /// The generated block of `sampling.wgsl` (between its `// BEGIN GENERATED` and
-/// `// END GENERATED` lines, exclusive): the `SAMPLER_KIND_*` codes ([`kind_code`]), PMJ02's y
+/// `// END GENERATED` lines, exclusive): `struct SamplerParams`, the `SAMPLER_KIND_*` codes ([`kind_code`]), PMJ02's y
 /// pairing xors ([`PMJ02_XORS`]`[1]`), Sobol's direction numbers of dimensions 2 and 3
 /// ([`SOBOL_DIRECTIONS`]), and the `f32` constants of the warps as Rust rounds them.
 ///
 /// `tests/sampler_parity.rs` checks that the file holds exactly this text.
 pub fn wgsl_generated() -> String {
-    let mut s = String::new();
+    let mut s = wgsl_struct::<SamplerParams>(false);
     for kind in SamplerKind::ALL {
         let name = kind.name().to_uppercase();
         let _ = writeln!(s, "const SAMPLER_KIND_{name}: u32 = {}u;", kind_code(kind));

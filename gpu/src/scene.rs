@@ -34,6 +34,7 @@
 use bytemuck::{Pod, Zeroable};
 use furnace_scene::{AlphaMode, ColorSpace, Scene, Texture, TextureRef, WrapMode, srgb_to_linear};
 
+use crate::shared::{Binding, BindingTable};
 use crate::{GpuContext, GpuError};
 
 /// Number of bindings the scene uses ([`bindings`], [`GpuScene::layout_entries`]).
@@ -165,21 +166,19 @@ const _: () = assert!(size_of::<GpuMaterial>() == 256);
 /// The WGSL declarations of the six scene buffers at `@group(group)`, bindings `first` …
 /// `first + 5`, in the order of the [module table](self).
 pub fn bindings(group: u32, first: u32) -> String {
-    let names = [
-        ("scene_triangles", "array<SceneTriangle>"),
-        ("scene_vertices", "array<SceneVertex>"),
-        ("scene_uvs", "array<vec2<f32>>"),
-        ("scene_tangents", "array<vec2<u32>>"),
-        ("scene_materials", "array<SceneMaterial>"),
-        ("scene_texels", "array<u32>"),
-    ];
-    names
-        .iter()
-        .enumerate()
-        .map(|(k, (name, ty))| {
-            format!("@group({group}) @binding({}) var<storage, read> {name}: {ty};\n", first + k as u32)
-        })
-        .collect()
+    BindingTable::new(group, first, binding_list()).wgsl()
+}
+
+/// The scene's six read-only storage bindings, in [`GpuScene::resources`] order.
+pub fn binding_list() -> Vec<Binding> {
+    vec![
+        Binding::read("scene_triangles", "array<SceneTriangle>"),
+        Binding::read("scene_vertices", "array<SceneVertex>"),
+        Binding::read("scene_uvs", "array<vec2<f32>>"),
+        Binding::read("scene_tangents", "array<vec2<u32>>"),
+        Binding::read("scene_materials", "array<SceneMaterial>"),
+        Binding::read("scene_texels", "array<u32>"),
+    ]
 }
 
 /// A slot's texture reference and texture, if both indices (texture, image) are in range.
@@ -509,25 +508,18 @@ impl GpuScene {
 
     /// Bind group layout entries of the six buffers at bindings `first` … `first + 5`
     /// (read-only storage, compute stage).
-    pub fn layout_entries(first: u32) -> [wgpu::BindGroupLayoutEntry; 6] {
-        std::array::from_fn(|k| wgpu::BindGroupLayoutEntry {
-            binding: first + k as u32,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage { read_only: true },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        })
+    pub fn layout_entries(first: u32) -> Vec<wgpu::BindGroupLayoutEntry> {
+        BindingTable::new(0, first, binding_list()).layout_entries()
+    }
+
+    /// The six buffers, in [`binding_list`] order.
+    pub fn resources(&self) -> Vec<wgpu::BindingResource<'_>> {
+        self.buffers.iter().map(wgpu::Buffer::as_entire_binding).collect()
     }
 
     /// Bind group entries matching [`GpuScene::layout_entries`].
-    pub fn bind_entries(&self, first: u32) -> [wgpu::BindGroupEntry<'_>; 6] {
-        std::array::from_fn(|k| wgpu::BindGroupEntry {
-            binding: first + k as u32,
-            resource: self.buffers[k].as_entire_binding(),
-        })
+    pub fn bind_entries(&self, first: u32) -> Vec<wgpu::BindGroupEntry<'_>> {
+        BindingTable::new(0, first, binding_list()).bind_entries(self.resources())
     }
 }
 

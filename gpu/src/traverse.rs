@@ -29,6 +29,7 @@
 use furnace_accel::{Bvh, GpuCwbvhNode, GpuTriangle, Layout};
 
 use crate::GpuError;
+use crate::shared::{Binding, BindingTable};
 
 /// Node groups the WGSL traversal stack holds (`TRV_STACK_SIZE` in `traverse.wgsl`): one per
 /// tree level below the root at most, so trees up to this depth never overflow. The same as
@@ -58,11 +59,12 @@ pub fn module_with_stack_size(size: u32) -> String {
 /// The declarations of the two storage buffers the traversal reads, at `@group(group)`,
 /// bindings `first` (nodes) and `first + 1` (triangles), for the composing shader.
 pub fn bindings(group: u32, first: u32) -> String {
-    format!(
-        "@group({group}) @binding({first}) var<storage, read> bvh_nodes: array<CwbvhNode>;\n\
-         @group({group}) @binding({}) var<storage, read> bvh_triangles: array<Triangle>;\n",
-        first + 1
-    )
+    BindingTable::new(group, first, binding_list()).wgsl()
+}
+
+/// The traversal's two read-only storage bindings: `bvh_nodes`, `bvh_triangles`.
+pub fn binding_list() -> Vec<Binding> {
+    vec![Binding::read("bvh_nodes", "array<CwbvhNode>"), Binding::read("bvh_triangles", "array<Triangle>")]
 }
 
 /// A CWBVH as the `u32` words of the two storage buffers of the WGSL traversal: the bytes of

@@ -80,7 +80,7 @@ fn accumulate(ctx: &GpuContext, precision: FilmPrecision, module: &str, fold: bo
         label: None,
         source: wgpu::ShaderSource::Wgsl(source.into()),
     });
-    let [a, b] = GpuFilm::layout_entries(0);
+    let [a, b]: [_; 2] = GpuFilm::layout_entries(0).try_into().unwrap();
     let u = wgpu::BindGroupLayoutEntry {
         binding: 2,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -112,7 +112,7 @@ fn accumulate(ctx: &GpuContext, precision: FilmPrecision, module: &str, fold: bo
     const PASS: u32 = 1000;
     for k in 0..FRAMES.div_ceil(PASS) {
         let params = uniform(ctx, &[PIXELS, PASS.min(FRAMES - k * PASS), BAD_EVERY, k * PASS]);
-        let [ea, eb] = film.bind_entries(0);
+        let [ea, eb]: [_; 2] = film.bind_entries(0).try_into().unwrap();
         let bg = d.create_bind_group(&wgpu::BindGroupDescriptor {
             label: None,
             layout: &bgl,

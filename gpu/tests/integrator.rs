@@ -110,36 +110,8 @@ fn dispatches_cover_every_pixel_once() {
 
 #[test]
 fn frame_params_layout_matches_wgsl() {
-    let src = shader_source(FilmPrecision::F64);
-    macro_rules! off {
-        ($($f:ident),*) => { [$((stringify!($f), std::mem::offset_of!(FrameParams, $f))),*] };
-    }
-    let mut members = off!(
-        cam_x,
-        cam_y,
-        cam_z,
-        cam_t,
-        sun_direction,
-        sun_irradiance,
-        sky,
-        sampler,
-        width,
-        height,
-        first_sample,
-        samples,
-        bounces,
-        flags,
-        bsdf_flags,
-        row_offset,
-        fov_scale,
-        aspect,
-        group_samples,
-        tile_width,
-        offset_scale
-    )
-    .to_vec();
-    members.extend([("pad0", 180), ("pad1", 184), ("pad2", 188)]);
-    common::assert_layout(&src, "FrameParams", size_of::<FrameParams>(), &members);
+    common::assert_gpu_struct::<FrameParams>(&shader_source(FilmPrecision::F64));
+    common::assert_gpu_struct::<FrameParams>(&shader_source(FilmPrecision::F32Pass));
 }
 
 #[test]

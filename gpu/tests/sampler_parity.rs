@@ -539,18 +539,7 @@ fn generated_block_matches_the_rust_constants() {
 /// `SamplerParams` has the same layout in WGSL as in Rust.
 #[test]
 fn sampler_params_layout_matches() {
-    use std::mem::{offset_of, size_of};
-    common::assert_layout(
-        wgsl::SAMPLING,
-        "SamplerParams",
-        size_of::<SamplerParams>(),
-        &[
-            ("kind", offset_of!(SamplerParams, kind)),
-            ("seed", offset_of!(SamplerParams, seed)),
-            ("sample_count", offset_of!(SamplerParams, sample_count)),
-            ("pad", offset_of!(SamplerParams, pad)),
-        ],
-    );
+    common::assert_gpu_struct::<SamplerParams>(wgsl::SAMPLING);
 }
 
 /// The module parses alone, declares no bindings (no globals at all), and names everything that

@@ -44,6 +44,7 @@ mod hash;
 mod light;
 mod load;
 mod material;
+mod surface;
 mod texture;
 
 pub use camera::{Camera, DEFAULT_YFOV, Projection, Ray};
@@ -52,6 +53,7 @@ pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, 
 pub use light::{Light, Sky, Sun};
 pub use load::{MAX_COORDINATE, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
 pub use material::{AlphaMode, Material, MaterialSample};
+pub use surface::{SurfacePoint, geometric_normal};
 pub use texture::{ColorSpace, Image, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear};
 
 use std::path::Path;

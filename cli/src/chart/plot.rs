@@ -2,7 +2,7 @@
 //! written atomically) and an SVG, with the legend in a panel of its own to the right of the
 //! plot so that it never hides a curve.
 //!
-//! Text is drawn with `ab_glyph` from DejaVu Sans (`assets/fonts/`, compiled in), so no system
+//! Text is drawn with `ab_glyph` from DejaVu Sans (`cli/assets/fonts/`, compiled in), so no system
 //! font library is needed. The SVG names the font family `sans-serif` and leaves the glyphs to
 //! the viewer.
 
@@ -11,8 +11,8 @@ use plotters::prelude::*;
 use std::path::Path;
 use std::sync::Once;
 
-/// The font the charts are drawn with (DejaVu Sans 2.37; licence in assets/fonts/).
-static FONT: &[u8] = include_bytes!("../../../assets/fonts/DejaVuSans.ttf");
+/// The font the charts are drawn with (DejaVu Sans 2.37; licence in cli/assets/fonts/).
+static FONT: &[u8] = include_bytes!("../../assets/fonts/DejaVuSans.ttf");
 
 /// Chart size in pixels (PNG) and user units (SVG).
 pub const SIZE: (u32, u32) = (1200, 720);

@@ -9,50 +9,13 @@
 // Sampler dimensions: DIM_PIXEL, DIM_FIRST_BOUNCE, DIMS_PER_BOUNCE and BOUNCE_* are declared by
 // the composing shader from furnace_render::layout.
 
-// FrameParams.flags.
-const FRAME_RUSSIAN_ROULETTE: u32 = 1u;
-const FRAME_ORTHOGRAPHIC: u32 = 2u;
-const FRAME_ANY_MASKED: u32 = 4u;
-const FRAME_HAS_SUN: u32 = 8u;
-const FRAME_COUNT_RAYS: u32 = 16u;
+// FRAME_* flags, FrameParams and the bindings are declared by the composing shader, generated
+// from furnace_gpu::integrator (frame_flags_wgsl, FrameParams, binding_table).
 
 // Rays this invocation traced (closest-hit and shadow); added to `ray_counter` at its end when
 // FRAME_COUNT_RAYS is set.
 var<private> rays_traced: u32 = 0u;
 
-// gpu/src/integrator.rs `FrameParams` (checked by naga reflection in tests/integrator.rs).
-struct FrameParams {
-    // Camera: world_from_camera's columns (xyz) and translation.
-    cam_x: vec4<f32>,
-    cam_y: vec4<f32>,
-    cam_z: vec4<f32>,
-    cam_t: vec4<f32>,
-    // Direction the sunlight travels (xyz); irradiance (rgb); sky radiance (rgb).
-    sun_direction: vec4<f32>,
-    sun_irradiance: vec4<f32>,
-    sky: vec4<f32>,
-    sampler: SamplerParams,
-    width: u32,
-    height: u32,
-    first_sample: u32,
-    samples: u32,
-    bounces: u32,
-    flags: u32,
-    bsdf_flags: u32,
-    row_offset: u32,
-    // tan(yfov/2) (perspective) or ymag (orthographic), and the image aspect ratio w/h, both
-    // computed on the CPU exactly as furnace-scene's Camera::generate_ray does.
-    fov_scale: f32,
-    aspect: f32,
-    // Invocations per pixel in a workgroup (a power of two ≤ GROUP_SIZE), and the tile's width in pixels.
-    group_samples: u32,
-    tile_width: u32,
-    // The ray offsets' length scale (furnace_accel::offset_scale_of_bounds of the scene).
-    offset_scale: f32,
-    pad0: u32,
-    pad1: u32,
-    pad2: u32,
-}
 
 // The alpha-mask callback of traverse.wgsl: masked materials' cut-outs are not hits.
 fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {

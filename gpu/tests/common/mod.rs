@@ -43,6 +43,31 @@ pub fn assert_layout(source: &str, name: &str, size: usize, members: &[(&str, us
     assert_eq!(got, want, "WGSL struct {name} differs from its Rust twin (left: WGSL, right: Rust)");
 }
 
+/// Asserts that the WGSL struct `T::NAME` in `source` has `T`'s size and, for every member that
+/// the Rust declares for WGSL, the Rust offset (from [`GpuStruct::members`]: no list kept by
+/// hand). Generated `_pad` members are left out of the comparison; the size covers them.
+pub fn assert_gpu_struct<T: furnace_gpu::shared::GpuStruct>(source: &str) {
+    let got = wgsl_struct(source, T::NAME);
+    let got = Layout {
+        size: got.size,
+        members: got.members.into_iter().filter(|(n, _)| !n.starts_with("_pad")).collect(),
+    };
+    let want = Layout {
+        size: size_of::<T>() as u32,
+        members: T::members()
+            .iter()
+            .filter(|m| m.ty != furnace_gpu::shared::WgslType::PAD)
+            .map(|m| (m.name.to_string(), m.offset))
+            .collect(),
+    };
+    assert_eq!(
+        got,
+        want,
+        "WGSL struct {} differs from its Rust description (left: WGSL, right: Rust)",
+        T::NAME
+    );
+}
+
 /// SplitMix64: the tests' deterministic input generator (test code may use `u64`); each test
 /// file adds the draws it needs in its own `impl Rng { … }` (same crate).
 pub struct Rng(pub u64);
