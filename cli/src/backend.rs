@@ -74,6 +74,14 @@ impl Backend {
         }
     }
 
+    /// The integrator, shared.
+    pub fn integrator_ref(&self) -> &dyn Integrator {
+        match self {
+            Self::Cpu(c) => c.as_ref(),
+            Self::Gpu(g) => g.as_ref(),
+        }
+    }
+
     /// The wgpu integrator, if that is what this is (benchmarks read its counters).
     pub fn gpu(&mut self) -> Option<&mut GpuRenderer> {
         match self {
@@ -85,24 +93,15 @@ impl Backend {
 
 impl Integrator for Backend {
     fn name(&self) -> &'static str {
-        match self {
-            Self::Cpu(c) => c.as_ref().name(),
-            Self::Gpu(g) => Integrator::name(g.as_ref()),
-        }
+        self.integrator_ref().name()
     }
 
     fn describe(&self) -> String {
-        match self {
-            Self::Cpu(c) => c.describe(),
-            Self::Gpu(g) => g.describe(),
-        }
+        self.integrator_ref().describe()
     }
 
     fn settings(&self) -> &RenderSettings {
-        match self {
-            Self::Cpu(c) => Integrator::settings(c.as_ref()),
-            Self::Gpu(g) => Integrator::settings(g.as_ref()),
-        }
+        self.integrator_ref().settings()
     }
 
     fn render_pass(&mut self, first_sample: u32, samples_per_pixel: u32) -> Result<(), RenderError> {
@@ -118,17 +117,11 @@ impl Integrator for Backend {
     }
 
     fn pass_samples(&self) -> u32 {
-        match self {
-            Self::Cpu(c) => c.pass_samples(),
-            Self::Gpu(g) => g.pass_samples(),
-        }
+        self.integrator_ref().pass_samples()
     }
 
     fn last_pass_device_seconds(&self) -> Option<f64> {
-        match self {
-            Self::Cpu(c) => c.last_pass_device_seconds(),
-            Self::Gpu(g) => g.last_pass_device_seconds(),
-        }
+        self.integrator_ref().last_pass_device_seconds()
     }
 }
 
