@@ -1,8 +1,8 @@
 //! BVH build time and ray throughput.
 //!
 //! `cargo bench -p furnace-accel` prints a Markdown table (quoted in `BENCHMARKS.md`). Scenes:
-//! the built-in reference Cornell box (`furnace_scene::builtin::cornell_box()`, always), and,
-//! when the files exist, `<repo>/../shared/scenes/{DamagedHelmet, MetalRoughSpheresNoTextures}`
+//! the built-in reference Cornell box (`furnace_scene::builtin::cornell_box()`), and Khronos'
+//! DamagedHelmet and MetalRoughSpheresNoTextures from the repository's `tests/data/scenes/`,
 //! loaded with `furnace_scene::Scene::load`. For each layout (CWBVH, BVH2; preset chosen by
 //! triangle count): build time (median of 3), then Mrays/s for
 //!
@@ -27,7 +27,6 @@ use furnace_scene::Scene;
 use glam::{Vec2, Vec3, Vec3A};
 use rayon::prelude::*;
 use std::hint::black_box;
-use std::path::Path;
 use std::time::Instant;
 
 fn cpu_name() -> String {
@@ -61,7 +60,7 @@ fn camera_rays(scene: &Scene, res: u32, seed: u64) -> Rays {
 /// A uniformly random point on a uniformly random (non-degenerate) triangle, and its normal.
 fn surface_point(tris: &[[Vec3; 3]], rng: &mut Rng) -> (Vec3, Vec3) {
     loop {
-        let [a, b, c] = tris[rng.below(tris.len())];
+        let [a, b, c] = tris[rng.index(tris.len())];
         let n = (b - a).cross(c - a);
         if !(n.length_squared() > 0.0) || !n.is_finite() {
             continue;
@@ -226,17 +225,14 @@ fn main() {
         Ok(s) => scenes.push(("cbox (builtin)".into(), s)),
         Err(e) => eprintln!("skipping the built-in Cornell box: {e}"),
     }
-    // The project's shared folder sits beside the repository (`<repo>/../shared`).
-    let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes");
     for (name, file) in [
-        ("DamagedHelmet", "DamagedHelmet/glTF/DamagedHelmet.gltf"),
-        ("MetalRoughSpheresNoTextures", "MetalRoughSpheresNoTextures/glTF/MetalRoughSpheresNoTextures.gltf"),
+        ("DamagedHelmet", "DamagedHelmet/glTF-Binary/DamagedHelmet.glb"),
+        (
+            "MetalRoughSpheresNoTextures",
+            "MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb",
+        ),
     ] {
-        let path = shared.join(file);
-        if !path.exists() {
-            eprintln!("skipping {name}: {} not found", path.display());
-            continue;
-        }
+        let path = furnace_tests::data::scene(file);
         match Scene::load(&path) {
             Ok(s) => scenes.push((name.into(), s)),
             Err(e) => eprintln!("skipping {name}: {e}"),

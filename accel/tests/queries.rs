@@ -22,7 +22,7 @@ fn meshes() -> Vec<(&'static str, Vec<Tri>)> {
         ("random soup 3k", random_soup(3000, 0.15, 1)),
         ("sphere 8k", sphere(5)),
         ("cornell room", cornell_room(8)),
-        ("Box.glb", load_gltf(&data.join("Box/Box.glb")).expect("Box.glb")),
+        ("Box.glb", load_gltf(&data.join("Box/glTF-Binary/Box.glb")).expect("Box.glb")),
         ("CornellBox-cetra", load_gltf(&data.join("CornellBox-cetra/cornell_box.gltf")).expect("cetra")),
     ]
 }

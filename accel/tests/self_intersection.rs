@@ -33,7 +33,7 @@ fn count_self_hits(scale: f32, seed: u64) -> Count {
     let cos = 89.9f32.to_radians().cos();
     let sin = 89.9f32.to_radians().sin();
     for _ in 0..RAYS_PER_SCALE {
-        let id = rng.below(tris.len());
+        let id = rng.index(tris.len());
         let [a, b, cc] = tris[id];
         let (mut u, mut v) = (rng.f32(), rng.f32());
         if u + v > 1.0 {

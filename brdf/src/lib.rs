@@ -53,6 +53,7 @@
 //! assert!((gold.pdf(wo, s.wi) - s.pdf).abs() < 1e-3 * s.pdf);
 //! ```
 
+mod frame;
 pub mod fresnel;
 pub mod ggx;
 mod lambert;
@@ -62,6 +63,7 @@ mod specular;
 mod tables;
 pub mod turquin;
 
+pub use frame::Frame;
 pub use ggx::{Ggx, Masking, SpecularSampling};
 pub use lambert::Lambert;
 pub use material::{MetallicRoughness, MetallicRoughnessParams, luminance};

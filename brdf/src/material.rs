@@ -93,6 +93,19 @@ impl MetallicRoughness {
         Self { diffuse: Lambert::new(base * (1.0 - metallic)), specular, specular_factor: sf, f0_dielectric }
     }
 
+    /// `sF` as the constructor sanitised it (`[0, 1]`, NaN → 1): scales the dielectric layer's
+    /// Fresnel, and so the diffuse attenuation. With [`Self::f0_dielectric`], `diffuse` and
+    /// `specular`, the whole record a GPU twin uploads.
+    pub fn specular_factor(&self) -> f32 {
+        self.specular_factor
+    }
+
+    /// `min(0.04·specularColor, 1)` with specularColor clamped to `[0, f32::MAX]` (NaN → 0): the
+    /// dielectric layer's F0 before `sF`.
+    pub fn f0_dielectric(&self) -> Rgb {
+        self.f0_dielectric
+    }
+
     /// The diffuse attenuation `1 − sF·max(fr(cos θd))` of the dielectric layer.
     #[inline]
     fn diffuse_scale(&self, cos_theta_d: f32) -> f32 {

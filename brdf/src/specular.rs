@@ -24,7 +24,7 @@ impl Default for SpecularOptions {
 
 impl SpecularOptions {
     /// Mitsuba 3's `roughconductor` model: separable masking, no compensation (what the
-    /// independent references in `shared/references` were rendered with).
+    /// independent references in `tests/data/references` were rendered with).
     pub fn mitsuba() -> Self {
         Self { masking: Masking::Separable, compensation: false, ..Self::default() }
     }

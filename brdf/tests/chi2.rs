@@ -2,7 +2,7 @@
 //! `Bsdf::sample` draw directions with the density that `Bsdf::pdf` claims?
 //!
 //! This is the BSDF test of Mitsuba 3 and pbrt-v4, run by the shared harness
-//! [`furnace_sampling::chi2`]: 10⁶ samples per configuration are histogrammed on the harness's
+//! [`furnace_tests::chi2`]: 10⁶ samples per configuration are histogrammed on the harness's
 //! 64 (cos θ) × 128 (φ) grid and compared with the pdf integrated over every cell; cells
 //! expecting fewer than 5 samples are pooled; rejected samples (`None`, a microfacet reflection
 //! below the horizon or a back-facing NDF normal) go to the harness's rejection cell, which
@@ -25,7 +25,7 @@
 //! `1 − cos θ ≈ 10⁻³` inside the top row of cells) is far narrower than a cell; the old fixed
 //! 5 × 5 Gauss–Legendre rule per cell integrates the lobe at 89° to 0.27 (0.57 when the lobe
 //! happens to straddle a cell edge) instead of 0.97. The harness integrates every cell
-//! adaptively, to its default relative tolerance of 10⁻⁴ (see `furnace_sampling::chi2`,
+//! adaptively, to its default relative tolerance of 10⁻⁴ (see `furnace_tests::chi2`,
 //! "Adaptive quadrature": this biases χ² by about 0.01), and these tests additionally require
 //! that every cell converged, so the expected counts are as good as the tolerance says for
 //! every configuration here. (At 89° the pdf's own `f32` rounding is a few 10⁻⁵, so a much
@@ -40,7 +40,7 @@ use furnace_brdf::{
     Bsdf, GgxSpecular, Lambert, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions,
     SpecularSampling,
 };
-use furnace_sampling::chi2::{ChiSquareResult, ChiSquareTest};
+use furnace_tests::chi2::{ChiSquareResult, ChiSquareTest};
 use glam::Vec3;
 use std::path::PathBuf;
 

@@ -27,7 +27,7 @@ use furnace_brdf::{
     SpecularSampling,
 };
 use furnace_sampling::RandomStream;
-use furnace_sampling::chi2::ChiSquareTest;
+use furnace_tests::chi2::ChiSquareTest;
 use glam::{Vec2, Vec3};
 
 /// GGX roughnesses of the sample/eval/pdf checks: the clamp `ALPHA_MIN` (= 1e-4), sharp,

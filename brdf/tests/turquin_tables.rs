@@ -16,7 +16,7 @@
 //!   with the command that regenerates it.
 //! * `quadrature_against_closed_forms` — at normal incidence `E_ss(1, α)` reduces to a 1-D
 //!   integral (below), evaluated here independently in f64 to ~1e-12; α = 1 gives the closed
-//!   form `1 − ln 2` (= `E_mu1_separable` of `shared/references/furnace/*.json`).
+//!   form `1 − ln 2` (= `E_mu1_separable` of `tests/data/references/furnace/*.json`).
 //! * `quadrature_converges` — order 96 (the table's) against 192 at the worst points found by a
 //!   scan against order 512.
 //!

@@ -4,8 +4,8 @@
 //!
 //! * `lambert_reflects_everything` — Lambert of albedo 1 has `E = 1` at every μo.
 //! * `ggx_white_matches_independent_references` — GGX with F = 1, α = 1, no compensation,
-//!   against the figures of `shared/references/furnace/furnace_ggx_a1_cuda_ad_rgb_4096spp.json`
-//!   (computed by `shared/oracle/render_ref.py`, `ggx_albedo` + `furnace_stats`, from D and Λ
+//!   against the figures of `tests/data/references/furnace/furnace_ggx_a1_cuda_ad_rgb_4096spp.json`
+//!   (computed by the oracle script `render_ref.py` of the references, `ggx_albedo` + `furnace_stats`, from D and Λ
 //!   directly, by quadrature over ωi): `E(1) = 1 − ln 2`, the cosine-weighted averages, and the
 //!   mean over the pixels of the 256 × 256 reference image (the oracle's pixel mask and camera
 //!   replicated here), which Mitsuba 3 measured as 0.37282.
@@ -29,7 +29,7 @@ use furnace_sampling::{OwenSobol, Sampler};
 use glam::{DVec3, Vec2, Vec3};
 use std::fmt::Write as _;
 
-/// The figures of `shared/references/furnace/furnace_ggx_a1_cuda_ad_rgb_4096spp.json`.
+/// The figures of `tests/data/references/furnace/furnace_ggx_a1_cuda_ad_rgb_4096spp.json`.
 mod reference {
     /// `E_mu1_separable` (= 1 − ln 2).
     pub const E_MU1_SEPARABLE: f64 = 0.306_852_819_440_056_27;
@@ -102,7 +102,7 @@ fn white_ggx(alpha: f32, masking: Masking, sampling: SpecularSampling, compensat
 #[test]
 fn lambert_reflects_everything() {
     let lambert = Lambert::new(Rgb::ONE);
-    // glTF's pure Lambert (README of shared/references: metallic 0 plus specularFactor 0).
+    // glTF's pure Lambert (README of tests/data/references: metallic 0 plus specularFactor 0).
     let gltf_lambert = MetallicRoughness::new(
         MetallicRoughnessParams { metallic: 0.0, specular_factor: 0.0, ..Default::default() },
         SpecularOptions::default(),

@@ -33,7 +33,7 @@ pub enum Command {
     /// Speed against accuracy: render a scene under several configurations (sampler × BRDF
     /// sampling × compensation × backend), record error against a reference and time at
     /// checkpoints of 1, 2, 4, … spp, and write CSV, JSON and error-vs-spp / error-vs-time charts.
-    Chart(crate::chart::ChartArgs),
+    Chart(ChartArgs),
 }
 
 /// `furnace render`.
@@ -199,6 +199,111 @@ pub struct BenchArgs {
     pub quiet: bool,
 }
 
+/// `furnace chart`.
+#[derive(Debug, Clone, Args)]
+#[command(after_long_help = "\
+Fixed-N samplers (hammersley, cmj) need the sample count in advance: each checkpoint is rendered \
+as its own render with N = that checkpoint (how they are meant to be used), so they cost about \
+twice the samples of a progressive sampler, and their time at a checkpoint is that render's.
+
+Errors, against the reference, over all pixels and channels (as `furnace compare`): RMSE = sqrt(mean (x − r)²); relative MSE = mean (x − r)² / (r² + ε), \
+ε = 1e-2. Slopes: least squares of ln(error) against ln(spp) over the checkpoints.
+
+Time is the wall time of the render passes only: no scene load, BVH build, upload, pipeline \
+creation, film read-back or error computation.
+
+--external FILE.csv adds peer series (e.g. another renderer timed on the same machine) to the \
+charts. Format: a header line `label,spp,seconds,rmse,relmse`, then one point per line; empty \
+fields are allowed (a point without seconds is left out of the time charts, one without rmse out \
+of the RMSE charts); lines starting with # are comments; no quoting. relmse must use ε = 1e-2 \
+(as `furnace compare`).
+
+Example (Mitsuba's reference of the built-in Cornell box, Mitsuba's BRDF model):
+  furnace chart --reference cbox_ref_bounces4.exr --masking separable --compensation off \\
+      --samplers sobol,pmj02,random,hammersley --sampling caps,vndf,ndf --spp 64 --out chart")]
+pub struct ChartArgs {
+    /// The reference image (.exr; its size is the study's image size): a long render of the
+    /// same scene, e.g. Mitsuba's, or one of furnace's own (then its recorded settings are
+    /// checked: scene, bounces, camera, model).
+    #[arg(long, value_name = "REF.exr")]
+    pub reference: PathBuf,
+    /// A second reference, rendered with energy compensation on, for the configurations with
+    /// --compensation on (--reference then serves those with it off).
+    #[arg(long, value_name = "REF.exr")]
+    pub reference_compensated: Option<PathBuf>,
+    /// Whether --reference was rendered with energy compensation, when it is not a furnace
+    /// render (which records it) [default: off, as Mitsuba and other renderers].
+    #[arg(long, value_enum, value_name = "on|off")]
+    pub reference_compensation: Option<Switch>,
+    /// The scene: cbox (the built-in reference Cornell box), interior:N, or a .gltf/.glb path.
+    #[arg(long, default_value = "cbox", value_parser = parse_scene)]
+    pub scene: SceneArg,
+    /// Smith masking of every configuration; match the reference's renderer (Mitsuba:
+    /// separable) [default: the reference's, if furnace rendered it; else height-correlated].
+    #[arg(long, value_enum)]
+    pub masking: Option<MaskingArg>,
+    /// Samplers, comma-separated: random, hammersley, cmj, pmj02, sobol.
+    #[arg(long, value_delimiter = ',', default_value = "sobol,pmj02,random,hammersley,cmj")]
+    pub samplers: Vec<SamplerKind>,
+    /// BRDF (GGX) sampling methods, comma-separated: ndf, vndf, caps.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "caps,vndf,ndf")]
+    pub sampling: Vec<SamplingArg>,
+    /// Energy compensation, comma-separated: on, off [default: the reference's; with
+    /// --reference-compensated, off and on].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub compensation: Vec<Switch>,
+    /// Backends, comma-separated: cpu, gpu.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
+    pub backends: Vec<ChartBackend>,
+    /// The GPU adapter for --backends gpu: a part of its name or its index.
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub adapter: Option<String>,
+    /// Samples per pixel of the last checkpoint (checkpoints: 1, 2, 4, … and this).
+    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
+    pub spp: u32,
+    /// Scattering events per path [default: the reference's, if furnace rendered it; else 4].
+    #[arg(long)]
+    pub bounces: Option<u32>,
+    /// Seed of the samplers' scrambling (1, not render's 0: a reference rendered with furnace's
+    /// defaults is then independent of the study).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u32,
+    /// The study's directory: chart.csv, chart.json, and the charts (rmse_vs_spp, rmse_vs_time,
+    /// relmse_vs_spp, relmse_vs_time; .png and .svg). An existing study there is resumed.
+    #[arg(long, value_name = "DIR", default_value = "chart")]
+    pub out: PathBuf,
+    /// Peer series to draw on the same axes (CSV: label,spp,seconds,rmse,relmse); repeatable.
+    #[arg(long, value_name = "FILE.csv")]
+    pub external: Vec<PathBuf>,
+    /// The time axis of the error-vs-time charts: wall (wall time of the render passes) or cpu
+    /// (the process's CPU time over them, all threads: steadier than wall time on a machine
+    /// shared with other work, meaningless for the GPU backend). Both are recorded; this only
+    /// picks what the charts show (--external seconds are drawn on the same axis).
+    #[arg(long, value_enum, default_value_t = ChartTime::Wall)]
+    pub time: ChartTime,
+    /// No progress bar and no summary table (warnings and errors are still printed).
+    #[arg(long, short)]
+    pub quiet: bool,
+}
+
+/// `furnace chart --backends`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ChartBackend {
+    /// The CPU reference integrator.
+    Cpu,
+    /// The wgpu integrator (`--adapter` picks the adapter; else the best one, software too).
+    Gpu,
+}
+
+/// `furnace chart --time`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum ChartTime {
+    /// Wall time.
+    Wall,
+    /// Process CPU time (user + system, all threads).
+    Cpu,
+}
+
 /// `furnace bench --scene`.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum SceneArg {
@@ -246,6 +351,9 @@ pub(crate) fn parse_scene(s: &str) -> Result<SceneArg, String> {
 
 /// The largest image side accepted.
 pub const MAX_SIDE: u32 = 16_384;
+
+/// The largest `furnace chart --spp`.
+const MAX_SPP: u32 = 1 << 20;
 
 /// `--backend`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]

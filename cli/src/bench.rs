@@ -13,7 +13,7 @@
 //!   available; the output says which.
 
 use crate::args::{BenchArgs, SceneArg};
-use crate::render::image_size;
+use crate::shared::{image_size, write_atomically};
 use furnace_cli::backend::{self, Backend};
 use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
 use furnace_render::{Budget, Integrator, RenderSettings, Session};
@@ -419,9 +419,4 @@ fn estimate_rays(
         },
         Err(e) => Rays::None(format!("the CPU integrator has no ray counter and the GPU count failed ({e})")),
     }
-}
-
-/// Writes `bytes` to `path` atomically (`furnace_post::write_bytes_atomic`).
-fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    furnace_post::write_bytes_atomic(path, bytes).map_err(|e| e.to_string())
 }

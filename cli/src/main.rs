@@ -33,6 +33,7 @@ mod info;
 mod interrupt;
 mod render;
 mod resume;
+mod shared;
 
 use clap::error::ErrorKind;
 use clap::parser::ValueSource;
@@ -57,15 +58,15 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         args::Command::Render(a) => render::run(&a, &interrupt::Interrupt::install()),
-        args::Command::Info(a) => info::run(&a).map(|()| render::Outcome::Done),
-        args::Command::Compare(a) => compare::run(&a).map(|()| render::Outcome::Done),
-        args::Command::Bench(a) => bench::run(&a).map(|()| render::Outcome::Done),
+        args::Command::Info(a) => info::run(&a).map(|()| shared::Outcome::Done),
+        args::Command::Compare(a) => compare::run(&a).map(|()| shared::Outcome::Done),
+        args::Command::Bench(a) => bench::run(&a).map(|()| shared::Outcome::Done),
         args::Command::Chart(a) => chart::run(&a, &interrupt::Interrupt::install()),
     };
     match result {
-        Ok(render::Outcome::Done) => ExitCode::SUCCESS,
+        Ok(shared::Outcome::Done) => ExitCode::SUCCESS,
         // 128 + SIGINT, what a shell reports for a process ended by Ctrl-C.
-        Ok(render::Outcome::Interrupted) => ExitCode::from(130),
+        Ok(shared::Outcome::Interrupted) => ExitCode::from(130),
         Err(message) => fail(&message),
     }
 }

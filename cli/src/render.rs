@@ -1,34 +1,20 @@
 //! `furnace render`: load, render in passes with a progress bar, write EXR + PNG.
 
-use crate::args::{MAX_SIDE, RenderArgs, Switch};
+use crate::args::{RenderArgs, Switch};
 use crate::interrupt::Interrupt;
 use crate::resume;
+use crate::shared::{Outcome, image_size};
 use furnace_brdf::SpecularOptions;
 use furnace_cli::backend;
 use furnace_post::{ExrWithState, Metadata, read_exr_with_state, to_srgb8, write_exr_with_state, write_png};
 use furnace_render::{Budget, Film, Integrator, RenderSettings, SAMPLER_LAYOUT_VERSION, Session, Stop};
-use furnace_scene::{Camera, Projection, Scene, builtin};
+use furnace_scene::{Camera, Scene, builtin};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::ffi::OsString;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::time::Instant;
-
-/// Default image width (and height for a square camera such as the built-in Cornell box's).
-pub const DEFAULT_WIDTH: u32 = 512;
-
-/// Largest number of pixels accepted (8192² — 2 GiB of `f64` film).
-const MAX_PIXELS: u64 = 1 << 26;
-
-/// How a render ended.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Outcome {
-    /// Finished (or stopped by `--time-limit`, or nothing was left to render).
-    Done,
-    /// Stopped by Ctrl-C (exit code 130); the partial render is saved if a pass was done.
-    Interrupted,
-}
 
 /// A render's settings, resolved from the arguments, the scene and (when resuming) the file.
 struct Job {
@@ -371,31 +357,6 @@ pub fn output_paths(out: &Path) -> (PathBuf, PathBuf) {
     (with(".png"), with(".exr"))
 }
 
-/// The image size: given sides win; a missing side follows the camera's aspect ratio (the
-/// file's `aspectRatio`, or `xmag/ymag` of an orthographic camera; square without one).
-pub(crate) fn image_size(
-    camera: &Camera,
-    width: Option<u32>,
-    height: Option<u32>,
-) -> Result<(u32, u32), String> {
-    let aspect = match camera.projection {
-        Projection::Perspective { aspect_ratio, .. } => aspect_ratio.unwrap_or(1.0),
-        Projection::Orthographic { xmag, ymag } => xmag / ymag,
-    };
-    let aspect = if aspect.is_finite() && aspect > 0.0 { f64::from(aspect) } else { 1.0 };
-    let side = |x: f64| x.round().clamp(1.0, f64::from(MAX_SIDE)) as u32;
-    let (w, h) = match (width, height) {
-        (Some(w), Some(h)) => (w, h),
-        (Some(w), None) => (w, side(f64::from(w) / aspect)),
-        (None, Some(h)) => (side(f64::from(h) * aspect), h),
-        (None, None) => (DEFAULT_WIDTH, side(f64::from(DEFAULT_WIDTH) / aspect)),
-    };
-    if u64::from(w) * u64::from(h) > MAX_PIXELS {
-        return Err(format!("a {w}×{h} image is too large (at most {MAX_PIXELS} pixels)"));
-    }
-    Ok((w, h))
-}
-
 fn progress_bar(quiet: bool, spp: u32, done: u32) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
@@ -423,13 +384,5 @@ mod tests {
         assert_eq!(p("out/x.png"), ("out/x.png".into(), "out/x.exr".into()));
         assert_eq!(p("x.EXR"), ("x.png".into(), "x.exr".into()));
         assert_eq!(p("render.v2"), ("render.v2.png".into(), "render.v2.exr".into()));
-    }
-
-    #[test]
-    fn cornell_box_defaults_to_512_square() {
-        let camera = builtin::cornell_box().unwrap().default_camera();
-        assert_eq!(image_size(&camera, None, None).unwrap(), (512, 512));
-        assert_eq!(image_size(&camera, Some(64), None).unwrap(), (64, 64));
-        assert!(image_size(&camera, Some(16_384), Some(16_384)).is_err());
     }
 }

@@ -6,7 +6,7 @@ use common::*;
 use std::path::{Path, PathBuf};
 
 fn data(path: &str) -> String {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scene/tests/data").join(path).display().to_string()
+    furnace_tests::data::scene(path).display().to_string()
 }
 
 #[test]
@@ -420,7 +420,7 @@ fn resume_at_or_past_the_target_renders_nothing() {
 #[test]
 fn resume_refuses_files_without_furnace_state() {
     let dir = temp_dir("resume_foreign");
-    let mitsuba = Path::new(env!("CARGO_MANIFEST_DIR")).join("../cpu/tests/data/cbox/cbox_ref_direct.exr");
+    let mitsuba = furnace_tests::data::reference("cbox/cbox_ref_direct.exr");
     let plain = dir.join("plain.exr");
     furnace_post::write_exr(&plain, 1, 1, &[glam::Vec3::ONE], &furnace_post::Metadata::default()).unwrap();
     for file in [mitsuba, plain] {

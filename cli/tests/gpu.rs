@@ -24,7 +24,7 @@ use common::*;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-/// `FURNACE_SKIP_GPU_TESTS=1`: this test is skipped (as `furnace_gpu::test_context`).
+/// `FURNACE_SKIP_GPU_TESTS=1`: this test is skipped (as `furnace_tests::gpu::test_context`).
 fn skip_gpu() -> bool {
     let skip = std::env::var("FURNACE_SKIP_GPU_TESTS").is_ok_and(|v| v == "1");
     if skip {

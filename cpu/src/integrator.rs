@@ -1,7 +1,7 @@
 //! [`CpuRenderer`]: the path tracer.
 
 use furnace_accel::{BuildOptions, Bvh, Hit, offset_ray_origin_scaled, offset_scale_of_bounds};
-use furnace_brdf::{Bsdf, MetallicRoughness, MetallicRoughnessParams, SpecularOptions};
+use furnace_brdf::{Bsdf, Frame, MetallicRoughness, MetallicRoughnessParams, SpecularOptions};
 use furnace_render::layout::{
     self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
 };
@@ -280,7 +280,7 @@ impl CpuRenderer {
             throughput *= s.weight;
             event += 1;
             if self.settings.russian_roulette && event >= 3 {
-                let survive = throughput.max_element().min(1.0);
+                let survive = furnace_render::russian_roulette_survival(throughput);
                 if !(self.sampler.value(pixel, index, dim + BOUNCE_RUSSIAN_ROULETTE) < survive) {
                     break;
                 }
@@ -373,53 +373,4 @@ fn bsdf(params: &MaterialSample, specular: SpecularOptions) -> MetallicRoughness
         },
         specular,
     )
-}
-
-/// An orthonormal frame around a unit normal (Duff et al., "Building an Orthonormal Basis,
-/// Revisited", JCGT 2017): the BSDF's local frame, z = normal.
-#[derive(Debug, Clone, Copy)]
-struct Frame {
-    x: Vec3,
-    y: Vec3,
-    z: Vec3,
-}
-
-impl Frame {
-    fn new(n: Vec3) -> Self {
-        let sign = 1.0f32.copysign(n.z);
-        let a = -1.0 / (sign + n.z);
-        let b = n.x * n.y * a;
-        let x = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let y = Vec3::new(b, sign + n.y * n.y * a, -n.y);
-        Self { x, y, z: n }
-    }
-
-    fn to_local(self, v: Vec3) -> Vec3 {
-        Vec3::new(v.dot(self.x), v.dot(self.y), v.dot(self.z))
-    }
-
-    fn to_world(self, v: Vec3) -> Vec3 {
-        v.x * self.x + v.y * self.y + v.z * self.z
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn frame_is_orthonormal_and_round_trips() {
-        // Tolerance: a few f32 ulps of unit-length arithmetic.
-        for n in
-            [Vec3::Z, Vec3::NEG_Z, Vec3::X, Vec3::new(0.3, -0.5, 0.2).normalize(), Vec3::new(1e-8, 0.0, -1.0)]
-        {
-            let n = n.normalize();
-            let f = Frame::new(n);
-            assert!((f.x.length() - 1.0).abs() < 1e-5 && (f.y.length() - 1.0).abs() < 1e-5);
-            assert!(f.x.dot(f.y).abs() < 1e-5 && f.x.dot(n).abs() < 1e-5 && f.y.dot(n).abs() < 1e-5);
-            assert!(f.x.cross(f.y).dot(n) > 0.99, "right-handed");
-            let v = Vec3::new(0.1, 0.7, -0.2);
-            assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
-        }
-    }
 }

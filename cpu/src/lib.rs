@@ -52,16 +52,17 @@
 //! * `tests/furnace.rs` — white furnaces (Lambert albedo 1 → 1; GGX α = 1 → the quadrature of
 //!   its directional albedo; with Turquin compensation → 1), an emissive sphere seen from inside
 //!   (`1 − 2^−(B+1)` exactly: the bounce convention; Russian roulette unbiased), a sunlit floor.
-//! * `tests/reference.rs` — the Cornell box at 256², direct and 4 bounces, against Mitsuba 3
-//!   references: per-channel mean ratio within ±0.5%, per-pixel z std in [0.9, 1.15], each
-//!   pixel's error from its own samples (passes of one sample).
-//! * `tests/alpha_mask.rs` — alpha MASK cut-outs let camera and shadow rays through, pixel by
-//!   pixel against the analytic values.
-//! * `tests/normal_map.rs` — normal-mapped Lambert planes shade as the tilted cosine (generated
-//!   and file tangents, both handedness signs, green up in the image).
+//!
+//! In the workspace's `furnace-tests` crate: `mitsuba.rs` — the Cornell box at 256², direct
+//! and 4 bounces, against Mitsuba 3 references (per-channel mean ratio within ±0.5%, per-pixel
+//! z std in [0.9, 1.15], each pixel's error from its own samples); `stability.rs` — scales
+//! 1e-12 … 1e12, extreme radiance, bad geometry; `backends.rs` — fixed-N samplers, every
+//! sampler on the white furnace; `alpha_mask.rs` — alpha MASK cut-outs let camera and shadow
+//! rays through, pixel by pixel against the analytic values; `normal_map.rs` — normal-mapped
+//! Lambert planes shade as the tilted cosine (generated and file tangents, both handedness
+//! signs, green up in the image).
 //! * `tests/film.rs` — no drift over 10⁶ frames; non-finite samples rejected.
 //! * `tests/determinism.rs` — bit-identical films with 1 and 2 threads.
-//! * `tests/samplers.rs` — every sampler kind; fixed-N kinds stop at N.
 //!
 //! `cargo bench -p furnace-cpu` prints Msamples/s on the Cornell box.
 //!

@@ -3,7 +3,7 @@
 //! * A Lambert sphere of albedo 1 under a sky of radiance 1 is invisible (radiance 1).
 //! * A GGX metal sphere (α = 1, F = 1, separable masking, no compensation) reflects the
 //!   directional albedo `E(μ)` of each pixel's view angle: the expected image mean is
-//!   `E(μ)` averaged over the pixel centres, as the oracle (`shared/oracle/render_ref.py`,
+//!   `E(μ)` averaged over the pixel centres, as the oracle (the oracle script `render_ref.py` of the references,
 //!   `furnace_stats`) computes it (Mitsuba 3, at its camera: 0.37282).
 //! * With Turquin compensation the metal sphere is invisible again.
 //! * Looking from inside a sphere with albedo ½ and emission ½, a path with `B` bounces sees

@@ -16,33 +16,38 @@
 //! includes the module declares `var<storage, read> turquin_table: array<f32>;` bound to
 //! [`turquin_table`].
 
-use bytemuck::{Pod, Zeroable};
+use crate::shared::{WgslType, wgsl_struct};
 use furnace_brdf::turquin::{E_SS_HEIGHT_CORRELATED, E_SS_SEPARABLE, TABLE_SIZE};
 use furnace_brdf::{
     Lobe, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions, SpecularSampling,
 };
 
-/// `BsdfParams.flags` bit 0: height-correlated masking (clear: separable).
-pub const FLAG_HEIGHT_CORRELATED: u32 = 1;
-/// `BsdfParams.flags` bits 1–2 hold the sampling method, shifted by this.
-pub const SAMPLING_SHIFT: u32 = 1;
-/// The sampling method's mask (after the shift).
-pub const SAMPLING_MASK: u32 = 3;
-/// Sampling method code of [`SpecularSampling::Ndf`].
-pub const SAMPLING_NDF: u32 = 0;
-/// Sampling method code of [`SpecularSampling::Vndf`].
-pub const SAMPLING_VNDF: u32 = 1;
-/// Sampling method code of [`SpecularSampling::SphericalCaps`].
-pub const SAMPLING_CAPS: u32 = 2;
-/// `BsdfParams.flags` bit 3: Turquin energy compensation.
-pub const FLAG_COMPENSATION: u32 = 8;
+crate::wgsl_consts! {
+    /// The WGSL `const` declarations of the flag and lobe codes below (`BSDF_` + the Rust
+    /// name), composed by [`declarations`].
+    fn consts_wgsl prefix "BSDF_";
+    /// `BsdfParams.flags` bit 0: height-correlated masking (clear: separable).
+    pub const FLAG_HEIGHT_CORRELATED: u32 = 1;
+    /// `BsdfParams.flags` bits 1–2 hold the sampling method, shifted by this.
+    pub const SAMPLING_SHIFT: u32 = 1;
+    /// The sampling method's mask (after the shift).
+    pub const SAMPLING_MASK: u32 = 3;
+    /// Sampling method code of [`SpecularSampling::Ndf`].
+    pub const SAMPLING_NDF: u32 = 0;
+    /// Sampling method code of [`SpecularSampling::Vndf`].
+    pub const SAMPLING_VNDF: u32 = 1;
+    /// Sampling method code of [`SpecularSampling::SphericalCaps`].
+    pub const SAMPLING_CAPS: u32 = 2;
+    /// `BsdfParams.flags` bit 3: Turquin energy compensation.
+    pub const FLAG_COMPENSATION: u32 = 8;
 
-/// `BsdfSample.lobe` when no direction was sampled (the Rust `None`).
-pub const LOBE_NONE: u32 = 0;
-/// `BsdfSample.lobe` of [`Lobe::Diffuse`].
-pub const LOBE_DIFFUSE: u32 = 1;
-/// `BsdfSample.lobe` of [`Lobe::Specular`].
-pub const LOBE_SPECULAR: u32 = 2;
+    /// `BsdfSample.lobe` when no direction was sampled (the Rust `None`).
+    pub const LOBE_NONE: u32 = 0;
+    /// `BsdfSample.lobe` of [`Lobe::Diffuse`].
+    pub const LOBE_DIFFUSE: u32 = 1;
+    /// `BsdfSample.lobe` of [`Lobe::Specular`].
+    pub const LOBE_SPECULAR: u32 = 2;
+}
 
 /// The number of `f32` in [`turquin_table`]: two tables of `TABLE_SIZE²`.
 pub const TURQUIN_TABLE_LEN: usize = 2 * TABLE_SIZE * TABLE_SIZE;
@@ -71,62 +76,54 @@ pub fn lobe_code(lobe: Option<Lobe>) -> u32 {
     }
 }
 
-/// The per-hit material record of the WGSL BSDF: a [`MetallicRoughness`] after its constructor
-/// (clamping, α = roughness², F0/F90 of the merged lobe), 64 bytes. Twin of WGSL
-/// `struct BsdfParams` (layout checked by `tests/brdf_parity.rs`).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct BsdfParams {
-    /// Lambert albedo `baseColor·(1 − metallic)` (before the Fresnel weighting).
-    pub diffuse: [f32; 3],
-    /// GGX α, clamped to `[ALPHA_MIN, 1]`.
-    pub alpha: f32,
-    /// Specular F0 of the merged lobe.
-    pub f0: [f32; 3],
-    /// Specular F90 (all channels alike for this material).
-    pub f90: f32,
-    /// `min(0.04·specularColor, 1)`: the dielectric F0 before `specular_factor`.
-    pub f0_dielectric: [f32; 3],
-    /// KHR_materials_specular `specularFactor`, clamped to `[0, 1]`.
-    pub specular_factor: f32,
-    /// The [`SpecularOptions`] ([`options_flags`]).
-    pub flags: u32,
-    /// Padding to WGSL's 16-byte struct alignment.
-    pub _pad0: u32,
-    /// Padding.
-    pub _pad1: u32,
-    /// Padding.
-    pub _pad2: u32,
+crate::gpu_struct! {
+    /// The per-hit material record of the WGSL BSDF: a [`MetallicRoughness`] after its
+    /// constructor (clamping, α = roughness², F0/F90 of the merged lobe), 64 bytes. Its WGSL
+    /// declaration is generated ([`declarations`]).
+    pub struct BsdfParams {
+        /// Lambert albedo `baseColor·(1 − metallic)` (before the Fresnel weighting).
+        pub diffuse: [f32; 3] => WgslType::VEC3_F32,
+        /// GGX α, clamped to `[ALPHA_MIN, 1]`.
+        pub alpha: f32 => WgslType::F32,
+        /// Specular F0 of the merged lobe.
+        pub f0: [f32; 3] => WgslType::VEC3_F32,
+        /// Specular F90 (all channels alike for this material).
+        pub f90: f32 => WgslType::F32,
+        /// `min(0.04·specularColor, 1)`: the dielectric F0 before `specular_factor`.
+        pub f0_dielectric: [f32; 3] => WgslType::VEC3_F32,
+        /// KHR_materials_specular `specularFactor`, clamped to `[0, 1]`.
+        pub specular_factor: f32 => WgslType::F32,
+        /// The [`SpecularOptions`] ([`options_flags`]).
+        pub flags: u32 => WgslType::U32,
+        /// Rust-only: `Pod` allows no implicit padding (WGSL pads the struct to its 16-byte
+        /// alignment by itself).
+        pub pad: [u32; 3] => WgslType::PAD,
+    }
+}
+
+/// The WGSL declarations [`crate::wgsl::BRDF`] needs before it, generated: the `BSDF_FLAG_*`,
+/// `BSDF_SAMPLING_*` and `BSDF_LOBE_*` constants and `struct BsdfParams`.
+pub fn declarations() -> String {
+    consts_wgsl() + &wgsl_struct::<BsdfParams>(false)
 }
 
 const _: () = assert!(size_of::<BsdfParams>() == 64);
 
 impl BsdfParams {
-    /// The record of `MetallicRoughness::new(params, options)`: the lobes' fields are read from
-    /// the Rust material itself; the two private ones (`specularFactor`, the dielectric F0) are
-    /// formed as its constructor forms them (and `eval` parity tests that they agree).
+    /// The record of `MetallicRoughness::new(params, options)`, every field read from the Rust
+    /// material itself.
     pub fn new(params: MetallicRoughnessParams, options: SpecularOptions) -> Self {
         let bsdf = MetallicRoughness::new(params, options);
         let spec = &bsdf.specular;
-        // MetallicRoughness::new: sF sanitised to [0, 1] (NaN → 1), specularColor clamped to
-        // [0, f32::MAX] (NaN → 0), F0 of the dielectric = min(0.04·specularColor, 1).
-        let sf = params.specular_factor;
-        let sf = if sf.is_nan() { 1.0 } else { sf.clamp(0.0, 1.0) };
-        let clamp = |x: f32| if x.is_nan() { 0.0 } else { x.clamp(0.0, f32::MAX) };
-        let sc = params.specular_color;
-        let f0_dielectric =
-            (0.04 * glam::Vec3::new(clamp(sc.x), clamp(sc.y), clamp(sc.z))).min(glam::Vec3::ONE);
         Self {
             diffuse: bsdf.diffuse.albedo.to_array(),
             alpha: spec.ggx.alpha(),
             f0: spec.f0.to_array(),
             f90: spec.f90.x,
-            f0_dielectric: f0_dielectric.to_array(),
-            specular_factor: sf,
+            f0_dielectric: bsdf.f0_dielectric().to_array(),
+            specular_factor: bsdf.specular_factor(),
             flags: options_flags(spec.options),
-            _pad0: 0,
-            _pad1: 0,
-            _pad2: 0,
+            pad: [0; 3],
         }
     }
 

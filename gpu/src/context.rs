@@ -107,7 +107,7 @@ pub struct GpuContext {
 ///
 /// One instance per process, shared by every context: NVIDIA's Vulkan driver finds no adapter
 /// once about 30 instances have been created and dropped in a process, and a `furnace chart`
-/// study makes a renderer per configuration and checkpoint (`tests/kernel.rs` opens forty).
+/// study makes a renderer per configuration and checkpoint (a test opens forty).
 fn instance() -> &'static wgpu::Instance {
     static INSTANCE: std::sync::OnceLock<wgpu::Instance> = std::sync::OnceLock::new();
     INSTANCE.get_or_init(|| {
@@ -295,25 +295,5 @@ impl GpuContext {
     /// The largest storage buffer binding this device accepts, in bytes.
     pub fn max_storage_binding(&self) -> u64 {
         self.device.limits().max_storage_buffer_binding_size
-    }
-}
-
-/// The context a GPU test runs on: [`AdapterChoice::Best`].
-///
-/// Returns `None` (the test should return early and pass) only when the environment variable
-/// `FURNACE_SKIP_GPU_TESTS=1` is set; it prints that it skipped. Otherwise a missing adapter
-/// **panics** with the reason, so that CI, which installs lavapipe, fails rather than silently
-/// skipping the GPU tests.
-pub fn test_context() -> Option<GpuContext> {
-    if std::env::var("FURNACE_SKIP_GPU_TESTS").is_ok_and(|v| v == "1") {
-        eprintln!("FURNACE_SKIP_GPU_TESTS=1: skipping a GPU test");
-        return None;
-    }
-    match GpuContext::new(&AdapterChoice::Best) {
-        Ok(ctx) => Some(ctx),
-        Err(e) => panic!(
-            "GPU test needs an adapter: {e}. Install Mesa's lavapipe (apt-get install mesa-vulkan-drivers) \
-             or set FURNACE_SKIP_GPU_TESTS=1 to skip GPU tests on purpose"
-        ),
     }
 }

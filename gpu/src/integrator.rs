@@ -212,13 +212,17 @@ pub fn binding_table(precision: FilmPrecision) -> BindingTable {
 }
 
 /// The composed WGSL of the integrator for a film precision (for tests and tools): the
-/// generated declarations (sampler layout, `FRAME_*` flags, [`FrameParams`], the bindings of
-/// [`binding_table`]), the twins, and `integrator.wgsl`.
+/// generated declarations (sampler layout, `FRAME_*` flags, [`FrameParams`], the BSDF's, the
+/// scene's and the traversal's structs and constants, the bindings of [`binding_table`]), the
+/// twins, and `integrator.wgsl`.
 pub fn shader_source(precision: FilmPrecision) -> String {
     let generated = [
         furnace_render::layout::wgsl(),
         frame_flags_wgsl(),
         wgsl_struct::<FrameParams>(true),
+        brdf::declarations(),
+        scene::declarations(),
+        traverse::declarations(),
         binding_table(precision).wgsl(),
     ]
     .concat();
@@ -229,6 +233,7 @@ pub fn shader_source(precision: FilmPrecision) -> String {
         wgsl::SCENE,
         wgsl::TRAVERSE,
         precision.wgsl(),
+        wgsl::PATH,
         include_str!("wgsl/integrator.wgsl"),
     ])
 }
@@ -623,7 +628,12 @@ impl Integrator for GpuRenderer {
 }
 
 /// The per-render part of the uniform block.
-fn frame_params(scene: &Scene, camera: &Camera, s: &RenderSettings, sampler: SamplerParams) -> FrameParams {
+pub fn frame_params(
+    scene: &Scene,
+    camera: &Camera,
+    s: &RenderSettings,
+    sampler: SamplerParams,
+) -> FrameParams {
     let m = camera.world_from_camera;
     let v4 = |v: glam::Vec3A| [v.x, v.y, v.z, 0.0];
     let (w, h) = (s.width.max(1) as f32, s.height.max(1) as f32);

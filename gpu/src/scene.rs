@@ -31,131 +31,136 @@
 //! fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool { return scene_alpha_passes(triangle_id, u, v); }
 //! ```
 
-use bytemuck::{Pod, Zeroable};
+use bytemuck::Zeroable;
 use furnace_scene::{AlphaMode, ColorSpace, Scene, Texture, TextureRef, WrapMode, srgb_to_linear};
 
-use crate::shared::{Binding, BindingTable};
+use crate::shared::{Binding, BindingTable, WgslType, wgsl_struct};
 use crate::{GpuContext, GpuError};
 
 /// Number of bindings the scene uses ([`bindings`], [`GpuScene::layout_entries`]).
 pub const BINDING_COUNT: u32 = 6;
 
-/// Word of `scene_texels` where the sRGB decode table starts (`srgb_to_linear(i / 255)`).
-pub const SRGB_TABLE: u32 = 0;
-/// Word of `scene_texels` where the linear decode table starts (`i / 255`).
-pub const LINEAR_TABLE: u32 = 256;
 /// Words of decode tables before the first texel.
 pub const TABLE_WORDS: u32 = 512;
 
-/// [`GpuMaterial::flags`] bits 0–1: the alpha mode ([`ALPHA_OPAQUE`], [`ALPHA_MASK`],
-/// [`ALPHA_BLEND`]).
-pub const ALPHA_MODE_BITS: u32 = 3;
-/// Alpha mode code of [`AlphaMode::Opaque`].
-pub const ALPHA_OPAQUE: u32 = 0;
-/// Alpha mode code of [`AlphaMode::Mask`] (cutoff in [`GpuMaterial::alpha_cutoff`]).
-pub const ALPHA_MASK: u32 = 1;
-/// Alpha mode code of [`AlphaMode::Blend`] (rendered opaque, as on the CPU).
-pub const ALPHA_BLEND: u32 = 2;
-/// [`GpuMaterial::flags`]: `doubleSided`.
-pub const MATERIAL_DOUBLE_SIDED: u32 = 4;
-/// [`GpuMaterial::flags`]: some slot has a texture (`Material::uses_textures`): the hit needs
-/// its UV.
-pub const MATERIAL_TEXTURED: u32 = 8;
+crate::wgsl_consts! {
+    /// The WGSL `const` declarations of the constants below (`SCENE_` + the Rust name),
+    /// composed by [`declarations`].
+    fn consts_wgsl prefix "SCENE_";
+    /// Word of `scene_texels` where the sRGB decode table starts (`srgb_to_linear(i / 255)`).
+    pub const SRGB_TABLE: u32 = 0;
+    /// Word of `scene_texels` where the linear decode table starts (`i / 255`).
+    pub const LINEAR_TABLE: u32 = 256;
+    /// [`GpuMaterial::flags`] bits 0–1: the alpha mode ([`ALPHA_OPAQUE`], [`ALPHA_MASK`],
+    /// [`ALPHA_BLEND`]).
+    pub const ALPHA_MODE_BITS: u32 = 3;
+    /// Alpha mode code of [`AlphaMode::Opaque`].
+    pub const ALPHA_OPAQUE: u32 = 0;
+    /// Alpha mode code of [`AlphaMode::Mask`] (cutoff in [`GpuMaterial::alpha_cutoff`]).
+    pub const ALPHA_MASK: u32 = 1;
+    /// Alpha mode code of [`AlphaMode::Blend`] (rendered opaque, as on the CPU).
+    pub const ALPHA_BLEND: u32 = 2;
+    /// [`GpuMaterial::flags`]: `doubleSided`.
+    pub const MATERIAL_DOUBLE_SIDED: u32 = 4;
+    /// [`GpuMaterial::flags`]: some slot has a texture (`Material::uses_textures`): the hit needs
+    /// its UV.
+    pub const MATERIAL_TEXTURED: u32 = 8;
 
-/// [`GpuTextureRef::flags`]: the slot has a texture (otherwise a lookup is opaque white).
-pub const TEXTURE_PRESENT: u32 = 1;
-/// [`GpuTextureRef::flags`]: RGB is sRGB-encoded ([`ColorSpace::Srgb`]); alpha is always linear.
-pub const TEXTURE_SRGB: u32 = 2;
-/// [`GpuTextureRef::flags`]: apply [`GpuTextureRef::transform`] (KHR_texture_transform).
-pub const TEXTURE_TRANSFORM: u32 = 4;
-/// [`GpuTextureRef::flags`] bits 4–5: `wrapS` ([`WRAP_REPEAT`], [`WRAP_CLAMP`], [`WRAP_MIRRORED`]).
-pub const WRAP_S_SHIFT: u32 = 4;
-/// [`GpuTextureRef::flags`] bits 6–7: `wrapT`.
-pub const WRAP_T_SHIFT: u32 = 6;
-/// Wrap code of [`WrapMode::Repeat`].
-pub const WRAP_REPEAT: u32 = 0;
-/// Wrap code of [`WrapMode::ClampToEdge`].
-pub const WRAP_CLAMP: u32 = 1;
-/// Wrap code of [`WrapMode::MirroredRepeat`].
-pub const WRAP_MIRRORED: u32 = 2;
-
-/// A triangle: its three vertex indices and its material (WGSL `SceneTriangle`).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Pod, Zeroable)]
-pub struct GpuSceneTriangle {
-    /// First vertex.
-    pub i0: u32,
-    /// Second vertex.
-    pub i1: u32,
-    /// Third vertex.
-    pub i2: u32,
-    /// Index into `scene_materials`.
-    pub material: u32,
+    /// [`GpuTextureRef::flags`]: the slot has a texture (otherwise a lookup is opaque white).
+    pub const TEXTURE_PRESENT: u32 = 1;
+    /// [`GpuTextureRef::flags`]: RGB is sRGB-encoded ([`ColorSpace::Srgb`]); alpha is always linear.
+    pub const TEXTURE_SRGB: u32 = 2;
+    /// [`GpuTextureRef::flags`]: apply [`GpuTextureRef::transform`] (KHR_texture_transform).
+    pub const TEXTURE_TRANSFORM: u32 = 4;
+    /// [`GpuTextureRef::flags`] bits 4–5: `wrapS` ([`WRAP_REPEAT`], [`WRAP_CLAMP`], [`WRAP_MIRRORED`]).
+    pub const WRAP_S_SHIFT: u32 = 4;
+    /// [`GpuTextureRef::flags`] bits 6–7: `wrapT`.
+    pub const WRAP_T_SHIFT: u32 = 6;
+    /// Wrap code of [`WrapMode::Repeat`].
+    pub const WRAP_REPEAT: u32 = 0;
+    /// Wrap code of [`WrapMode::ClampToEdge`].
+    pub const WRAP_CLAMP: u32 = 1;
+    /// Wrap code of [`WrapMode::MirroredRepeat`].
+    pub const WRAP_MIRRORED: u32 = 2;
 }
 
-/// A vertex: world position and octahedral-encoded unit shading normal (WGSL `SceneVertex`,
-/// `vec3<f32>` + `u32` in 16 bytes).
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct GpuVertex {
-    /// World-space position.
-    pub position: [f32; 3],
-    /// `furnace_scene::oct_encode` of the shading normal.
-    pub normal: u32,
+crate::gpu_struct! {
+    /// A triangle: its three vertex indices and its material (WGSL `SceneTriangle`).
+    pub struct GpuSceneTriangle as "SceneTriangle" {
+        /// First vertex.
+        pub i0: u32 => WgslType::U32,
+        /// Second vertex.
+        pub i1: u32 => WgslType::U32,
+        /// Third vertex.
+        pub i2: u32 => WgslType::U32,
+        /// Index into `scene_materials`.
+        pub material: u32 => WgslType::U32,
+    }
 }
 
-/// One material slot's texture, resolved (WGSL `SceneTextureRef`): where its image is in
-/// `scene_texels`, its size, wrap modes, colour space and texture transform.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct GpuTextureRef {
-    /// Index in `scene_texels` of texel (0, 0) (≥ [`TABLE_WORDS`]).
-    pub texel_offset: u32,
-    /// Image width in texels.
-    pub width: u32,
-    /// Image height in texels.
-    pub height: u32,
-    /// [`TEXTURE_PRESENT`], [`TEXTURE_SRGB`], [`TEXTURE_TRANSFORM`], wrap codes.
-    pub flags: u32,
-    /// `TextureTransform::matrix()` as computed on the CPU, its first two rows column by
-    /// column: `uv' = (t[0]·u + t[2]·v + t[4], t[1]·u + t[3]·v + t[5])`.
-    pub transform: [f32; 6],
-    /// Zero.
-    pub pad: [u32; 2],
+crate::gpu_struct! {
+    /// A vertex: world position and octahedral-encoded unit shading normal (WGSL `SceneVertex`,
+    /// `vec3<f32>` + `u32` in 16 bytes).
+    pub struct GpuVertex as "SceneVertex" {
+        /// World-space position.
+        pub position: [f32; 3] => WgslType::VEC3_F32,
+        /// `furnace_scene::oct_encode` of the shading normal.
+        pub normal: u32 => WgslType::U32,
+    }
 }
 
-/// A material as the WGSL reads it (`SceneMaterial`): `furnace_scene::Material` with its
-/// textures resolved. 256 bytes.
-#[repr(C)]
-#[derive(Debug, Clone, Copy, PartialEq, Pod, Zeroable)]
-pub struct GpuMaterial {
-    /// `baseColorFactor`, linear RGBA.
-    pub base_color_factor: [f32; 4],
-    /// Emitted radiance factor (`emissiveFactor × emissiveStrength`).
-    pub emissive: [f32; 3],
-    /// `normalTexture.scale`.
-    pub normal_scale: f32,
-    /// KHR_materials_specular `specularColorFactor`.
-    pub specular_color_factor: [f32; 3],
-    /// KHR_materials_specular `specularFactor`.
-    pub specular_factor: f32,
-    /// `metallicFactor`.
-    pub metallic_factor: f32,
-    /// `roughnessFactor`.
-    pub roughness_factor: f32,
-    /// `alphaCutoff` (MASK only; 0 otherwise).
-    pub alpha_cutoff: f32,
-    /// Alpha mode ([`ALPHA_MODE_BITS`]), [`MATERIAL_DOUBLE_SIDED`], [`MATERIAL_TEXTURED`].
-    pub flags: u32,
-    /// `baseColorTexture`.
-    pub base_color_texture: GpuTextureRef,
-    /// `metallicRoughnessTexture`.
-    pub metallic_roughness_texture: GpuTextureRef,
-    /// `normalTexture` (absent when the scene stores no tangents: the CPU then skips the normal
-    /// map too).
-    pub normal_texture: GpuTextureRef,
-    /// `emissiveTexture`.
-    pub emissive_texture: GpuTextureRef,
+crate::gpu_struct! {
+    /// One material slot's texture, resolved (WGSL `SceneTextureRef`): where its image is in
+    /// `scene_texels`, its size, wrap modes, colour space and texture transform.
+    pub struct GpuTextureRef as "SceneTextureRef" {
+        /// Index in `scene_texels` of texel (0, 0) (≥ [`TABLE_WORDS`]).
+        pub texel_offset: u32 => WgslType::U32,
+        /// Image width in texels.
+        pub width: u32 => WgslType::U32,
+        /// Image height in texels.
+        pub height: u32 => WgslType::U32,
+        /// [`TEXTURE_PRESENT`], [`TEXTURE_SRGB`], [`TEXTURE_TRANSFORM`], wrap codes.
+        pub flags: u32 => WgslType::U32,
+        /// `TextureTransform::matrix()` as computed on the CPU, its first two rows column by
+        /// column: `uv' = (t[0]·u + t[2]·v + t[4], t[1]·u + t[3]·v + t[5])`.
+        pub transform: [f32; 6] => WgslType::ARRAY_F32_6,
+            /// Rust-only zeros up to 48 bytes (WGSL pads by itself).
+        pub pad: [u32; 2] => WgslType::PAD,
+    }
+}
+
+crate::gpu_struct! {
+    /// A material as the WGSL reads it (`SceneMaterial`): `furnace_scene::Material` with its
+    /// textures resolved. 256 bytes.
+    pub struct GpuMaterial as "SceneMaterial" {
+        /// `baseColorFactor`, linear RGBA.
+        pub base_color_factor: [f32; 4] => WgslType::VEC4_F32,
+        /// Emitted radiance factor (`emissiveFactor × emissiveStrength`).
+        pub emissive: [f32; 3] => WgslType::VEC3_F32,
+        /// `normalTexture.scale`.
+        pub normal_scale: f32 => WgslType::F32,
+        /// KHR_materials_specular `specularColorFactor`.
+        pub specular_color_factor: [f32; 3] => WgslType::VEC3_F32,
+        /// KHR_materials_specular `specularFactor`.
+        pub specular_factor: f32 => WgslType::F32,
+        /// `metallicFactor`.
+        pub metallic_factor: f32 => WgslType::F32,
+        /// `roughnessFactor`.
+        pub roughness_factor: f32 => WgslType::F32,
+        /// `alphaCutoff` (MASK only; 0 otherwise).
+        pub alpha_cutoff: f32 => WgslType::F32,
+        /// Alpha mode ([`ALPHA_MODE_BITS`]), [`MATERIAL_DOUBLE_SIDED`], [`MATERIAL_TEXTURED`].
+        pub flags: u32 => WgslType::U32,
+        /// `baseColorTexture`.
+        pub base_color_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `metallicRoughnessTexture`.
+        pub metallic_roughness_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `normalTexture` (absent when the scene stores no tangents: the CPU then skips the normal
+        /// map too).
+        pub normal_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `emissiveTexture`.
+        pub emissive_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+    }
 }
 
 const _: () = assert!(size_of::<GpuSceneTriangle>() == 16);
@@ -166,7 +171,20 @@ const _: () = assert!(size_of::<GpuMaterial>() == 256);
 /// The WGSL declarations of the six scene buffers at `@group(group)`, bindings `first` …
 /// `first + 5`, in the order of the [module table](self).
 pub fn bindings(group: u32, first: u32) -> String {
-    BindingTable::new(group, first, binding_list()).wgsl()
+    declarations() + &BindingTable::new(group, first, binding_list()).wgsl()
+}
+
+/// The WGSL declarations [`crate::wgsl::SCENE`] needs besides its bindings: the `SCENE_*`
+/// constants and the four structs of the scene buffers, generated from the Rust.
+pub fn declarations() -> String {
+    [
+        consts_wgsl(),
+        wgsl_struct::<GpuSceneTriangle>(false),
+        wgsl_struct::<GpuVertex>(false),
+        wgsl_struct::<GpuTextureRef>(false),
+        wgsl_struct::<GpuMaterial>(false),
+    ]
+    .concat()
 }
 
 /// The scene's six read-only storage bindings, in [`GpuScene::resources`] order.
@@ -197,7 +215,7 @@ fn wrap_code(w: WrapMode) -> u32 {
 }
 
 /// A scene packed into the words of the six storage buffers (CPU side; [`GpuScene::upload`]
-/// copies them to the device, parity tests hand them to [`crate::kernel::run_with`]).
+/// copies them to the device, parity tests hand them to their test kernels).
 #[derive(Debug, Clone, PartialEq)]
 pub struct SceneBuffers {
     /// `scene_triangles`.
@@ -404,7 +422,7 @@ impl SceneBuffers {
     }
 
     /// The six buffers' words in binding order (an absent one as 4 zero words), e.g. for
-    /// [`crate::kernel::run_with`] with [`bindings`]`(0, 3)`.
+    /// a test kernel (`furnace_tests::gpu::run_with`) with [`bindings`]`(0, 3)`.
     pub fn extra(&self) -> [&[u32]; 6] {
         fn w(s: &[u32]) -> &[u32] {
             const EMPTY: &[u32] = &[0; 4];
@@ -529,10 +547,12 @@ mod tests {
 
     #[test]
     fn bindings_name_six_buffers_in_order() {
-        let b = bindings(1, 4);
+        let b = BindingTable::new(1, 4, binding_list()).wgsl();
         assert!(b.starts_with("@group(1) @binding(4) var<storage, read> scene_triangles"));
         assert!(b.contains("@binding(9) var<storage, read> scene_texels: array<u32>;"));
         assert_eq!(b.lines().count(), BINDING_COUNT as usize);
+        // `bindings` is the declarations the buffers need, then the buffers.
+        assert_eq!(bindings(1, 4), declarations() + &b);
     }
 
     #[test]

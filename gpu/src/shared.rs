@@ -33,6 +33,12 @@ impl WgslType {
     pub const VEC2_U32: Self = Self { name: "vec2<u32>", size: 8, align: 8 };
     /// `vec2<f32>`.
     pub const VEC2_F32: Self = Self { name: "vec2<f32>", size: 8, align: 8 };
+    /// `vec3<f32>` (12 bytes, 16-byte aligned: a following scalar packs into its fourth word).
+    pub const VEC3_F32: Self = Self { name: "vec3<f32>", size: 12, align: 16 };
+    /// `array<f32, 3>` (12 bytes, 4-byte aligned: unlike `vec3<f32>`, packs like `[f32; 3]`).
+    pub const ARRAY_F32_3: Self = Self { name: "array<f32, 3>", size: 12, align: 4 };
+    /// `array<f32, 6>`.
+    pub const ARRAY_F32_6: Self = Self { name: "array<f32, 6>", size: 24, align: 4 };
     /// `vec4<u32>`.
     pub const VEC4_U32: Self = Self { name: "vec4<u32>", size: 16, align: 16 };
     /// `vec4<f32>`.
@@ -127,7 +133,8 @@ pub fn wgsl_struct<T: GpuStruct>(uniform: bool) -> String {
 }
 
 /// Declares a `#[repr(C)]`, `Pod` struct whose fields carry their WGSL types, and implements
-/// [`GpuStruct`] for it:
+/// [`GpuStruct`] for it. The WGSL struct has the Rust name, or the one given after `as`
+/// (`pub struct GpuVertex as "SceneVertex" { … }`):
 ///
 /// ```
 /// use furnace_gpu::shared::{WgslType, wgsl_struct};
@@ -162,6 +169,31 @@ pub fn wgsl_struct<T: GpuStruct>(uniform: bool) -> String {
 macro_rules! gpu_struct {
     (
         $(#[$meta:meta])*
+        pub struct $name:ident as $wgsl_name:literal {
+            $( $(#[$fmeta:meta])* pub $field:ident : $ty:ty => $wgsl:expr ),* $(,)?
+        }
+    ) => {
+        $crate::gpu_struct! {
+            @named $wgsl_name;
+            $(#[$meta])*
+            pub struct $name { $( $(#[$fmeta])* pub $field : $ty => $wgsl ),* }
+        }
+    };
+    (
+        $(#[$meta:meta])*
+        pub struct $name:ident {
+            $( $(#[$fmeta:meta])* pub $field:ident : $ty:ty => $wgsl:expr ),* $(,)?
+        }
+    ) => {
+        $crate::gpu_struct! {
+            @named stringify!($name);
+            $(#[$meta])*
+            pub struct $name { $( $(#[$fmeta])* pub $field : $ty => $wgsl ),* }
+        }
+    };
+    (
+        @named $wgsl_name:expr;
+        $(#[$meta:meta])*
         pub struct $name:ident {
             $( $(#[$fmeta:meta])* pub $field:ident : $ty:ty => $wgsl:expr ),* $(,)?
         }
@@ -174,7 +206,7 @@ macro_rules! gpu_struct {
         }
 
         impl $crate::shared::GpuStruct for $name {
-            const NAME: &'static str = stringify!($name);
+            const NAME: &'static str = $wgsl_name;
             fn members() -> Vec<$crate::shared::Member> {
                 vec![$($crate::shared::Member {
                     name: stringify!($field),
@@ -187,7 +219,7 @@ macro_rules! gpu_struct {
 }
 
 /// Declares `u32` constants and a function returning their WGSL `const` declarations, so that a
-/// shader and the Rust share one list:
+/// shader and the Rust share one list (`fn name prefix "SCENE_";` prefixes the WGSL names):
 ///
 /// ```
 /// furnace_gpu::wgsl_consts! {
@@ -208,11 +240,22 @@ macro_rules! wgsl_consts {
         fn $fn_name:ident;
         $( $(#[$meta:meta])* pub const $name:ident : u32 = $value:expr; )*
     ) => {
+        $crate::wgsl_consts! {
+            $(#[$fnmeta])*
+            fn $fn_name prefix "";
+            $( $(#[$meta])* pub const $name : u32 = $value; )*
+        }
+    };
+    (
+        $(#[$fnmeta:meta])*
+        fn $fn_name:ident prefix $prefix:literal;
+        $( $(#[$meta:meta])* pub const $name:ident : u32 = $value:expr; )*
+    ) => {
         $( $(#[$meta])* pub const $name: u32 = $value; )*
 
         $(#[$fnmeta])*
         pub fn $fn_name() -> String {
-            [$((stringify!($name), $name)),*]
+            [$((concat!($prefix, stringify!($name)), $name)),*]
                 .iter()
                 .map(|(n, v)| format!("const {n}: u32 = {v}u;\n"))
                 .collect()

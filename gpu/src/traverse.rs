@@ -10,26 +10,27 @@
 //!
 //! ```no_run
 //! # fn main() -> Result<(), furnace_gpu::GpuError> {
-//! use furnace_gpu::{GpuContext, AdapterChoice, kernel, traverse, wgsl};
+//! use furnace_gpu::{GpuContext, AdapterChoice, traverse, wgsl};
 //! let ctx = GpuContext::new(&AdapterChoice::Best)?;
 //! let tris = [[glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y]];
 //! let bvh = furnace_accel::Bvh::build(&tris);
 //! let buffers = traverse::BvhBuffers::new(&bvh, ctx.max_storage_binding())?;
 //! let src = wgsl::compose(&[
-//!     kernel::PREAMBLE,
 //!     &traverse::bindings(0, 3),
 //!     wgsl::TRAVERSE,
 //!     "fn hit_filter(id: u32, u: f32, v: f32) -> bool { return true; }",
 //!     "@compute @workgroup_size(64) fn main() { /* trace_closest(...) */ }",
 //! ]);
-//! let out = kernel::run_with(&ctx, &src, &[], &buffers.extra(), 4, 1)?;
+//! // `src` becomes a compute pipeline whose group 0 binds `buffers.extra()` at 3 and 4.
+//! let _ = (src, buffers.extra());
 //! # Ok(()) }
 //! ```
 
 use furnace_accel::{Bvh, GpuCwbvhNode, GpuTriangle, Layout};
 
 use crate::GpuError;
-use crate::shared::{Binding, BindingTable};
+use crate::shared::{Binding, BindingTable, GpuStruct, Member, WgslType, wgsl_struct};
+use std::mem::offset_of;
 
 /// Node groups the WGSL traversal stack holds (`TRV_STACK_SIZE` in `traverse.wgsl`): one per
 /// tree level below the root at most, so trees up to this depth never overflow. The same as
@@ -59,7 +60,59 @@ pub fn module_with_stack_size(size: u32) -> String {
 /// The declarations of the two storage buffers the traversal reads, at `@group(group)`,
 /// bindings `first` (nodes) and `first + 1` (triangles), for the composing shader.
 pub fn bindings(group: u32, first: u32) -> String {
-    BindingTable::new(group, first, binding_list()).wgsl()
+    declarations() + &BindingTable::new(group, first, binding_list()).wgsl()
+}
+
+/// The WGSL declarations of the two buffers' element structs, `CwbvhNode` and `Triangle`,
+/// generated from furnace-accel's [`GpuCwbvhNode`] and [`GpuTriangle`] (composed by
+/// [`bindings`]).
+pub fn declarations() -> String {
+    wgsl_struct::<GpuCwbvhNode>(false) + &wgsl_struct::<GpuTriangle>(false)
+}
+
+/// `vec2<u32>` holding eight bytes, one per child slot (slots 0–3 in `.x`, 4–7 in `.y`).
+const SLOT_BYTES: WgslType = WgslType::VEC2_U32;
+
+/// The WGSL view of furnace-accel's node: the same bytes, with the three exponent bytes and the
+/// internal-child mask read as one `u32` (`e_imask`), and the per-slot byte arrays as
+/// `vec2<u32>` (WGSL has no `u8`).
+impl GpuStruct for GpuCwbvhNode {
+    const NAME: &'static str = "CwbvhNode";
+    fn members() -> Vec<Member> {
+        let m = |name: &'static str, ty: WgslType, offset: usize| Member { name, ty, offset: offset as u32 };
+        vec![
+            m("p", WgslType::ARRAY_F32_3, offset_of!(GpuCwbvhNode, p)),
+            m("e_imask", WgslType::U32, offset_of!(GpuCwbvhNode, e)),
+            m("child_base_idx", WgslType::U32, offset_of!(GpuCwbvhNode, child_base_idx)),
+            m("primitive_base_idx", WgslType::U32, offset_of!(GpuCwbvhNode, primitive_base_idx)),
+            m("child_meta", SLOT_BYTES, offset_of!(GpuCwbvhNode, child_meta)),
+            m("child_min_x", SLOT_BYTES, offset_of!(GpuCwbvhNode, child_min_x)),
+            m("child_max_x", SLOT_BYTES, offset_of!(GpuCwbvhNode, child_max_x)),
+            m("child_min_y", SLOT_BYTES, offset_of!(GpuCwbvhNode, child_min_y)),
+            m("child_max_y", SLOT_BYTES, offset_of!(GpuCwbvhNode, child_max_y)),
+            m("child_min_z", SLOT_BYTES, offset_of!(GpuCwbvhNode, child_min_z)),
+            m("child_max_z", SLOT_BYTES, offset_of!(GpuCwbvhNode, child_max_z)),
+        ]
+    }
+}
+
+// `e_imask` covers `e` and `imask`: the mask is the fourth byte of the word.
+const _: () = assert!(offset_of!(GpuCwbvhNode, imask) == offset_of!(GpuCwbvhNode, e) + 3);
+
+/// furnace-accel's triangle slot as the WGSL reads it.
+impl GpuStruct for GpuTriangle {
+    const NAME: &'static str = "Triangle";
+    fn members() -> Vec<Member> {
+        let m = |name: &'static str, ty: WgslType, offset: usize| Member { name, ty, offset: offset as u32 };
+        vec![
+            m("v0", WgslType::VEC3_F32, offset_of!(GpuTriangle, v0)),
+            m("id", WgslType::U32, offset_of!(GpuTriangle, id)),
+            m("v1", WgslType::VEC3_F32, offset_of!(GpuTriangle, v1)),
+            m("reserved1", WgslType::U32, offset_of!(GpuTriangle, reserved1)),
+            m("v2", WgslType::VEC3_F32, offset_of!(GpuTriangle, v2)),
+            m("reserved2", WgslType::U32, offset_of!(GpuTriangle, reserved2)),
+        ]
+    }
 }
 
 /// The traversal's two read-only storage bindings: `bvh_nodes`, `bvh_triangles`.
@@ -126,7 +179,7 @@ impl BvhBuffers {
         self.triangles.len() / TRIANGLE_WORDS
     }
 
-    /// Both buffers in binding order (nodes, triangles), e.g. for [`crate::kernel::run_with`]
+    /// Both buffers in binding order (nodes, triangles), e.g. for the test kernels of `furnace-tests`
     /// with [`bindings`]`(0, 3)`.
     pub fn extra(&self) -> [&[u32]; 2] {
         [&self.nodes, &self.triangles]

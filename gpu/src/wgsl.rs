@@ -22,6 +22,12 @@ pub const SCENE: &str = include_str!("wgsl/scene.wgsl");
 /// CWBVH traversal of `furnace-accel`'s GPU buffers: closest hit and any hit (shadow rays).
 pub const TRAVERSE: &str = include_str!("wgsl/traverse.wgsl");
 
+/// The integrator's per-path pieces with Rust twins: the camera ray (`furnace-scene`'s
+/// `Camera::generate_ray`), the shading frame (`furnace_brdf::Frame`) and Russian roulette's
+/// survival probability (`furnace_render::russian_roulette_survival`). Needs the `FRAME_*`
+/// constants and a `params: FrameParams` (see [`crate::integrator`]).
+pub const PATH: &str = include_str!("wgsl/path.wgsl");
+
 /// Concatenates WGSL modules (in the order given) into one shader source.
 pub fn compose(parts: &[&str]) -> String {
     let mut s = String::with_capacity(parts.iter().map(|p| p.len() + 1).sum());

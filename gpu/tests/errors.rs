@@ -25,9 +25,10 @@
 //! Like every GPU test, these fail without an adapter unless `FURNACE_SKIP_GPU_TESTS=1`.
 
 use furnace_gpu::film::FilmPrecision;
-use furnace_gpu::{GpuContext, GpuError, GpuRenderer, test_context};
+use furnace_gpu::{GpuContext, GpuError, GpuRenderer};
 use furnace_render::RenderSettings;
 use furnace_scene::{Scene, builtin};
+use furnace_tests::gpu::test_context;
 use std::sync::mpsc;
 use std::time::Duration;
 

@@ -4,9 +4,10 @@
 //! The samples are made from integer hashes by perturbing the mantissa of 0.1f32, so the GPU and
 //! the CPU see bit-identical inputs and the CPU can form the exact mean in `f64`.
 
+use furnace_gpu::GpuContext;
 use furnace_gpu::film::{FilmPrecision, GpuFilm, uniform};
-use furnace_gpu::{GpuContext, test_context};
 use furnace_render::Film;
+use furnace_tests::gpu::test_context;
 
 const FRAMES: u32 = 1_000_000;
 const PIXELS: u32 = 64;

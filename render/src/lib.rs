@@ -68,3 +68,11 @@ pub use integrator::{Integrator, RenderError};
 pub use layout::SAMPLER_LAYOUT_VERSION;
 pub use session::{Budget, Progress, Session, Stop, Timing, process_cpu_seconds};
 pub use settings::RenderSettings;
+
+/// Russian roulette's survival probability for a path of `throughput`: its largest channel, at
+/// most 1 (a path whose throughput has grown past 1 always survives). NaN channels are ignored
+/// (`f32::max`). Both integrators play roulette from the
+/// third scattering event on, with the sample of `layout::BOUNCE_RUSSIAN_ROULETTE`.
+pub fn russian_roulette_survival(throughput: glam::Vec3) -> f32 {
+    throughput.max_element().min(1.0)
+}

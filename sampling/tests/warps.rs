@@ -5,11 +5,11 @@
 //! the Šidák correction over the [`TESTS`] tests of this file. On failure the report is printed
 //! and the tables are written to `target/test-output/chi2/<name>.{txt,csv,ppm}`.
 
-use furnace_sampling::chi2::{ChiSquareResult, ChiSquareTest};
 use furnace_sampling::warp::{
     concentric_disk_pdf, cosine_hemisphere_pdf, square_to_concentric_disk, square_to_cosine_hemisphere,
     square_to_uniform_hemisphere, uniform_hemisphere_pdf,
 };
+use furnace_tests::chi2::{ChiSquareResult, ChiSquareTest};
 use glam::{Vec2, Vec3};
 use std::path::PathBuf;
 

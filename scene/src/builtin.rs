@@ -5,8 +5,9 @@ use crate::material::Material;
 use crate::{Camera, Scene, SceneError};
 use glam::{Vec3, Vec4};
 
-/// The reference Cornell box (`shared/references/cbox/cbox.glb`, see `assets/cbox-README.md`
-/// for its conventions), embedded in the binary: the CLI's default scene.
+/// The reference Cornell box (the scene of the Mitsuba references in the repository's
+/// `tests/data/references/cbox/`; `assets/cbox-README.md` gives its conventions), embedded in
+/// the binary: the CLI's default scene.
 pub const CORNELL_BOX_GLB: &[u8] = include_bytes!("../assets/cbox.glb");
 
 /// The reference Cornell box: 20,516 triangles, Lambert walls, a GGX metal sphere, sun, sky and

@@ -1,5 +1,5 @@
 //! Cameras and primary rays, following the reference renders' convention
-//! (`shared/references/README.md`): the camera looks down its node's −Z with +Y up; pixel
+//! (`tests/data/references/README.md`): the camera looks down its node's −Z with +Y up; pixel
 //! `(i, j)` covers `[i, i+1] × [j, j+1]` with row 0 at the **top**; `yfov` is vertical.
 
 use glam::{Affine3A, Vec2, Vec3};

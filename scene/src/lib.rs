@@ -15,7 +15,7 @@
 //!   decoded (sRGB → linear, IEC 61966-2-1) when sampled bilinearly with glTF wrap modes and
 //!   KHR_texture_transform ([`TextureRef::sample_bilinear`]).
 //! * **Camera, sun and sky** ([`Camera`], [`Sun`]) with the reference renders' conventions
-//!   (`shared/references/README.md`): camera looks down −Z, pixel `(i, j)` covers
+//!   (`tests/data/references/README.md`): camera looks down −Z, pixel `(i, j)` covers
 //!   `[i, i+1] × [j, j+1]` with row 0 at the top; the sun is a KHR_lights_punctual directional
 //!   light whose irradiance is `color × intensity` W/m² travelling along the node's −Z; the sky is
 //!   `scenes[i].extras.background_radiance_rgb`.

@@ -1,5 +1,5 @@
 //! Every `.gltf`/`.glb` of the Khronos glTF-Validator test corpus and of atteneder's edge cases
-//! (`tests/data/`, with their licences): none may panic; files the validator finds valid
+//! (the workspace's `tests/data/scenes/`, with their licences): none may panic; files the validator finds valid
 //! (`X.report.json`: `issues.numErrors == 0`) must load, or fail only with an error that states
 //! why furnace cannot render them (no triangles at all, or a required extension furnace does
 //! not implement); invalid ones must return an error or load with warnings.
@@ -54,7 +54,7 @@ fn acceptable_on_valid(e: &SceneError) -> bool {
 
 #[test]
 fn corpus_never_panics_and_valid_files_load() {
-    let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data");
+    let data = furnace_tests::data::scene("");
     let mut files = Vec::new();
     collect(&data.join("gltf-validator-tests"), &mut files);
     collect(&data.join("atteneder-edge-cases"), &mut files);

@@ -5,19 +5,9 @@ use furnace_scene::{AlphaMode, ColorSpace, Projection, Scene, SceneError, builti
 use glam::{Vec2, Vec3};
 use std::path::{Path, PathBuf};
 
+/// A scene of the workspace's test data (`tests/data/scenes/`).
 fn data(p: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data").join(p)
-}
-
-/// Scenes too large to copy into the crate are read from the shared folder when present.
-fn shared(p: &str) -> Option<PathBuf> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenes").join(p);
-    if path.exists() {
-        Some(path)
-    } else {
-        println!("SKIPPED: {} is absent", path.display());
-        None
-    }
+    furnace_tests::data::scene(p)
 }
 
 #[test]
@@ -113,9 +103,7 @@ fn cameras_file_has_perspective_and_orthographic() {
 
 #[test]
 fn damaged_helmet_has_every_texture() {
-    let Some(p) = shared("DamagedHelmet/glTF-Binary/DamagedHelmet.glb") else {
-        return;
-    };
+    let p = data("DamagedHelmet/glTF-Binary/DamagedHelmet.glb");
     let s = Scene::load(p).expect("DamagedHelmet loads");
     assert_eq!(s.geometry.triangle_count(), 15_452);
     let m = &s.materials[0];
@@ -140,18 +128,14 @@ fn damaged_helmet_has_every_texture() {
 
 #[test]
 fn large_and_lenient_scenes() {
-    if let Some(p) = shared("MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb")
-        .or_else(|| shared("MetalRoughSpheresNoTextures/glTF/MetalRoughSpheresNoTextures.gltf"))
-    {
-        let s = Scene::load(p).expect("MetalRoughSpheresNoTextures loads");
-        println!("MetalRoughSpheresNoTextures: {:?}", s.stats());
-        assert!(s.geometry.triangle_count() + s.dropped_triangles >= 1_000_000);
-    }
-    if let Some(p) = shared("CornellBox-nvpro/cornellBox.gltf") {
-        let s = Scene::load(p).expect("nvpro loads (emissive 10 warns, does not fail)");
-        assert!(!s.warnings.is_empty());
-        println!("CornellBox-nvpro: {:?}", s.stats());
-    }
+    let s = Scene::load(data("MetalRoughSpheresNoTextures/glTF-Binary/MetalRoughSpheresNoTextures.glb"))
+        .expect("MetalRoughSpheresNoTextures loads");
+    println!("MetalRoughSpheresNoTextures: {:?}", s.stats());
+    assert!(s.geometry.triangle_count() + s.dropped_triangles >= 1_000_000);
+    let s = Scene::load(data("CornellBox-nvpro/cornellBox.gltf"))
+        .expect("nvpro loads (emissive 10 warns, does not fail)");
+    assert!(!s.warnings.is_empty());
+    println!("CornellBox-nvpro: {:?}", s.stats());
 }
 
 #[test]

@@ -1,4 +1,4 @@
-//! Shared by the integration tests and the benchmark: a seeded RNG, generated meshes, a glTF
+//! Shared by the integration tests and the benchmark: generated meshes, a glTF
 //! flattener, ray generators and brute-force references.
 #![allow(dead_code)] // each test binary uses a different subset
 
@@ -8,41 +8,7 @@ use std::path::{Path, PathBuf};
 
 pub type Tri = [Vec3; 3];
 
-/// SplitMix64: tiny, seedable, good enough for test inputs.
-pub struct Rng(u64);
-
-impl Rng {
-    pub fn new(seed: u64) -> Self {
-        Rng(seed)
-    }
-    pub fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    /// Uniform in [0, 1).
-    pub fn f32(&mut self) -> f32 {
-        (self.next_u64() >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
-    }
-    pub fn range(&mut self, lo: f32, hi: f32) -> f32 {
-        lo + (hi - lo) * self.f32()
-    }
-    pub fn below(&mut self, n: usize) -> usize {
-        (self.next_u64() % n as u64) as usize
-    }
-    pub fn vec3(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
-        Vec3::new(self.range(lo.x, hi.x), self.range(lo.y, hi.y), self.range(lo.z, hi.z))
-    }
-    /// Uniform on the unit sphere.
-    pub fn unit_vector(&mut self) -> Vec3 {
-        let z = self.range(-1.0, 1.0);
-        let phi = self.range(0.0, std::f32::consts::TAU);
-        let r = (1.0 - z * z).max(0.0).sqrt();
-        Vec3::new(r * phi.cos(), r * phi.sin(), z)
-    }
-}
+pub use furnace_tests::Rng;
 
 /// `n` random triangles in the unit cube, edge lengths up to `size`.
 pub fn random_soup(n: usize, size: f32, seed: u64) -> Vec<Tri> {
@@ -219,15 +185,14 @@ pub fn load_gltf(path: &Path) -> Result<Vec<Tri>, String> {
     Ok(out)
 }
 
+/// The test scenes of the workspace (`tests/data/scenes/`).
 pub fn data_dir() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data")
+    furnace_tests::data::scene("")
 }
 
 /// Where failing or reporting tests write their tables.
 pub fn output_dir() -> PathBuf {
-    let d = Path::new(env!("CARGO_MANIFEST_DIR")).join("../target/test-output/accel");
-    std::fs::create_dir_all(&d).expect("create target/test-output/accel");
-    d
+    furnace_tests::data::output_dir("accel")
 }
 
 /// A mix of rays for a mesh with bounds `(lo, hi)`: half start inside the (slightly grown)

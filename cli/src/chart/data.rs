@@ -135,6 +135,18 @@ pub fn log_log_slope(points: impl IntoIterator<Item = (f64, f64)>) -> Option<f64
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
+/// Rows of `config`, ordered by spp.
+pub fn rows_of<'r>(rows: &'r [Row], config: &str) -> Vec<&'r Row> {
+    let mut v: Vec<&Row> = rows.iter().filter(|r| r.config == config).collect();
+    v.sort_by_key(|r| r.spp);
+    v
+}
+
+/// The log-log slope of `metric` against spp over `rows` (see [`log_log_slope`]).
+pub fn slope(rows: &[&Row], metric: fn(&Row) -> f64) -> Option<f64> {
+    log_log_slope(rows.iter().map(|r| (f64::from(r.spp), metric(r))))
+}
+
 /// One point of an external series (`--external`): any field may be missing.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExternalPoint {

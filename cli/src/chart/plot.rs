@@ -98,7 +98,7 @@ pub fn write_chart(base: &Path, labels: &Labels, series: &[Series]) -> Result<()
         draw(&root, labels, series)?;
         root.present().map_err(|e| format!("drawing the chart: {e}"))?;
     }
-    super::write_atomically(&base.with_extension("svg"), svg.as_bytes())
+    crate::shared::write_atomically(&base.with_extension("svg"), svg.as_bytes())
 }
 
 /// The range of the positive finite values of `v`, widened to whole decades-ish margins on

@@ -23,7 +23,8 @@
 //   fn bsdf_e_ss(mu, alpha, height_correlated) -> f32   = `turquin::e_ss`
 // Private helpers are prefixed `brdf_`.
 //
-// Requires, declared by the composing shader (this module declares no bindings):
+// Requires, declared by the composing shader (this module declares no bindings): the generated
+// `furnace_gpu::brdf::declarations()` (flag and lobe codes, `struct BsdfParams`), and
 //   var<storage, read> turquin_table: array<f32>;
 // holding `furnace_gpu::brdf::turquin_table()`: 2 × 64 × 64 floats, E_ss(μ, α) of
 // `furnace_brdf::turquin`, index (m·64 + j)·64 + i with m = 0 for the separable table
@@ -37,7 +38,7 @@
 // Requires the sampling module (`furnace_gpu::wgsl::SAMPLING`) before it: Lambert sampling uses
 // its `warp_cosine_hemisphere` and `cosine_hemisphere_pdf`, twins of furnace-sampling's warps.
 
-// ---- constants (Rust twins in `furnace_gpu::brdf`, checked by tests/brdf_parity.rs) ----
+// ---- constants (Rust twins in `furnace_gpu::brdf`, checked by furnace-tests' brdf_parity.rs) ----
 
 // `furnace_brdf::MIN_COS`.
 const BSDF_MIN_COS: f32 = 1e-15;
@@ -46,22 +47,9 @@ const BSDF_ALPHA_MIN: f32 = 1e-4;
 // `furnace_brdf::turquin::TABLE_SIZE`.
 const BSDF_TABLE_SIZE: u32 = 64u;
 
-// BsdfParams.flags: the `SpecularOptions`.
-// Bit 0: masking, 0 = separable, 1 = height-correlated.
-const BSDF_FLAG_HEIGHT_CORRELATED: u32 = 1u;
-// Bits 1–2: sampling method.
-const BSDF_SAMPLING_SHIFT: u32 = 1u;
-const BSDF_SAMPLING_MASK: u32 = 3u;
-const BSDF_SAMPLING_NDF: u32 = 0u;
-const BSDF_SAMPLING_VNDF: u32 = 1u;
-const BSDF_SAMPLING_CAPS: u32 = 2u;
-// Bit 3: Turquin compensation.
-const BSDF_FLAG_COMPENSATION: u32 = 8u;
-
-// BsdfSample.lobe.
-const BSDF_LOBE_NONE: u32 = 0u;
-const BSDF_LOBE_DIFFUSE: u32 = 1u;
-const BSDF_LOBE_SPECULAR: u32 = 2u;
+// The codes of BsdfParams.flags (BSDF_FLAG_*, BSDF_SAMPLING_*: masking bit 0, sampling method
+// bits 1–2, compensation bit 3) and of BsdfSample.lobe (BSDF_LOBE_*) are declared before this
+// module, generated from furnace_gpu::brdf.
 
 // std::f32::consts.
 const BRDF_PI: f32 = 3.14159265358979323846264338327950288;
@@ -72,27 +60,8 @@ const BRDF_F32_MAX: f32 = 3.40282347e38;
 
 // ---- records ----
 
-// The per-hit material: `MetallicRoughness` after its constructor, in the form the lobes use.
-// 64 bytes; Rust twin `furnace_gpu::brdf::BsdfParams`.
-struct BsdfParams {
-    // Lambert albedo baseColor·(1 − metallic), before the Fresnel weighting.
-    diffuse: vec3<f32>,
-    // GGX roughness α = roughness², clamped to [BSDF_ALPHA_MIN, 1].
-    alpha: f32,
-    // Specular F0 = mix(min(0.04·specularColor, 1)·sF, baseColor, metallic).
-    f0: vec3<f32>,
-    // Specular F90 (all channels) = sF + (1 − sF)·metallic.
-    f90: f32,
-    // min(0.04·specularColor, 1): the dielectric F0 before sF.
-    f0_dielectric: vec3<f32>,
-    // sF, KHR_materials_specular's specularFactor.
-    specular_factor: f32,
-    // The SpecularOptions (BSDF_FLAG_*, BSDF_SAMPLING_*).
-    flags: u32,
-    _pad0: u32,
-    _pad1: u32,
-    _pad2: u32,
-}
+// The per-hit material `BsdfParams` (`MetallicRoughness` after its constructor, in the form the
+// lobes use) is declared before this module, generated from furnace_gpu::brdf::BsdfParams.
 
 // A sampled direction (`Option<furnace_brdf::Sample>`): lobe == BSDF_LOBE_NONE (with everything
 // else 0) is `None`.
@@ -448,7 +417,7 @@ fn bsdf_params(base_color: vec3<f32>, metallic: f32, roughness: f32, specular_fa
     // Ggx::new: α = roughness² clamped to [ALPHA_MIN, 1].
     let alpha = brdf_sanitize(rough * rough, BSDF_ALPHA_MIN, 1.0, 1.0);
     let diffuse = brdf_clamp_rgb(base * (1.0 - metal), 1.0);
-    return BsdfParams(diffuse, alpha, f0, f90, f0d, sf, flags, 0u, 0u, 0u);
+    return BsdfParams(diffuse, alpha, f0, f90, f0d, sf, flags);
 }
 
 // `MetallicRoughness::diffuse_scale`: 1 − sF·max(fr(cos θd)).

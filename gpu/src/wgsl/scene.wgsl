@@ -1,5 +1,5 @@
 // furnace-gpu: scene module — WGSL twin of what furnace-scene and furnace-cpu's integrator do
-// at a hit (Rust side of the buffers: gpu/src/scene.rs; parity: gpu/tests/scene_parity.rs).
+// at a hit (Rust side of the buffers: gpu/src/scene.rs; parity: furnace-tests' scene_parity.rs).
 //
 // What is twinned:
 //
@@ -38,8 +38,10 @@
 // A driver may fuse multiply-adds and WGSL division / sqrt are not correctly rounded, so
 // floating-point results agree with the CPU to float rounding, not bit for bit.
 //
-// What the composing shader must declare (this module declares no bindings; Rust:
-// `furnace_gpu::scene::bindings(group, first)`):
+// What the composing shader must declare before this module (Rust:
+// `furnace_gpu::scene::bindings(group, first)`, generated): the `SCENE_*` constants of
+// gpu/src/scene.rs, the structs `SceneTriangle`, `SceneVertex`, `SceneTextureRef`,
+// `SceneMaterial` (furnace_gpu::scene::Gpu*), and the six buffers
 //
 //   var<storage, read> scene_triangles: array<SceneTriangle>;
 //   var<storage, read> scene_vertices: array<SceneVertex>;
@@ -47,64 +49,6 @@
 //   var<storage, read> scene_tangents: array<vec2<u32>>;
 //   var<storage, read> scene_materials: array<SceneMaterial>;
 //   var<storage, read> scene_texels: array<u32>;
-
-// Material flags (gpu/src/scene.rs: ALPHA_*, MATERIAL_*).
-const SCENE_ALPHA_MODE_BITS: u32 = 3u;
-const SCENE_ALPHA_MASK: u32 = 1u;
-const SCENE_DOUBLE_SIDED: u32 = 4u;
-const SCENE_TEXTURED: u32 = 8u;
-// Texture reference flags (TEXTURE_*, WRAP_*).
-const SCENE_TEX_PRESENT: u32 = 1u;
-const SCENE_TEX_SRGB: u32 = 2u;
-const SCENE_TEX_TRANSFORM: u32 = 4u;
-const SCENE_WRAP_S_SHIFT: u32 = 4u;
-const SCENE_WRAP_T_SHIFT: u32 = 6u;
-const SCENE_WRAP_REPEAT: u32 = 0u;
-const SCENE_WRAP_MIRRORED: u32 = 2u;
-// Decode tables at the head of scene_texels (SRGB_TABLE, LINEAR_TABLE).
-const SCENE_SRGB_TABLE: u32 = 0u;
-const SCENE_LINEAR_TABLE: u32 = 256u;
-
-// furnace_gpu::scene::GpuSceneTriangle (16 B).
-struct SceneTriangle {
-    i0: u32,
-    i1: u32,
-    i2: u32,
-    material: u32,
-}
-
-// furnace_gpu::scene::GpuVertex (16 B): world position, oct-encoded shading normal.
-struct SceneVertex {
-    position: vec3<f32>,
-    normal: u32,
-}
-
-// furnace_gpu::scene::GpuTextureRef (48 B).
-struct SceneTextureRef {
-    texel_offset: u32,
-    width: u32,
-    height: u32,
-    flags: u32,
-    transform: array<f32, 6>,
-    pad: array<u32, 2>,
-}
-
-// furnace_gpu::scene::GpuMaterial (256 B).
-struct SceneMaterial {
-    base_color_factor: vec4<f32>,
-    emissive: vec3<f32>,
-    normal_scale: f32,
-    specular_color_factor: vec3<f32>,
-    specular_factor: f32,
-    metallic_factor: f32,
-    roughness_factor: f32,
-    alpha_cutoff: f32,
-    flags: u32,
-    base_color_texture: SceneTextureRef,
-    metallic_roughness_texture: SceneTextureRef,
-    normal_texture: SceneTextureRef,
-    emissive_texture: SceneTextureRef,
-}
 
 // furnace_scene::MaterialSample.
 struct MaterialSample {
@@ -283,7 +227,7 @@ fn scene_wrap(i: i32, n: u32, mode: u32) -> u32 {
 // Image::texel: texel (x, y) decoded to linear RGBA through the CPU's tables.
 fn scene_texel(t: SceneTextureRef, x: u32, y: u32) -> vec4<f32> {
     let w = scene_texels[t.texel_offset + y * t.width + x];
-    let rgb = select(SCENE_LINEAR_TABLE, SCENE_SRGB_TABLE, (t.flags & SCENE_TEX_SRGB) != 0u);
+    let rgb = select(SCENE_LINEAR_TABLE, SCENE_SRGB_TABLE, (t.flags & SCENE_TEXTURE_SRGB) != 0u);
     return vec4<f32>(
         bitcast<f32>(scene_texels[rgb + (w & 0xffu)]),
         bitcast<f32>(scene_texels[rgb + ((w >> 8u) & 0xffu)]),
@@ -322,7 +266,7 @@ fn scene_image_sample(t: SceneTextureRef, uv_in: vec2<f32>) -> vec4<f32> {
 
 // TextureTransform::apply (matrix from the CPU); identity without the extension.
 fn scene_texture_transform(t: SceneTextureRef, uv: vec2<f32>) -> vec2<f32> {
-    if (t.flags & SCENE_TEX_TRANSFORM) == 0u {
+    if (t.flags & SCENE_TEXTURE_TRANSFORM) == 0u {
         return uv;
     }
     let m = t.transform;
@@ -331,7 +275,7 @@ fn scene_texture_transform(t: SceneTextureRef, uv: vec2<f32>) -> vec2<f32> {
 
 // TextureRef::sample_bilinear: linear RGBA at the stored UV0; opaque white without a texture.
 fn scene_texture_sample(t: SceneTextureRef, uv: vec2<f32>) -> vec4<f32> {
-    if (t.flags & SCENE_TEX_PRESENT) == 0u {
+    if (t.flags & SCENE_TEXTURE_PRESENT) == 0u {
         return vec4<f32>(1.0);
     }
     return scene_image_sample(t, scene_texture_transform(t, uv));
@@ -342,7 +286,7 @@ fn scene_texture_sample(t: SceneTextureRef, uv: vec2<f32>) -> vec4<f32> {
 
 // Material::uses_textures: whether evaluating needs the hit's UV.
 fn scene_material_is_textured(material: u32) -> bool {
-    return (scene_materials[material].flags & SCENE_TEXTURED) != 0u;
+    return (scene_materials[material].flags & SCENE_MATERIAL_TEXTURED) != 0u;
 }
 
 // Material::evaluate: factors × textures at uv (ignored by an untextured material).
@@ -383,7 +327,7 @@ fn scene_surface_point(triangle: u32, b1: f32, b2: f32, uv: vec2<f32>, direction
         shading = geometric;
     }
     let normal_map = scene_materials[t.material].normal_texture;
-    if (normal_map.flags & SCENE_TEX_PRESENT) != 0u {
+    if (normal_map.flags & SCENE_TEXTURE_PRESENT) != 0u {
         // glTF normal map: tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame
         // (T, B = w·N×T, N), with T made orthogonal to the shading normal N.
         let tangent = scene_tangent(triangle, b1, b2);
@@ -397,7 +341,7 @@ fn scene_surface_point(triangle: u32, b1: f32, b2: f32, uv: vec2<f32>, direction
     }
     var valid = 1u;
     if scene_dot(geometric, direction) > 0.0 {
-        if (scene_materials[t.material].flags & SCENE_DOUBLE_SIDED) == 0u {
+        if (scene_materials[t.material].flags & SCENE_MATERIAL_DOUBLE_SIDED) == 0u {
             valid = 0u;
         }
         geometric = -geometric;

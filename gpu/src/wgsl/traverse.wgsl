@@ -4,8 +4,8 @@
 //
 // * `struct CwbvhNode` / `struct Triangle`: the bytes of `furnace_accel::GpuCwbvhNode` (80 B) and
 //   `GpuTriangle` (48 B), u8 fields read from u32 words (little-endian: byte k of a word is
-//   bits 8k..8k+7). Checked against the Rust structs by naga reflection
-//   (gpu/tests/traversal_parity.rs).
+//   bits 8k..8k+7). Declared before this module, generated from the Rust structs
+//   (`furnace_gpu::traverse::declarations`).
 // * `trv_intersect_triangle`: `furnace_accel::intersect_triangle`, two-sided Möller–Trumbore,
 //   the same operations in the same order (glam's `cross` and `dot`), the same accept tests.
 //   A driver may fuse multiply-adds and WGSL's division is only good to 2.5 ULP, so t, u, v
@@ -20,7 +20,8 @@
 //   (see `CULL_SLACK` in accel/src/bvh.rs), so that ties resolve the same way as on the CPU.
 // * `offset_ray_origin`: `furnace_accel::offset_ray_origin` (Wächter & Binder 2019), bit-exact.
 //
-// What the composing shader must declare (this module declares no bindings):
+// What the composing shader must declare (this module declares no bindings; Rust:
+// `furnace_gpu::traverse::bindings(group, first)`, which includes the two structs):
 //
 //   @group(G) @binding(B0) var<storage, read> bvh_nodes: array<CwbvhNode>;
 //   @group(G) @binding(B1) var<storage, read> bvh_triangles: array<Triangle>;
@@ -42,7 +43,7 @@
 // distance) and their triangles. Every triangle the ray can hit lies in its leaf's box, and that
 // box is tested in the sweep, so no hit is lost: the result is the same hit (same t; a tie may
 // resolve to the other triangle), only slower (O(node count) for that ray). `trace_stats` counts
-// rays that needed it. Tested in gpu/tests/traversal_parity.rs with stacks of 1 and 2 on the
+// rays that needed it. Tested in furnace-tests' traversal_parity.rs with stacks of 1 and 2 on the
 // Cornell box and with a hand-built 100-level chain at the default size, against the CPU and
 // brute force; with the sweep disabled those tests fail. The CPU twin (accel/src/traverse.rs)
 // does the same.
@@ -50,38 +51,6 @@
 // this path.
 //
 // Private helpers are prefixed `trv_`.
-
-/// A CWBVH8 node: `furnace_accel::GpuCwbvhNode`, as u32 words.
-struct CwbvhNode {
-    /// Origin of the child quantisation grid (node min corner).
-    p: array<f32, 3>,
-    /// Bytes 0..2: per-axis scale exponents e[0..3] (scale = bitcast<f32>(e << 23)); byte 3: imask.
-    e_imask: u32,
-    /// First internal child in `bvh_nodes`.
-    child_base_idx: u32,
-    /// First triangle slot in `bvh_triangles`.
-    primitive_base_idx: u32,
-    /// Per-slot metadata, slots 0..3 in .x, 4..7 in .y (one byte each).
-    child_meta: vec2<u32>,
-    /// Quantised child planes, one byte per slot as `child_meta`.
-    child_min_x: vec2<u32>,
-    child_max_x: vec2<u32>,
-    child_min_y: vec2<u32>,
-    child_max_y: vec2<u32>,
-    child_min_z: vec2<u32>,
-    child_max_z: vec2<u32>,
-}
-
-/// A triangle in leaf order: `furnace_accel::GpuTriangle`.
-struct Triangle {
-    v0: vec3<f32>,
-    /// The caller's triangle id (index in the BVH builder's input).
-    id: u32,
-    v1: vec3<f32>,
-    reserved1: u32,
-    v2: vec3<f32>,
-    reserved2: u32,
-}
 
 /// Result of `trace_closest`.
 struct Hit {

@@ -1,0 +1,236 @@
+//! The study's four charts (RMSE and relative MSE, each against spp and against time): one
+//! series per configuration and per `--external` label, with the notes that explain them.
+
+use super::data::{self, ExternalPoint, Row, rows_of, slope};
+use super::plot::{self, Labels, Marker, Series, Style};
+use super::study::{Config, Study, dedup};
+use crate::args::{ChartBackend, ChartTime, SamplingArg, Switch};
+use crate::resume;
+use furnace_sampling::SamplerKind;
+
+/// One error metric that is charted.
+struct Metric {
+    /// In file names (`rmse`).
+    key: &'static str,
+    /// In titles (`RMSE`).
+    name: &'static str,
+    row: fn(&Row) -> f64,
+    external: fn(&ExternalPoint) -> Option<f64>,
+    /// Its slope against spp for independent samples.
+    ideal: &'static str,
+}
+
+/// Colour per sampler (matplotlib's tab10, grey for random).
+fn sampler_color(s: SamplerKind) -> plotters::style::RGBColor {
+    use plotters::style::RGBColor;
+    match s {
+        SamplerKind::Sobol => RGBColor(31, 119, 180),
+        SamplerKind::Pmj02 => RGBColor(255, 127, 14),
+        SamplerKind::Random => RGBColor(90, 90, 90),
+        SamplerKind::Hammersley => RGBColor(44, 160, 44),
+        SamplerKind::Cmj => RGBColor(214, 39, 40),
+    }
+}
+
+fn fmt_slope(k: f64) -> String {
+    format!("{k:.2}").replace('-', "−")
+}
+
+/// How many samplers, sampling methods, compensation states and backends the study has: a
+/// legend entry names only what varies.
+struct Varying {
+    samplers: usize,
+    sampling: usize,
+    compensations: usize,
+    backends: usize,
+}
+
+impl Varying {
+    fn of(study: &Study) -> Self {
+        Self {
+            samplers: dedup(&study.args.samplers).len(),
+            sampling: dedup(&study.args.sampling).len(),
+            compensations: study.compensations().len(),
+            backends: dedup(&study.args.backends).len(),
+        }
+    }
+
+    /// The legend text of configuration `c`.
+    fn label(&self, c: &Config) -> String {
+        let vary = |n: usize| n > 1;
+        let mut parts = vec![c.sampler.to_string()];
+        if vary(self.sampling) {
+            parts.push(resume::cli_name(&c.sampling));
+        }
+        if vary(self.compensations) {
+            parts.push(format!("comp {}", resume::cli_name(&c.compensation)));
+        }
+        if vary(self.backends) || c.backend == ChartBackend::Gpu {
+            parts.push(resume::cli_name(&c.backend));
+        }
+        if vary(self.samplers) || parts.len() > 1 { parts.join(" ") } else { c.name() }
+    }
+}
+
+/// Draws the four charts into the study's directory.
+pub(super) fn save_charts(study: &Study, rows: &[Row], external: &[ExternalPoint]) -> Result<(), String> {
+    let varying = Varying::of(study);
+    let metrics = [
+        Metric { key: "rmse", name: "RMSE", row: |r| r.rmse, external: |p| p.rmse, ideal: "−0.5" },
+        Metric {
+            key: "relmse",
+            name: "relative MSE",
+            row: |r| r.relmse,
+            external: |p| p.relmse,
+            ideal: "−1",
+        },
+    ];
+    for metric in &metrics {
+        for by_time in [false, true] {
+            let mut series = config_series(study, rows, &varying, metric, by_time);
+            series.extend(external_series(external, metric, by_time));
+            let (labels, file_x) = labels(study, &varying, metric, by_time);
+            plot::write_chart(&study.args.out.join(format!("{}_vs_{file_x}", metric.key)), &labels, &series)?;
+        }
+    }
+    Ok(())
+}
+
+/// One series per configuration with rows: colour by sampler, marker by sampling method,
+/// dashed with compensation, hollow on the GPU.
+fn config_series(
+    study: &Study,
+    rows: &[Row],
+    varying: &Varying,
+    metric: &Metric,
+    by_time: bool,
+) -> Vec<Series> {
+    let time_of = |r: &Row| match study.args.time {
+        ChartTime::Wall => r.seconds,
+        ChartTime::Cpu => r.cpu_seconds,
+    };
+    let mut series = Vec::new();
+    for c in &study.configs {
+        let mine = rows_of(rows, &c.name());
+        if mine.is_empty() {
+            continue;
+        }
+        let matches = study.reference_for(c).1;
+        let mut text = varying.label(c);
+        if !by_time && let Some(k) = slope(&mine, metric.row) {
+            text.push_str(&format!("  slope {}", fmt_slope(k)));
+        }
+        if !matches {
+            text.push_str("  (≠ ref model)");
+        }
+        let points = mine
+            .iter()
+            .map(|r| (if by_time { time_of(r) } else { f64::from(r.spp) }, (metric.row)(r)))
+            .collect();
+        let style = Style {
+            color: sampler_color(c.sampler),
+            marker: match c.sampling {
+                SamplingArg::Caps => Marker::Circle,
+                SamplingArg::Vndf => Marker::Triangle,
+                SamplingArg::Ndf => Marker::Square,
+            },
+            dashed: c.compensation == Switch::On,
+            hollow: c.backend == ChartBackend::Gpu,
+        };
+        series.push(Series { label: text, points, style });
+    }
+    series
+}
+
+/// One series per `--external` label, in first-seen order, with the points that have the
+/// axis values.
+fn external_series(external: &[ExternalPoint], metric: &Metric, by_time: bool) -> Vec<Series> {
+    let mut ext_labels: Vec<&str> = Vec::new();
+    for p in external {
+        if !ext_labels.contains(&p.label.as_str()) {
+            ext_labels.push(&p.label);
+        }
+    }
+    let ext_colors = [(148, 103, 189), (140, 86, 75), (227, 119, 194), (188, 189, 34), (23, 190, 207)];
+    let mut series = Vec::new();
+    for (k, name) in ext_labels.iter().enumerate() {
+        let pts: Vec<&ExternalPoint> = external.iter().filter(|p| p.label == *name).collect();
+        let points: Vec<(f64, f64)> = pts
+            .iter()
+            .filter_map(|p| Some((if by_time { p.seconds? } else { p.spp? }, (metric.external)(p)?)))
+            .collect();
+        let mut text = format!("{name} (external)");
+        if !by_time && let Some(k) = data::log_log_slope(points.iter().copied()) {
+            text.push_str(&format!("  slope {}", fmt_slope(k)));
+        }
+        let (r, g, b) = ext_colors[k % ext_colors.len()];
+        let style = Style {
+            color: plotters::style::RGBColor(r, g, b),
+            marker: Marker::Cross,
+            dashed: false,
+            hollow: false,
+        };
+        series.push(Series { label: text, points, style });
+    }
+    series
+}
+
+/// The chart's titles and note, and the x part of its file name (`spp` or `time`).
+fn labels(study: &Study, varying: &Varying, metric: &Metric, by_time: bool) -> (Labels, &'static str) {
+    let s = &study.settings;
+    let what = format!("{} {}×{}, {} bounces", study.scene_name, s.width, s.height, s.bounces);
+    let (x, file_x) = match (by_time, study.args.time) {
+        (false, _) => ("samples per pixel", "spp"),
+        (true, ChartTime::Wall) => ("seconds (wall time of the render passes)", "time"),
+        (true, ChartTime::Cpu) => ("CPU seconds of the render passes (all threads)", "time"),
+    };
+    let labels = Labels {
+        title: format!("{what}: {} vs {}", metric.name, if by_time { "time" } else { "samples per pixel" }),
+        x: x.to_string(),
+        y: format!("{} against the reference", metric.name),
+        note: note(study, varying, metric, by_time),
+        x_powers_of_two: !by_time,
+    };
+    (labels, file_x)
+}
+
+/// The line under the legend: what the axis or the slopes are, the references, and what the
+/// markers and line styles mean.
+fn note(study: &Study, varying: &Varying, metric: &Metric, by_time: bool) -> String {
+    let mut note = if by_time {
+        format!(
+            "Time: {} of the render passes only (no setup, BVH build, read-back or metrics). Fixed-N \
+             samplers: one render per checkpoint.",
+            match study.args.time {
+                ChartTime::Wall => "wall time",
+                ChartTime::Cpu => "process CPU time (user + system, all threads)",
+            }
+        )
+    } else {
+        format!(
+            "Slope: least squares of log error vs log spp over the checkpoints ({} for independent \
+             samples).",
+            metric.ideal
+        )
+    };
+    note.push_str(&format!(" Reference: {}.", study.reference.name()));
+    if let Some(rc) = &study.compensated {
+        note.push_str(&format!(" Compensation on: {}.", rc.name()));
+    }
+    if varying.sampling > 1 {
+        note.push_str(" Markers: caps ●, vndf ▲, ndf ■.");
+    }
+    if study.configs.iter().any(|c| c.compensation == Switch::On) {
+        note.push_str(" Dashed: compensation on.");
+    }
+    if study.configs.iter().any(|c| c.backend == ChartBackend::Gpu) {
+        note.push_str(" Hollow markers: GPU.");
+    }
+    if study.configs.iter().any(|c| !study.reference_for(c).1) {
+        note.push_str(" ≠ ref model: rendered with another BRDF model than the reference (biased).");
+    }
+    if metric.key == "relmse" {
+        note.push_str(" relMSE = mean (x−r)²/(r²+0.01).");
+    }
+    note
+}

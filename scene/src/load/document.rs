@@ -1,0 +1,133 @@
+//! Parsing and checking the document before anything is read from it: the GLB header, the
+//! required and used extensions, and gltf-json's validation (with the leniencies the
+//! specification allows).
+
+use super::context::Ctx;
+use crate::accessor::Located;
+use crate::error::SceneError;
+
+/// Extensions furnace honours, so a file may require them.
+pub const SUPPORTED_EXTENSIONS: &[&str] = &[
+    "KHR_lights_punctual",
+    "KHR_materials_specular",
+    "KHR_materials_emissive_strength",
+    "KHR_texture_transform",
+    "KHR_mesh_quantization",
+];
+
+/// Extensions whose absence changes the look but which furnace ignores with a warning when
+/// only *used* (never when *required*).
+const IGNORED_WITH_WARNING: &str = "is used but not supported: ignored";
+
+/// Parses a glTF (JSON or GLB) without gltf-json's validation (see [`check`]): the document
+/// and the GLB BIN chunk, if any.
+pub(super) fn parse(bytes: &[u8], file: &str) -> Result<(gltf::Document, Option<Vec<u8>>), SceneError> {
+    // gltf 1.4's GLB reader underflows (panics) on a header length below 12: check first.
+    if bytes.starts_with(b"glTF") {
+        let len = bytes.get(8..12).map_or(0, |b| u32::from_le_bytes([b[0], b[1], b[2], b[3]]));
+        if (len as usize) < 12 || bytes.len() < 12 {
+            return Err(SceneError::Parse {
+                file: file.to_string(),
+                message: format!("GLB header length {len} is shorter than the 12-byte header"),
+            });
+        }
+    }
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
+        .map_err(|e| SceneError::Parse { file: file.to_string(), message: e.to_string() })?;
+    Ok((gltf.document, gltf.blob))
+}
+
+/// Refuses a required extension furnace does not support and a document that fails
+/// validation; warns about each used extension it ignores.
+pub(super) fn check(ctx: &mut Ctx<'_>, root: &gltf::json::Root) -> Result<(), SceneError> {
+    for (i, ext) in root.extensions_required.iter().enumerate() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+            return Err(SceneError::UnsupportedExtension {
+                file: ctx.file.to_string(),
+                path: format!("extensionsRequired[{i}]"),
+                extension: ext.clone(),
+            });
+        }
+    }
+    precheck(root).map_err(|e| ctx.invalid(e))?;
+    validate(ctx, root)?;
+    for (i, ext) in root.extensions_used.iter().enumerate() {
+        if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
+            ctx.warn(format!("extensionsUsed[{i}]"), format!("{ext} {IGNORED_WITH_WARNING}"));
+        }
+    }
+    Ok(())
+}
+
+fn validation_message(e: &gltf::json::validation::Error) -> &'static str {
+    use gltf::json::validation::Error as E;
+    match e {
+        E::IndexOutOfBounds => "index out of bounds",
+        E::Invalid => "invalid value",
+        E::Missing => "missing required value",
+        E::Oversize => "size exceeds system limits",
+        E::Unsupported => "unsupported extension",
+    }
+}
+
+/// Index checks that gltf-json's validator itself relies on (it indexes `accessors` with a
+/// primitive's POSITION before checking it, and would panic).
+fn precheck(root: &gltf::json::Root) -> Result<(), Located> {
+    let na = root.accessors.len();
+    for (m, mesh) in root.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let path = format!("meshes[{m}].primitives[{p}]");
+            for (sem, idx) in &prim.attributes {
+                if idx.value() >= na {
+                    let name = match sem {
+                        gltf::json::validation::Checked::Valid(s) => s.to_string(),
+                        gltf::json::validation::Checked::Invalid => "?".into(),
+                    };
+                    return Err((
+                        format!("{path}.attributes.{name}"),
+                        format!("accessor {} does not exist ({na} accessors)", idx.value()),
+                    ));
+                }
+            }
+            if let Some(i) = &prim.indices
+                && i.value() >= na
+            {
+                return Err((
+                    format!("{path}.indices"),
+                    format!("accessor {} does not exist ({na} accessors)", i.value()),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// gltf-json's validation: the first problem (and how many more) is an error.
+fn validate(ctx: &Ctx<'_>, root: &gltf::json::Root) -> Result<(), SceneError> {
+    use gltf::json::validation::{Error as VE, Validate};
+    let mut errors = Vec::new();
+    root.validate(root, gltf::json::Path::new, &mut |path, err| {
+        let path = path().to_string();
+        // gltf-json is stricter than the specification here: an accessor without a
+        // bufferView is all zeros (§3.6.2.1) and a texture's source is optional (§5.29);
+        // both are handled where they are read. Unsupported extensions are checked by `check`.
+        // A texture whose source is out of range is ignored with a warning (lenient: the
+        // geometry is still renderable).
+        let texture_source = path.starts_with("textures[") && path.ends_with("].source");
+        let spec_allows =
+            (err == VE::Missing && path.starts_with("accessors[") && path.ends_with("].bufferView"))
+                || (texture_source && matches!(err, VE::Missing | VE::IndexOutOfBounds));
+        if err != VE::Unsupported && !spec_allows {
+            errors.push((path, validation_message(&err)));
+        }
+    });
+    if let Some((path, msg)) = errors.first() {
+        let more = if errors.len() > 1 {
+            format!(" (and {} more problems)", errors.len() - 1)
+        } else {
+            String::new()
+        };
+        return Err(ctx.invalid((path.clone(), format!("{msg}{more}"))));
+    }
+    Ok(())
+}

@@ -1,0 +1,125 @@
+//! The glTF 2.0 / GLB loader: parse, check required extensions, validate, load buffers
+//! ourselves (so that a missing file is named), flatten the default scene into world space.
+//!
+//! The steps, in order: [`document`] (parse and check), [`resources`] (buffers, then the
+//! images the materials use), [`material`] (textures and materials), [`nodes`] (the node
+//! hierarchy: cameras, lights, and each mesh primitive through [`primitive`]); then the
+//! geometry's checks here. [`context::Ctx`] carries the file and the warnings through them.
+
+mod context;
+mod document;
+mod material;
+mod nodes;
+mod primitive;
+mod resources;
+
+pub use document::SUPPORTED_EXTENSIONS;
+
+use crate::error::SceneError;
+use crate::geometry::Geometry;
+use crate::material::Material;
+use crate::{Light, Scene, Sky};
+use context::Ctx;
+use glam::Vec3;
+use primitive::Meshes;
+use std::collections::HashSet;
+use std::path::Path;
+
+/// Loads a glTF (JSON or GLB) from bytes. `base` resolves relative URIs.
+pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scene, SceneError> {
+    let mut ctx = Ctx::new(file, base);
+    let (doc, blob) = document::parse(bytes, file)?;
+    document::check(&mut ctx, doc.as_json())?;
+    let buffers = resources::load_buffers(&mut ctx, &doc, blob.as_deref())?;
+    let textures = material::read_textures(&mut ctx, &doc);
+    let materials = material::read_materials(&mut ctx, &doc);
+    let default_material = (materials.len() - 1) as u32;
+    let needs_uv = materials.iter().any(Material::uses_textures);
+    let needs_tangent = materials.iter().any(|m| m.normal_texture.is_some());
+    let images = resources::load_images(&ctx, &doc, &buffers, &materials, &textures)?;
+
+    let scene = nodes::scene_to_render(&ctx, &doc)?;
+    let sky = nodes::read_sky(&mut ctx, &scene);
+    let meshes = Meshes::new(&buffers, needs_uv, needs_tangent, default_material);
+    let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes)?;
+    let (mut geo, dropped) = (flat.meshes.geo, flat.meshes.dropped);
+    check_geometry(&mut ctx, &geo, dropped)?;
+    if !needs_uv {
+        geo.uvs = Vec::new();
+    }
+    if !needs_tangent {
+        geo.tangents = Vec::new();
+    }
+    Ok(Scene {
+        name: file.to_string(),
+        geometry: geo,
+        materials,
+        textures,
+        images,
+        cameras: flat.cameras,
+        lights: flat
+            .sun
+            .map(Light::Sun)
+            .into_iter()
+            .chain((sky != Vec3::ZERO).then_some(Light::Sky(Sky { radiance: sky })))
+            .collect(),
+        warnings: ctx.warnings,
+        dropped_triangles: dropped,
+    })
+}
+
+/// Refuses a scene without triangles; warns about dropped triangles and about coordinates
+/// outside the range the renderer handles.
+fn check_geometry(ctx: &mut Ctx<'_>, geo: &Geometry, dropped: usize) -> Result<(), SceneError> {
+    if geo.triangles.is_empty() {
+        let reason = if dropped > 0 {
+            format!("all {dropped} triangles have zero area")
+        } else {
+            "the scene has no triangles".to_string()
+        };
+        return Err(SceneError::NothingToRender { file: ctx.file.to_string(), reason });
+    }
+    if dropped > 0 {
+        ctx.warn("", format!("{dropped} zero-area triangles dropped (they cannot be hit)"));
+    }
+    check_scale(ctx, geo);
+    Ok(())
+}
+
+/// Largest world coordinate magnitude of a scene that f32 ray tracing handles: above it the
+/// Möller–Trumbore products (edge² × distance) overflow and hits are lost. The Cornell box
+/// renders its s = 1 image when scaled by 1e12 (|coordinates| ≤ 2e12) and breaks at 1e13
+/// (`furnace-cpu`'s `tests/stability.rs`); 2⁴² ≈ 4.4e12.
+pub const MAX_COORDINATE: f32 = 4_398_046_511_104.0;
+
+/// Smallest largest-coordinate magnitude of a scene that f32 ray tracing handles: below it the
+/// Möller–Trumbore triple products (three lengths multiplied, (2e-13)³ < 1.2e-38) become
+/// subnormal and hits lose their precision. Ray offsets scale with the scene
+/// (`furnace_accel::offset_scale`), so they are not the limit: the Cornell box renders its
+/// s = 1 image scaled by 1e-12 (|coordinates| ≤ 2e-12) and breaks at 1e-13
+/// (`furnace-cpu`'s `tests/stability.rs`); 2⁻³⁹ ≈ 1.8e-12.
+pub const MIN_COORDINATE: f32 = 1.818_989_4e-12;
+
+/// Warns when the scene's coordinates lie outside what the renderer measured to be scale
+/// invariant ([`MIN_COORDINATE`] … [`MAX_COORDINATE`]).
+fn check_scale(ctx: &mut Ctx<'_>, geo: &Geometry) {
+    let used: HashSet<u32> = geo.triangles.iter().flatten().copied().collect();
+    let max = used.iter().map(|&i| geo.positions[i as usize].abs().max_element()).fold(0.0f32, f32::max);
+    if max > MAX_COORDINATE {
+        ctx.warn(
+            "",
+            format!(
+                "coordinates up to {max:e}: beyond ~{MAX_COORDINATE:.1e} f32 ray–triangle tests overflow and \
+                 hits are lost; scale the scene down"
+            ),
+        );
+    } else if max < MIN_COORDINATE {
+        ctx.warn(
+            "",
+            format!(
+                "all coordinates within ±{max:e}: below ~{MIN_COORDINATE:.1e} f32 ray–triangle tests lose \
+                 precision (subnormal products) and hits are lost; scale the scene up"
+            ),
+        );
+    }
+}

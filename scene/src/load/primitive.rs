@@ -1,0 +1,387 @@
+//! Mesh primitives flattened into world-space triangles: attributes and indices read and
+//! checked, positions and normals transformed, tangents transformed or generated, zero-area
+//! triangles dropped.
+
+use super::context::Ctx;
+use crate::accessor::{read_floats, read_indices};
+use crate::error::SceneError;
+use crate::geometry::{Geometry, encode_tangent, generate_tangents, oct_encode};
+use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+use gltf::accessor::Dimensions;
+
+/// The triangles of the primitives added so far, and what adding one needs.
+pub(super) struct Meshes<'b> {
+    buffers: &'b [Vec<u8>],
+    /// Some material samples a texture: UVs are stored.
+    needs_uv: bool,
+    /// Some material has a normal map: tangents are stored.
+    needs_tangent: bool,
+    /// The material of primitives without one (glTF's default material).
+    default_material: u32,
+    pub(super) geo: Geometry,
+    /// Zero-area triangles dropped.
+    pub(super) dropped: usize,
+}
+
+/// A primitive's attributes and indices, read and checked (object space).
+struct Attributes {
+    /// POSITION, 3 floats per vertex, all finite.
+    positions: Vec<f32>,
+    normals: Option<Vec<f32>>,
+    /// TEXCOORD_0 (read only when UVs are stored).
+    uvs: Option<Vec<f32>>,
+    /// TANGENT (read only when tangents are stored).
+    tangents: Option<Vec<f32>>,
+    indices: Vec<u32>,
+}
+
+/// A primitive placed in world space by its node's transform.
+struct Placed {
+    positions: Vec<Vec3>,
+    /// Shading normals; `None` if absent or any is unusable (then per-face normals).
+    normals: Option<Vec<Vec3>>,
+    uvs: Option<Vec<f32>>,
+    /// The file's tangents, in object space.
+    tangents: Option<Vec<f32>>,
+    indices: Vec<u32>,
+    material: u32,
+    world: Mat4,
+    /// The transform mirrors: triangles are wound the other way round and the tangents'
+    /// handedness flips.
+    flip: bool,
+}
+
+impl Placed {
+    /// Vertex `i`'s UV (zero without UVs).
+    fn uv(&self, i: usize) -> Vec2 {
+        self.uvs.as_ref().and_then(|t| t.get(2 * i..2 * i + 2)).map_or(Vec2::ZERO, |c| Vec2::new(c[0], c[1]))
+    }
+}
+
+impl<'b> Meshes<'b> {
+    pub(super) fn new(
+        buffers: &'b [Vec<u8>],
+        needs_uv: bool,
+        needs_tangent: bool,
+        default_material: u32,
+    ) -> Self {
+        Self { buffers, needs_uv, needs_tangent, default_material, geo: Geometry::default(), dropped: 0 }
+    }
+}
+
+impl Meshes<'_> {
+    /// Adds primitive `prim` (JSON path `ppath`) of node `npath`, placed by `world`; a
+    /// primitive that is not a triangle list or has no positions is skipped with a warning.
+    pub(super) fn add_primitive(
+        &mut self,
+        ctx: &mut Ctx<'_>,
+        prim: &gltf::Primitive<'_>,
+        ppath: &str,
+        npath: &str,
+        world: Mat4,
+    ) -> Result<(), SceneError> {
+        if prim.mode() != gltf::mesh::Mode::Triangles {
+            ctx.warn(ppath, format!("mode {:?} is not TRIANGLES: primitive skipped", prim.mode()));
+            return Ok(());
+        }
+        if prim.extension_value("KHR_draco_mesh_compression").is_some() {
+            ctx.warn(ppath, "KHR_draco_mesh_compression is not supported: uncompressed fallback used if any");
+        }
+        let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
+            ctx.warn(ppath, "no POSITION attribute: primitive skipped");
+            return Ok(());
+        };
+        let attributes = self.read_attributes(ctx, prim, &pos_acc, ppath)?;
+        let material = prim.material().index().map_or(self.default_material, |i| i as u32);
+        let placed = place(ctx, attributes, material, world, ppath, npath)?;
+        let base = self.geo.positions.len();
+        if let Some(normals) = &placed.normals {
+            self.add_vertices(ctx, &placed, normals, ppath)?;
+        }
+        self.add_triangles(ctx, &placed, base, ppath)
+    }
+
+    /// Reads the attributes the scene stores and the indices, checking counts and ranges.
+    fn read_attributes(
+        &self,
+        ctx: &mut Ctx<'_>,
+        prim: &gltf::Primitive<'_>,
+        pos_acc: &gltf::Accessor<'_>,
+        ppath: &str,
+    ) -> Result<Attributes, SceneError> {
+        let positions = read_positions(ctx, pos_acc, self.buffers, ppath)?;
+        let reader = Reader { ctx, buffers: self.buffers, ppath, nverts: positions.len() / 3 };
+        let normals = reader.attribute(prim.get(&gltf::Semantic::Normals), Dimensions::Vec3, "NORMAL")?;
+        let uvs = if self.needs_uv {
+            reader.attribute(prim.get(&gltf::Semantic::TexCoords(0)), Dimensions::Vec2, "TEXCOORD_0")?
+        } else {
+            None
+        };
+        let tangents = if self.needs_tangent {
+            reader.attribute(prim.get(&gltf::Semantic::Tangents), Dimensions::Vec4, "TANGENT")?
+        } else {
+            None
+        };
+        let indices = reader.indices(prim.indices())?;
+        if !indices.len().is_multiple_of(3) {
+            ctx.warn(ppath, format!("{} indices is not a multiple of 3: the rest ignored", indices.len()));
+        }
+        Ok(Attributes { positions, normals, uvs, tangents, indices })
+    }
+
+    /// Copies the vertices of a primitive with shading normals once (its triangles index
+    /// them), with their normals, tangents and UVs as the scene stores them.
+    fn add_vertices(
+        &mut self,
+        ctx: &Ctx<'_>,
+        p: &Placed,
+        normals: &[Vec3],
+        ppath: &str,
+    ) -> Result<(), SceneError> {
+        let nverts = p.positions.len();
+        if self.geo.positions.len() + nverts > u32::MAX as usize {
+            return Err(ctx.invalid((ppath.to_string(), "more than 2^32 vertices".into())));
+        }
+        self.geo.positions.extend_from_slice(&p.positions);
+        self.geo.normals.extend(normals.iter().map(|&n| oct_encode(n)));
+        if self.needs_tangent {
+            self.geo.tangents.extend(vertex_tangents(p, normals).into_iter().map(encode_tangent));
+        }
+        if self.needs_uv {
+            self.geo.uvs.extend((0..nverts).map(|i| p.uv(i)));
+        }
+        Ok(())
+    }
+
+    /// Adds the primitive's triangles (its vertices start at `base` when it has shading
+    /// normals), dropping and counting the zero-area ones.
+    fn add_triangles(
+        &mut self,
+        ctx: &Ctx<'_>,
+        p: &Placed,
+        base: usize,
+        ppath: &str,
+    ) -> Result<(), SceneError> {
+        for t in p.indices.chunks_exact(3) {
+            let (mut a, b, mut c) = (t[0] as usize, t[1] as usize, t[2] as usize);
+            if p.flip {
+                std::mem::swap(&mut a, &mut c);
+            }
+            let Some(face_normal) = face_normal(p.positions[a], p.positions[b], p.positions[c]) else {
+                self.dropped += 1;
+                continue;
+            };
+            if p.normals.is_some() {
+                self.geo.triangles.push([(base + a) as u32, (base + b) as u32, (base + c) as u32]);
+            } else {
+                self.add_flat_triangle(ctx, p, [a, b, c], face_normal, ppath)?;
+            }
+            self.geo.triangle_materials.push(p.material);
+        }
+        Ok(())
+    }
+
+    /// A triangle of a primitive without shading normals: three vertices of its own with the
+    /// face normal (and a tangent from its UVs).
+    fn add_flat_triangle(
+        &mut self,
+        ctx: &Ctx<'_>,
+        p: &Placed,
+        [a, b, c]: [usize; 3],
+        face_normal: Vec3,
+        ppath: &str,
+    ) -> Result<(), SceneError> {
+        let geo = &mut self.geo;
+        let v0 = geo.positions.len();
+        if v0 + 3 > u32::MAX as usize {
+            return Err(ctx.invalid((ppath.to_string(), "more than 2^32 vertices".into())));
+        }
+        let n = oct_encode(face_normal);
+        let face_tangent = self.needs_tangent.then(|| {
+            let uv = [p.uv(a), p.uv(b), p.uv(c)];
+            let (pa, pb, pc) = (p.positions[a], p.positions[b], p.positions[c]);
+            generate_tangents(&[pa, pb, pc], &[face_normal; 3], &uv, &[[0, 1, 2]])[0]
+        });
+        for &i in &[a, b, c] {
+            geo.positions.push(p.positions[i]);
+            geo.normals.push(n);
+            if self.needs_uv {
+                geo.uvs.push(p.uv(i));
+            }
+            if let Some(t) = face_tangent {
+                geo.tangents.push(encode_tangent(t));
+            }
+        }
+        geo.triangles.push([v0 as u32, v0 as u32 + 1, v0 as u32 + 2]);
+        Ok(())
+    }
+}
+
+/// Reads a primitive's other accessors against its vertex count; errors name the primitive.
+struct Reader<'a> {
+    ctx: &'a Ctx<'a>,
+    buffers: &'a [Vec<u8>],
+    ppath: &'a str,
+    nverts: usize,
+}
+
+impl Reader<'_> {
+    /// Attribute `name` from `acc` (if present) as floats of type `dims`, one element per vertex.
+    fn attribute(
+        &self,
+        acc: Option<gltf::Accessor<'_>>,
+        dims: Dimensions,
+        name: &str,
+    ) -> Result<Option<Vec<f32>>, SceneError> {
+        let Some(acc) = acc else { return Ok(None) };
+        let (v, _) = read_floats(&acc, self.buffers, &[dims]).map_err(|e| self.ctx.invalid(e))?;
+        let width = match dims {
+            Dimensions::Vec2 => 2,
+            Dimensions::Vec3 => 3,
+            _ => 4,
+        };
+        let n = v.len() / width;
+        if n != self.nverts {
+            return Err(self.ctx.invalid((
+                format!("{}.attributes.{name}", self.ppath),
+                format!("count {n} differs from POSITION's count {}", self.nverts),
+            )));
+        }
+        Ok(Some(v))
+    }
+
+    /// The indices from `acc`, each below the vertex count; without an accessor, 0, 1, 2, ….
+    fn indices(&self, acc: Option<gltf::Accessor<'_>>) -> Result<Vec<u32>, SceneError> {
+        let nverts = self.nverts;
+        let Some(acc) = acc else { return Ok((0..nverts as u32).collect()) };
+        let idx = read_indices(&acc, self.buffers).map_err(|e| self.ctx.invalid(e))?;
+        if let Some(&bad) = idx.iter().find(|&&i| i as usize >= nverts) {
+            return Err(self.ctx.invalid((
+                format!("{}.indices", self.ppath),
+                format!("index {bad} ≥ vertex count {nverts}"),
+            )));
+        }
+        Ok(idx)
+    }
+}
+
+/// POSITION, which must be finite.
+fn read_positions(
+    ctx: &Ctx<'_>,
+    pos_acc: &gltf::Accessor<'_>,
+    buffers: &[Vec<u8>],
+    ppath: &str,
+) -> Result<Vec<f32>, SceneError> {
+    let (pos, _) = read_floats(pos_acc, buffers, &[Dimensions::Vec3]).map_err(|e| ctx.invalid(e))?;
+    // NaN and infinite positions are an error, not dropped triangles: the glTF Validator
+    // reports them (ACCESSOR_INVALID_FLOAT), and a model with a broken vertex is one the user
+    // wants to hear about by name rather than see rendered with a hole.
+    if let Some(i) = pos.iter().position(|x| !x.is_finite()) {
+        let v = i / 3;
+        return Err(ctx.invalid((
+            format!("{ppath}.attributes.POSITION"),
+            format!(
+                "accessors[{}] vertex {v} is ({}, {}, {}): positions must be finite",
+                pos_acc.index(),
+                pos[3 * v],
+                pos[3 * v + 1],
+                pos[3 * v + 2]
+            ),
+        )));
+    }
+    Ok(pos)
+}
+
+/// Transforms the primitive's positions and shading normals to world space.
+fn place(
+    ctx: &mut Ctx<'_>,
+    a: Attributes,
+    material: u32,
+    world: Mat4,
+    ppath: &str,
+    npath: &str,
+) -> Result<Placed, SceneError> {
+    let flip = Mat3::from_mat4(world).determinant() < 0.0;
+    let pos = &a.positions;
+    let wp: Vec<Vec3> =
+        pos.chunks_exact(3).map(|p| world.transform_point3(Vec3::new(p[0], p[1], p[2]))).collect();
+    // Finite positions that the node's (finite) transform takes past f32's range.
+    if let Some(v) = wp.iter().position(|p| !p.is_finite()) {
+        return Err(ctx.invalid((
+            format!("{npath}: {ppath}.attributes.POSITION"),
+            format!(
+                "vertex {v} ({}, {}, {}) transformed to world space is {}: the node's transform takes it \
+                 beyond f32's range (3.4e38)",
+                pos[3 * v],
+                pos[3 * v + 1],
+                pos[3 * v + 2],
+                wp[v]
+            ),
+        )));
+    }
+    let normals = a.normals.and_then(|n| world_normals(ctx, &n, world, ppath));
+    Ok(Placed {
+        positions: wp,
+        normals,
+        uvs: a.uvs,
+        tangents: a.tangents,
+        indices: a.indices,
+        material,
+        world,
+        flip,
+    })
+}
+
+/// Shading normals in world space (by the inverse transpose); `None`, with a warning, if any
+/// is zero or not finite.
+fn world_normals(ctx: &mut Ctx<'_>, n: &[f32], world: Mat4, ppath: &str) -> Option<Vec<Vec3>> {
+    let normal_matrix = Mat3::from_mat4(world).inverse().transpose();
+    let v: Vec<Vec3> = n
+        .chunks_exact(3)
+        .map(|c| (normal_matrix * Vec3::new(c[0], c[1], c[2])).normalize_or_zero())
+        .collect();
+    if v.iter().all(|x| *x != Vec3::ZERO) {
+        Some(v)
+    } else {
+        ctx.warn(format!("{ppath}.attributes.NORMAL"), "zero or non-finite normals: per-face normals used");
+        None
+    }
+}
+
+/// Per-vertex world-space tangents of a primitive with shading `normals`.
+fn vertex_tangents(p: &Placed, normals: &[Vec3]) -> Vec<Vec4> {
+    // The file's tangents transform as directions (not by the inverse transpose);
+    // a mirroring transform flips the handedness. Otherwise generate them.
+    let world3 = Mat3::from_mat4(p.world);
+    let from_file: Option<Vec<Vec4>> = p.tangents.as_ref().map(|t| {
+        t.chunks_exact(4)
+            .map(|c| {
+                let w = if (c[3] < 0.0) != p.flip { -1.0 } else { 1.0 };
+                (world3 * Vec3::new(c[0], c[1], c[2])).normalize_or_zero().extend(w)
+            })
+            .collect()
+    });
+    let usable = from_file.filter(|v| v.iter().all(|t| t.truncate() != Vec3::ZERO));
+    usable.unwrap_or_else(|| {
+        let local: Vec<[u32; 3]> = p.indices.chunks_exact(3).map(|t| [t[0], t[1], t[2]]).collect();
+        let uv: Vec<Vec2> = (0..p.positions.len()).map(|i| p.uv(i)).collect();
+        generate_tangents(&p.positions, normals, &uv, &local)
+    })
+}
+
+/// The unit normal of triangle (`pa`, `pb`, `pc`), `None` for a zero-area one.
+fn face_normal(pa: Vec3, pb: Vec3, pc: Vec3) -> Option<Vec3> {
+    let cross = (pb - pa).cross(pc - pa);
+    let area2 = cross.length();
+    // The face normal. `length` squares the cross product, which overflows f32 for edges
+    // beyond ~4e9 and underflows below ~5e-12: such triangles were dropped as if
+    // degenerate. Then it is formed in f64, where the positions' differences are exact and
+    // nothing over- or underflows; only a zero cross product (zero area) drops a triangle.
+    if area2 > 0.0 && area2.is_finite() {
+        return Some(cross / area2);
+    }
+    let (da, db, dc) = (pa.as_dvec3(), pb.as_dvec3(), pc.as_dvec3());
+    let c64 = (db - da).cross(dc - da);
+    let l = c64.length();
+    (l > 0.0 && l.is_finite()).then(|| (c64 / l).as_vec3())
+}

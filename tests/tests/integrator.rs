@@ -1,0 +1,274 @@
+//! The GPU integrator against the CPU reference (furnace-cpu) on the Cornell box.
+//!
+//! 1. Same sampler, same seed: both estimate the image from the *same* sample points, so the
+//!    images must agree far more closely than their noise — per-channel means within 1e-3
+//!    relative. Paths may still part where a float differs by an ulp at a branch (FMA
+//!    contraction on the GPU), so per-pixel agreement is reported, not required.
+//! 2. Independent estimates (random sampler, different seeds), one sample per pass so each
+//!    pixel's standard error comes from its own samples: per-channel means within 0.5% and
+//!    per-pixel z = (gpu − cpu)/√(se_gpu² + se_cpu²) with |mean| < 0.1 and std ≤ 1.15 (the
+//!    issue's bounds; with N = 128 samples the variance estimate inflates z's std by ≈ 1.01).
+
+use furnace_cpu::CpuRenderer;
+use furnace_gpu::integrator::{FrameParams, GROUP_SIZE, shader_source, tile};
+use furnace_gpu::{GpuRenderer, film::FilmPrecision};
+use furnace_render::RenderSettings;
+use furnace_sampling::SamplerKind;
+use furnace_scene::builtin;
+use furnace_tests::gpu::test_context;
+
+const SIZE: u32 = 64;
+
+fn settings(sampler: SamplerKind, seed: u32) -> RenderSettings {
+    RenderSettings { width: SIZE, height: SIZE, sampler, seed, ..RenderSettings::default() }
+}
+
+/// Per-pixel sample means and variances of the mean, from `passes` passes of one sample.
+fn per_sample_stats(
+    mut pass: impl FnMut(u32) -> Vec<[f64; 3]>,
+    passes: u32,
+) -> (Vec<[f64; 3]>, Vec<[f64; 3]>) {
+    let n = (SIZE * SIZE) as usize;
+    let mut sum = vec![[0.0f64; 3]; n];
+    let mut sq = vec![[0.0f64; 3]; n];
+    for k in 0..passes {
+        for (i, v) in pass(k).iter().enumerate() {
+            for c in 0..3 {
+                sum[i][c] += v[c];
+                sq[i][c] += v[c] * v[c];
+            }
+        }
+    }
+    let p = f64::from(passes);
+    let mean: Vec<[f64; 3]> = sum.iter().map(|s| s.map(|x| x / p)).collect();
+    let var = sq
+        .iter()
+        .zip(&mean)
+        .map(|(q, m)| std::array::from_fn(|c| ((q[c] / p - m[c] * m[c]) * p / (p - 1.0)).max(0.0) / p))
+        .collect();
+    (mean, var)
+}
+
+fn channel_means(img: &[[f64; 3]]) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for v in img {
+        for c in 0..3 {
+            m[c] += v[c] / img.len() as f64;
+        }
+    }
+    m
+}
+
+#[test]
+fn workgroup_size_matches_wgsl() {
+    let src = shader_source(FilmPrecision::F64);
+    let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
+    let main = module.entry_points.iter().find(|e| e.name == "main").expect("entry point main");
+    assert_eq!(main.workgroup_size, [GROUP_SIZE, 1, 1]);
+    for g in (0..=GROUP_SIZE.ilog2()).map(|k| 1 << k) {
+        let (w, h) = tile(g);
+        assert!(w * h * g == GROUP_SIZE && w >= h && w <= 2 * h, "group_samples {g}: tile {w}×{h}");
+    }
+}
+
+/// Passes cut into several dispatches of whole tiles (300 × 260 = 78 000 pixels: two or more
+/// dispatches of rows on a software adapter, whose dispatches hold 2¹⁶ samples), and images
+/// smaller than a tile (they panicked below 8 rows), add each sample to each pixel exactly once,
+/// for every grouping.
+#[test]
+fn dispatches_cover_every_pixel_once() {
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    for (width, height) in [(300, 260), (1, 1), (8, 4), (3, 1), (1, 5)] {
+        let Some(ctx) = test_context() else { return };
+        let s = RenderSettings { width, height, bounces: 0, ..RenderSettings::default() };
+        let mut r = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
+        let mut first = 0;
+        // Every grouping on the small images; 1, 2, 16 on the large one (lavapipe time).
+        let groups = if width * height > 64 { &[1, 2, 16][..] } else { &[1, 2, 16, GROUP_SIZE][..] };
+        for &g in groups {
+            r.set_group_samples(Some(g));
+            r.render_pass(first, g).unwrap();
+            first += g;
+            let film = r.film().unwrap();
+            let wrong: Vec<_> = film
+                .counts()
+                .iter()
+                .enumerate()
+                .filter(|&(_, &c)| c != u64::from(first))
+                .take(5)
+                .map(|(i, c)| (i as u32 % width, i as u32 / width, *c))
+                .collect();
+            assert!(
+                wrong.is_empty(),
+                "{width}×{height}, group_samples {g}: (x, y, count) not {first}: {wrong:?}"
+            );
+        }
+    }
+}
+
+#[test]
+fn frame_params_layout_matches_wgsl() {
+    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(FilmPrecision::F64));
+    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(FilmPrecision::F32Pass));
+}
+
+#[test]
+fn same_samples_give_the_same_image() {
+    let Some(ctx) = test_context() else { return };
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    let s = settings(SamplerKind::Sobol, 3);
+    const SPP: u32 = 16;
+    let cpu = CpuRenderer::with_default_camera(scene.clone(), s).unwrap();
+    let mut film = cpu.new_film();
+    cpu.render_into(&mut film, 0, SPP).unwrap();
+    let mut gpu = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
+    eprintln!("adapter {}, film {:?}", gpu.context().describe(), gpu.film_precision());
+    gpu.render_pass(0, SPP).unwrap();
+    let g = gpu.film().unwrap();
+    assert_eq!(g.rejected(), 0);
+    let n = (SIZE * SIZE) as usize;
+    let mut close = 0;
+    let (mut gm, mut cm) = ([0.0f64; 3], [0.0f64; 3]);
+    for i in 0..n {
+        assert_eq!(g.counts()[i], u64::from(SPP), "pixel {i} sample count");
+        let gp = g.mean(i);
+        let cp = film.pixel(i as u32 % SIZE, i as u32 / SIZE).to_array();
+        let rel = (0..3).map(|c| (gp[c] - cp[c]).abs() / cp[c].abs().max(1e-3)).fold(0.0, f64::max);
+        close += usize::from(rel < 1e-4);
+        for c in 0..3 {
+            gm[c] += gp[c] / n as f64;
+            cm[c] += cp[c] / n as f64;
+        }
+    }
+    eprintln!("same samples: {close}/{n} pixels within 1e-4; means gpu {gm:?} cpu {cm:?}");
+    for c in 0..3 {
+        let rel = (gm[c] - cm[c]).abs() / cm[c];
+        assert!(rel < 1e-3, "channel {c}: GPU mean {} vs CPU {} (rel {rel:e})", gm[c], cm[c]);
+    }
+    // Most paths must be the same paths (a twin that is merely unbiased would give ~0%).
+    assert!(close * 2 > n, "only {close}/{n} pixels agree within 1e-4 with the same sample points");
+}
+
+#[test]
+fn independent_estimates_agree_within_noise() {
+    let Some(ctx) = test_context() else { return };
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    const PASSES: u32 = 128;
+    let cpu = CpuRenderer::with_default_camera(scene.clone(), settings(SamplerKind::Random, 1)).unwrap();
+    let mut film = cpu.new_film();
+    let (cm, cv) = per_sample_stats(
+        |k| {
+            film.clear();
+            cpu.render_into(&mut film, k, 1).unwrap();
+            (0..SIZE * SIZE).map(|i| film.pixel(i % SIZE, i / SIZE).to_array()).collect()
+        },
+        PASSES,
+    );
+    let mut gpu = GpuRenderer::new(ctx, &scene, &camera, settings(SamplerKind::Random, 2)).unwrap();
+    let mut prev = gpu.film().unwrap();
+    let (gm, gv) = per_sample_stats(
+        |k| {
+            gpu.render_pass(k, 1).unwrap();
+            let now = gpu.film().unwrap();
+            let v = (0..(SIZE * SIZE) as usize)
+                .map(|i| std::array::from_fn(|c| now.sums()[i][c] - prev.sums()[i][c]))
+                .collect();
+            prev = now;
+            v
+        },
+        PASSES,
+    );
+    let (a, b) = (channel_means(&gm), channel_means(&cm));
+    let mut zs = Vec::new();
+    for i in 0..gm.len() {
+        for c in 0..3 {
+            let se = (gv[i][c] + cv[i][c]).sqrt();
+            if se > 0.0 {
+                zs.push((gm[i][c] - cm[i][c]) / se);
+            }
+        }
+    }
+    let zn = zs.len() as f64;
+    let zmean = zs.iter().sum::<f64>() / zn;
+    let zstd = (zs.iter().map(|z| (z - zmean).powi(2)).sum::<f64>() / zn).sqrt();
+    eprintln!("independent: means gpu {a:?} cpu {b:?}; z mean {zmean:.3}, std {zstd:.3} over {zn} values");
+    for c in 0..3 {
+        let ratio = a[c] / b[c];
+        assert!((ratio - 1.0).abs() < 5e-3, "channel {c}: GPU/CPU mean ratio {ratio}");
+    }
+    assert!(zmean.abs() < 0.1, "z mean {zmean}");
+    assert!(zstd <= 1.15, "z std {zstd}");
+}
+
+#[test]
+fn grouping_samples_does_not_change_a_bit() {
+    let Some(ctx) = test_context() else { return };
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    // 20×13: rows and columns that no tile divides, so partial workgroups are exercised.
+    let s = RenderSettings { width: 20, height: 13, ..settings(SamplerKind::Sobol, 5) };
+    let mut gpu = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
+    let mut films = Vec::new();
+    // (group_samples, pass sizes): one invocation per pixel; 4 and 64 (capped at the pass's
+    // sample count) invocations per pixel; uneven passes.
+    for (group, passes) in [(1, vec![8]), (4, vec![8]), (64, vec![8]), (2, vec![3, 5]), (8, vec![1, 7])] {
+        gpu.set_group_samples(Some(group));
+        gpu.load_film(&furnace_render::Film::new(s.width, s.height)).unwrap();
+        let mut first = 0;
+        for n in passes {
+            gpu.render_pass(first, n).unwrap();
+            first += n;
+        }
+        films.push((group, gpu.film().unwrap()));
+    }
+    let (_, reference) = &films[0];
+    assert!(reference.counts().iter().all(|&c| c == 8));
+    for (group, f) in &films[1..] {
+        let same = f.counts() == reference.counts()
+            && f.sums()
+                .iter()
+                .zip(reference.sums())
+                .all(|(a, b)| a.to_array().map(f64::to_bits) == b.to_array().map(f64::to_bits));
+        assert!(same, "group_samples {group}: the film differs from one invocation per pixel");
+    }
+}
+
+#[test]
+fn traversal_counters_are_exact_for_primary_rays_and_plausible() {
+    let Some(ctx) = test_context() else { return };
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    let s = RenderSettings { width: 16, height: 16, bounces: 0, ..RenderSettings::default() };
+    let mut gpu = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
+    gpu.set_count_rays(true);
+    gpu.set_group_samples(Some(2));
+    gpu.render_pass(0, 2).unwrap();
+    let c = gpu.take_trace_counts().unwrap();
+    assert_eq!(c.rays, 16 * 16 * 2, "{c:?}");
+    // Every closest-hit ray starts at the root (≥ 1 node) and a ray that hits tested ≥ 1 triangle;
+    // the box is closed but for its ceiling hole, so most do.
+    assert!(c.nodes >= c.rays && c.triangles >= c.rays / 2, "{c:?}");
+    // A 20k-triangle CWBVH is ~8 levels deep: the stack (32) never overflows.
+    assert!(c.fallbacks == 0 && (1..=32).contains(&c.max_stack_depth), "{c:?}");
+    assert_eq!(gpu.take_trace_counts().unwrap(), Default::default(), "taking the counts resets them");
+}
+
+#[test]
+fn ray_counter_counts_every_ray_only_when_asked() {
+    let Some(ctx) = test_context() else { return };
+    let scene = builtin::cornell_box().unwrap();
+    let camera = scene.default_camera();
+    // No bounces: exactly one closest-hit ray per sample (the Cornell box has no sun).
+    let s = RenderSettings { width: 16, height: 16, bounces: 0, ..RenderSettings::default() };
+    let mut gpu = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
+    gpu.render_pass(0, 2).unwrap();
+    assert_eq!(gpu.take_ray_count().unwrap(), 0, "counting is off by default");
+    gpu.set_count_rays(true);
+    gpu.render_pass(2, 3).unwrap();
+    assert_eq!(gpu.take_ray_count().unwrap(), 16 * 16 * 3);
+    assert_eq!(gpu.take_ray_count().unwrap(), 0, "taking the count resets it");
+    assert!(gpu.bvh_bytes() > 0 && gpu.scene_bytes() > 0);
+}
