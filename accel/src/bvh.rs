@@ -111,7 +111,7 @@ pub struct BuildOptions {
 /// (`distribute_left < 7`, `tests/degenerate.rs::huge_triangles_are_skipped_not_a_panic`).
 /// At 2⁵⁶ a box's half area is at most 3·2¹¹⁴ ≈ 6e34, four orders of magnitude below
 /// `f32::MAX`. Nothing renderable is lost: the `f32` ray–triangle test already overflows for
-/// scenes beyond ~1e13 (`furnace-cpu`'s `tests/stability.rs`).
+/// scenes beyond ~1e13 (`furnace-tests`' `tests/stability.rs`).
 pub const MAX_BUILD_COORDINATE: f32 = 72_057_594_037_927_936.0;
 
 /// The closest intersection found by [`Bvh::closest_hit`].

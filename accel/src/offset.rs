@@ -12,7 +12,7 @@
 //!
 //! That float offset (2⁻¹⁶ below |p| = 1/32) assumes a scene of about unit size: in a scene
 //! 1e-4 across it is a sixth of the scene and light leaks through corners (measured:
-//! `cpu/tests/stability.rs`). [`offset_ray_origin_scaled`] multiplies both constants by the
+//! `tests/tests/stability.rs`). [`offset_ray_origin_scaled`] multiplies both constants by the
 //! scene's [`offset_scale`] — the power of two at or above its extent, at most 1 — so a scene
 //! scaled by a power of two gets exactly scaled offsets, and scenes of unit size or more keep
 //! the paper's constants bit for bit.

@@ -275,7 +275,7 @@ mod tests {
     }
 
     /// A hand-built chain of `levels` CWBVH nodes (the tree of
-    /// `gpu/tests/traversal_parity.rs`'s deep-tree test): chain node k has two inner children
+    /// `tests/tests/traversal_parity.rs`'s deep-tree test): chain node k has two inner children
     /// whose boxes cover the whole scene, a leaf holder with triangles 3k..3k+3 and chain node
     /// k + 1. Rays whose octant visits the chain child first push one group per level, so the
     /// stack reaches `levels` groups; a fixed 32-entry stack that overwrote its top entry would

@@ -149,6 +149,20 @@ fn info_prints_the_triangle_count() {
 }
 
 #[test]
+fn info_lists_point_lights() {
+    let path = furnace_tests::data::reference("lights/cbox_point.gltf");
+    let o = furnace(&["info", &path.display().to_string()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        text.contains("point light at (0.1000, 1.7000, 0.1500), intensity (2.5000, 2.1250, 1.5000) W/sr"),
+        "{text}"
+    );
+    assert!(text.contains("point light at (-0.5500, 0.9000, 0.5500)"), "{text}");
+    assert!(!text.contains("not supported"), "{text}");
+}
+
+#[test]
 fn info_on_the_cornell_box_file() {
     let o = furnace(&["info", &data("cbox/cbox.gltf")]);
     assert!(o.status.success(), "{}", stderr(&o));

@@ -38,6 +38,8 @@ pub struct CpuRenderer {
     offset_scale: f32,
     /// The scene's directional lights ([`Scene::suns`]).
     suns: Vec<furnace_scene::Sun>,
+    /// Point and spot lights ([`Scene::point_lights`]).
+    point_lights: Vec<furnace_scene::PointLight>,
     /// Radiance of an escaping ray ([`Scene::sky`]).
     sky: Vec3,
 }
@@ -99,6 +101,7 @@ impl CpuRenderer {
         let offset_scale = offset_scale_of_bounds(lo, hi);
         Ok(Self {
             suns: scene.suns().copied().collect(),
+            point_lights: scene.point_lights().copied().collect(),
             sky: scene.sky(),
             film: Film::new(settings.width, settings.height),
             scene,
@@ -265,6 +268,31 @@ impl CpuRenderer {
                 }
             }
 
+            // Point and spot lights, delta lights too: a shadow ray to each.
+            for light in &self.point_lights {
+                let to_light = light.position - surface.position;
+                let d2 = to_light.length_squared();
+                if !(d2 > 0.0) {
+                    continue;
+                }
+                let d = d2.sqrt();
+                let wi = to_light / d;
+                if wi.dot(surface.geometric) > 0.0 {
+                    let li = light.intensity_towards(-wi, d);
+                    if li != Vec3::ZERO {
+                        let f = bsdf.eval(wo, frame.to_local(wi));
+                        let contribution = throughput * f * li / d2;
+                        // A light on the surface (d → 0) would add ∞: it adds nothing instead.
+                        if f != Vec3::ZERO
+                            && contribution.is_finite()
+                            && !self.occluded_within(leave, wi, d * (1.0 - furnace_render::SHADOW_EPSILON))
+                        {
+                            radiance += contribution;
+                        }
+                    }
+                }
+            }
+
             // Continue the path by sampling the BSDF.
             let dim = layout::bounce(event);
             let [u1, u2] = self.sampler.value_2d(pixel, index, dim + BOUNCE_BSDF_DIRECTION);
@@ -314,10 +342,15 @@ impl CpuRenderer {
     }
 
     fn occluded(&self, origin: Vec3, direction: Vec3) -> bool {
+        self.occluded_within(origin, direction, f32::INFINITY)
+    }
+
+    /// Whether a surface lies along `direction` from `origin` closer than `t_max`.
+    fn occluded_within(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
         if self.any_masked {
-            self.bvh.occluded_masked(origin, direction, f32::INFINITY, |t, b| self.alpha_passes(t, b))
+            self.bvh.occluded_masked(origin, direction, t_max, |t, b| self.alpha_passes(t, b))
         } else {
-            self.bvh.occluded(origin, direction, f32::INFINITY)
+            self.bvh.occluded(origin, direction, t_max)
         }
     }
 }

@@ -25,9 +25,14 @@
 //!    * **Sun** (a delta light, gathered *only* here): if `-sun.direction` is above `Ng` and a
 //!      shadow ray from the offset point (`offset_ray_origin(p, Ng)`) reaches infinity, add
 //!      `throughput · f(wo, wi)·cos θi · E_sun` (`Bsdf::eval` includes the cosine).
+//!    * **Point and spot lights** (delta lights, gathered *only* here): for each, toward `wi`
+//!      at distance `d` above `Ng`, a shadow ray stopping `SHADOW_EPSILON·d` short of it; add
+//!      `throughput · f(wo, wi)·cos θi · I(−wi, d) / d²` (`PointLight::intensity_towards`: the
+//!      spot cone and the range window), nothing where that is not finite (a light on the
+//!      surface).
 //!    * **BSDF sample** `wi` from three sampler dimensions; `throughput *= eval/pdf`. A
 //!      direction above `Ns`'s horizon but below `Ng`'s ends the path. The sky is gathered only
-//!      by such sampled rays escaping (step 2), so neither light is counted twice and no MIS
+//!      by such sampled rays escaping (step 2), so no light is counted twice and no MIS
 //!      is needed.
 //!    * **Russian roulette** (if enabled), from the third event on: survive with probability
 //!      `q = min(1, max(throughput))`, and divide by `q` (unbiased).

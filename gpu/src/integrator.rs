@@ -34,6 +34,7 @@ use crate::scene::GpuScene;
 use crate::shared::{Binding, BindingKind, BindingTable, GpuStruct, WgslType, wgsl_struct};
 use crate::traverse::BvhBuffers;
 use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
+use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
 use furnace_render::{Film, Integrator, RenderError, RenderSettings};
 use furnace_sampling::AnySampler;
@@ -103,14 +104,79 @@ crate::gpu_struct! {
         pub tile_width: u32 => WgslType::U32,
         /// The ray offsets' length scale ([`furnace_accel::offset_scale_of_bounds`] of the scene).
         pub offset_scale: f32 => WgslType::F32,
+        /// Records in `point_lights` (0: the loop over them is skipped).
+        pub point_light_count: u32 => WgslType::U32,
         /// Rust-only padding to 192 bytes (WGSL rounds the struct up by itself).
-        pub pad: [u32; 3] => WgslType::PAD,
+        pub pad: [u32; 2] => WgslType::PAD,
     }
 }
 
 const _: () = assert!(size_of::<FrameParams>() == 192);
 
-/// Words of the counter buffer (binding 12): rays, nodes and triangles as 64-bit pairs, then
+crate::gpu_struct! {
+    /// A point or spot light as the WGSL reads it (`furnace_scene::PointLight`), 64 bytes.
+    pub struct GpuPointLight as "PointLight" {
+        /// World-space position.
+        pub position: [f32; 3] => WgslType::VEC3_F32,
+        /// `range` (0: none).
+        pub range: f32 => WgslType::F32,
+        /// Radiant intensity, W/sr.
+        pub intensity: [f32; 3] => WgslType::VEC3_F32,
+        /// [`POINT_LIGHT_SPOT`], [`POINT_LIGHT_RANGE`].
+        pub flags: u32 => WgslType::U32,
+        /// The direction a spot light points.
+        pub spot_direction: [f32; 3] => WgslType::VEC3_F32,
+        /// `cos(innerConeAngle)`.
+        pub cos_inner: f32 => WgslType::F32,
+        /// `cos(outerConeAngle)`.
+        pub cos_outer: f32 => WgslType::F32,
+        /// Rust-only padding to 64 bytes.
+        pub pad: [u32; 3] => WgslType::PAD,
+    }
+}
+
+const _: () = assert!(size_of::<GpuPointLight>() == 64);
+
+crate::wgsl_consts! {
+    /// The `POINT_LIGHT_*` flags as WGSL `const` declarations.
+    fn point_light_flags_wgsl;
+    /// `GpuPointLight.flags`: a spot light (the cone applies).
+    pub const POINT_LIGHT_SPOT: u32 = 1;
+    /// `GpuPointLight.flags`: a `range` window applies.
+    pub const POINT_LIGHT_RANGE: u32 = 2;
+}
+
+impl GpuPointLight {
+    /// The record of `light`.
+    pub fn new(light: &furnace_scene::PointLight) -> Self {
+        let (spot_direction, cos_inner, cos_outer) =
+            light.spot.map_or(([0.0; 3], 1.0, 0.0), |c| (c.direction.to_array(), c.cos_inner, c.cos_outer));
+        let flags = if light.spot.is_some() { POINT_LIGHT_SPOT } else { 0 }
+            | if light.range.is_some() { POINT_LIGHT_RANGE } else { 0 };
+        Self {
+            position: light.position.to_array(),
+            range: light.range.unwrap_or(0.0),
+            intensity: light.intensity.to_array(),
+            flags,
+            spot_direction,
+            cos_inner,
+            cos_outer,
+            pad: [0; 3],
+        }
+    }
+}
+
+/// The records of the scene's point and spot lights; one zero record when there are none (a
+/// binding cannot be empty; `FrameParams::point_light_count` stays 0 and no shader work is done).
+pub fn point_light_records(scene: &Scene) -> Vec<GpuPointLight> {
+    let mut v: Vec<GpuPointLight> = scene.point_lights().map(GpuPointLight::new).collect();
+    if v.is_empty() {
+        v.push(GpuPointLight::zeroed());
+    }
+    v
+}
+
+/// Words of the counter buffer (`ray_counter`): rays, nodes and triangles as 64-bit pairs, then
 /// fallbacks and the deepest stack.
 const COUNTER_WORDS: usize = 8;
 
@@ -174,6 +240,7 @@ pub struct GpuRenderer {
     scene: GpuScene,
     bvh: [wgpu::Buffer; 2],
     turquin: wgpu::Buffer,
+    point_lights: wgpu::Buffer,
     bytes_per_triangle: f64,
     bvh_bytes: u64,
     scene_bytes: u64,
@@ -207,6 +274,7 @@ pub fn binding_table(precision: FilmPrecision) -> BindingTable {
     bindings.extend(traverse::binding_list());
     bindings.extend(scene::binding_list());
     bindings.push(Binding::read("turquin_table", "array<f32>"));
+    bindings.push(Binding::read("point_lights", "array<PointLight>"));
     bindings.push(Binding::read_write("ray_counter", &format!("array<atomic<u32>, {COUNTER_WORDS}>")));
     BindingTable::new(0, 0, bindings)
 }
@@ -223,6 +291,9 @@ pub fn shader_source(precision: FilmPrecision) -> String {
         brdf::declarations(),
         scene::declarations(),
         traverse::declarations(),
+        point_light_flags_wgsl(),
+        wgsl_struct::<GpuPointLight>(false),
+        format!("const SHADOW_EPSILON: f32 = {:?};\n", furnace_render::SHADOW_EPSILON),
         binding_table(precision).wgsl(),
     ]
     .concat();
@@ -280,6 +351,8 @@ impl GpuRenderer {
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         )?;
         let turquin = storage_buffer(&ctx, "turquin", bytemuck::cast_slice(&brdf::turquin_table()))?;
+        let point_lights =
+            storage_buffer(&ctx, "point lights", bytemuck::cast_slice(&point_light_records(scene)))?;
         let precision = FilmPrecision::for_context(&ctx);
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
         let base = frame_params(scene, camera, &settings, sampler_params);
@@ -331,6 +404,7 @@ impl GpuRenderer {
             scene: gpu_scene,
             bvh,
             turquin,
+            point_lights,
             samples_per_dispatch,
             max_samples_per_invocation,
             group_samples: None,
@@ -536,6 +610,7 @@ impl GpuRenderer {
         resources.extend(self.bvh.iter().map(wgpu::Buffer::as_entire_binding));
         resources.extend(self.scene.resources());
         resources.push(self.turquin.as_entire_binding());
+        resources.push(self.point_lights.as_entire_binding());
         resources.push(self.ray_counter.as_entire_binding());
         let entries = binding_table(self.film.precision()).bind_entries(resources);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -681,6 +756,7 @@ pub fn frame_params(
             let (lo, hi) = scene.geometry.bounds();
             offset_scale_of_bounds(lo, hi)
         },
-        pad: [0; 3],
+        point_light_count: scene.point_lights().count() as u32,
+        pad: [0; 2],
     }
 }

@@ -69,6 +69,11 @@ pub use layout::SAMPLER_LAYOUT_VERSION;
 pub use session::{Budget, Progress, Session, Stop, Timing, process_cpu_seconds};
 pub use settings::RenderSettings;
 
+/// A shadow ray towards a point light stops this fraction of the distance short of it (pbrt's
+/// `ShadowEpsilon`), so that a light mounted on a surface is not shadowed by that surface. Both
+/// integrators use it (the GPU's WGSL gets it as a generated `const`).
+pub const SHADOW_EPSILON: f32 = 1e-4;
+
 /// Russian roulette's survival probability for a path of `throughput`: its largest channel, at
 /// most 1 (a path whose throughput has grown past 1 always survives). NaN channels are ignored
 /// (`f32::max`). Both integrators play roulette from the

@@ -50,7 +50,7 @@ mod texture;
 pub use camera::{Camera, DEFAULT_YFOV, Projection, Ray};
 pub use error::{SceneError, Warning};
 pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, oct_decode, oct_encode};
-pub use light::{Light, Sky, Sun};
+pub use light::{Light, PointLight, Sky, SpotCone, Sun};
 pub use load::{MAX_COORDINATE, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
 pub use material::{AlphaMode, Material, MaterialSample};
 pub use surface::{SurfacePoint, geometric_normal};

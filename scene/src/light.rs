@@ -25,6 +25,58 @@ pub struct Sky {
     pub radiance: Vec3,
 }
 
+/// A point light (`KHR_lights_punctual` `point`), or a spot light (`spot`: a point light whose
+/// intensity is shaped by a cone). A delta light: reached only by shadow rays, never seen.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointLight {
+    /// World-space position (the light node's origin).
+    pub position: Vec3,
+    /// Radiant intensity `color × intensity` in W/sr per channel (no photometric conversion,
+    /// as the references' README rules); inside the inner cone for a spot light.
+    pub intensity: Vec3,
+    /// `range` of the file: beyond it the light contributes nothing; `None` = pure inverse
+    /// square.
+    pub range: Option<f32>,
+    /// The cone of a spot light.
+    pub spot: Option<SpotCone>,
+}
+
+/// A spot light's cone: full intensity inside the inner angle, none outside the outer one, and
+/// between them the smooth falloff the `KHR_lights_punctual` specification recommends.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SpotCone {
+    /// Unit direction the spot points (the light node's −Z in world space).
+    pub direction: Vec3,
+    /// `cos(innerConeAngle)`.
+    pub cos_inner: f32,
+    /// `cos(outerConeAngle)`, below `cos_inner`.
+    pub cos_outer: f32,
+}
+
+impl PointLight {
+    /// The radiant intensity (W/sr) the light sends along unit direction `direction` (from the
+    /// light) to a point at distance `distance`: [`intensity`](Self::intensity) × the spot
+    /// cone's attenuation × the range window. Divide by `distance²` for the irradiance at
+    /// normal incidence.
+    ///
+    /// Both factors are the specification's recommended ones: the cone's
+    /// `t = clamp((cos − cos_outer) / (cos_inner − cos_outer), 0, 1)`, squared; the window
+    /// `clamp(1 − (distance / range)⁴, 0, 1)`.
+    pub fn intensity_towards(&self, direction: Vec3, distance: f32) -> Vec3 {
+        let mut k = 1.0;
+        if let Some(cone) = &self.spot {
+            let cos = direction.dot(cone.direction);
+            let t = ((cos - cone.cos_outer) / (cone.cos_inner - cone.cos_outer)).clamp(0.0, 1.0);
+            k = t * t;
+        }
+        if let Some(range) = self.range {
+            let r = distance / range;
+            k *= (1.0 - (r * r) * (r * r)).clamp(0.0, 1.0);
+        }
+        self.intensity * k
+    }
+}
+
 /// A light of a scene.
 #[derive(Debug, Clone, Copy, PartialEq)]
 #[non_exhaustive]
@@ -33,6 +85,8 @@ pub enum Light {
     Sun(Sun),
     /// Constant radiance at infinity, gathered by rays that escape.
     Sky(Sky),
+    /// A point or spot light, gathered by shadow rays.
+    Point(PointLight),
 }
 
 impl std::fmt::Display for Light {
@@ -44,6 +98,29 @@ impl std::fmt::Display for Light {
                 write!(f, "sun travelling {}, irradiance {} W/m²", v(s.direction), v(s.irradiance))
             }
             Light::Sky(s) => write!(f, "sky of radiance {}", v(s.radiance)),
+            Light::Point(p) => {
+                write!(
+                    f,
+                    "{} light at {}, intensity {} W/sr",
+                    if p.spot.is_some() { "spot" } else { "point" },
+                    v(p.position),
+                    v(p.intensity)
+                )?;
+                if let Some(cone) = &p.spot {
+                    let deg = |c: f32| c.clamp(-1.0, 1.0).acos().to_degrees();
+                    write!(
+                        f,
+                        ", pointing {}, cone {:.1}°–{:.1}°",
+                        v(cone.direction),
+                        deg(cone.cos_inner),
+                        deg(cone.cos_outer)
+                    )?;
+                }
+                if let Some(r) = p.range {
+                    write!(f, ", range {r} m")?;
+                }
+                Ok(())
+            }
         }
     }
 }
@@ -54,16 +131,54 @@ pub(crate) fn punctual(
     light: &gltf::khr_lights_punctual::Light<'_>,
     world: Mat4,
 ) -> Result<Light, (&'static str, &'static str)> {
+    use gltf::khr_lights_punctual::Kind;
+    let power = Vec3::from(light.color()) * light.intensity();
+    if !power.is_finite() || power.min_element() < 0.0 {
+        return Err(("", "negative or non-finite colour × intensity: light ignored"));
+    }
+    let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
     match light.kind() {
-        gltf::khr_lights_punctual::Kind::Directional => {
-            let direction = world.transform_vector3(Vec3::NEG_Z).normalize_or_zero();
-            let irradiance = Vec3::from(light.color()) * light.intensity();
-            if direction == Vec3::ZERO || !irradiance.is_finite() {
+        Kind::Directional => {
+            if direction == Vec3::ZERO {
                 return Err(("", "degenerate directional light: ignored"));
             }
-            Ok(Light::Sun(Sun { direction, irradiance }))
+            Ok(Light::Sun(Sun { direction, irradiance: power }))
         }
-        _ => Err(("KHR_lights_punctual", "point and spot lights are not supported: ignored")),
+        kind => {
+            let position = world.transform_point3(Vec3::ZERO);
+            if !position.is_finite() {
+                return Err(("", "light at a non-finite position: ignored"));
+            }
+            let range = match light.range() {
+                None => None,
+                Some(r) if r > 0.0 && r.is_finite() => Some(r),
+                Some(_) => return Err(("", "range must be a positive number: light ignored")),
+            };
+            let spot = match kind {
+                Kind::Spot { inner_cone_angle, outer_cone_angle } => {
+                    if direction == Vec3::ZERO {
+                        return Err(("", "degenerate spot light direction: ignored"));
+                    }
+                    // The specification: 0 ≤ inner < outer ≤ π/2.
+                    let ok = 0.0 <= inner_cone_angle
+                        && inner_cone_angle < outer_cone_angle
+                        && outer_cone_angle <= std::f32::consts::FRAC_PI_2;
+                    if !ok {
+                        return Err((
+                            "",
+                            "spot cone angles must satisfy 0 ≤ inner < outer ≤ π/2: light ignored",
+                        ));
+                    }
+                    Some(SpotCone {
+                        direction,
+                        cos_inner: inner_cone_angle.cos(),
+                        cos_outer: outer_cone_angle.cos(),
+                    })
+                }
+                _ => None,
+            };
+            Ok(Light::Point(PointLight { position, intensity: power, range, spot }))
+        }
     }
 }
 
@@ -72,6 +187,14 @@ impl Scene {
     pub fn suns(&self) -> impl Iterator<Item = &Sun> {
         self.lights.iter().filter_map(|l| match l {
             Light::Sun(s) => Some(s),
+            _ => None,
+        })
+    }
+
+    /// The point and spot lights, in list order.
+    pub fn point_lights(&self) -> impl Iterator<Item = &PointLight> {
+        self.lights.iter().filter_map(|l| match l {
+            Light::Point(p) => Some(p),
             _ => None,
         })
     }
@@ -142,6 +265,44 @@ mod tests {
         scene.set_sun(None);
         assert!(scene.lights.is_empty());
         assert_eq!(scene.sky(), Vec3::ZERO);
+    }
+
+    #[test]
+    fn point_and_spot_lights_are_read_as_the_specification_says() {
+        let json = br#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_lights_punctual"],
+            "extensions":{"KHR_lights_punctual":{"lights":[
+                {"type":"point","color":[1,0.5,0.25],"intensity":2},
+                {"type":"spot","intensity":3,"range":4,"spot":{"innerConeAngle":0.2,"outerConeAngle":0.5}},
+                {"type":"spot","spot":{"innerConeAngle":0.6,"outerConeAngle":0.5}},
+                {"type":"point","intensity":-1},
+                {"type":"point","range":0}]}}}"#;
+        let doc = gltf::Gltf::from_slice(json).expect("valid JSON");
+        let lights: Vec<_> = doc.lights().expect("lights").collect();
+        let world = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0));
+        let Ok(Light::Point(p)) = punctual(&lights[0], world) else { panic!("a point light") };
+        assert_eq!(
+            (p.position, p.intensity, p.range, p.spot),
+            (Vec3::new(1.0, 2.0, 3.0), Vec3::new(2.0, 1.0, 0.5), None, None)
+        );
+        let Ok(Light::Point(s)) = punctual(&lights[1], world) else { panic!("a spot light") };
+        let cone = s.spot.expect("a cone");
+        assert_eq!((s.intensity, s.range, cone.direction), (Vec3::splat(3.0), Some(4.0), Vec3::NEG_Z));
+        assert_eq!((cone.cos_inner, cone.cos_outer), (0.2f32.cos(), 0.5f32.cos()));
+        // Full intensity inside the inner cone (and at d = 0 of the range), none outside the
+        // outer one or beyond the range, t² between; the window (1 − (d/r)⁴).
+        assert_eq!(s.intensity_towards(Vec3::NEG_Z, 0.0), Vec3::splat(3.0));
+        let at = |angle: f32| Vec3::new(angle.sin(), 0.0, -angle.cos());
+        assert_eq!(s.intensity_towards(at(0.51), 1.0), Vec3::ZERO);
+        assert_eq!(s.intensity_towards(Vec3::NEG_Z, 4.0), Vec3::ZERO);
+        let t = (0.35f32.cos() - 0.5f32.cos()) / (0.2f32.cos() - 0.5f32.cos());
+        let k = s.intensity_towards(at(0.35), 2.0).x / 3.0;
+        // At d = 2 of range 4 the window is 1 − 0.5⁴ = 0.9375. Tolerance: f32 rounding of the
+        // cosines.
+        assert!((k - t * t * 0.9375).abs() < 1e-5, "{k} vs {}", t * t * 0.9375);
+        // Invalid lights are refused with the reason.
+        assert!(matches!(punctual(&lights[2], world), Err((_, why)) if why.contains("inner < outer")));
+        assert!(matches!(punctual(&lights[3], world), Err((_, why)) if why.contains("negative")));
+        assert!(matches!(punctual(&lights[4], world), Err((_, why)) if why.contains("range")));
     }
 
     #[test]

@@ -14,7 +14,7 @@
 //!   [`MAX_COORDINATE`]).
 //!
 //! The glTF files are written in memory (one buffer as a data URI). Rendering such scenes
-//! without NaN or panic is checked in `furnace-cpu`'s `tests/stability.rs`.
+//! without NaN or panic is checked in `furnace-tests`' `tests/stability.rs`.
 
 use furnace_scene::{MAX_COORDINATE, MIN_COORDINATE, Scene, SceneError, oct_decode};
 use glam::{Mat4, Vec3};

@@ -9,7 +9,8 @@
 //! glTF default instead), random sampler, seeds `--first-seed` (100), 101, …, one sample per
 //! pass up to `--max-spp`, on the GPU (`--backend gpu`, the test's adapter) or with the CPU
 //! twin (`--backend cpu`, same sampler and paths), and evaluates every prefix N ∈ {32, 64, …}
-//! against the downsampled reference. `--crop C`: only the central C×C pixels.
+//! against the downsampled reference. `--crop C`: only the central C×C pixels. `--lights point`:
+//! the point-light box of `tests/data/references/lights/` (4 bounces).
 
 use furnace_brdf::SpecularOptions;
 use furnace_cpu::CpuRenderer;
@@ -47,8 +48,25 @@ fn main() {
     } else {
         SpecularOptions::mitsuba()
     };
-    let stem = if bounces == 1 { "cbox_ref_direct" } else { "cbox_ref_bounces4" };
-    let full = Reference::load(stem);
+    // `--lights point`: the point-light box of `references/lights/` instead of the Cornell box.
+    let lights = opt("--lights");
+    let stem = match (lights.as_deref(), bounces) {
+        (Some(kind), _) => format!("cbox_{kind}_ref_bounces4"),
+        (None, 1) => "cbox_ref_direct".to_string(),
+        (None, _) => "cbox_ref_bounces4".to_string(),
+    };
+    let stem = stem.as_str();
+    let full = match &lights {
+        Some(_) => Reference::load_in("lights", stem),
+        None => Reference::load(stem),
+    };
+    let base_scene = match &lights {
+        Some(kind) => {
+            furnace_scene::Scene::load(furnace_tests::data::reference(&format!("lights/cbox_{kind}.gltf")))
+                .expect("the reference's scene")
+        }
+        None => furnace_scene::builtin::cornell_box().expect("the built-in Cornell box"),
+    };
     let factor = full.mean.width / size as usize;
     let small = cbox::downsample(&full, factor);
     let reference = Reference {
@@ -77,7 +95,7 @@ fn main() {
             specular,
             ..Default::default()
         };
-        let scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
+        let scene = base_scene.clone();
         let start = Instant::now();
         let mut estimators = vec![BatchEstimator::new(1); n];
         let mut gpu_renderer = gpu.then(|| {

@@ -62,8 +62,13 @@ pub struct Reference {
 impl Reference {
     /// `tests/data/references/cbox/{stem}.exr` and `{stem}_stderr.exr`.
     pub fn load(stem: &str) -> Self {
-        let mean = Image::read_exr(&crate::data::reference(&format!("cbox/{stem}.exr")));
-        let stderr = Image::read_exr(&crate::data::reference(&format!("cbox/{stem}_stderr.exr")));
+        Self::load_in("cbox", stem)
+    }
+
+    /// `tests/data/references/{folder}/{stem}.exr` and `{stem}_stderr.exr`.
+    pub fn load_in(folder: &str, stem: &str) -> Self {
+        let mean = Image::read_exr(&crate::data::reference(&format!("{folder}/{stem}.exr")));
+        let stderr = Image::read_exr(&crate::data::reference(&format!("{folder}/{stem}_stderr.exr")));
         assert_eq!((mean.width, mean.height), (stderr.width, stderr.height), "{stem}: sizes");
         Self { name: stem.to_owned(), mean, stderr }
     }

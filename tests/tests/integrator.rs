@@ -10,7 +10,7 @@
 //!    issue's bounds; with N = 128 samples the variance estimate inflates z's std by ≈ 1.01).
 
 use furnace_cpu::CpuRenderer;
-use furnace_gpu::integrator::{FrameParams, GROUP_SIZE, shader_source, tile};
+use furnace_gpu::integrator::{FrameParams, GROUP_SIZE, GpuPointLight, shader_source, tile};
 use furnace_gpu::{GpuRenderer, film::FilmPrecision};
 use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
@@ -111,12 +111,37 @@ fn dispatches_cover_every_pixel_once() {
 fn frame_params_layout_matches_wgsl() {
     furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(FilmPrecision::F64));
     furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(FilmPrecision::F32Pass));
+    furnace_tests::layout::assert_gpu_struct::<GpuPointLight>(&shader_source(FilmPrecision::F64));
 }
 
 #[test]
 fn same_samples_give_the_same_image() {
+    same_samples(&builtin::cornell_box().unwrap());
+}
+
+/// The point-light box with a spot light added (cone and range window): the point-light loop,
+/// the spot cone and the range on both sides.
+#[test]
+fn same_samples_give_the_same_image_with_point_and_spot_lights() {
+    let path = furnace_tests::data::reference("lights/cbox_point.gltf");
+    let mut scene = furnace_scene::Scene::load(&path).unwrap();
+    scene.lights.push(furnace_scene::Light::Point(furnace_scene::PointLight {
+        position: glam::Vec3::new(0.5, 1.8, -0.3),
+        intensity: glam::Vec3::new(3.0, 2.0, 1.0),
+        range: Some(1.6),
+        spot: Some(furnace_scene::SpotCone {
+            direction: glam::Vec3::new(-0.3, -1.0, 0.2).normalize(),
+            cos_inner: 0.9,
+            cos_outer: 0.7,
+        }),
+    }));
+    assert_eq!(scene.point_lights().count(), 3);
+    same_samples(&scene);
+}
+
+fn same_samples(scene: &furnace_scene::Scene) {
     let Some(ctx) = test_context() else { return };
-    let scene = builtin::cornell_box().unwrap();
+    let scene = scene.clone();
     let camera = scene.default_camera();
     let s = settings(SamplerKind::Sobol, 3);
     const SPP: u32 = 16;

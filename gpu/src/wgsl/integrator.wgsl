@@ -25,6 +25,28 @@ fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {
     return scene_alpha_passes(triangle_id, u, v);
 }
 
+// furnace_scene::PointLight::intensity_towards: the intensity sent along unit `direction` (from
+// the light) to a point at `distance`, the spot cone and the range window applied.
+fn point_light_intensity(light: PointLight, direction: vec3<f32>, distance: f32) -> vec3<f32> {
+    var k = 1.0;
+    if (light.flags & POINT_LIGHT_SPOT) != 0u {
+        let cos = dot(direction, light.spot_direction);
+        let t = clamp((cos - light.cos_outer) / (light.cos_inner - light.cos_outer), 0.0, 1.0);
+        k = t * t;
+    }
+    if (light.flags & POINT_LIGHT_RANGE) != 0u {
+        let r = distance / light.range;
+        k *= clamp(1.0 - (r * r) * (r * r), 0.0, 1.0);
+    }
+    return light.intensity * k;
+}
+
+// Every component finite, by the exponent bits (WGSL may assume floats are never NaN or ∞).
+fn path_is_finite(v: vec3<f32>) -> bool {
+    let e = (bitcast<vec3<u32>>(v) >> vec3<u32>(23u)) & vec3<u32>(0xffu);
+    return all(e != vec3<u32>(0xffu));
+}
+
 // Renderer::trace: radiance arriving at `origin` from −`direction`.
 fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f32>) -> vec3<f32> {
     var origin = origin_in;
@@ -71,6 +93,32 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
                     rays_traced += 1u;
                     if !trace_any(leave, to_sun, inf) {
                         radiance += throughput * f * params.sun_irradiance.xyz;
+                    }
+                }
+            }
+        }
+
+        // Point and spot lights, delta lights too: a shadow ray to each (furnace-cpu's loop).
+        for (var i = 0u; i < params.point_light_count; i++) {
+            let light = point_lights[i];
+            let to_light = light.position - surface.position;
+            let d2 = dot(to_light, to_light);
+            if !(d2 > 0.0) {
+                continue;
+            }
+            let d = sqrt(d2);
+            let wi = to_light / d;
+            if dot(wi, surface.geometric) > 0.0 {
+                let li = point_light_intensity(light, -wi, d);
+                if any(li != vec3<f32>(0.0)) {
+                    let f = bsdf_eval(bsdf, wo, frame_to_local(frame, wi));
+                    let contribution = throughput * f * li / d2;
+                    // A light on the surface (d → 0) would add ∞: it adds nothing instead.
+                    if any(f != vec3<f32>(0.0)) && path_is_finite(contribution) {
+                        rays_traced += 1u;
+                        if !trace_any(leave, wi, d * (1.0 - SHADOW_EPSILON)) {
+                            radiance += contribution;
+                        }
                     }
                 }
             }

@@ -62,6 +62,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
             .map(Light::Sun)
             .into_iter()
             .chain((sky != Vec3::ZERO).then_some(Light::Sky(Sky { radiance: sky })))
+            .chain(flat.lights)
             .collect(),
         warnings: ctx.warnings,
         dropped_triangles: dropped,
@@ -89,7 +90,7 @@ fn check_geometry(ctx: &mut Ctx<'_>, geo: &Geometry, dropped: usize) -> Result<(
 /// Largest world coordinate magnitude of a scene that f32 ray tracing handles: above it the
 /// Möller–Trumbore products (edge² × distance) overflow and hits are lost. The Cornell box
 /// renders its s = 1 image when scaled by 1e12 (|coordinates| ≤ 2e12) and breaks at 1e13
-/// (`furnace-cpu`'s `tests/stability.rs`); 2⁴² ≈ 4.4e12.
+/// (`furnace-tests`' `tests/stability.rs`); 2⁴² ≈ 4.4e12.
 pub const MAX_COORDINATE: f32 = 4_398_046_511_104.0;
 
 /// Smallest largest-coordinate magnitude of a scene that f32 ray tracing handles: below it the
@@ -97,7 +98,7 @@ pub const MAX_COORDINATE: f32 = 4_398_046_511_104.0;
 /// subnormal and hits lose their precision. Ray offsets scale with the scene
 /// (`furnace_accel::offset_scale`), so they are not the limit: the Cornell box renders its
 /// s = 1 image scaled by 1e-12 (|coordinates| ≤ 2e-12) and breaks at 1e-13
-/// (`furnace-cpu`'s `tests/stability.rs`); 2⁻³⁹ ≈ 1.8e-12.
+/// (`furnace-tests`' `tests/stability.rs`); 2⁻³⁹ ≈ 1.8e-12.
 pub const MIN_COORDINATE: f32 = 1.818_989_4e-12;
 
 /// Warns when the scene's coordinates lie outside what the renderer measured to be scale
