@@ -31,7 +31,7 @@
 //! `target/test-output/brdf/stability_*.txt`.
 
 //!
-//! **Measured edges** (issue 7, quoted in `docs/stability.md`):
+//! **Measured edges** (quoted in `docs/stability.md`):
 //! `near_mirror_lobes_bounded_weights_and_unbiased` (α = 1e-4 and 1e-3 up to θo = 89.99°: the
 //! VNDF weight bound `G1(ωi) ≤ w/comp ≤ 1`, unbiased means, NDF's fireflies and variance),
 //! `grazing_view_and_light_energy_bounded` (μ = 1e-4, 1e-6, 0, −ε from both sides, every lobe
@@ -451,8 +451,8 @@ fn alpha_floor() {
 }
 
 // ---------------------------------------------------------------------------------------------
-// Roughness → 0 and grazing view/light, measured (issue 7, "Stability suite"; the figures are
-// quoted in docs/stability.md).
+// Roughness → 0 and grazing view/light, measured (the figures are quoted in
+// docs/stability.md).
 
 use furnace_brdf::turquin::directional_albedo;
 use furnace_sampling::{OwenSobol, Sampler};

@@ -1,5 +1,5 @@
-//! Bad geometry in an otherwise valid glTF file (issue 7, "Stability suite"; what the program
-//! does at each edge is tabled in `docs/stability.md`):
+//! Bad geometry in an otherwise valid glTF file (what the program does at each edge is tabled
+//! in `docs/stability.md`):
 //!
 //! * a NaN or infinite vertex position is an error that names the file, the mesh primitive, the
 //!   accessor and the vertex (the glTF Validator reports such files as invalid,

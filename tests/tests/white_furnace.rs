@@ -1,7 +1,7 @@
 //! The white furnace on the GPU: the WGSL BSDF (`src/wgsl/brdf.wgsl`) sampled over the whole
 //! range of roughness and view angle, its albedo `E(μo)` = mean sample weight compared with the
-//! analytic albedo and with `furnace-brdf` on the same uniform numbers (issue 7, "Stability
-//! suite", "white furnace across all α and angles, both backends").
+//! analytic albedo and with `furnace-brdf` on the same uniform numbers (`docs/stability.md`,
+//! "White furnace across all α and angles, both backends").
 //!
 //! Configurations: α ∈ {1e-4, 1e-3, 1e-2, 0.1, 0.5, 1} × μo ∈ {1e-4, 1e-3, 1e-2, 0.1, 0.5, 1} ×
 //! the 12 `SpecularOptions` combinations of a white metal (base colour 1, metallic 1: F = 1), plus
