@@ -269,28 +269,8 @@ impl CpuRenderer {
             }
 
             // Point and spot lights, delta lights too: a shadow ray to each.
-            for light in &self.point_lights {
-                let to_light = light.position - surface.position;
-                let d2 = to_light.length_squared();
-                if !(d2 > 0.0) {
-                    continue;
-                }
-                let d = d2.sqrt();
-                let wi = to_light / d;
-                if wi.dot(surface.geometric) > 0.0 {
-                    let li = light.intensity_towards(-wi, d);
-                    if li != Vec3::ZERO {
-                        let f = bsdf.eval(wo, frame.to_local(wi));
-                        let contribution = throughput * f * li / d2;
-                        // A light on the surface (d → 0) would add ∞: it adds nothing instead.
-                        if f != Vec3::ZERO
-                            && contribution.is_finite()
-                            && !self.occluded_within(leave, wi, d * (1.0 - furnace_render::SHADOW_EPSILON))
-                        {
-                            radiance += contribution;
-                        }
-                    }
-                }
+            if !self.point_lights.is_empty() {
+                radiance += self.gather_point_lights(throughput, bsdf, wo, frame, &surface, leave);
             }
 
             // Continue the path by sampling the BSDF.
@@ -339,6 +319,45 @@ impl CpuRenderer {
         } else {
             self.bvh.closest_hit(origin, direction, f32::INFINITY)
         }
+    }
+
+    /// What the point and spot lights add at a scattering event (throughput included): a
+    /// shadow ray to each, stopping `SHADOW_EPSILON·d` short of it; a contribution that is not
+    /// finite (a light on the surface, d → 0) adds nothing. Summed over the lights first, as
+    /// the WGSL twin does.
+    fn gather_point_lights(
+        &self,
+        throughput: Vec3,
+        bsdf: &MetallicRoughness,
+        wo: Vec3,
+        frame: Frame,
+        surface: &furnace_scene::SurfacePoint,
+        leave: Vec3,
+    ) -> Vec3 {
+        let mut sum = Vec3::ZERO;
+        for light in &self.point_lights {
+            let to_light = light.position - surface.position;
+            let d2 = to_light.length_squared();
+            if !(d2 > 0.0) {
+                continue;
+            }
+            let d = d2.sqrt();
+            let wi = to_light / d;
+            if wi.dot(surface.geometric) > 0.0 {
+                let li = light.intensity_towards(-wi, d);
+                if li != Vec3::ZERO {
+                    let f = bsdf.eval(wo, frame.to_local(wi));
+                    let contribution = throughput * f * li / d2;
+                    if f != Vec3::ZERO
+                        && contribution.is_finite()
+                        && !self.occluded_within(leave, wi, d * (1.0 - furnace_render::SHADOW_EPSILON))
+                    {
+                        sum += contribution;
+                    }
+                }
+            }
+        }
+        sum
     }
 
     fn occluded(&self, origin: Vec3, direction: Vec3) -> bool {

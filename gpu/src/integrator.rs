@@ -279,11 +279,31 @@ pub fn binding_table(precision: FilmPrecision) -> BindingTable {
     BindingTable::new(0, 0, bindings)
 }
 
+/// The light and material features a scene uses that the integrator shader is composed for:
+/// code for a feature the scene lacks is left out at compile time (no GPU work, no registers).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct SceneFeatures {
+    /// Point or spot lights (the shadow-ray loop over `point_lights`).
+    pub point_lights: bool,
+}
+
+impl SceneFeatures {
+    /// The features `scene` uses.
+    pub fn of(scene: &Scene) -> Self {
+        Self { point_lights: scene.point_lights().next().is_some() }
+    }
+
+    /// The `HAS_*` constants of these features, as WGSL.
+    pub fn wgsl(self) -> String {
+        format!("const HAS_POINT_LIGHTS: bool = {};\n", self.point_lights)
+    }
+}
+
 /// The composed WGSL of the integrator for a film precision (for tests and tools): the
 /// generated declarations (sampler layout, `FRAME_*` flags, [`FrameParams`], the BSDF's, the
 /// scene's and the traversal's structs and constants, the bindings of [`binding_table`]), the
-/// twins, and `integrator.wgsl`.
-pub fn shader_source(precision: FilmPrecision) -> String {
+/// twins, and `integrator.wgsl`, with the code of the scene `features` only.
+pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> String {
     let generated = [
         furnace_render::layout::wgsl(),
         frame_flags_wgsl(),
@@ -294,6 +314,7 @@ pub fn shader_source(precision: FilmPrecision) -> String {
         point_light_flags_wgsl(),
         wgsl_struct::<GpuPointLight>(false),
         format!("const SHADOW_EPSILON: f32 = {:?};\n", furnace_render::SHADOW_EPSILON),
+        features.wgsl(),
         binding_table(precision).wgsl(),
     ]
     .concat();
@@ -371,7 +392,7 @@ impl GpuRenderer {
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("integrator"),
-            source: wgpu::ShaderSource::Wgsl(shader_source(precision).into()),
+            source: wgpu::ShaderSource::Wgsl(shader_source(precision, SceneFeatures::of(scene)).into()),
         });
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("integrator"),

@@ -10,7 +10,7 @@
 //!    issue's bounds; with N = 128 samples the variance estimate inflates z's std by ≈ 1.01).
 
 use furnace_cpu::CpuRenderer;
-use furnace_gpu::integrator::{FrameParams, GROUP_SIZE, GpuPointLight, shader_source, tile};
+use furnace_gpu::integrator::{FrameParams, GROUP_SIZE, GpuPointLight, SceneFeatures, shader_source, tile};
 use furnace_gpu::{GpuRenderer, film::FilmPrecision};
 use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
@@ -61,7 +61,7 @@ fn channel_means(img: &[[f64; 3]]) -> [f64; 3] {
 
 #[test]
 fn workgroup_size_matches_wgsl() {
-    let src = shader_source(FilmPrecision::F64);
+    let src = shader_source(FilmPrecision::F64, SceneFeatures::default());
     let module = naga::front::wgsl::parse_str(&src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&src)));
     let main = module.entry_points.iter().find(|e| e.name == "main").expect("entry point main");
     assert_eq!(main.workgroup_size, [GROUP_SIZE, 1, 1]);
@@ -109,9 +109,18 @@ fn dispatches_cover_every_pixel_once() {
 
 #[test]
 fn frame_params_layout_matches_wgsl() {
-    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(FilmPrecision::F64));
-    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(FilmPrecision::F32Pass));
-    furnace_tests::layout::assert_gpu_struct::<GpuPointLight>(&shader_source(FilmPrecision::F64));
+    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(
+        FilmPrecision::F64,
+        SceneFeatures::default(),
+    ));
+    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(
+        FilmPrecision::F32Pass,
+        SceneFeatures { point_lights: true },
+    ));
+    furnace_tests::layout::assert_gpu_struct::<GpuPointLight>(&shader_source(
+        FilmPrecision::F64,
+        SceneFeatures::default(),
+    ));
 }
 
 #[test]

@@ -47,6 +47,38 @@ fn path_is_finite(v: vec3<f32>) -> bool {
     return all(e != vec3<u32>(0xffu));
 }
 
+// furnace-cpu's loop over the point and spot lights at a scattering event: what they add to
+// the path's radiance (throughput included).
+fn gather_point_lights(throughput: vec3<f32>, bsdf: BsdfParams, wo: vec3<f32>, frame: Frame,
+                       surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
+    var sum = vec3<f32>(0.0);
+    for (var i = 0u; i < params.point_light_count; i++) {
+        let light = point_lights[i];
+        let to_light = light.position - surface.position;
+        let d2 = dot(to_light, to_light);
+        if !(d2 > 0.0) {
+            continue;
+        }
+        let d = sqrt(d2);
+        let wi = to_light / d;
+        if dot(wi, surface.geometric) > 0.0 {
+            let li = point_light_intensity(light, -wi, d);
+            if any(li != vec3<f32>(0.0)) {
+                let f = bsdf_eval(bsdf, wo, frame_to_local(frame, wi));
+                let contribution = throughput * f * li / d2;
+                // A light on the surface (d → 0) would add ∞: it adds nothing instead.
+                if any(f != vec3<f32>(0.0)) && path_is_finite(contribution) {
+                    rays_traced += 1u;
+                    if !trace_any(leave, wi, d * (1.0 - SHADOW_EPSILON)) {
+                        sum += contribution;
+                    }
+                }
+            }
+        }
+    }
+    return sum;
+}
+
 // Renderer::trace: radiance arriving at `origin` from −`direction`.
 fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f32>) -> vec3<f32> {
     var origin = origin_in;
@@ -98,30 +130,10 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             }
         }
 
-        // Point and spot lights, delta lights too: a shadow ray to each (furnace-cpu's loop).
-        for (var i = 0u; i < params.point_light_count; i++) {
-            let light = point_lights[i];
-            let to_light = light.position - surface.position;
-            let d2 = dot(to_light, to_light);
-            if !(d2 > 0.0) {
-                continue;
-            }
-            let d = sqrt(d2);
-            let wi = to_light / d;
-            if dot(wi, surface.geometric) > 0.0 {
-                let li = point_light_intensity(light, -wi, d);
-                if any(li != vec3<f32>(0.0)) {
-                    let f = bsdf_eval(bsdf, wo, frame_to_local(frame, wi));
-                    let contribution = throughput * f * li / d2;
-                    // A light on the surface (d → 0) would add ∞: it adds nothing instead.
-                    if any(f != vec3<f32>(0.0)) && path_is_finite(contribution) {
-                        rays_traced += 1u;
-                        if !trace_any(leave, wi, d * (1.0 - SHADOW_EPSILON)) {
-                            radiance += contribution;
-                        }
-                    }
-                }
-            }
+        // Point and spot lights, delta lights too: a shadow ray to each (composed only for a
+        // scene that has them: HAS_POINT_LIGHTS is a generated constant).
+        if HAS_POINT_LIGHTS {
+            radiance += gather_point_lights(throughput, bsdf, wo, frame, surface, leave);
         }
 
         // Continue the path by sampling the BSDF.
