@@ -241,7 +241,10 @@ impl CpuRenderer {
                 Shading::Constant(c) => c.emission,
                 Shading::Evaluated(params) => params.emission,
             };
-            radiance += throughput * emission;
+            // Emission is one-sided: the back of a double-sided emitter does not emit.
+            if !surface.back_face {
+                radiance += throughput * emission;
+            }
             if event == self.settings.bounces {
                 break;
             }

@@ -19,7 +19,8 @@
 //!    the side the ray came from; the back of a single-sided material is black and ends the
 //!    path. The material is evaluated at the hit's UV (`Material::evaluate`) into a
 //!    `MetallicRoughness` BSDF with [`RenderSettings::specular`].
-//! 4. **Emission**: `throughput · emissive` is added.
+//! 4. **Emission**: `throughput · emissive` is added — on the front of the surface only (emission
+//!    is one-sided, as in the references' conventions; the back of a double-sided emitter is dark).
 //! 5. If the path already has [`RenderSettings::bounces`] scattering events, it ends here.
 //!    Otherwise this hit is a scattering event:
 //!    * **Sun** (a delta light, gathered *only* here): if `-sun.direction` is above `Ng` and a

@@ -201,6 +201,14 @@ fn glowing_interior(bounces: u32, russian_roulette: bool) -> CpuRenderer {
     let mut material = builtin::lambert(Vec3::splat(0.5));
     material.emissive = Vec3::splat(0.5);
     let mut scene = builtin::furnace_sphere(material, 64);
+    // Emission is one-sided: turn the sphere inside out (winding and normals) so that its
+    // emitting side faces the camera inside it.
+    for t in &mut scene.geometry.triangles {
+        t.swap(1, 2);
+    }
+    for n in &mut scene.geometry.normals {
+        *n = furnace_scene::oct_encode(-furnace_scene::oct_decode(*n));
+    }
     scene.cameras = vec![Camera::look_at(Vec3::ZERO, Vec3::NEG_Z, Vec3::Y, furnace_scene::DEFAULT_YFOV)];
     let settings = RenderSettings {
         width: 16,

@@ -15,6 +15,9 @@ pub struct SurfacePoint {
     pub geometric: Vec3,
     /// Shading normal (interpolated, normal-mapped): the z axis of the BSDF frame.
     pub shading: Vec3,
+    /// The ray hit the back of a double-sided surface (both normals were flipped to face it).
+    /// Emission is one-sided: the back of an emitter does not emit.
+    pub back_face: bool,
 }
 
 /// The unit normal `(v1 − v0) × (v2 − v0)` of a triangle, or zero if it has none.
@@ -70,14 +73,15 @@ impl Scene {
                 shading = (m.x * tn + m.y * bn + m.z * shading).normalize_or(shading);
             }
         }
-        if geometric.dot(direction) > 0.0 {
+        let back_face = geometric.dot(direction) > 0.0;
+        if back_face {
             if !material.double_sided {
                 return None;
             }
             geometric = -geometric;
             shading = -shading;
         }
-        Some(SurfacePoint { position, geometric, shading })
+        Some(SurfacePoint { position, geometric, shading, back_face })
     }
 
     /// The alpha test of a hit of triangle `t` (of `material`) at barycentrics `(b1, b2)`: true

@@ -106,7 +106,10 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // The back of a single-sided surface: black.
             break;
         }
-        radiance += throughput * ms.emission;
+        // Emission is one-sided: the back of a double-sided emitter does not emit.
+        if surface.back_face == 0u {
+            radiance += throughput * ms.emission;
+        }
         if event == params.bounces {
             break;
         }

@@ -67,6 +67,8 @@ struct SceneSurfacePoint {
     position: vec3<f32>,
     valid: u32,
     geometric: vec3<f32>,
+    // 1 on the back of a double-sided surface (normals flipped): emission is one-sided.
+    back_face: u32,
     shading: vec3<f32>,
 }
 
@@ -340,12 +342,14 @@ fn scene_surface_point(triangle: u32, b1: f32, b2: f32, uv: vec2<f32>, direction
         }
     }
     var valid = 1u;
+    var back_face = 0u;
     if scene_dot(geometric, direction) > 0.0 {
         if (scene_materials[t.material].flags & SCENE_MATERIAL_DOUBLE_SIDED) == 0u {
             valid = 0u;
         }
+        back_face = 1u;
         geometric = -geometric;
         shading = -shading;
     }
-    return SceneSurfacePoint(position, valid, geometric, shading);
+    return SceneSurfacePoint(position, valid, geometric, back_face, shading);
 }
