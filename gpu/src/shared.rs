@@ -58,6 +58,13 @@ pub struct Member {
     pub offset: u32,
 }
 
+impl Member {
+    /// Member `name` of WGSL type `ty` at byte `offset` (e.g. from `offset_of!`).
+    pub fn new(name: &'static str, ty: WgslType, offset: usize) -> Self {
+        Self { name, ty, offset: offset as u32 }
+    }
+}
+
 /// A `#[repr(C)]` struct that a shader reads, described member by member (see
 /// [`gpu_struct!`](crate::gpu_struct)).
 pub trait GpuStruct: bytemuck::Pod {

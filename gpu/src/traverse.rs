@@ -79,7 +79,7 @@ const SLOT_BYTES: WgslType = WgslType::VEC2_U32;
 impl GpuStruct for GpuCwbvhNode {
     const NAME: &'static str = "CwbvhNode";
     fn members() -> Vec<Member> {
-        let m = |name: &'static str, ty: WgslType, offset: usize| Member { name, ty, offset: offset as u32 };
+        let m = Member::new;
         vec![
             m("p", WgslType::ARRAY_F32_3, offset_of!(GpuCwbvhNode, p)),
             m("e_imask", WgslType::U32, offset_of!(GpuCwbvhNode, e)),
@@ -103,7 +103,7 @@ const _: () = assert!(offset_of!(GpuCwbvhNode, imask) == offset_of!(GpuCwbvhNode
 impl GpuStruct for GpuTriangle {
     const NAME: &'static str = "Triangle";
     fn members() -> Vec<Member> {
-        let m = |name: &'static str, ty: WgslType, offset: usize| Member { name, ty, offset: offset as u32 };
+        let m = Member::new;
         vec![
             m("v0", WgslType::VEC3_F32, offset_of!(GpuTriangle, v0)),
             m("id", WgslType::U32, offset_of!(GpuTriangle, id)),

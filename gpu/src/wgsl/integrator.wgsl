@@ -41,12 +41,6 @@ fn point_light_intensity(light: PointLight, direction: vec3<f32>, distance: f32)
     return light.intensity * k;
 }
 
-// Every component finite, by the exponent bits (WGSL may assume floats are never NaN or ∞).
-fn path_is_finite(v: vec3<f32>) -> bool {
-    let e = (bitcast<vec3<u32>>(v) >> vec3<u32>(23u)) & vec3<u32>(0xffu);
-    return all(e != vec3<u32>(0xffu));
-}
-
 // furnace-cpu's loop over the point and spot lights at a scattering event: what they add to
 // the path's radiance (throughput included).
 fn gather_point_lights(throughput: vec3<f32>, bsdf: BsdfParams, wo: vec3<f32>, frame: Frame,
@@ -67,7 +61,7 @@ fn gather_point_lights(throughput: vec3<f32>, bsdf: BsdfParams, wo: vec3<f32>, f
                 let f = bsdf_eval(bsdf, wo, frame_to_local(frame, wi));
                 let contribution = throughput * f * li / d2;
                 // A light on the surface (d → 0) would add ∞: it adds nothing instead.
-                if any(f != vec3<f32>(0.0)) && path_is_finite(contribution) {
+                if any(f != vec3<f32>(0.0)) && film_is_finite(contribution) {
                     rays_traced += 1u;
                     if !trace_any(leave, wi, d * (1.0 - SHADOW_EPSILON)) {
                         sum += contribution;
