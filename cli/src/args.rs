@@ -3,6 +3,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
+use furnace_render::LightSampling;
 use furnace_sampling::SamplerKind;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -89,6 +90,14 @@ pub struct RenderArgs {
     /// Russian roulette from the third scattering event on (unbiased; faster, noisier).
     #[arg(long, value_enum, default_value_t = Switch::Off)]
     pub russian_roulette: Switch,
+    /// How light of emitters and sun discs is found: bsdf (only by sampled rays that hit them),
+    /// nee (only by light samples with shadow rays) or mis (both, by the power heuristic).
+    #[arg(long, value_enum, default_value_t = LightSamplingArg::Mis)]
+    pub light_sampling: LightSamplingArg,
+    /// The sun's angular diameter in degrees (0: a delta sun, hard shadows; the real sun is
+    /// about 0.53), replacing the scene's `extras.angular_diameter_deg`.
+    #[arg(long, value_name = "DEG", value_parser = parse_sun_angle)]
+    pub sun_angle: Option<f32>,
     /// Where to render: cpu (the reference integrator), gpu (wgpu: Vulkan, Metal or DX12), or
     /// auto (a hardware GPU if there is one, else the CPU; software GPUs such as lavapipe are
     /// slower than the CPU integrator and used only when asked for).
@@ -394,6 +403,27 @@ impl From<MaskingArg> for Masking {
     }
 }
 
+/// `--light-sampling`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LightSamplingArg {
+    /// BSDF sampling only.
+    Bsdf,
+    /// Next-event estimation only.
+    Nee,
+    /// Both, weighted by multiple importance sampling (power heuristic).
+    Mis,
+}
+
+impl From<LightSamplingArg> for LightSampling {
+    fn from(m: LightSamplingArg) -> Self {
+        match m {
+            LightSamplingArg::Bsdf => LightSampling::Bsdf,
+            LightSamplingArg::Nee => LightSampling::Nee,
+            LightSamplingArg::Mis => LightSampling::Mis,
+        }
+    }
+}
+
 /// `--specular-sampling`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum SamplingArg {
@@ -422,6 +452,15 @@ pub enum Switch {
     On,
     /// Disabled.
     Off,
+}
+
+fn parse_sun_angle(s: &str) -> Result<f32, String> {
+    let d: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of degrees"))?;
+    if (0.0..=180.0).contains(&d) {
+        Ok(d)
+    } else {
+        Err(format!("the sun's angular diameter must be between 0 and 180 degrees (got {s})"))
+    }
 }
 
 fn parse_exposure(s: &str) -> Result<f32, String> {

@@ -48,11 +48,13 @@ impl Job {
                 (resume::SPECULAR_SAMPLING, resume::cli_name(&a.specular_sampling)),
                 (resume::CAMERA, camera),
                 (resume::RUSSIAN_ROULETTE, resume::cli_name(&a.russian_roulette)),
+                (resume::LIGHT_SAMPLING, resume::cli_name(&a.light_sampling)),
                 (resume::TARGET_SPP, a.spp.to_string()),
                 (resume::TONEMAP, a.tonemap.to_string()),
                 (resume::EXPOSURE, a.exposure.to_string()),
             ]
             .into_iter()
+            .chain(a.sun_angle.map(|d| (resume::SUN_ANGLE, d.to_string())))
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
         }
@@ -87,7 +89,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         None => None,
     };
 
-    let scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
+    let mut scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
         // The scene came from the file's record: say so, and how to point at it.
         (Some(file), None) => {
             format!("{e} (the scene {} was rendered from; give its path after `render`)", file.display())
@@ -97,6 +99,12 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
+    if let Some(deg) = args.sun_angle
+        && scene.set_sun_angular_diameter(deg) == 0
+    {
+        eprintln!("warning: {}: --sun-angle {deg} is ignored: the scene has no sun", scene.name);
+    }
+    let samples_lights = scene.samples_lights();
     let scene_hash = scene.content_hash();
     let (camera, view) = select_camera(&scene, args.camera)?;
     let (width, height) = image_size(&view, args.width, args.height)?;
@@ -113,6 +121,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             compensation: args.compensation == Switch::On,
         },
         russian_roulette: args.russian_roulette == Switch::On,
+        light_sampling: args.light_sampling.into(),
     };
     let job = Job { scene_name: scene.name.clone(), scene_hash, camera, settings, args };
     let a = &job.args;
@@ -122,7 +131,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             let path = a.resume.clone().unwrap_or_default();
             let recorded = resume::identity(&file.metadata, file.width, file.height);
             let now = resume::identity(&job.metadata(0, 0.0, 0), width, height);
-            resume::check_same(&path, &file.metadata, &recorded, &now)?;
+            resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights)?;
             let saved = restore(&path, file)?;
             if saved.spp >= a.spp {
                 eprintln!(

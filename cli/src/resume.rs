@@ -18,7 +18,7 @@
 //! render to the float rounding of each path, not bit for bit (`tests/gpu.rs` checks it). The
 //! record keeps every backend that added samples, and `--resume` says when it changes.
 
-use crate::args::{MaskingArg, RenderArgs, SamplingArg, Switch};
+use crate::args::{LightSamplingArg, MaskingArg, RenderArgs, SamplingArg, Switch};
 use clap::ValueEnum;
 use furnace_post::Metadata;
 use furnace_render::resume;
@@ -47,6 +47,10 @@ pub const CAMERA: &str = "furnace.camera";
 /// `--russian-roulette`.
 pub const RUSSIAN_ROULETTE: &str = "furnace.russian_roulette";
 /// `--spp` asked for (the render may have stopped earlier; `furnace.spp` says where).
+pub const LIGHT_SAMPLING: &str = "furnace.light_sampling";
+/// The `--sun-angle` given (absent: the scene's own).
+pub const SUN_ANGLE: &str = "furnace.sun_angle_deg";
+/// Attribute: the `--spp` target (for a fixed-N sampler, its N).
 pub const TARGET_SPP: &str = "furnace.target_spp";
 /// `--tonemap` (PNG only; free to change on resume).
 pub const TONEMAP: &str = "furnace.tonemap";
@@ -89,6 +93,9 @@ pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, 
         ("specular sampling", extra(SPECULAR_SAMPLING)),
         ("camera", extra(CAMERA)),
         ("russian roulette", extra(RUSSIAN_ROULETTE)),
+        // Files from before light sampling had no choice to record.
+        ("light sampling", extra(LIGHT_SAMPLING).or_else(|| Some("mis".into()))),
+        ("sun angle", extra(SUN_ANGLE)),
     ];
     let fixed_n = meta.sampler.as_deref().and_then(|s| SamplerKind::from_str(s).ok());
     if fixed_n.is_some_and(|k| k.needs_sample_count()) {
@@ -105,8 +112,9 @@ pub fn check_same(
     meta: &Metadata,
     recorded: &[(&'static str, Option<String>)],
     now: &[(&'static str, Option<String>)],
+    samples_lights: bool,
 ) -> Result<(), String> {
-    resume::check_layout(meta.extra.get(SAMPLER_LAYOUT).map(String::as_str))
+    resume::check_layout(meta.extra.get(SAMPLER_LAYOUT).map(String::as_str), samples_lights)
         .and_then(|()| resume::check_same(recorded, now))
         .map_err(|e| format!("{}: {e}", file.display()))
 }
@@ -172,6 +180,16 @@ pub fn apply_recorded(
     if !a.given("russian_roulette") {
         let v = extra(RUSSIAN_ROULETTE)?;
         a.russian_roulette = enum_value::<Switch>(v).ok_or_else(|| invalid(RUSSIAN_ROULETTE, v))?;
+    }
+    if !a.given("light_sampling")
+        && let Some(v) = meta.extra.get(LIGHT_SAMPLING)
+    {
+        a.light_sampling = enum_value::<LightSamplingArg>(v).ok_or_else(|| invalid(LIGHT_SAMPLING, v))?;
+    }
+    if !a.given("sun_angle")
+        && let Some(v) = meta.extra.get(SUN_ANGLE)
+    {
+        a.sun_angle = Some(v.parse().map_err(|_| invalid(SUN_ANGLE, v))?);
     }
     if !a.given("spp") {
         let v = extra(TARGET_SPP)?;

@@ -5,12 +5,16 @@ use furnace_brdf::{Bsdf, Frame, MetallicRoughness, MetallicRoughnessParams, Spec
 use furnace_render::layout::{
     self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
 };
-use furnace_render::{Film, Integrator, RenderError, RenderSettings};
+use furnace_render::{Film, Integrator, LightSampling, RenderError, RenderSettings};
 use furnace_sampling::{AnySampler, Sampler};
-use furnace_scene::{AlphaMode, Camera, MaterialSample, Scene, oct_decode};
+use furnace_scene::{AlphaMode, Camera, Emitters, MaterialSample, Scene, oct_decode};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
+
+mod lights;
+
+use lights::{SunDisc, Vertex};
 
 /// A scene prepared for rendering through one camera: its BVH, per-triangle material indices,
 /// sampler, and the film that [`Integrator::render_pass`] adds to.
@@ -36,8 +40,12 @@ pub struct CpuRenderer {
     any_masked: bool,
     /// The ray offsets' length scale (`furnace_accel::offset_scale_of_bounds`).
     offset_scale: f32,
-    /// The scene's directional lights ([`Scene::suns`]).
+    /// The scene's delta suns ([`Scene::suns`] without a disc).
     suns: Vec<furnace_scene::Sun>,
+    /// The scene's sun discs ([`Scene::suns`] with one).
+    sun_discs: Vec<SunDisc>,
+    /// The emissive triangles, chosen for light samples by power; `None` without any.
+    emitters: Option<Emitters>,
     /// Point and spot lights ([`Scene::point_lights`]).
     point_lights: Vec<furnace_scene::PointLight>,
     /// Radiance of an escaping ray ([`Scene::sky`]).
@@ -81,10 +89,7 @@ impl CpuRenderer {
         let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
-        let last = scene.materials.len().saturating_sub(1) as u32;
-        let triangle_materials = (0..g.triangle_count())
-            .map(|t| g.triangle_materials.get(t).copied().unwrap_or(last).min(last))
-            .collect();
+        let triangle_materials = (0..g.triangle_count()).map(|t| scene.triangle_material(t) as u32).collect();
         let any_masked = scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }));
         let constant_materials = scene
             .materials
@@ -100,7 +105,9 @@ impl CpuRenderer {
         let (lo, hi) = g.bounds();
         let offset_scale = offset_scale_of_bounds(lo, hi);
         Ok(Self {
-            suns: scene.suns().copied().collect(),
+            suns: scene.suns().filter(|s| !s.is_disc()).copied().collect(),
+            sun_discs: scene.suns().filter(|s| s.is_disc()).map(SunDisc::new).collect(),
+            emitters: Emitters::new(&scene),
             point_lights: scene.point_lights().copied().collect(),
             sky: scene.sky(),
             film: Film::new(settings.width, settings.height),
@@ -213,10 +220,16 @@ impl CpuRenderer {
         let mut throughput = Vec3::ONE;
         // `event` counts the scattering events so far; the loop body handles one ray.
         let mut event = 0;
+        // The solid-angle pdf of the BSDF sample that made the ray (`None`: the camera's), for
+        // the MIS weights of the lights it reaches.
+        let mut bsdf_pdf: Option<f32> = None;
         loop {
             let Some(hit) = self.closest_hit(origin, direction) else {
-                // The ray leaves the scene: the sky is gathered here and only here.
+                // The ray leaves the scene: the sky and the sun discs it sees.
                 radiance += throughput * self.sky;
+                if !self.sun_discs.is_empty() {
+                    radiance += throughput * self.sun_discs_seen(direction, bsdf_pdf);
+                }
                 break;
             };
             let material_index = self.triangle_materials[hit.triangle as usize] as usize;
@@ -241,9 +254,16 @@ impl CpuRenderer {
                 Shading::Constant(c) => c.emission,
                 Shading::Evaluated(params) => params.emission,
             };
-            // Emission is one-sided: the back of a double-sided emitter does not emit.
+            // Emission is one-sided: the back of a double-sided emitter does not emit. Reached
+            // by a BSDF sample, it is weighted against the light sample that could have found it.
             if !surface.back_face {
-                radiance += throughput * emission;
+                if self.emitters.is_some() && emission != Vec3::ZERO {
+                    let cos_light = -surface.geometric.dot(direction);
+                    let w = self.emission_weight(bsdf_pdf, material_index, t, hit.t, cos_light);
+                    radiance += throughput * emission * w;
+                } else {
+                    radiance += throughput * emission;
+                }
             }
             if event == self.settings.bounces {
                 break;
@@ -260,7 +280,7 @@ impl CpuRenderer {
             let wo = frame.to_local(-direction);
             let leave = offset_ray_origin_scaled(surface.position, surface.geometric, self.offset_scale);
 
-            // Suns, delta lights: gathered by a shadow ray only.
+            // Delta suns: gathered by a shadow ray only.
             for sun in &self.suns {
                 let to_sun = -sun.direction;
                 if to_sun.dot(surface.geometric) > 0.0 {
@@ -276,6 +296,19 @@ impl CpuRenderer {
                 radiance += self.gather_point_lights(throughput, bsdf, wo, frame, &surface, leave);
             }
 
+            // Emitters and sun discs: one light sample each (next-event estimation).
+            if self.settings.light_sampling != LightSampling::Bsdf
+                && (self.emitters.is_some() || !self.sun_discs.is_empty())
+            {
+                let vertex = Vertex { throughput, bsdf, wo, frame, surface: &surface, leave };
+                if self.emitters.is_some() {
+                    radiance += self.sample_emitter(pixel, index, event, &vertex);
+                }
+                if !self.sun_discs.is_empty() {
+                    radiance += self.sample_sun_discs(pixel, index, event, &vertex);
+                }
+            }
+
             // Continue the path by sampling the BSDF.
             let dim = layout::bounce(event);
             let [u1, u2] = self.sampler.value_2d(pixel, index, dim + BOUNCE_BSDF_DIRECTION);
@@ -289,6 +322,7 @@ impl CpuRenderer {
                 break;
             }
             throughput *= s.weight;
+            bsdf_pdf = Some(s.pdf);
             event += 1;
             if self.settings.russian_roulette && event >= 3 {
                 let survive = furnace_render::russian_roulette_survival(throughput);

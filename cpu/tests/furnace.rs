@@ -271,7 +271,7 @@ fn sunlit_lambert_floor() {
         textures: Vec::new(),
         images: Vec::new(),
         cameras: vec![Camera::look_at(Vec3::Y, Vec3::ZERO, Vec3::Z, 0.5)],
-        lights: vec![Light::Sun(Sun { direction: -Vec3::new(theta.sin(), theta.cos(), 0.0), irradiance })],
+        lights: vec![Light::Sun(Sun::delta(-Vec3::new(theta.sin(), theta.cos(), 0.0), irradiance))],
         warnings: Vec::new(),
         dropped_triangles: 0,
     };

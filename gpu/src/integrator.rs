@@ -36,9 +36,9 @@ use crate::traverse::BvhBuffers;
 use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
 use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
-use furnace_render::{Film, Integrator, RenderError, RenderSettings};
+use furnace_render::{Film, Integrator, LightSampling, RenderError, RenderSettings};
 use furnace_sampling::AnySampler;
-use furnace_scene::{AlphaMode, Camera, Projection, Scene};
+use furnace_scene::{AlphaMode, Camera, Emitters, Projection, Scene};
 
 crate::wgsl_consts! {
     /// The `FRAME_*` flags as WGSL `const` declarations (composed into the integrator shader).
@@ -53,6 +53,11 @@ crate::wgsl_consts! {
     pub const FRAME_HAS_SUN: u32 = 8;
     /// `FrameParams.flags`: add the rays traced to the ray counter.
     pub const FRAME_COUNT_RAYS: u32 = 16;
+    /// `FrameParams.flags`: no light samples of emitters and sun discs (`LightSampling::Bsdf`).
+    pub const FRAME_NO_LIGHT_SAMPLES: u32 = 32;
+    /// `FrameParams.flags`: BSDF-sampled rays that reach an emitter or a sun disc add nothing
+    /// (`LightSampling::Nee`).
+    pub const FRAME_NO_BSDF_LIGHT: u32 = 64;
 }
 
 crate::gpu_struct! {
@@ -67,9 +72,9 @@ crate::gpu_struct! {
         pub cam_z: [f32; 4] => WgslType::VEC4_F32,
         /// See `cam_x`.
         pub cam_t: [f32; 4] => WgslType::VEC4_F32,
-        /// Direction sunlight travels (xyz).
+        /// Direction sunlight travels (xyz); `1 − cos θ` of its disc (w; 0: a delta sun).
         pub sun_direction: [f32; 4] => WgslType::VEC4_F32,
-        /// Sun irradiance (rgb).
+        /// Sun irradiance (rgb); the disc's radiance per unit irradiance, `1/(π sin²θ)` (w).
         pub sun_irradiance: [f32; 4] => WgslType::VEC4_F32,
         /// Sky radiance (rgb).
         pub sky: [f32; 4] => WgslType::VEC4_F32,
@@ -106,8 +111,10 @@ crate::gpu_struct! {
         pub offset_scale: f32 => WgslType::F32,
         /// Records in `point_lights` (0: the loop over them is skipped).
         pub point_light_count: u32 => WgslType::U32,
-        /// Rust-only padding to 192 bytes (WGSL rounds the struct up by itself).
-        pub pad: [u32; 2] => WgslType::PAD,
+        /// Emissive triangles in `emitters` (0: none).
+        pub emitter_count: u32 => WgslType::U32,
+        /// [`Emitters::total_weight`], the selection pdfs' denominator.
+        pub emitter_total: f32 => WgslType::F32,
     }
 }
 
@@ -176,6 +183,21 @@ pub fn point_light_records(scene: &Scene) -> Vec<GpuPointLight> {
     v
 }
 
+/// The `emitters` buffer of a scene's [`Emitters`], as `u32` words: per emitter its triangle,
+/// its alias-table bin's alias and threshold (`f32` bits) — `3·n` words — then per material its
+/// selection weight (`f32` bits). 12 bytes per emitter and 4 per material; four zero words when
+/// there are no emitters (a binding cannot be empty; `emitter_count` is 0 and the shader has no
+/// emitter code then).
+pub fn emitter_words(emitters: Option<&Emitters>) -> Vec<u32> {
+    let Some(e) = emitters else { return vec![0; 4] };
+    let mut words = Vec::with_capacity(3 * e.len() + e.material_weights().len());
+    for (&t, bin) in e.triangles().iter().zip(e.bins()) {
+        words.extend([t, bin.alias, bin.threshold.to_bits()]);
+    }
+    words.extend(e.material_weights().iter().map(|w| w.to_bits()));
+    words
+}
+
 /// Words of the counter buffer (`ray_counter`): rays, nodes and triangles as 64-bit pairs, then
 /// fallbacks and the deepest stack.
 const COUNTER_WORDS: usize = 8;
@@ -241,6 +263,7 @@ pub struct GpuRenderer {
     bvh: [wgpu::Buffer; 2],
     turquin: wgpu::Buffer,
     point_lights: wgpu::Buffer,
+    emitters: wgpu::Buffer,
     bytes_per_triangle: f64,
     bvh_bytes: u64,
     scene_bytes: u64,
@@ -275,6 +298,7 @@ pub fn binding_table(precision: FilmPrecision) -> BindingTable {
     bindings.extend(scene::binding_list());
     bindings.push(Binding::read("turquin_table", "array<f32>"));
     bindings.push(Binding::read("point_lights", "array<PointLight>"));
+    bindings.push(Binding::read("emitters", "array<u32>"));
     bindings.push(Binding::read_write("ray_counter", &format!("array<atomic<u32>, {COUNTER_WORDS}>")));
     BindingTable::new(0, 0, bindings)
 }
@@ -285,17 +309,32 @@ pub fn binding_table(precision: FilmPrecision) -> BindingTable {
 pub struct SceneFeatures {
     /// Point or spot lights (the shadow-ray loop over `point_lights`).
     pub point_lights: bool,
+    /// Emissive triangles (their light samples and the MIS weights of their emission).
+    pub emitters: bool,
+    /// A sun with a disc (its cone samples, and its radiance seen by escaping rays).
+    pub sun_disc: bool,
 }
 
 impl SceneFeatures {
     /// The features `scene` uses.
     pub fn of(scene: &Scene) -> Self {
-        Self { point_lights: scene.point_lights().next().is_some() }
+        Self::with_emitters(scene, Emitters::new(scene).is_some())
+    }
+
+    fn with_emitters(scene: &Scene, emitters: bool) -> Self {
+        Self {
+            point_lights: scene.point_lights().next().is_some(),
+            emitters,
+            sun_disc: scene.sun().is_some_and(|s| s.is_disc()),
+        }
     }
 
     /// The `HAS_*` constants of these features, as WGSL.
     pub fn wgsl(self) -> String {
-        format!("const HAS_POINT_LIGHTS: bool = {};\n", self.point_lights)
+        format!(
+            "const HAS_POINT_LIGHTS: bool = {};\nconst HAS_EMITTERS: bool = {};\nconst HAS_SUN_DISC: bool = {};\n",
+            self.point_lights, self.emitters, self.sun_disc
+        )
     }
 }
 
@@ -374,9 +413,12 @@ impl GpuRenderer {
         let turquin = storage_buffer(&ctx, "turquin", bytemuck::cast_slice(&brdf::turquin_table()))?;
         let point_lights =
             storage_buffer(&ctx, "point lights", bytemuck::cast_slice(&point_light_records(scene)))?;
+        let scene_emitters = Emitters::new(scene);
+        let emitters = storage_buffer(&ctx, "emitters", &emitter_words(scene_emitters.as_ref()))?;
+        let features = SceneFeatures::with_emitters(scene, scene_emitters.is_some());
         let precision = FilmPrecision::for_context(&ctx);
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
-        let base = frame_params(scene, camera, &settings, sampler_params);
+        let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
 
         let entries = binding_table(precision).layout_entries();
         let device = &ctx.device;
@@ -392,7 +434,7 @@ impl GpuRenderer {
         });
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("integrator"),
-            source: wgpu::ShaderSource::Wgsl(shader_source(precision, SceneFeatures::of(scene)).into()),
+            source: wgpu::ShaderSource::Wgsl(shader_source(precision, features).into()),
         });
         let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some("integrator"),
@@ -426,6 +468,7 @@ impl GpuRenderer {
             bvh,
             turquin,
             point_lights,
+            emitters,
             samples_per_dispatch,
             max_samples_per_invocation,
             group_samples: None,
@@ -632,6 +675,7 @@ impl GpuRenderer {
         resources.extend(self.scene.resources());
         resources.push(self.turquin.as_entire_binding());
         resources.push(self.point_lights.as_entire_binding());
+        resources.push(self.emitters.as_entire_binding());
         resources.push(self.ray_counter.as_entire_binding());
         let entries = binding_table(self.film.precision()).bind_entries(resources);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -730,6 +774,17 @@ pub fn frame_params(
     s: &RenderSettings,
     sampler: SamplerParams,
 ) -> FrameParams {
+    frame_params_with(scene, camera, s, sampler, Emitters::new(scene).as_ref())
+}
+
+/// [`frame_params`] with the scene's emitters already built.
+fn frame_params_with(
+    scene: &Scene,
+    camera: &Camera,
+    s: &RenderSettings,
+    sampler: SamplerParams,
+    emitters: Option<&Emitters>,
+) -> FrameParams {
     let m = camera.world_from_camera;
     let v4 = |v: glam::Vec3A| [v.x, v.y, v.z, 0.0];
     let (w, h) = (s.width.max(1) as f32, s.height.max(1) as f32);
@@ -745,10 +800,16 @@ pub fn frame_params(
     if any_masked {
         flags |= FRAME_ANY_MASKED;
     }
+    flags |= match s.light_sampling {
+        LightSampling::Bsdf => FRAME_NO_LIGHT_SAMPLES,
+        LightSampling::Nee => FRAME_NO_BSDF_LIGHT,
+        LightSampling::Mis => 0,
+    };
     let (sun_direction, sun_irradiance) = match scene.sun() {
         Some(sun) => {
             flags |= FRAME_HAS_SUN;
-            (sun.direction.extend(0.0).to_array(), sun.irradiance.extend(0.0).to_array())
+            let (t, k) = (sun.one_minus_cos(), sun.radiance_scale());
+            (sun.direction.extend(t).to_array(), sun.irradiance.extend(k).to_array())
         }
         None => ([0.0; 4], [0.0; 4]),
     };
@@ -778,6 +839,7 @@ pub fn frame_params(
             offset_scale_of_bounds(lo, hi)
         },
         point_light_count: scene.point_lights().count() as u32,
-        pad: [0; 2],
+        emitter_count: emitters.map_or(0, |e| e.len() as u32),
+        emitter_total: emitters.map_or(0.0, Emitters::total_weight),
     }
 }

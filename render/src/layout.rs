@@ -7,6 +7,16 @@
 //! | `2 + 4k`, `3 + 4k` | BSDF direction `u` of scattering event `k = 0, 1, …` ([`bounce`] + [`BOUNCE_BSDF_DIRECTION`]) |
 //! | `4 + 4k` | BSDF lobe choice `uc` of event `k` ([`BOUNCE_BSDF_LOBE`]) |
 //! | `5 + 4k` | Russian roulette of event `k` ([`BOUNCE_RUSSIAN_ROULETTE`]; unused without it) |
+//! | `L + 8k`, `L + 1 + 8k` | point on the emitter chosen at event `k` ([`light`] + [`LIGHT_EMITTER_POINT`]) |
+//! | `L + 2 + 8k` | the emitter's bin in the alias table, 32 bits ([`LIGHT_EMITTER_BIN`]) |
+//! | `L + 3 + 8k` | the alias table's coin ([`LIGHT_EMITTER_COIN`]) |
+//! | `L + 4 + 8k`, `L + 5 + 8k` | direction in the sun's disc ([`LIGHT_SUN_DISC`]) |
+//! | `L + 6 + 8k`, `L + 7 + 8k` | reserved for environment sampling |
+//!
+//! where `L = 4·(bounces + 1)` ([`light_block`]) is the first group of four after every
+//! event's BSDF dimensions. The light dimensions come after the whole BSDF block, not
+//! interleaved with it, so that a scene that samples no light (no emitters, no sun disc) reads
+//! exactly the dimensions it read before they existed: its images are the same bits.
 //!
 //! Pairs start on even dimensions, so the 2-D samplers (Hammersley, CMJ, PMJ02) stratify the
 //! pixel position and each BSDF direction jointly; Owen-Sobol's groups of four put the first
@@ -19,8 +29,11 @@
 //! reordering — must increase it.
 
 /// The version of the layout below. Version 1 is the layout of every furnace before the version
-/// was recorded, so a saved render without a recorded version is of version 1.
-pub const SAMPLER_LAYOUT_VERSION: u32 = 1;
+/// was recorded, so a saved render without a recorded version is of version 1. Version 2 added
+/// the light block; it changed no dimension of version 1, so a version-1 render of a scene
+/// that reads no light dimension is a version-2 render too
+/// ([`crate::resume::check_layout`]).
+pub const SAMPLER_LAYOUT_VERSION: u32 = 2;
 
 /// First of the two dimensions of the camera ray's position inside the pixel.
 pub const DIM_PIXEL: u32 = 0;
@@ -46,8 +59,35 @@ pub const fn bounce(event: u32) -> u32 {
     DIM_FIRST_BOUNCE.wrapping_add(DIMS_PER_BOUNCE.wrapping_mul(event))
 }
 
+/// Sampler dimensions of the light block per scattering event.
+pub const LIGHT_DIMS_PER_EVENT: u32 = 8;
+/// Offset in an event's light dimensions of the two of the point on the chosen emitter.
+pub const LIGHT_EMITTER_POINT: u32 = 0;
+/// Offset of the 32 bits that choose the emitter's alias-table bin.
+pub const LIGHT_EMITTER_BIN: u32 = 2;
+/// Offset of the alias table's coin.
+pub const LIGHT_EMITTER_COIN: u32 = 3;
+/// Offset of the two dimensions of the direction inside a sun's disc.
+pub const LIGHT_SUN_DISC: u32 = 4;
+
+const _: () = assert!(LIGHT_SUN_DISC + 2 <= LIGHT_DIMS_PER_EVENT && LIGHT_EMITTER_COIN < LIGHT_SUN_DISC);
+
+/// The first dimension of the light block of a render of `bounces` scattering events:
+/// `4·(bounces + 1)`, past the last BSDF dimension `bounce(bounces − 1) + 3 = 4·bounces + 1`
+/// and on a group of four (Owen-Sobol's 4-D padding). Wraps like the GPU's `u32`.
+#[inline]
+pub const fn light_block(bounces: u32) -> u32 {
+    4u32.wrapping_mul(bounces.wrapping_add(1))
+}
+
+/// The first light dimension of scattering event `event` of a render of `bounces` events.
+#[inline]
+pub const fn light(bounces: u32, event: u32) -> u32 {
+    light_block(bounces).wrapping_add(LIGHT_DIMS_PER_EVENT.wrapping_mul(event))
+}
+
 /// The layout as WGSL `const` declarations (`DIM_PIXEL`, `DIM_FIRST_BOUNCE`, `DIMS_PER_BOUNCE`,
-/// `BOUNCE_*`), for shaders that trace the same paths: the GPU integrator composes this instead
+/// `BOUNCE_*`, `LIGHT_*`; the light block's start is `4u * (bounces + 1u)`), for shaders that trace the same paths: the GPU integrator composes this instead
 /// of declaring its own copy.
 pub fn wgsl() -> String {
     [
@@ -57,6 +97,11 @@ pub fn wgsl() -> String {
         ("BOUNCE_BSDF_DIRECTION", BOUNCE_BSDF_DIRECTION),
         ("BOUNCE_BSDF_LOBE", BOUNCE_BSDF_LOBE),
         ("BOUNCE_RUSSIAN_ROULETTE", BOUNCE_RUSSIAN_ROULETTE),
+        ("LIGHT_DIMS_PER_EVENT", LIGHT_DIMS_PER_EVENT),
+        ("LIGHT_EMITTER_POINT", LIGHT_EMITTER_POINT),
+        ("LIGHT_EMITTER_BIN", LIGHT_EMITTER_BIN),
+        ("LIGHT_EMITTER_COIN", LIGHT_EMITTER_COIN),
+        ("LIGHT_SUN_DISC", LIGHT_SUN_DISC),
     ]
     .iter()
     .map(|(name, v)| format!("const {name}: u32 = {v}u;\n"))
@@ -73,5 +118,16 @@ mod tests {
         assert_eq!(bounce(1) - bounce(0), DIMS_PER_BOUNCE);
         assert!(bounce(0).is_multiple_of(2), "the BSDF direction pair starts on an even dimension");
         assert!(wgsl().contains("const DIMS_PER_BOUNCE: u32 = 4u;\n"));
+    }
+
+    #[test]
+    fn the_light_block_follows_every_bsdf_dimension() {
+        for bounces in [0, 1, 4, 100] {
+            let last_bsdf =
+                if bounces == 0 { DIM_PIXEL + 1 } else { bounce(bounces - 1) + DIMS_PER_BOUNCE - 1 };
+            assert!(light_block(bounces) > last_bsdf);
+            assert!(light_block(bounces).is_multiple_of(4));
+            assert_eq!(light(bounces, 1) - light(bounces, 0), LIGHT_DIMS_PER_EVENT);
+        }
     }
 }

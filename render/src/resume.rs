@@ -78,16 +78,19 @@ pub fn check_same(
 }
 
 /// `Err` unless the recorded sampler layout (`None`: not recorded, which is layout 1, the layout
-/// before the version was recorded) is [`SAMPLER_LAYOUT_VERSION`].
+/// before the version was recorded) traces the paths [`SAMPLER_LAYOUT_VERSION`] traces now: the
+/// same version, or layout 1 for a scene that samples no light (`samples_lights` false: no
+/// emitters, no sun disc), whose paths version 2 left unchanged.
 ///
 /// # Errors
 /// [`ResumeError::Layout`].
-pub fn check_layout(recorded: Option<&str>) -> Result<(), ResumeError> {
+pub fn check_layout(recorded: Option<&str>, samples_lights: bool) -> Result<(), ResumeError> {
     let recorded = recorded.unwrap_or("1");
-    if recorded.trim().parse::<u32>() == Ok(SAMPLER_LAYOUT_VERSION) {
-        return Ok(());
+    match recorded.trim().parse::<u32>() {
+        Ok(SAMPLER_LAYOUT_VERSION) => Ok(()),
+        Ok(1) if !samples_lights => Ok(()),
+        _ => Err(ResumeError::Layout { recorded: recorded.to_string(), now: SAMPLER_LAYOUT_VERSION }),
     }
-    Err(ResumeError::Layout { recorded: recorded.to_string(), now: SAMPLER_LAYOUT_VERSION })
 }
 
 /// The backend record of a render continued (or begun, `recorded` = `None`) on `now`
@@ -121,11 +124,12 @@ mod tests {
 
     #[test]
     fn another_layout_is_refused() {
-        assert!(check_layout(None).is_ok(), "files without a version are layout 1");
-        assert!(check_layout(Some(&SAMPLER_LAYOUT_VERSION.to_string())).is_ok());
-        let e = check_layout(Some("2")).unwrap_err();
-        assert!(e.to_string().contains("sampler dimension layout 2, this furnace traces layout 1"), "{e}");
-        assert!(check_layout(Some("two")).is_err());
+        assert!(check_layout(None, false).is_ok(), "files without a version are layout 1");
+        assert!(check_layout(None, true).is_err(), "layout 1 never sampled lights");
+        assert!(check_layout(Some(&SAMPLER_LAYOUT_VERSION.to_string()), true).is_ok());
+        let e = check_layout(Some("3"), false).unwrap_err();
+        assert!(e.to_string().contains("layout 3"), "{e}");
+        assert!(check_layout(Some("two"), false).is_err());
     }
 
     #[test]

@@ -5,7 +5,7 @@ use furnace_sampling::SamplerKind;
 
 /// What to render and how. [`Default`] is 256×256, 4 bounces, Owen-scrambled Sobol, seed 0,
 /// the glTF material model (height-correlated masking, spherical-cap sampling, Turquin
-/// compensation), no Russian roulette.
+/// compensation), no Russian roulette, MIS of light and BSDF samples.
 ///
 /// Sobol is the default by measurement (furnace-cpu's `examples/sampler_study.rs`, BENCHMARKS.md "Sampler
 /// choice (cbox)"): on the Cornell box it has the lowest error at equal time of the progressive
@@ -32,6 +32,91 @@ pub struct RenderSettings {
     pub specular: SpecularOptions,
     /// Russian roulette from the third scattering event on (unbiased: survivors are reweighted).
     pub russian_roulette: bool,
+    /// How light from emitters and sun discs is found ([`LightSampling`]); delta lights (the
+    /// delta sun, point and spot lights) are always gathered by shadow rays.
+    pub light_sampling: LightSampling,
+}
+
+/// The strategies that find light of emitters and sun discs: BSDF-sampled rays that hit them,
+/// light samples with shadow rays (next-event estimation), or both combined by multiple
+/// importance sampling (power heuristic, Veach 1995). All three are unbiased; MIS is the
+/// default because it is never much worse than the better of the other two and far better than
+/// the worse (small bright emitters: NEE wins; glossy reflections of large ones: BSDF wins).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum LightSampling {
+    /// Only BSDF sampling: light is found when a sampled ray hits it.
+    Bsdf,
+    /// Only next-event estimation: a BSDF-sampled ray that hits an emitter or disc adds nothing
+    /// (except the camera ray's, which no light sample could find).
+    Nee,
+    /// Both, weighted by the power heuristic.
+    #[default]
+    Mis,
+}
+
+impl LightSampling {
+    /// Every strategy, in CLI order.
+    pub const ALL: [LightSampling; 3] = [Self::Bsdf, Self::Nee, Self::Mis];
+
+    /// The CLI name: `bsdf`, `nee`, `mis`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Bsdf => "bsdf",
+            Self::Nee => "nee",
+            Self::Mis => "mis",
+        }
+    }
+
+    /// The weight of a light sample whose light pdf is `light` and BSDF pdf `bsdf` (solid angle).
+    #[inline]
+    pub fn light_weight(self, light: f32, bsdf: f32) -> f32 {
+        match self {
+            Self::Bsdf => 0.0,
+            Self::Nee => 1.0,
+            Self::Mis => power_heuristic(light, bsdf),
+        }
+    }
+
+    /// The weight of a BSDF-sampled hit on a light whose light pdf is `light` (solid angle, as
+    /// the light sampler would have chosen it from the previous vertex) and BSDF pdf `bsdf`.
+    #[inline]
+    pub fn bsdf_weight(self, bsdf: f32, light: f32) -> f32 {
+        match self {
+            Self::Bsdf => 1.0,
+            Self::Nee => 0.0,
+            Self::Mis => power_heuristic(bsdf, light),
+        }
+    }
+}
+
+impl std::fmt::Display for LightSampling {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for LightSampling {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| format!("unknown light sampling {s:?} (bsdf, nee or mis)"))
+    }
+}
+
+/// Veach's power heuristic with β = 2 for one sample of each strategy: `a² / (a² + b²)`,
+/// formed as `1 / (1 + (b/a)²)` so that pdfs near `f32::MAX` (a tiny emitter seen from afar)
+/// do not overflow; 1 when `b` is 0, 0 when `a` is 0 (and 0 for NaN).
+#[inline]
+pub fn power_heuristic(a: f32, b: f32) -> f32 {
+    if !(a > 0.0) {
+        return 0.0;
+    }
+    let r = b / a;
+    let w = 1.0 / (1.0 + r * r);
+    if w.is_nan() { 0.0 } else { w }
 }
 
 impl Default for RenderSettings {
@@ -45,6 +130,7 @@ impl Default for RenderSettings {
             sample_count: None,
             specular: SpecularOptions::default(),
             russian_roulette: false,
+            light_sampling: LightSampling::Mis,
         }
     }
 }

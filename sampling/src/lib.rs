@@ -28,8 +28,9 @@
 //!
 //! ## Warps
 //!
-//! [`warp`] maps the unit square to the disk and the hemisphere; each warp comes with its pdf and
-//! its inverse.
+//! [`warp`] maps the unit square to the disk, the hemisphere, a cone and a triangle; each warp
+//! comes with its pdf. [`AliasTable`] samples one of many items (lights) by weight in constant
+//! time.
 //!
 //! Each warp and sampler is checked by a chi-square test against its pdf (the workspace's
 //! `furnace-tests` crate holds the harness).
@@ -48,6 +49,7 @@
 //! assert_eq!(sampler.value_2d(pixel, 0, 0), [u, v]);
 //! ```
 
+mod alias;
 mod cmj;
 mod error;
 pub mod fixed;
@@ -60,6 +62,7 @@ mod random;
 mod sobol;
 pub mod warp;
 
+pub use alias::{AliasBin, AliasTable};
 pub use cmj::{Cmj, cmj_point};
 pub use error::SamplerError;
 pub use fixed::to_unit_f32;

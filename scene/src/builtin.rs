@@ -164,10 +164,10 @@ pub fn sunlit_interior(target_triangles: u32) -> Scene {
         textures: Vec::new(),
         images: Vec::new(),
         cameras: vec![Camera::look_at(eye, Vec3::new(x1, 1.2, -1.0), Vec3::Y, 1.0)],
-        lights: vec![crate::Light::Sun(crate::Sun {
-            direction: Vec3::new(-1.0, -0.7, 0.15).normalize(),
-            irradiance: Vec3::new(1000.0, 950.0, 850.0),
-        })],
+        lights: vec![crate::Light::Sun(crate::Sun::delta(
+            Vec3::new(-1.0, -0.7, 0.15).normalize(),
+            Vec3::new(1000.0, 950.0, 850.0),
+        ))],
         warnings: Vec::new(),
         dropped_triangles: 0,
     }

@@ -38,6 +38,7 @@
 mod accessor;
 pub mod builtin;
 mod camera;
+mod emitter;
 mod error;
 mod geometry;
 mod hash;
@@ -48,6 +49,7 @@ mod surface;
 mod texture;
 
 pub use camera::{Camera, DEFAULT_YFOV, Projection, Ray};
+pub use emitter::{Emitters, luminance, triangle_area};
 pub use error::{SceneError, Warning};
 pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, oct_decode, oct_encode};
 pub use light::{Light, PointLight, Sky, SpotCone, Sun};
@@ -107,6 +109,13 @@ pub struct SceneStats {
 }
 
 impl Scene {
+    /// The material index of triangle `t`, clamped into `materials` (a triangle without one
+    /// takes the last material, the loader's default).
+    pub fn triangle_material(&self, t: usize) -> usize {
+        let last = self.materials.len().saturating_sub(1);
+        self.geometry.triangle_materials.get(t).map_or(last, |&m| (m as usize).min(last))
+    }
+
     /// Loads a `.gltf` or `.glb` file; buffers and images are resolved relative to it.
     pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
         let path = path.as_ref();

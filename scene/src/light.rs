@@ -7,15 +7,79 @@
 use crate::Scene;
 use glam::{Mat4, Vec3};
 
-/// A directional light ("sun"): parallel light of constant irradiance.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// A directional light ("sun"): light of constant irradiance from a direction, either exactly
+/// parallel (a delta light, `angular_radius` 0) or from a disc of uniform radiance that
+/// subtends `angular_radius` (soft shadows).
+#[derive(Clone, Copy, PartialEq)]
 pub struct Sun {
     /// Unit direction the light **travels** (the light node's −Z in world space). The
     /// direction towards the sun is `-direction`.
     pub direction: Vec3,
     /// Irradiance on a surface facing the sun, W/m² per channel (`color × intensity`, no
-    /// photometric conversion).
+    /// photometric conversion), the disc's included.
     pub irradiance: Vec3,
+    /// Half the disc's angular diameter θ in radians, in `[0, π/2]`: 0 is the delta sun; a disc
+    /// has uniform radiance [`Sun::radiance`] `= E / (π sin²θ)` over the cone of half-angle θ
+    /// (the references' convention).
+    pub angular_radius: f32,
+}
+
+impl std::fmt::Debug for Sun {
+    /// As `#[derive(Debug)]` would print it, without `angular_radius` when it is 0: the content
+    /// hash reads this, and delta suns keep the hash they had before discs existed.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let mut d = f.debug_struct("Sun");
+        d.field("direction", &self.direction).field("irradiance", &self.irradiance);
+        if self.angular_radius != 0.0 {
+            d.field("angular_radius", &self.angular_radius);
+        }
+        d.finish()
+    }
+}
+
+impl Sun {
+    /// A delta sun (no disc).
+    pub fn delta(direction: Vec3, irradiance: Vec3) -> Self {
+        Self { direction, irradiance, angular_radius: 0.0 }
+    }
+
+    /// Whether the sun is a disc (sampled over its cone, seen by rays) rather than a delta light.
+    pub fn is_disc(&self) -> bool {
+        self.angular_radius > 0.0
+    }
+
+    /// `1 − cos θ` of the disc's half-angle θ, formed as `2 sin²(θ/2)` in `f64`: exact to
+    /// `f32` rounding however small the disc (a 0.001° disc has 3.8·10⁻¹¹, where `cos θ`
+    /// rounds to 1). 0 for a delta sun.
+    pub fn one_minus_cos(&self) -> f32 {
+        let h = f64::from(self.angular_radius) / 2.0;
+        (2.0 * h.sin() * h.sin()) as f32
+    }
+
+    /// The disc's radiance `E / (π sin²θ)` (`sin²θ = t(2 − t)`, `t = 1 − cos θ`); zero for a
+    /// delta sun.
+    pub fn radiance(&self) -> Vec3 {
+        self.irradiance * self.radiance_scale()
+    }
+
+    /// The disc's radiance per unit irradiance, `1 / (π sin²θ)`, formed in `f64` (0 for a delta
+    /// sun): [`Sun::radiance`] is `irradiance ×` this.
+    pub fn radiance_scale(&self) -> f32 {
+        if !self.is_disc() {
+            return 0.0;
+        }
+        let t = f64::from(self.one_minus_cos());
+        (1.0 / (std::f64::consts::PI * t * (2.0 - t))) as f32
+    }
+
+    /// The cone sampling estimate's factor: a disc sampled uniformly over its cone, one
+    /// direction, contributes `f · cos · L / pdf = f · cos · E · 2 / (2 − t)`; this is
+    /// `E · 2 / (2 − t)` (E for a delta sun), formed without the huge `L` and `1/pdf` of a tiny
+    /// disc.
+    pub fn cone_estimate(&self) -> Vec3 {
+        let t = self.one_minus_cos();
+        self.irradiance * (2.0 / (2.0 - t))
+    }
 }
 
 /// Constant radiance arriving from every direction in which a ray leaves the scene.
@@ -95,7 +159,11 @@ impl std::fmt::Display for Light {
         let v = |v: Vec3| format!("({:.4}, {:.4}, {:.4})", v.x, v.y, v.z);
         match self {
             Light::Sun(s) => {
-                write!(f, "sun travelling {}, irradiance {} W/m²", v(s.direction), v(s.irradiance))
+                write!(f, "sun travelling {}, irradiance {} W/m²", v(s.direction), v(s.irradiance))?;
+                if s.is_disc() {
+                    write!(f, ", a disc of {:.4}°", 2.0 * s.angular_radius.to_degrees())?;
+                }
+                Ok(())
             }
             Light::Sky(s) => write!(f, "sky of radiance {}", v(s.radiance)),
             Light::Point(p) => {
@@ -142,7 +210,7 @@ pub(crate) fn punctual(
             if direction == Vec3::ZERO {
                 return Err(("", "degenerate directional light: ignored"));
             }
-            Ok(Light::Sun(Sun { direction, irradiance: power }))
+            Ok(Light::Sun(Sun::delta(direction, power)))
         }
         kind => {
             let position = world.transform_point3(Vec3::ZERO);
@@ -224,6 +292,27 @@ impl Scene {
         }
     }
 
+    /// Gives every directional light a disc of angular diameter `degrees` (0: delta suns);
+    /// returns how many there are.
+    pub fn set_sun_angular_diameter(&mut self, degrees: f32) -> usize {
+        let radius = (f64::from(degrees).to_radians() / 2.0) as f32;
+        let mut n = 0;
+        for l in &mut self.lights {
+            if let Light::Sun(s) = l {
+                s.angular_radius = radius;
+                n += 1;
+            }
+        }
+        n
+    }
+
+    /// Whether a path samples a light here beyond the delta lights: the scene has emissive
+    /// triangles ([`crate::Emitters`]) or a sun disc. Such scenes read the sampler's light
+    /// dimensions (`furnace_render::layout`).
+    pub fn samples_lights(&self) -> bool {
+        self.suns().any(Sun::is_disc) || crate::Emitters::new(self).is_some()
+    }
+
     /// Replaces the scene's skies by one of `radiance` (none for black).
     pub fn set_sky(&mut self, radiance: Vec3) {
         self.lights.retain(|l| !matches!(l, Light::Sky(_)));
@@ -257,7 +346,7 @@ mod tests {
         let mut scene = builtin::furnace_sphere(builtin::lambert(Vec3::ONE), 4);
         assert_eq!(scene.sky(), Vec3::ONE);
         assert!(scene.sun().is_none());
-        let sun = Sun { direction: -Vec3::Y, irradiance: Vec3::splat(2.0) };
+        let sun = Sun::delta(-Vec3::Y, Vec3::splat(2.0));
         scene.set_sun(Some(sun));
         scene.set_sky(Vec3::splat(0.5));
         assert_eq!(scene.lights, [Light::Sun(sun), Light::Sky(Sky { radiance: Vec3::splat(0.5) })]);

@@ -194,8 +194,12 @@ fn case(stem: &str) -> (&'static str, furnace_scene::Scene) {
         "cbox_ref_direct" | "cbox_ref_bounces4" => {
             ("cbox", furnace_scene::builtin::cornell_box().expect("the built-in Cornell box"))
         }
-        "cbox_point_ref_bounces4" => {
-            let path = furnace_tests::data::reference("lights/cbox_point.gltf");
+        "cbox_point_ref_bounces4"
+        | "cbox_area_ref_bounces4"
+        | "cbox_many_lights_ref_bounces4"
+        | "cbox_sun_disc_ref_bounces4" => {
+            let file = stem.trim_end_matches("_ref_bounces4");
+            let path = furnace_tests::data::reference(&format!("lights/{file}.gltf"));
             let scene = furnace_scene::Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
             assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
             ("lights", scene)

@@ -73,6 +73,172 @@ fn gather_point_lights(throughput: vec3<f32>, bsdf: BsdfParams, wo: vec3<f32>, f
     return sum;
 }
 
+// furnace_render::power_heuristic: a² / (a² + b²) as 1 / (1 + (b/a)²); 0 for a <= 0 or NaN.
+fn power_heuristic(a: f32, b: f32) -> f32 {
+    if !(a > 0.0) {
+        return 0.0;
+    }
+    let r = b / a;
+    let w = 1.0 / (1.0 + r * r);
+    if w != w {
+        return 0.0;
+    }
+    return w;
+}
+
+// LightSampling::light_weight (FRAME_NO_LIGHT_SAMPLES never reaches here).
+fn light_weight(light: f32, bsdf: f32) -> f32 {
+    if (params.flags & FRAME_NO_BSDF_LIGHT) != 0u {
+        return 1.0;
+    }
+    return power_heuristic(light, bsdf);
+}
+
+// LightSampling::bsdf_weight.
+fn bsdf_weight(bsdf: f32, light: f32) -> f32 {
+    if (params.flags & FRAME_NO_LIGHT_SAMPLES) != 0u {
+        return 1.0;
+    }
+    if (params.flags & FRAME_NO_BSDF_LIGHT) != 0u {
+        return 0.0;
+    }
+    return power_heuristic(bsdf, light);
+}
+
+// furnace_scene::triangle_area.
+fn triangle_area(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>) -> f32 {
+    let c = scene_cross(v1 - v0, v2 - v0);
+    return 0.5 * sqrt(scene_dot(c, c));
+}
+
+// Emitters::selection_pdf: the probability of choosing a triangle of `material` and `area`.
+fn emitter_selection_pdf(material: u32, area: f32) -> f32 {
+    let w = bitcast<f32>(emitters[3u * params.emitter_count + material]);
+    return w * area / params.emitter_total;
+}
+
+// Emitters::select: the alias table's item for the bin-choosing bits and the coin.
+fn emitter_select(bits: u32, coin: f32) -> u32 {
+    let bin = smp_mul_hi(bits, params.emitter_count);
+    var item = bin;
+    if !(coin < bitcast<f32>(emitters[3u * bin + 2u])) {
+        item = emitters[3u * bin + 1u];
+    }
+    return emitters[3u * item];
+}
+
+// CpuRenderer::sample_emitter: one light sample of an emissive triangle (throughput included).
+fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: BsdfParams,
+                  wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
+    let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event;
+    let bits = sampler_bits(params.sampler, pixel, index, dim + LIGHT_EMITTER_BIN);
+    let coin = sampler_value(params.sampler, pixel, index, dim + LIGHT_EMITTER_COIN);
+    let t = emitter_select(bits, coin);
+    let b = warp_uniform_triangle(sampler_value_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_POINT));
+    let tri = scene_triangles[t];
+    let v0 = scene_vertices[tri.i0].position;
+    let v1 = scene_vertices[tri.i1].position;
+    let v2 = scene_vertices[tri.i2].position;
+    let y = scene_interpolate3(v0, v1, v2, b.x, b.y);
+    let to_light = y - surface.position;
+    let d2 = scene_dot(to_light, to_light);
+    if !(d2 > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let d = sqrt(d2);
+    let wi = to_light / d;
+    // One-sided: only the front (the side the winding's normal points to) emits.
+    let cos_light = -scene_dot(scene_geometric_normal(v0, v1, v2), wi);
+    if !(cos_light > 0.0 && scene_dot(wi, surface.geometric) > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    if (params.flags & FRAME_ANY_MASKED) != 0u && !scene_alpha_passes(t, b.x, b.y) {
+        return vec3<f32>(0.0);
+    }
+    let material = scene_triangle_material(t);
+    var uv = vec2<f32>(0.0);
+    if scene_material_is_textured(material) {
+        uv = scene_uv(t, b.x, b.y);
+    }
+    let emission = scene_material_evaluate(material, uv).emission;
+    let wi_local = frame_to_local(frame, wi);
+    let f = bsdf_eval(bsdf, wo, wi_local);
+    if all(emission == vec3<f32>(0.0)) || all(f == vec3<f32>(0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let area = triangle_area(v0, v1, v2);
+    let pdf = emitter_selection_pdf(material, area) * d2 / (area * cos_light);
+    let w = light_weight(pdf, bsdf_pdf(bsdf, wo, wi_local));
+    let contribution = throughput * f * emission * (w / pdf);
+    if !(film_is_finite(contribution) && any(contribution != vec3<f32>(0.0))) {
+        return vec3<f32>(0.0);
+    }
+    rays_traced += 1u;
+    if trace_any(leave, wi, d * (1.0 - SHADOW_EPSILON)) {
+        return vec3<f32>(0.0);
+    }
+    return contribution;
+}
+
+// CpuRenderer::emission_weight: the MIS weight of emission reached by a BSDF sample of pdf
+// `bsdf_pdf_value` (< 0: a camera ray) at distance `t` on the front of `triangle`.
+fn emission_weight(bsdf_pdf_value: f32, material: u32, triangle: u32, t: f32, cos_light: f32) -> f32 {
+    if bsdf_pdf_value < 0.0 {
+        return 1.0;
+    }
+    let tri = scene_triangles[triangle];
+    let area = triangle_area(scene_vertices[tri.i0].position, scene_vertices[tri.i1].position,
+        scene_vertices[tri.i2].position);
+    let selection = emitter_selection_pdf(material, area);
+    if !(selection > 0.0) {
+        return 1.0;
+    }
+    let light = selection * (t * t) / (area * cos_light);
+    return bsdf_weight(bsdf_pdf_value, light);
+}
+
+// CpuRenderer::sample_sun_discs for the one sun: a direction uniform in its cone, a shadow ray.
+fn sample_sun_disc(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: BsdfParams,
+                   wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
+    let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event + LIGHT_SUN_DISC;
+    let u = sampler_value_2d(params.sampler, pixel, index, dim);
+    let t = params.sun_direction.w;
+    let wi = frame_to_world(frame_new(-params.sun_direction.xyz), warp_uniform_cone(u, t));
+    if !(scene_dot(wi, surface.geometric) > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let wi_local = frame_to_local(frame, wi);
+    let f = bsdf_eval(bsdf, wo, wi_local);
+    if all(f == vec3<f32>(0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let w = light_weight(uniform_cone_pdf(t), bsdf_pdf(bsdf, wo, wi_local));
+    // Sun::cone_estimate: E · 2 / (2 − t).
+    let estimate = params.sun_irradiance.xyz * (2.0 / (2.0 - t));
+    let contribution = throughput * f * estimate * w;
+    if all(contribution == vec3<f32>(0.0)) {
+        return vec3<f32>(0.0);
+    }
+    rays_traced += 1u;
+    if trace_any(leave, wi, bitcast<f32>(0x7f800000u)) {
+        return vec3<f32>(0.0);
+    }
+    return contribution;
+}
+
+// CpuRenderer::sun_discs_seen for the one sun: its radiance along an escaping ray.
+fn sun_disc_seen(direction: vec3<f32>, bsdf_pdf_value: f32) -> vec3<f32> {
+    let t = params.sun_direction.w;
+    if !in_cone(direction, -params.sun_direction.xyz, t) {
+        return vec3<f32>(0.0);
+    }
+    var w = 1.0;
+    if bsdf_pdf_value >= 0.0 {
+        w = bsdf_weight(bsdf_pdf_value, uniform_cone_pdf(t));
+    }
+    return (params.sun_irradiance.xyz * params.sun_irradiance.w) * w;
+}
+
 // Renderer::trace: radiance arriving at `origin` from −`direction`.
 fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f32>) -> vec3<f32> {
     var origin = origin_in;
@@ -80,13 +246,18 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
     var event = 0u;
+    // The pdf of the BSDF sample that made the ray (−1: the camera's), for MIS weights.
+    var ray_pdf = -1.0;
     let inf = bitcast<f32>(0x7f800000u);
     loop {
         rays_traced += 1u;
         let hit = trace_closest(origin, direction, inf);
         if !hit.hit {
-            // The ray leaves the scene: the sky is gathered here and only here.
+            // The ray leaves the scene: the sky and the sun disc it sees.
             radiance += throughput * params.sky.xyz;
+            if HAS_SUN_DISC {
+                radiance += throughput * sun_disc_seen(direction, ray_pdf);
+            }
             break;
         }
         let material = scene_triangle_material(hit.triangle);
@@ -102,7 +273,13 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         }
         // Emission is one-sided: the back of a double-sided emitter does not emit.
         if surface.back_face == 0u {
-            radiance += throughput * ms.emission;
+            if HAS_EMITTERS && any(ms.emission != vec3<f32>(0.0)) {
+                let cos_light = -scene_dot(surface.geometric, direction);
+                let w = emission_weight(ray_pdf, material, hit.triangle, hit.t, cos_light);
+                radiance += throughput * ms.emission * w;
+            } else {
+                radiance += throughput * ms.emission;
+            }
         }
         if event == params.bounces {
             break;
@@ -113,8 +290,8 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         let wo = frame_to_local(frame, -direction);
         let leave = offset_ray_origin_scaled(surface.position, surface.geometric, params.offset_scale);
 
-        // The sun, a delta light: gathered by a shadow ray only.
-        if (params.flags & FRAME_HAS_SUN) != 0u {
+        // The delta sun: gathered by a shadow ray only.
+        if !HAS_SUN_DISC && (params.flags & FRAME_HAS_SUN) != 0u {
             let to_sun = -params.sun_direction.xyz;
             if dot(to_sun, surface.geometric) > 0.0 {
                 let f = bsdf_eval(bsdf, wo, frame_to_local(frame, to_sun));
@@ -133,6 +310,16 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             radiance += gather_point_lights(throughput, bsdf, wo, frame, surface, leave);
         }
 
+        // Emitters and the sun disc: one light sample each (next-event estimation).
+        if (params.flags & FRAME_NO_LIGHT_SAMPLES) == 0u {
+            if HAS_EMITTERS {
+                radiance += sample_emitter(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+            }
+            if HAS_SUN_DISC {
+                radiance += sample_sun_disc(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+            }
+        }
+
         // Continue the path by sampling the BSDF.
         let dim = DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE * event;
         let u = sampler_value_2d(params.sampler, pixel, index, dim + BOUNCE_BSDF_DIRECTION);
@@ -147,6 +334,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             break;
         }
         throughput *= s.weight;
+        ray_pdf = s.pdf;
         event += 1u;
         if (params.flags & FRAME_RUSSIAN_ROULETTE) != 0u && event >= 3u {
             let survive = russian_roulette_survival(throughput);

@@ -536,3 +536,53 @@ fn warp_cosine_hemisphere(u: vec2<f32>) -> vec3<f32> {
 fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
     return max(cos_theta, 0.0) * SMP_FRAC_1_PI;
 }
+
+// `square_to_uniform_triangle`: Heitz's low-distortion map (pbrt-v4's SampleUniformTriangle),
+// as barycentrics (b1, b2) of (1 − b1 − b2)·v0 + b1·v1 + b2·v2.
+fn warp_uniform_triangle(u: vec2<f32>) -> vec2<f32> {
+    var b0: f32;
+    var b1: f32;
+    if u.x < u.y {
+        b0 = u.x / 2.0;
+        b1 = u.y - b0;
+    } else {
+        b1 = u.y / 2.0;
+        b0 = u.x - b1;
+    }
+    return vec2<f32>(b1, max(1.0 - b0 - b1, 0.0));
+}
+
+// `square_to_uniform_cone`: uniform in solid angle within the cone 1 − cos θmax = one_minus_cos
+// around +z; sin θ formed from t = u.x·(1 − cos θmax) so that tiny cones keep their size.
+fn warp_uniform_cone(u: vec2<f32>, one_minus_cos: f32) -> vec3<f32> {
+    let t = u.x * one_minus_cos;
+    let sin_theta = sqrt(max(t * (2.0 - t), 0.0));
+    let sc = smp_sin_cos_turns(u.y);
+    return vec3<f32>(sin_theta * sc.y, sin_theta * sc.x, 1.0 - t);
+}
+
+// `uniform_cone_pdf`: 1/(2π (1 − cos θmax)) in solid angle.
+fn uniform_cone_pdf(one_minus_cos: f32) -> f32 {
+    return (0.5 * SMP_FRAC_1_PI) / one_minus_cos;
+}
+
+// `in_cone`: ‖w − axis‖² <= 2(1 − cos θmax), the chord form of w·axis >= cos θmax.
+fn in_cone(w: vec3<f32>, axis: vec3<f32>, one_minus_cos: f32) -> bool {
+    let d = w - axis;
+    return d.x * d.x + d.y * d.y + d.z * d.z <= 2.0 * one_minus_cos;
+}
+
+// The high 32 bits of the 64-bit product a·b (WGSL has no u64): `AliasTable::sample`'s bin
+// ⌊bits · n / 2³²⌋, exactly.
+fn smp_mul_hi(a: u32, b: u32) -> u32 {
+    let a_lo = a & 0xffffu;
+    let a_hi = a >> 16u;
+    let b_lo = b & 0xffffu;
+    let b_hi = b >> 16u;
+    let lo_lo = a_lo * b_lo;
+    let hi_lo = a_hi * b_lo;
+    let lo_hi = a_lo * b_hi;
+    // At most 0xffff + 0xffff + 0xfffe0001 = 0xffffffff: no overflow.
+    let mid = (lo_lo >> 16u) + (hi_lo & 0xffffu) + lo_hi;
+    return a_hi * b_hi + (hi_lo >> 16u) + (mid >> 16u);
+}

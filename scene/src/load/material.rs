@@ -122,6 +122,15 @@ fn normal_texture(m: &gltf::Material<'_>) -> (Option<TextureRef>, f32) {
 fn emissive(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> Vec3 {
     let strength = m.emissive_strength().unwrap_or(1.0);
     let emissive = Vec3::from(m.emissive_factor()) * strength;
+    if !(emissive.is_finite() && emissive.min_element() >= 0.0) {
+        // A NaN or infinite radiance would make NaN pixels; a negative one is not light.
+        ctx.warn(
+            format!("{p}.emissiveFactor"),
+            "negative or non-finite emission (emissiveFactor × emissiveStrength): those channels are 0",
+        );
+        let clean = |x: f32| if x.is_finite() && x > 0.0 { x } else { 0.0 };
+        return Vec3::new(clean(emissive.x), clean(emissive.y), clean(emissive.z));
+    }
     if m.emissive_factor().iter().any(|&x| x > 1.0) {
         ctx.warn(
             format!("{p}.emissiveFactor"),

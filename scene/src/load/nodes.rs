@@ -122,9 +122,31 @@ impl Flattened<'_> {
             Ok(Light::Sun(_)) if self.sun.is_some() => {
                 ctx.warn(lpath, "only the first directional light is used as the sun");
             }
-            Ok(Light::Sun(s)) => self.sun = Some(s),
+            Ok(Light::Sun(mut s)) => {
+                s.angular_radius = angular_radius(ctx, light, &lpath);
+                self.sun = Some(s);
+            }
             Ok(other) => self.lights.push(other),
             Err((path, why)) => ctx.warn(if path.is_empty() { lpath } else { path.to_string() }, why),
+        }
+    }
+}
+
+/// Half the angular diameter (radians) of a directional light's disc, from the light's
+/// `extras.angular_diameter_deg` (the references' convention): 0 (a delta sun) without it; a
+/// value outside `[0°, 180°]` or not a number is ignored with a warning.
+fn angular_radius(ctx: &mut Ctx<'_>, light: &gltf::khr_lights_punctual::Light<'_>, lpath: &str) -> f32 {
+    let Some(raw) = light.extras() else { return 0.0 };
+    let Ok(v) = gltf::json::deserialize::from_str::<gltf::json::Value>(raw.get()) else { return 0.0 };
+    let Some(d) = v.get("angular_diameter_deg") else { return 0.0 };
+    match d.as_f64() {
+        Some(deg) if (0.0..=180.0).contains(&deg) => (deg.to_radians() / 2.0) as f32,
+        _ => {
+            ctx.warn(
+                format!("{lpath}.extras.angular_diameter_deg"),
+                "not a number of degrees in [0, 180]: the sun is a delta light",
+            );
+            0.0
         }
     }
 }

@@ -1,0 +1,173 @@
+//! Light samples of the CPU path tracer: next-event estimation of emissive triangles and sun
+//! discs, with the MIS weights of both strategies ([`furnace_render::LightSampling`]).
+
+use super::CpuRenderer;
+use furnace_brdf::{Bsdf, Frame, MetallicRoughness};
+use furnace_render::layout::{
+    self, LIGHT_EMITTER_BIN, LIGHT_EMITTER_COIN, LIGHT_EMITTER_POINT, LIGHT_SUN_DISC,
+};
+use furnace_sampling::Sampler;
+use furnace_sampling::warp::{in_cone, square_to_uniform_cone, square_to_uniform_triangle, uniform_cone_pdf};
+use furnace_scene::{Sun, SurfacePoint, geometric_normal, triangle_area};
+use glam::{Vec2, Vec3};
+
+/// A sun disc, with what its sampling needs formed once.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct SunDisc {
+    /// Unit direction towards the sun (the cone's axis).
+    pub axis: Vec3,
+    /// `1 − cos θ` of the disc's half-angle ([`Sun::one_minus_cos`]).
+    pub one_minus_cos: f32,
+    /// Solid-angle pdf of a direction sampled in the cone.
+    pub pdf: f32,
+    /// Radiance seen inside the cone.
+    pub radiance: Vec3,
+    /// `f · cos · L / pdf` per unit `f · cos` ([`Sun::cone_estimate`]).
+    pub estimate: Vec3,
+}
+
+impl SunDisc {
+    pub fn new(sun: &Sun) -> Self {
+        let one_minus_cos = sun.one_minus_cos();
+        Self {
+            axis: -sun.direction,
+            one_minus_cos,
+            pdf: uniform_cone_pdf(one_minus_cos),
+            radiance: sun.radiance(),
+            estimate: sun.cone_estimate(),
+        }
+    }
+}
+
+/// What a light sample needs of the scattering event it is taken at.
+pub(super) struct Vertex<'a> {
+    pub throughput: Vec3,
+    pub bsdf: &'a MetallicRoughness,
+    pub wo: Vec3,
+    pub frame: Frame,
+    pub surface: &'a SurfacePoint,
+    /// The offset origin of rays leaving the surface.
+    pub leave: Vec3,
+}
+
+impl CpuRenderer {
+    /// One light sample of an emissive triangle at scattering event `event` (throughput
+    /// included): the triangle chosen by power, a point uniform on its area, a shadow ray
+    /// stopping `SHADOW_EPSILON·d` short of it; weighted against BSDF sampling.
+    pub(super) fn sample_emitter(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>) -> Vec3 {
+        let Some(emitters) = &self.emitters else { return Vec3::ZERO };
+        let dim = layout::light(self.settings.bounces, event);
+        let bits = self.sampler.bits(pixel, index, dim + LIGHT_EMITTER_BIN);
+        let coin = self.sampler.value(pixel, index, dim + LIGHT_EMITTER_COIN);
+        let t = emitters.select(bits, coin) as usize;
+        let [u1, u2] = self.sampler.value_2d(pixel, index, dim + LIGHT_EMITTER_POINT);
+        let b = square_to_uniform_triangle(Vec2::new(u1, u2));
+        let Some([v0, v1, v2]) = self.scene.geometry.triangle(t) else { return Vec3::ZERO };
+        let y = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
+        let to_light = y - v.surface.position;
+        let d2 = to_light.length_squared();
+        if !(d2 > 0.0) {
+            return Vec3::ZERO;
+        }
+        let d = d2.sqrt();
+        let wi = to_light / d;
+        // One-sided: only the front (the side the winding's normal points to) emits.
+        let cos_light = -geometric_normal(v0, v1, v2).dot(wi);
+        if !(cos_light > 0.0 && wi.dot(v.surface.geometric) > 0.0) {
+            return Vec3::ZERO;
+        }
+        if self.any_masked && !self.alpha_passes(t as u32, b) {
+            return Vec3::ZERO; // a cut-out of an alpha-masked emitter emits nothing
+        }
+        let material = self.triangle_materials[t] as usize;
+        let emission = self.emission_at(material, t, b);
+        let wi_local = v.frame.to_local(wi);
+        let f = v.bsdf.eval(v.wo, wi_local);
+        if emission == Vec3::ZERO || f == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let area = triangle_area(v0, v1, v2);
+        let pdf = emitters.selection_pdf(material, area) * d2 / (area * cos_light);
+        let w = self.settings.light_sampling.light_weight(pdf, v.bsdf.pdf(v.wo, wi_local));
+        let contribution = v.throughput * f * emission * (w / pdf);
+        // A light sample that is not finite (an emitter touching the surface) adds nothing.
+        if !(contribution.is_finite() && contribution != Vec3::ZERO)
+            || self.occluded_within(v.leave, wi, d * (1.0 - furnace_render::SHADOW_EPSILON))
+        {
+            return Vec3::ZERO;
+        }
+        contribution
+    }
+
+    /// One light sample of each sun disc at scattering event `event` (throughput included): a
+    /// direction uniform in its cone and a shadow ray to infinity, weighted against BSDF sampling.
+    pub(super) fn sample_sun_discs(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>) -> Vec3 {
+        let mut sum = Vec3::ZERO;
+        let dim = layout::light(self.settings.bounces, event) + LIGHT_SUN_DISC;
+        for disc in &self.sun_discs {
+            let [u1, u2] = self.sampler.value_2d(pixel, index, dim);
+            let wi =
+                Frame::new(disc.axis).to_world(square_to_uniform_cone(Vec2::new(u1, u2), disc.one_minus_cos));
+            if !(wi.dot(v.surface.geometric) > 0.0) {
+                continue;
+            }
+            let wi_local = v.frame.to_local(wi);
+            let f = v.bsdf.eval(v.wo, wi_local);
+            if f == Vec3::ZERO {
+                continue;
+            }
+            let w = self.settings.light_sampling.light_weight(disc.pdf, v.bsdf.pdf(v.wo, wi_local));
+            let contribution = v.throughput * f * disc.estimate * w;
+            if contribution != Vec3::ZERO && !self.occluded(v.leave, wi) {
+                sum += contribution;
+            }
+        }
+        sum
+    }
+
+    /// The sun discs' radiance along an escaping ray (`direction`), each weighted against its
+    /// cone sampling at the previous vertex (`bsdf_pdf`; `None` for a camera ray, weight 1).
+    pub(super) fn sun_discs_seen(&self, direction: Vec3, bsdf_pdf: Option<f32>) -> Vec3 {
+        let mut sum = Vec3::ZERO;
+        for disc in &self.sun_discs {
+            if in_cone(direction, disc.axis, disc.one_minus_cos) {
+                let w = bsdf_pdf.map_or(1.0, |p| self.settings.light_sampling.bsdf_weight(p, disc.pdf));
+                sum += disc.radiance * w;
+            }
+        }
+        sum
+    }
+
+    /// The MIS weight of emission reached by a BSDF-sampled ray of pdf `bsdf_pdf` (`None`: a
+    /// camera ray) at distance `t` on the front of triangle `triangle` of `material`: against
+    /// the light sample that could have chosen the same point from the previous vertex.
+    pub(super) fn emission_weight(
+        &self,
+        bsdf_pdf: Option<f32>,
+        material: usize,
+        triangle: usize,
+        t: f32,
+        cos_light: f32,
+    ) -> f32 {
+        let (Some(p), Some(emitters)) = (bsdf_pdf, &self.emitters) else { return 1.0 };
+        let Some([v0, v1, v2]) = self.scene.geometry.triangle(triangle) else { return 1.0 };
+        let area = triangle_area(v0, v1, v2);
+        let selection = emitters.selection_pdf(material, area);
+        if !(selection > 0.0) {
+            return 1.0; // never chosen by the light sampler: BSDF sampling is its only strategy
+        }
+        let light = selection * (t * t) / (area * cos_light);
+        self.settings.light_sampling.bsdf_weight(p, light)
+    }
+
+    /// The emitted radiance of `material` on triangle `t` at barycentrics `b`.
+    fn emission_at(&self, material: usize, t: usize, b: Vec2) -> Vec3 {
+        match &self.constant_materials[material] {
+            Some(c) => c.emission,
+            None => {
+                let uv = self.scene.geometry.uv(t, b.x, b.y);
+                self.scene.materials[material].evaluate(uv, &self.scene.textures, &self.scene.images).emission
+            }
+        }
+    }
+}
