@@ -185,11 +185,9 @@ pub fn point_light_records(scene: &Scene) -> Vec<GpuPointLight> {
 
 /// The `emitters` buffer of a scene's [`Emitters`], as `u32` words: per emitter its triangle,
 /// its alias-table bin's alias and threshold (`f32` bits) — `3·n` words — then per material its
-/// selection weight (`f32` bits). 12 bytes per emitter and 4 per material; four zero words when
-/// there are no emitters (a binding cannot be empty; `emitter_count` is 0 and the shader has no
-/// emitter code then).
-pub fn emitter_words(emitters: Option<&Emitters>) -> Vec<u32> {
-    let Some(e) = emitters else { return vec![0; 4] };
+/// selection weight (`f32` bits): 12 bytes per emitter and 4 per material. A scene without
+/// emitters has no such buffer, binding or shader code.
+pub fn emitter_words(e: &Emitters) -> Vec<u32> {
     let mut words = Vec::with_capacity(3 * e.len() + e.material_weights().len());
     for (&t, bin) in e.triangles().iter().zip(e.bins()) {
         words.extend([t, bin.alias, bin.threshold.to_bits()]);
@@ -263,7 +261,8 @@ pub struct GpuRenderer {
     bvh: [wgpu::Buffer; 2],
     turquin: wgpu::Buffer,
     point_lights: wgpu::Buffer,
-    emitters: wgpu::Buffer,
+    emitters: Option<wgpu::Buffer>,
+    features: SceneFeatures,
     bytes_per_triangle: f64,
     bvh_bytes: u64,
     scene_bytes: u64,
@@ -286,7 +285,7 @@ struct Timer {
 /// The integrator's bindings, group 0 from binding 0: the [`FrameParams`] uniform (dynamic
 /// offset, one slot per dispatch), the film, the BVH, the scene, the Turquin table and the ray
 /// counter. One table gives the shader's declarations, the layout and the bind group.
-pub fn binding_table(precision: FilmPrecision) -> BindingTable {
+pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> BindingTable {
     let params = Binding {
         name: "params",
         ty: FrameParams::NAME.to_string(),
@@ -298,7 +297,9 @@ pub fn binding_table(precision: FilmPrecision) -> BindingTable {
     bindings.extend(scene::binding_list());
     bindings.push(Binding::read("turquin_table", "array<f32>"));
     bindings.push(Binding::read("point_lights", "array<PointLight>"));
-    bindings.push(Binding::read("emitters", "array<u32>"));
+    if features.emitters {
+        bindings.push(Binding::read("emitters", "array<u32>"));
+    }
     bindings.push(Binding::read_write("ray_counter", &format!("array<atomic<u32>, {COUNTER_WORDS}>")));
     BindingTable::new(0, 0, bindings)
 }
@@ -329,12 +330,21 @@ impl SceneFeatures {
         }
     }
 
-    /// The `HAS_*` constants of these features, as WGSL.
+    /// The `HAS_POINT_LIGHTS` constant, as WGSL.
     pub fn wgsl(self) -> String {
-        format!(
-            "const HAS_POINT_LIGHTS: bool = {};\nconst HAS_EMITTERS: bool = {};\nconst HAS_SUN_DISC: bool = {};\n",
-            self.point_lights, self.emitters, self.sun_disc
-        )
+        format!("const HAS_POINT_LIGHTS: bool = {};\n", self.point_lights)
+    }
+
+    /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
+    /// `HAS_EMITTERS`, `HAS_SUN_DISC`, and `SAMPLES_LIGHTS` (either: the MIS weights).
+    pub fn enabled(self, name: &str) -> bool {
+        match name {
+            "HAS_EMITTERS" => self.emitters,
+            "HAS_SUN_DISC" => self.sun_disc,
+            "SAMPLES_LIGHTS" => self.emitters || self.sun_disc,
+            "HAS_POINT_LIGHTS" => self.point_lights,
+            _ => panic!("no scene feature {name} (integrator.wgsl's #if)"),
+        }
     }
 }
 
@@ -354,9 +364,10 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         wgsl_struct::<GpuPointLight>(false),
         format!("const SHADOW_EPSILON: f32 = {:?};\n", furnace_render::SHADOW_EPSILON),
         features.wgsl(),
-        binding_table(precision).wgsl(),
+        binding_table(precision, features).wgsl(),
     ]
     .concat();
+    let integrator = wgsl::select(include_str!("wgsl/integrator.wgsl"), |name| features.enabled(name));
     wgsl::compose(&[
         &generated,
         wgsl::SAMPLING,
@@ -365,7 +376,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         wgsl::TRAVERSE,
         precision.wgsl(),
         wgsl::PATH,
-        include_str!("wgsl/integrator.wgsl"),
+        &integrator,
     ])
 }
 
@@ -414,13 +425,17 @@ impl GpuRenderer {
         let point_lights =
             storage_buffer(&ctx, "point lights", bytemuck::cast_slice(&point_light_records(scene)))?;
         let scene_emitters = Emitters::new(scene);
-        let emitters = storage_buffer(&ctx, "emitters", &emitter_words(scene_emitters.as_ref()))?;
+        // No buffer (and no binding) for a scene without emitters.
+        let emitters = scene_emitters
+            .as_ref()
+            .map(|e| storage_buffer(&ctx, "emitters", &emitter_words(e)))
+            .transpose()?;
         let features = SceneFeatures::with_emitters(scene, scene_emitters.is_some());
         let precision = FilmPrecision::for_context(&ctx);
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
 
-        let entries = binding_table(precision).layout_entries();
+        let entries = binding_table(precision, features).layout_entries();
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
@@ -455,7 +470,7 @@ impl GpuRenderer {
         Ok(Self {
             bytes_per_triangle: gpu_scene.bytes_per_triangle(),
             bvh_bytes,
-            scene_bytes: gpu_scene.bytes,
+            scene_bytes: gpu_scene.bytes + emitters.as_ref().map_or(0, wgpu::Buffer::size),
             ray_counter,
             ctx,
             settings,
@@ -469,6 +484,7 @@ impl GpuRenderer {
             turquin,
             point_lights,
             emitters,
+            features,
             samples_per_dispatch,
             max_samples_per_invocation,
             group_samples: None,
@@ -675,9 +691,11 @@ impl GpuRenderer {
         resources.extend(self.scene.resources());
         resources.push(self.turquin.as_entire_binding());
         resources.push(self.point_lights.as_entire_binding());
-        resources.push(self.emitters.as_entire_binding());
+        if let Some(e) = &self.emitters {
+            resources.push(e.as_entire_binding());
+        }
         resources.push(self.ray_counter.as_entire_binding());
-        let entries = binding_table(self.film.precision()).bind_entries(resources);
+        let entries = binding_table(self.film.precision(), self.features).bind_entries(resources);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("integrator"),
             layout: &self.layout,

@@ -2,6 +2,11 @@
 //!
 //! WGSL has no `#include`: a shader is the concatenation of the modules it needs, in dependency
 //! order, done by [`compose`]. Each module documents what it requires before it.
+//!
+//! Nor has it conditional compilation: [`select`] keeps or drops the lines between
+//! `// #if NAME` and `// #endif` (with an optional `// #else`), so that a shader holds no code,
+//! variable or binding of a feature its scene lacks — not even behind a `false` constant, which
+//! a driver is free to compile and keep registers for.
 
 /// `furnace-sampling`'s samplers (random, Hammersley, CMJ, PMJ02, Owen-Sobol) and warps,
 /// bit-identical to the Rust (all `u32` arithmetic, 0.32 fixed point).
@@ -36,4 +41,59 @@ pub fn compose(parts: &[&str]) -> String {
         s.push('\n');
     }
     s
+}
+
+/// `source` with its `// #if NAME` (or `// #if !NAME`) … `// #else` … `// #endif` blocks
+/// resolved by `enabled(NAME)` (blocks nest; the directive lines themselves are dropped). The directives must each stand on
+/// their own line, indentation allowed.
+///
+/// # Panics
+/// On an unbalanced `#else` / `#endif` or an unterminated `#if`: the shaders are this crate's
+/// own sources, so that is a bug here, caught by any test that composes the shader.
+pub fn select(source: &str, enabled: impl Fn(&str) -> bool) -> String {
+    let mut out = String::with_capacity(source.len());
+    // Per open block: (whether its lines are kept, whether the enclosing block is kept).
+    let mut stack: Vec<(bool, bool)> = Vec::new();
+    let live = |stack: &[(bool, bool)]| stack.last().is_none_or(|&(keep, _)| keep);
+    for (n, line) in source.lines().enumerate() {
+        let directive = line.trim_start().strip_prefix("// #");
+        match directive.map(|d| d.split_whitespace().collect::<Vec<_>>()).as_deref() {
+            Some(["if", name]) => {
+                let outer = live(&stack);
+                let on = match name.strip_prefix('!') {
+                    Some(n) => !enabled(n),
+                    None => enabled(name),
+                };
+                stack.push((outer && on, outer));
+            }
+            Some(["else"]) => {
+                let (keep, outer) =
+                    stack.pop().unwrap_or_else(|| panic!("line {}: #else without #if", n + 1));
+                stack.push((outer && !keep, outer));
+            }
+            Some(["endif"]) => {
+                stack.pop().unwrap_or_else(|| panic!("line {}: #endif without #if", n + 1));
+            }
+            _ => {
+                if live(&stack) {
+                    out.push_str(line);
+                    out.push('\n');
+                }
+            }
+        }
+    }
+    assert!(stack.is_empty(), "unterminated #if");
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn select_keeps_enabled_blocks_only() {
+        let src = "a\n// #if X\nx\n  // #if Y\n  y\n  // #else\n  not y\n  // #endif\n// #else\nnot x\n// #endif\nb\n";
+        assert_eq!(super::select(src, |n| n == "X"), "a\nx\n  not y\nb\n");
+        assert_eq!(super::select(src, |n| n == "Y"), "a\nnot x\nb\n");
+        assert_eq!(super::select(src, |_| true), "a\nx\n  y\nb\n");
+        assert_eq!(super::select("// #if !X\nno x\n// #endif\n", |_| false), "no x\n");
+    }
 }

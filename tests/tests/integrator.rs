@@ -107,6 +107,23 @@ fn dispatches_cover_every_pixel_once() {
     }
 }
 
+/// A scene without emitters or a sun disc gets a shader without their code, variables or
+/// binding (not code behind a `false` constant: measured on the H200, that cost 2–4 %).
+#[test]
+fn absent_light_features_compose_no_code() {
+    let bare = shader_source(FilmPrecision::F64, SceneFeatures::default());
+    for absent in ["sample_emitter", "sun_disc", "ray_pdf", "emitters", "power_heuristic", "#if"] {
+        assert!(!bare.contains(absent), "{absent} in the shader of a scene without light samples");
+    }
+    let all = shader_source(
+        FilmPrecision::F64,
+        SceneFeatures { point_lights: true, emitters: true, sun_disc: true },
+    );
+    for present in ["fn sample_emitter", "fn sample_sun_disc", "var ray_pdf", "var<storage, read> emitters"] {
+        assert!(all.contains(present), "{present} missing from the shader of a scene with every light");
+    }
+}
+
 #[test]
 fn frame_params_layout_matches_wgsl() {
     furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(

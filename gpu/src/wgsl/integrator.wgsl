@@ -73,6 +73,7 @@ fn gather_point_lights(throughput: vec3<f32>, bsdf: BsdfParams, wo: vec3<f32>, f
     return sum;
 }
 
+// #if SAMPLES_LIGHTS
 // furnace_render::power_heuristic: a² / (a² + b²) as 1 / (1 + (b/a)²); 0 for a <= 0 or NaN.
 fn power_heuristic(a: f32, b: f32) -> f32 {
     if !(a > 0.0) {
@@ -105,6 +106,9 @@ fn bsdf_weight(bsdf: f32, light: f32) -> f32 {
     return power_heuristic(bsdf, light);
 }
 
+// #endif
+
+// #if HAS_EMITTERS
 // furnace_scene::triangle_area.
 fn triangle_area(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>) -> f32 {
     let c = scene_cross(v1 - v0, v2 - v0);
@@ -197,6 +201,9 @@ fn emission_weight(bsdf_pdf_value: f32, material: u32, triangle: u32, t: f32, co
     return bsdf_weight(bsdf_pdf_value, light);
 }
 
+// #endif
+
+// #if HAS_SUN_DISC
 // CpuRenderer::sample_sun_discs for the one sun: a direction uniform in its cone, a shadow ray.
 fn sample_sun_disc(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: BsdfParams,
                    wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
@@ -239,6 +246,8 @@ fn sun_disc_seen(direction: vec3<f32>, bsdf_pdf_value: f32) -> vec3<f32> {
     return (params.sun_irradiance.xyz * params.sun_irradiance.w) * w;
 }
 
+// #endif
+
 // Renderer::trace: radiance arriving at `origin` from −`direction`.
 fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f32>) -> vec3<f32> {
     var origin = origin_in;
@@ -246,18 +255,20 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
     var event = 0u;
+    // #if SAMPLES_LIGHTS
     // The pdf of the BSDF sample that made the ray (−1: the camera's), for MIS weights.
     var ray_pdf = -1.0;
+    // #endif
     let inf = bitcast<f32>(0x7f800000u);
     loop {
         rays_traced += 1u;
         let hit = trace_closest(origin, direction, inf);
         if !hit.hit {
-            // The ray leaves the scene: the sky and the sun disc it sees.
+            // The ray leaves the scene: the sky (and the sun disc) it sees.
             radiance += throughput * params.sky.xyz;
-            if HAS_SUN_DISC {
-                radiance += throughput * sun_disc_seen(direction, ray_pdf);
-            }
+            // #if HAS_SUN_DISC
+            radiance += throughput * sun_disc_seen(direction, ray_pdf);
+            // #endif
             break;
         }
         let material = scene_triangle_material(hit.triangle);
@@ -273,13 +284,15 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         }
         // Emission is one-sided: the back of a double-sided emitter does not emit.
         if surface.back_face == 0u {
-            if HAS_EMITTERS && any(ms.emission != vec3<f32>(0.0)) {
+            // #if HAS_EMITTERS
+            if any(ms.emission != vec3<f32>(0.0)) {
                 let cos_light = -scene_dot(surface.geometric, direction);
                 let w = emission_weight(ray_pdf, material, hit.triangle, hit.t, cos_light);
                 radiance += throughput * ms.emission * w;
-            } else {
-                radiance += throughput * ms.emission;
             }
+            // #else
+            radiance += throughput * ms.emission;
+            // #endif
         }
         if event == params.bounces {
             break;
@@ -290,8 +303,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         let wo = frame_to_local(frame, -direction);
         let leave = offset_ray_origin_scaled(surface.position, surface.geometric, params.offset_scale);
 
-        // The delta sun: gathered by a shadow ray only.
-        if !HAS_SUN_DISC && (params.flags & FRAME_HAS_SUN) != 0u {
+        // #if !HAS_SUN_DISC
+        // The sun, a delta light: gathered by a shadow ray only.
+        if (params.flags & FRAME_HAS_SUN) != 0u {
             let to_sun = -params.sun_direction.xyz;
             if dot(to_sun, surface.geometric) > 0.0 {
                 let f = bsdf_eval(bsdf, wo, frame_to_local(frame, to_sun));
@@ -303,6 +317,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
                 }
             }
         }
+        // #endif
 
         // Point and spot lights, delta lights too: a shadow ray to each (composed only for a
         // scene that has them: HAS_POINT_LIGHTS is a generated constant).
@@ -310,15 +325,17 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             radiance += gather_point_lights(throughput, bsdf, wo, frame, surface, leave);
         }
 
+        // #if SAMPLES_LIGHTS
         // Emitters and the sun disc: one light sample each (next-event estimation).
         if (params.flags & FRAME_NO_LIGHT_SAMPLES) == 0u {
-            if HAS_EMITTERS {
-                radiance += sample_emitter(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
-            }
-            if HAS_SUN_DISC {
-                radiance += sample_sun_disc(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
-            }
+            // #if HAS_EMITTERS
+            radiance += sample_emitter(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+            // #endif
+            // #if HAS_SUN_DISC
+            radiance += sample_sun_disc(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+            // #endif
         }
+        // #endif
 
         // Continue the path by sampling the BSDF.
         let dim = DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE * event;
@@ -334,7 +351,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             break;
         }
         throughput *= s.weight;
+        // #if SAMPLES_LIGHTS
         ray_pdf = s.pdf;
+        // #endif
         event += 1u;
         if (params.flags & FRAME_RUSSIAN_ROULETTE) != 0u && event >= 3u {
             let survive = russian_roulette_survival(throughput);
