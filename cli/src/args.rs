@@ -186,6 +186,9 @@ pub struct BenchArgs {
     /// Sampler: random, hammersley, cmj, pmj02, sobol (the fixed-N ones need --spp).
     #[arg(long, default_value_t = furnace_render::RenderSettings::default().sampler)]
     pub sampler: SamplerKind,
+    /// How light of emitters and sun discs is found: bsdf, nee or mis (as `furnace render`).
+    #[arg(long, value_enum, default_value_t = LightSamplingArg::Mis)]
+    pub light_sampling: LightSamplingArg,
     /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
@@ -229,7 +232,12 @@ of the RMSE charts); lines starting with # are comments; no quoting. relmse must
 
 Example (Mitsuba's reference of the built-in Cornell box, Mitsuba's BRDF model):
   furnace chart --reference cbox_ref_bounces4.exr --masking separable --compensation off \\
-      --samplers sobol,pmj02,random,hammersley --sampling caps,vndf,ndf --spp 64 --out chart")]
+      --samplers sobol,pmj02,random,hammersley --sampling caps,vndf,ndf --spp 64 --out chart
+
+Example (the light-sampling strategies on a Cornell box lit by an area light):
+  furnace chart --reference cbox_area_ref_bounces4.exr --scene cbox_area.gltf --masking separable \\
+      --compensation off --samplers sobol --sampling caps --light-sampling bsdf,nee,mis --spp 64 \\
+      --out chart_lights")]
 pub struct ChartArgs {
     /// The reference image (.exr; its size is the study's image size): a long render of the
     /// same scene, e.g. Mitsuba's, or one of furnace's own (then its recorded settings are
@@ -261,6 +269,10 @@ pub struct ChartArgs {
     /// --reference-compensated, off and on].
     #[arg(long, value_enum, value_delimiter = ',')]
     pub compensation: Vec<Switch>,
+    /// How light of emitters and sun discs is found, comma-separated: bsdf, nee, mis (as
+    /// `furnace render --light-sampling`).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "mis")]
+    pub light_sampling: Vec<LightSamplingArg>,
     /// Backends, comma-separated: cpu, gpu.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
     pub backends: Vec<ChartBackend>,

@@ -42,6 +42,7 @@ struct Report {
     height: u32,
     bounces: u32,
     sampler: String,
+    light_sampling: &'static str,
     spp: u32,
     seconds: f64,
     time_to_first_frame_s: f64,
@@ -211,6 +212,7 @@ impl Report {
             "height": self.height,
             "bounces": self.bounces,
             "sampler": self.sampler,
+            "light_sampling": self.light_sampling,
             "spp": self.spp,
             "seconds": finite(Some(self.seconds)),
             "msamples_per_s": finite(Some(self.msamples_per_s())),
@@ -272,6 +274,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         seed: 0,
         // The warm-up frame and the measured samples.
         sample_count: a.sampler.needs_sample_count().then(|| a.spp.map_or(1, |n| n.saturating_add(1))),
+        light_sampling: a.light_sampling.into(),
         ..RenderSettings::default()
     };
     let triangles = scene.geometry.triangle_count() as u64;
@@ -350,6 +353,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         height,
         bounces: a.bounces,
         sampler: a.sampler.to_string(),
+        light_sampling: settings.light_sampling.name(),
         spp: done,
         seconds,
         time_to_first_frame_s,

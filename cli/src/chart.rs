@@ -1,5 +1,5 @@
 //! `furnace chart`: speed against accuracy. Renders one scene progressively under several
-//! configurations — sampler × BRDF sampling method × energy compensation × backend — and records
+//! configurations — sampler × BRDF sampling method × light sampling × energy compensation × backend — and records
 //! at checkpoints of 1, 2, 4, … samples per pixel (and `--spp`) the wall time and the error
 //! against a reference image; writes the data as CSV and JSON and draws error-vs-spp and
 //! error-vs-time charts (PNG and SVG).

@@ -230,8 +230,8 @@ mod tests {
         n.bounces = Some(2);
         n.extra.insert(CAMERA.into(), "1".into());
         let file = Path::new("dir/r.exr");
-        assert!(check_same(file, &m, &identity(&m, 8, 8), &identity(&m, 8, 8)).is_ok());
-        let e = check_same(file, &m, &identity(&m, 8, 8), &identity(&n, 8, 6)).unwrap_err();
+        assert!(check_same(file, &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false).is_ok());
+        let e = check_same(file, &m, &identity(&m, 8, 8), &identity(&n, 8, 6), false).unwrap_err();
         assert_eq!(
             e,
             "dir/r.exr: cannot resume with different settings: height is 8 in the file but 6 now; \
@@ -242,9 +242,16 @@ mod tests {
     #[test]
     fn another_sampler_layout_is_refused() {
         let mut m = Metadata { bounces: Some(4), ..Metadata::default() };
-        m.extra.insert(SAMPLER_LAYOUT.into(), "2".into());
-        let e = check_same(Path::new("old.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8)).unwrap_err();
-        assert!(e.starts_with("old.exr: its samples were drawn with sampler dimension layout 2"), "{e}");
+        m.extra.insert(SAMPLER_LAYOUT.into(), "3".into());
+        let e = check_same(Path::new("old.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false)
+            .unwrap_err();
+        assert!(e.starts_with("old.exr: its samples were drawn with sampler dimension layout 3"), "{e}");
+        // Layout 1 (or none recorded) continues a scene that samples no light, not one that does.
+        m.extra.insert(SAMPLER_LAYOUT.into(), "1".into());
+        assert!(check_same(Path::new("v1.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false).is_ok());
+        let e =
+            check_same(Path::new("v1.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8), true).unwrap_err();
+        assert!(e.contains("layout 1, this furnace traces layout 2"), "{e}");
     }
 
     #[test]
@@ -253,7 +260,8 @@ mod tests {
         m.extra.insert(TARGET_SPP.into(), "64".into());
         let mut n = m.clone();
         n.extra.insert(TARGET_SPP.into(), "128".into());
-        let e = check_same(Path::new("h.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4)).unwrap_err();
+        let e =
+            check_same(Path::new("h.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4), false).unwrap_err();
         assert!(
             e.contains("sample count N of the fixed-N sampler (--spp) is 64 in the file but 128 now"),
             "{e}"
@@ -261,7 +269,7 @@ mod tests {
         // A progressive sampler's target may change.
         m.sampler = Some("sobol".into());
         n.sampler = Some("sobol".into());
-        assert!(check_same(Path::new("s.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4)).is_ok());
+        assert!(check_same(Path::new("s.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4), false).is_ok());
     }
 
     #[test]

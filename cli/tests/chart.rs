@@ -98,15 +98,18 @@ fn a_tiny_study_writes_csv_json_png_and_svg() {
     let lines: Vec<&str> = csv.lines().collect();
     assert_eq!(
         lines[0],
-        "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,cpu_seconds"
+        "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,cpu_seconds,\
+         light_sampling"
     );
     // 4 configurations × checkpoints 1, 2, 4, 8.
     assert_eq!(lines.len(), 1 + 16, "{csv}");
     let mut seen = Vec::new();
     for line in &lines[1..] {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 11, "{line}");
-        assert_eq!(f[0], format!("{}/{}/comp-{}/{}", f[1], f[2], f[3], f[4]), "{line}");
+        assert_eq!(f.len(), 12, "{line}");
+        // The default light sampling: mis.
+        assert_eq!(f[11], "mis", "{line}");
+        assert_eq!(f[0], format!("{}/{}/{}/comp-{}/{}", f[1], f[2], f[11], f[3], f[4]), "{line}");
         let (seconds, rmse, relmse): (f64, f64, f64) =
             (f[6].parse().unwrap(), f[7].parse().unwrap(), f[8].parse().unwrap());
         assert!(seconds > 0.0 && rmse > 0.0 && relmse > 0.0, "{line}");
@@ -174,6 +177,21 @@ fn a_study_resumes_and_refuses_other_settings() {
     assert!(stderr(&o).contains("4 already complete"), "{}", stderr(&o));
     assert_eq!(row_keys(&json(&path)), row_keys(&first));
 
+    // A study saved before the light-sampling axis (no light_sampling in its settings and rows,
+    // names without it) is resumed as one of light sampling mis: nothing is rendered again.
+    let mut old = first.clone();
+    old["settings"].as_object_mut().unwrap().remove("light_sampling");
+    for r in old["rows"].as_array_mut().unwrap() {
+        r.as_object_mut().unwrap().remove("light_sampling");
+        let name = r["config"].as_str().unwrap().replace("/mis/", "/");
+        r["config"] = name.into();
+    }
+    std::fs::write(&path, serde_json::to_string_pretty(&old).unwrap()).unwrap();
+    let o = tiny_study(&dir, &reference, &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("4 already complete"), "{}", stderr(&o));
+    assert_eq!(row_keys(&json(&path)), row_keys(&first));
+
     // Drop the 8-spp rows of sobol/comp-on and hammersley/comp-on, as if Ctrl-C had stopped the
     // study there: hammersley (fixed N: one render per checkpoint) renders only N = 8 again;
     // sobol (progressive: its film is not saved) renders from sample 0 again.
@@ -190,12 +208,12 @@ fn a_study_resumes_and_refuses_other_settings() {
     };
     for spp in [1, 2, 4] {
         assert_eq!(
-            time(&after, "hammersley/caps/comp-on/cpu", spp),
-            time(&before, "hammersley/caps/comp-on/cpu", spp)
+            time(&after, "hammersley/caps/mis/comp-on/cpu", spp),
+            time(&before, "hammersley/caps/mis/comp-on/cpu", spp)
         );
         assert_eq!(
-            time(&after, "sobol/caps/comp-off/cpu", spp),
-            time(&before, "sobol/caps/comp-off/cpu", spp)
+            time(&after, "sobol/caps/mis/comp-off/cpu", spp),
+            time(&before, "sobol/caps/mis/comp-off/cpu", spp)
         );
     }
     // The re-rendered sobol rows: same images (same sampler and seed), so the same errors.
@@ -205,7 +223,10 @@ fn a_study_resumes_and_refuses_other_settings() {
     };
     let now = json(&path);
     for spp in [1, 2, 4, 8] {
-        assert_eq!(rmse(&now, "sobol/caps/comp-on/cpu", spp), rmse(&first, "sobol/caps/comp-on/cpu", spp));
+        assert_eq!(
+            rmse(&now, "sobol/caps/mis/comp-on/cpu", spp),
+            rmse(&first, "sobol/caps/mis/comp-on/cpu", spp)
+        );
     }
 
     // Other settings in the same directory are refused, naming the setting.
@@ -217,7 +238,80 @@ fn a_study_resumes_and_refuses_other_settings() {
     let o = tiny_study(&dir, &reference, &["--sampling", "ndf"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("sampling: [\"caps\"] there, [\"caps\",\"ndf\"] now"), "{}", stderr(&o));
+    let o = tiny_study(&dir, &reference, &["--light-sampling", "nee"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(stderr(&o).contains("light_sampling: [\"mis\"] there, [\"nee\"] now"), "{}", stderr(&o));
     assert_eq!(row_keys(&json(&path)), after, "a refused run leaves the study as it was");
+}
+
+/// `--light-sampling bsdf,nee,mis`: one configuration per strategy, each named and recorded with
+/// it, each rendered with it (the area light of the test data's Cornell box is found differently
+/// by each, so their images, and errors, differ), against a 256-spp render of our own at 16×16.
+#[test]
+fn light_sampling_is_an_axis() {
+    let dir = temp_dir("light_sampling");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/references/lights/cbox_area.gltf");
+    let o = furnace(&[
+        "render",
+        scene,
+        "--backend",
+        "cpu",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "256",
+        "--seed",
+        "7",
+        "--quiet",
+        "--out",
+        dir.join("ref").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let reference = dir.join("ref.exr");
+    let out = dir.join("study");
+    let o = furnace(&[
+        "chart",
+        "--reference",
+        reference.to_str().unwrap(),
+        "--scene",
+        scene,
+        "--samplers",
+        "sobol",
+        "--sampling",
+        "caps",
+        "--light-sampling",
+        "bsdf,nee,mis",
+        "--spp",
+        "4",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc = json(&out.join("chart.json"));
+    assert_eq!(doc["settings"]["light_sampling"], serde_json::json!(["bsdf", "nee", "mis"]));
+    let configs: Vec<&str> =
+        doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
+    assert_eq!(
+        configs,
+        ["sobol/caps/bsdf/comp-on/cpu", "sobol/caps/nee/comp-on/cpu", "sobol/caps/mis/comp-on/cpu"]
+    );
+    let rmse_at_4 = |light: &str| {
+        let rows = doc["rows"].as_array().unwrap();
+        let r = rows.iter().find(|r| r["light_sampling"] == light && r["spp"] == 4).unwrap();
+        assert_eq!(r["config"], format!("sobol/caps/{light}/comp-on/cpu"), "{r}");
+        r["rmse"].as_f64().unwrap()
+    };
+    let (bsdf, nee, mis) = (rmse_at_4("bsdf"), rmse_at_4("nee"), rmse_at_4("mis"));
+    assert!(bsdf != nee && nee != mis && bsdf != mis, "bsdf {bsdf}, nee {nee}, mis {mis}");
+    let csv = std::fs::read_to_string(out.join("chart.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 3 * 3, "{csv}");
+    let svg = std::fs::read_to_string(out.join("rmse_vs_spp.svg")).unwrap();
+    for label in ["sobol bsdf", "sobol nee", "sobol mis"] {
+        assert!(svg.contains(label), "the legend names {label}");
+    }
 }
 
 #[test]

@@ -8,12 +8,14 @@ use std::path::Path;
 /// One measurement: a configuration at a checkpoint.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
-    /// The configuration's name (`sobol/caps/comp-off/cpu`).
+    /// The configuration's name (`sobol/caps/mis/comp-off/cpu`, see [`config_name`]).
     pub config: String,
     /// Sampler name.
     pub sampler: String,
     /// BRDF sampling method (`ndf`, `vndf`, `caps`).
     pub sampling: String,
+    /// Light sampling (`bsdf`, `nee`, `mis`).
+    pub light_sampling: String,
     /// Energy compensation (`on`, `off`).
     pub compensation: String,
     /// Backend (`cpu`, `gpu`).
@@ -35,9 +37,27 @@ pub struct Row {
     pub reference_matches: bool,
 }
 
-/// The CSV header of the study's data file.
-pub const CSV_HEADER: &str =
-    "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,cpu_seconds";
+/// The light sampling of a row saved before the light-sampling axis existed: every
+/// configuration then rendered with the renderer's default, MIS.
+pub const OLD_LIGHT_SAMPLING: &str = "mis";
+
+/// A configuration's name from its axes' CLI names: `sobol/caps/mis/comp-off/cpu`.
+pub fn config_name(
+    sampler: &str,
+    sampling: &str,
+    light_sampling: &str,
+    compensation: &str,
+    backend: &str,
+) -> String {
+    format!("{sampler}/{sampling}/{light_sampling}/comp-{compensation}/{backend}")
+}
+
+/// The CSV header of the study's data file (columns added later go at the end, so that a
+/// reader of the older columns by position still works).
+pub const CSV_HEADER: &str = concat!(
+    "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,",
+    "cpu_seconds,light_sampling"
+);
 
 /// The rows as CSV (with [`CSV_HEADER`]); numbers in Rust's shortest round-trip form.
 pub fn to_csv(rows: &[Row]) -> String {
@@ -46,7 +66,7 @@ pub fn to_csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{}",
             r.config,
             r.sampler,
             r.sampling,
@@ -57,7 +77,8 @@ pub fn to_csv(rows: &[Row]) -> String {
             r.rmse,
             r.relmse,
             r.reference_matches,
-            if r.cpu_seconds.is_finite() { r.cpu_seconds.to_string() } else { String::new() }
+            if r.cpu_seconds.is_finite() { r.cpu_seconds.to_string() } else { String::new() },
+            r.light_sampling
         );
     }
     s
@@ -69,6 +90,7 @@ pub fn row_json(r: &Row) -> Value {
         "config": r.config,
         "sampler": r.sampler,
         "sampling": r.sampling,
+        "light_sampling": r.light_sampling,
         "compensation": r.compensation,
         "backend": r.backend,
         "spp": r.spp,
@@ -85,7 +107,9 @@ fn finite(x: f64) -> Value {
     if x.is_finite() { json!(x) } else { Value::Null }
 }
 
-/// A row read back from the JSON of a previous run.
+/// A row read back from the JSON of a previous run. A row saved before the light-sampling axis
+/// has no `light_sampling`: it was rendered with [`OLD_LIGHT_SAMPLING`], and its configuration
+/// is renamed to today's name for it, so that a resumed study finds it.
 pub fn row_from_json(v: &Value) -> Result<Row, String> {
     let text = |k: &str| {
         v.get(k).and_then(Value::as_str).map(str::to_string).ok_or_else(|| format!("a row has no '{k}'"))
@@ -100,12 +124,22 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
         .and_then(Value::as_u64)
         .and_then(|n| u32::try_from(n).ok())
         .ok_or_else(|| "a row has no valid 'spp'".to_string())?;
+    let (config, sampler, sampling, compensation, backend) =
+        (text("config")?, text("sampler")?, text("sampling")?, text("compensation")?, text("backend")?);
+    let (config, light_sampling) = match v.get("light_sampling") {
+        Some(_) => (config, text("light_sampling")?),
+        None => (
+            config_name(&sampler, &sampling, OLD_LIGHT_SAMPLING, &compensation, &backend),
+            OLD_LIGHT_SAMPLING.to_string(),
+        ),
+    };
     Ok(Row {
-        config: text("config")?,
-        sampler: text("sampler")?,
-        sampling: text("sampling")?,
-        compensation: text("compensation")?,
-        backend: text("backend")?,
+        config,
+        sampler,
+        sampling,
+        light_sampling,
+        compensation,
+        backend,
         spp,
         seconds: num("seconds")?,
         cpu_seconds: num("cpu_seconds").unwrap_or(f64::NAN),
@@ -260,9 +294,10 @@ mod tests {
     #[test]
     fn csv_and_json_rows_round_trip() {
         let row = Row {
-            config: "sobol/caps/comp-off/cpu".into(),
+            config: "sobol/caps/nee/comp-off/cpu".into(),
             sampler: "sobol".into(),
             sampling: "caps".into(),
+            light_sampling: "nee".into(),
             compensation: "off".into(),
             backend: "cpu".into(),
             spp: 8,
@@ -277,9 +312,36 @@ mod tests {
         assert_eq!(
             csv,
             format!(
-                "{CSV_HEADER}\nsobol/caps/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25\n"
+                "{CSV_HEADER}\nsobol/caps/nee/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee\n"
             )
         );
+    }
+
+    #[test]
+    fn a_row_saved_before_light_sampling_is_mis() {
+        // A row of a study saved before the axis: no light_sampling, the older name.
+        let mut v = row_json(&Row {
+            config: "sobol/caps/comp-off/cpu".into(),
+            sampler: "sobol".into(),
+            sampling: "caps".into(),
+            light_sampling: String::new(),
+            compensation: "off".into(),
+            backend: "cpu".into(),
+            spp: 4,
+            seconds: 0.5,
+            cpu_seconds: f64::NAN,
+            rmse: 0.25,
+            relmse: 0.125,
+            reference_matches: true,
+        });
+        v.as_object_mut().unwrap().remove("light_sampling");
+        let row = row_from_json(&v).unwrap();
+        assert_eq!(
+            (row.config.as_str(), row.light_sampling.as_str()),
+            ("sobol/caps/mis/comp-off/cpu", "mis")
+        );
+        assert_eq!((row.spp, row.rmse), (4, 0.25));
+        assert!(row.cpu_seconds.is_nan());
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use super::data::{self, ExternalPoint, Row, rows_of, slope};
 use super::plot::{self, Labels, Marker, Series, Style};
 use super::study::{Config, Study, dedup};
-use crate::args::{ChartBackend, ChartTime, SamplingArg, Switch};
+use crate::args::{ChartBackend, ChartTime, LightSamplingArg, SamplingArg, Switch};
 use crate::resume;
 use furnace_sampling::SamplerKind;
 
@@ -32,15 +32,31 @@ fn sampler_color(s: SamplerKind) -> plotters::style::RGBColor {
     }
 }
 
+/// `c` shaded by light sampling: lighter for bsdf, darker for nee, as is for mis.
+fn shade(c: plotters::style::RGBColor, light: LightSamplingArg) -> plotters::style::RGBColor {
+    use plotters::style::RGBColor;
+    // Towards white by half, towards black by 40%.
+    let mix = |to: f64, t: f64| {
+        let f = |v: u8| (f64::from(v) + (to - f64::from(v)) * t).round() as u8;
+        RGBColor(f(c.0), f(c.1), f(c.2))
+    };
+    match light {
+        LightSamplingArg::Bsdf => mix(255.0, 0.5),
+        LightSamplingArg::Nee => mix(0.0, 0.4),
+        LightSamplingArg::Mis => c,
+    }
+}
+
 fn fmt_slope(k: f64) -> String {
     format!("{k:.2}").replace('-', "−")
 }
 
-/// How many samplers, sampling methods, compensation states and backends the study has: a
-/// legend entry names only what varies.
+/// How many samplers, sampling methods, light samplings, compensation states and backends the
+/// study has: a legend entry names only what varies.
 struct Varying {
     samplers: usize,
     sampling: usize,
+    light_sampling: usize,
     compensations: usize,
     backends: usize,
 }
@@ -50,6 +66,7 @@ impl Varying {
         Self {
             samplers: dedup(&study.args.samplers).len(),
             sampling: dedup(&study.args.sampling).len(),
+            light_sampling: dedup(&study.args.light_sampling).len(),
             compensations: study.compensations().len(),
             backends: dedup(&study.args.backends).len(),
         }
@@ -61,6 +78,9 @@ impl Varying {
         let mut parts = vec![c.sampler.to_string()];
         if vary(self.sampling) {
             parts.push(resume::cli_name(&c.sampling));
+        }
+        if vary(self.light_sampling) {
+            parts.push(resume::cli_name(&c.light_sampling));
         }
         if vary(self.compensations) {
             parts.push(format!("comp {}", resume::cli_name(&c.compensation)));
@@ -96,8 +116,8 @@ pub(super) fn save_charts(study: &Study, rows: &[Row], external: &[ExternalPoint
     Ok(())
 }
 
-/// One series per configuration with rows: colour by sampler, marker by sampling method,
-/// dashed with compensation, hollow on the GPU.
+/// One series per configuration with rows: colour by sampler (shaded by light sampling when it
+/// varies), marker by sampling method, dashed with compensation, hollow on the GPU.
 fn config_series(
     study: &Study,
     rows: &[Row],
@@ -128,7 +148,11 @@ fn config_series(
             .map(|r| (if by_time { time_of(r) } else { f64::from(r.spp) }, (metric.row)(r)))
             .collect();
         let style = Style {
-            color: sampler_color(c.sampler),
+            color: if varying.light_sampling > 1 {
+                shade(sampler_color(c.sampler), c.light_sampling)
+            } else {
+                sampler_color(c.sampler)
+            },
             marker: match c.sampling {
                 SamplingArg::Caps => Marker::Circle,
                 SamplingArg::Vndf => Marker::Triangle,
@@ -219,6 +243,12 @@ fn note(study: &Study, varying: &Varying, metric: &Metric, by_time: bool) -> Str
     }
     if varying.sampling > 1 {
         note.push_str(" Markers: caps ●, vndf ▲, ndf ■.");
+    }
+    if varying.light_sampling > 1 {
+        note.push_str(
+            " Light sampling: bsdf (BSDF rays only, lighter), nee (light samples only, darker), mis (both, \
+             power heuristic).",
+        );
     }
     if study.configs.iter().any(|c| c.compensation == Switch::On) {
         note.push_str(" Dashed: compensation on.");

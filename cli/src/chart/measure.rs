@@ -30,6 +30,7 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
             sampling: c.sampling.into(),
             compensation: c.compensation == Switch::On,
         },
+        light_sampling: c.light_sampling.into(),
         ..study.settings
     };
     let choice = match c.backend {

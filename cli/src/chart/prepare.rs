@@ -55,15 +55,26 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
     };
     for backend in dedup(&a.backends) {
         for compensation in study.compensations() {
-            for sampling in dedup(&a.sampling) {
-                for sampler in dedup(&a.samplers) {
-                    study.configs.push(Config { sampler, sampling, compensation, backend });
+            for light_sampling in dedup(&a.light_sampling) {
+                for sampling in dedup(&a.sampling) {
+                    for sampler in dedup(&a.samplers) {
+                        study.configs.push(Config {
+                            sampler,
+                            sampling,
+                            light_sampling,
+                            compensation,
+                            backend,
+                        });
+                    }
                 }
             }
         }
     }
     if study.configs.is_empty() {
-        return Err("no configurations: give at least one sampler, sampling method and backend".into());
+        return Err(
+            "no configurations: give at least one sampler, sampling method, light sampling and backend"
+                .into(),
+        );
     }
     warn_compensation_mismatch(&study);
     warn_correlated_seed(&study);

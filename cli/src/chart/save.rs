@@ -28,7 +28,11 @@ pub(super) fn load_saved(dir: &Path, now: &Value) -> Result<Vec<Row>, String> {
     if v.get("format").and_then(Value::as_u64) != Some(FORMAT) {
         return Err(format!("{p}: not a furnace chart file of format {FORMAT}"));
     }
-    let recorded = v.get("settings").cloned().unwrap_or(Value::Null);
+    let mut recorded = v.get("settings").cloned().unwrap_or(Value::Null);
+    // A study saved before the light-sampling axis rendered every configuration with MIS.
+    if let Some(s) = recorded.as_object_mut() {
+        s.entry("light_sampling").or_insert_with(|| json!([data::OLD_LIGHT_SAMPLING]));
+    }
     if let Some((key, was, is)) = data::first_difference(&recorded, now) {
         return Err(format!(
             "{} holds a study with other settings ({key}: {was} there, {is} now); re-run with the same \
@@ -80,6 +84,7 @@ fn configs_json(study: &Study, rows: &[Row]) -> Vec<Value> {
                 "config": name,
                 "sampler": c.sampler.to_string(),
                 "sampling": resume::cli_name(&c.sampling),
+                "light_sampling": resume::cli_name(&c.light_sampling),
                 "compensation": resume::cli_name(&c.compensation),
                 "backend": resume::cli_name(&c.backend),
                 "reference": r.path.display().to_string(),

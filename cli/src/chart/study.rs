@@ -1,9 +1,10 @@
-//! The study: its configurations (sampler × BRDF sampling × compensation × backend), their
-//! checkpoints, the references they are scored against, and what is left to render.
+//! The study: its configurations (sampler × BRDF sampling × light sampling × compensation ×
+//! backend), their checkpoints, the references they are scored against, and what is left to
+//! render.
 
-use super::data::{Row, rows_of};
+use super::data::{Row, config_name, rows_of};
 use super::reference::Reference;
-use crate::args::{ChartArgs, ChartBackend, MaskingArg, SamplingArg, Switch};
+use crate::args::{ChartArgs, ChartBackend, LightSamplingArg, MaskingArg, SamplingArg, Switch};
 use crate::resume;
 use furnace_render::{RenderSettings, Timing};
 use furnace_sampling::SamplerKind;
@@ -15,19 +16,20 @@ use serde_json::{Value, json};
 pub(super) struct Config {
     pub(super) sampler: SamplerKind,
     pub(super) sampling: SamplingArg,
+    pub(super) light_sampling: LightSamplingArg,
     pub(super) compensation: Switch,
     pub(super) backend: ChartBackend,
 }
 
 impl Config {
-    /// `sobol/caps/comp-off/cpu`.
+    /// `sobol/caps/mis/comp-off/cpu`.
     pub(super) fn name(&self) -> String {
-        format!(
-            "{}/{}/comp-{}/{}",
-            self.sampler,
-            resume::cli_name(&self.sampling),
-            resume::cli_name(&self.compensation),
-            resume::cli_name(&self.backend)
+        config_name(
+            &self.sampler.to_string(),
+            &resume::cli_name(&self.sampling),
+            &resume::cli_name(&self.light_sampling),
+            &resume::cli_name(&self.compensation),
+            &resume::cli_name(&self.backend),
         )
     }
 
@@ -36,6 +38,7 @@ impl Config {
             config: self.name(),
             sampler: self.sampler.to_string(),
             sampling: resume::cli_name(&self.sampling),
+            light_sampling: resume::cli_name(&self.light_sampling),
             compensation: resume::cli_name(&self.compensation),
             backend: resume::cli_name(&self.backend),
             spp,
@@ -113,6 +116,7 @@ impl Study {
             "checkpoints": self.checkpoints,
             "samplers": names(dedup(&self.args.samplers).iter().map(ToString::to_string).collect()),
             "sampling": names(dedup(&self.args.sampling).iter().map(resume::cli_name).collect()),
+            "light_sampling": names(dedup(&self.args.light_sampling).iter().map(resume::cli_name).collect()),
             "compensation": names(self.compensations().iter().map(resume::cli_name).collect()),
             "backends": names(dedup(&self.args.backends).iter().map(resume::cli_name).collect()),
             "adapter": self.args.adapter,
