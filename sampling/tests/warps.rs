@@ -1,5 +1,7 @@
 //! Chi-square tests of the warps through the public API: each hemisphere warp against its own
-//! pdf, and the concentric disk lifted to the hemisphere by Malley's method.
+//! pdf, the concentric disk lifted to the hemisphere by Malley's method, the uniform cone, and
+//! the uniform triangle seen from a point (its area pdf turned into solid angle, as next-event
+//! estimation of an emissive triangle does).
 //!
 //! Every test draws 10⁶ samples from a fixed seed, at a family-wise significance of 1% with
 //! the Šidák correction over the [`TESTS`] tests of this file. On failure the report is printed
@@ -7,14 +9,15 @@
 
 use furnace_sampling::warp::{
     concentric_disk_pdf, cosine_hemisphere_pdf, square_to_concentric_disk, square_to_cosine_hemisphere,
-    square_to_uniform_hemisphere, uniform_hemisphere_pdf,
+    square_to_uniform_cone, square_to_uniform_hemisphere, square_to_uniform_triangle, uniform_cone_pdf,
+    uniform_hemisphere_pdf,
 };
 use furnace_tests::chi2::{ChiSquareResult, ChiSquareTest};
 use glam::{Vec2, Vec3};
 use std::path::PathBuf;
 
 /// Number of chi-square tests in this file (the Šidák family).
-const TESTS: usize = 4;
+const TESTS: usize = 6;
 
 /// The harness as every test here uses it; only the seed differs.
 fn harness(seed: u32) -> ChiSquareTest {
@@ -75,4 +78,36 @@ fn chi2_concentric_disk_lifted_against_disk_pdf() {
         },
     );
     check("concentric_disk_area_pdf", &result);
+}
+
+/// A 40° cone: uniform inside (`1/(2π(1 − cos 40°))`), nothing outside.
+#[test]
+fn chi2_uniform_cone() {
+    let t = 1.0 - 40f32.to_radians().cos();
+    let result = harness(15).run(
+        |u, _| Some(square_to_uniform_cone(u, t)),
+        |w| if 1.0 - w.z <= t { uniform_cone_pdf(t) } else { 0.0 },
+    );
+    check("uniform_cone", &result);
+}
+
+/// Points uniform on a triangle in the plane z = 1, seen from the origin: the direction
+/// `w = p/|p|` has solid-angle pdf `|p|²/(A cos θ) = 1/(A w_z³)` inside the triangle's
+/// projection (`|p| = 1/w_z` on that plane).
+#[test]
+fn chi2_uniform_triangle_seen_from_a_point() {
+    let [a, b, c] = [Vec3::new(-0.5, -0.5, 1.0), Vec3::new(0.8, -0.3, 1.0), Vec3::new(0.0, 0.7, 1.0)];
+    let area = 0.5 * (b - a).cross(c - a).length();
+    let inside = |p: Vec3| {
+        let edge = |o: Vec3, d: Vec3| (d - o).cross(p - o).z;
+        edge(a, b) >= 0.0 && edge(b, c) >= 0.0 && edge(c, a) >= 0.0
+    };
+    let result = harness(16).run(
+        |u, _| {
+            let bary = square_to_uniform_triangle(u);
+            Some(((1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c).normalize())
+        },
+        |w| if w.z > 0.0 && inside(w / w.z) { 1.0 / (area * w.z * w.z * w.z) } else { 0.0 },
+    );
+    check("uniform_triangle", &result);
 }

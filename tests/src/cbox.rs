@@ -262,25 +262,52 @@ impl Comparison {
     }
 }
 
+/// Relative floor of the z-scores' denominators: the references are `f32` sums of 65 536
+/// samples, so a pixel whose every sample has the same value (an emitter seen directly, filling
+/// the pixel) has a "standard error" of float rounding (10⁻⁹ of 0.2) that the candidate's
+/// exact value misses by 10⁻⁷ relative — a z of 100 that is no bias. 10⁻⁶ of the reference
+/// value is far below any pixel's noise (≥ 10⁻⁴ here) and above that rounding. Pixels with no
+/// error on either side (exactly 0) still have no z.
+pub const Z_ROUNDING_FLOOR: f64 = 1e-6;
+
 /// Compares `candidate` with `reference` pixel by pixel (same size).
 pub fn compare(candidate: &Estimate, reference: &Reference) -> Comparison {
+    compare_masked(candidate, reference, None)
+}
+
+/// [`compare`], with the image-mean ratio (and its standard error) over the pixels where
+/// `ratio_pixels` is true only (all of them for `None`); z covers every pixel.
+pub fn compare_masked(
+    candidate: &Estimate,
+    reference: &Reference,
+    ratio_pixels: Option<&[bool]>,
+) -> Comparison {
     let (w, h) = (reference.mean.width, reference.mean.height);
     assert_eq!((candidate.mean.width, candidate.mean.height), (w, h), "candidate size");
     let mut zs = Vec::with_capacity(w * h * 3);
     let mut z_image = vec![DVec3::ZERO; w * h];
     let mut z_max = (0.0, 0, 0);
     let (mut var_ours, mut var_ref) = (DVec3::ZERO, DVec3::ZERO);
+    let (mut sum_ours, mut sum_ref, mut p) = (DVec3::ZERO, DVec3::ZERO, 0.0);
     let mut errors = furnace_post::metrics::ErrorSum::default();
     for (i, z_pixel) in z_image.iter_mut().enumerate() {
         let (m, s) = (candidate.mean.pixels[i], candidate.stderr.pixels[i]);
         let (r, sr) = (reference.mean.pixels[i], reference.stderr.pixels[i]);
-        var_ours += s * s;
-        var_ref += sr * sr;
+        if ratio_pixels.is_none_or(|mask| mask[i]) {
+            var_ours += s * s;
+            var_ref += sr * sr;
+            sum_ours += m;
+            sum_ref += r;
+            p += 1.0;
+        }
         let d = m - r;
         errors.add_rgb(m.to_array(), r.to_array());
-        let denominator = (s * s + sr * sr).map(f64::sqrt);
+        let floor = r * Z_ROUNDING_FLOOR;
+        let variance = s * s + sr * sr;
+        let denominator = (variance + floor * floor).map(f64::sqrt);
         for c in 0..3 {
-            if denominator[c] > 0.0 {
+            // A value without noise on either side (the sky through a hole) has no z.
+            if variance[c] > 0.0 {
                 let z = d[c] / denominator[c];
                 z_pixel[c] = z;
                 zs.push(z);
@@ -290,8 +317,7 @@ pub fn compare(candidate: &Estimate, reference: &Reference) -> Comparison {
             }
         }
     }
-    let p = (w * h) as f64;
-    let (ours, refm) = (candidate.mean.mean(), reference.mean.mean());
+    let (ours, refm) = (sum_ours / p, sum_ref / p);
     // Pixels' errors are independent: Var(image mean) = Σ se²/p².
     let ratio = ours / refm;
     let ratio_se = ratio * ((var_ours / (ours * ours) + var_ref / (refm * refm)) / (p * p)).map(f64::sqrt);
@@ -312,4 +338,25 @@ pub fn compare(candidate: &Estimate, reference: &Reference) -> Comparison {
         rel_mse: errors.rel_mse(),
         z_image: Image { width: w, height: h, pixels: z_image },
     }
+}
+
+/// Which pixels of a `size`² render of `scene` (its default camera) show **no** emitter
+/// directly: a camera-ray-only render (0 bounces, 64 Owen-Sobol samples per pixel, CPU) is 0
+/// there. `None` for a scene without emitters. Image-mean ratios over these pixels measure the
+/// light the emitters cast: a pixel on an emitter's edge has the jitter noise of where its
+/// samples land on the edge, the same for every light-sampling method, which dominates the
+/// image mean's error when emitters are seen (many small ones, or one bright one).
+pub fn pixels_without_visible_emitters(scene: &furnace_scene::Scene, size: u32) -> Option<Vec<bool>> {
+    furnace_scene::Emitters::new(scene)?;
+    let settings = furnace_render::RenderSettings {
+        width: size,
+        height: size,
+        bounces: 0,
+        sampler: furnace_sampling::SamplerKind::Sobol,
+        ..Default::default()
+    };
+    let cpu = furnace_cpu::CpuRenderer::with_default_camera(scene.clone(), settings).expect("a CPU renderer");
+    let mut film = cpu.new_film();
+    cpu.render_into(&mut film, 0, 64).expect("a pass");
+    Some((0..film.counts().len()).map(|i| film.mean(i) == DVec3::ZERO).collect())
 }
