@@ -1,7 +1,8 @@
 //! # furnace-cpu
 //!
 //! The reference CPU integrator of furnace: a unidirectional path tracer (Kajiya, "The
-//! Rendering Equation", SIGGRAPH 1986) with next-event estimation of the sun, BSDF sampling of
+//! Rendering Equation", SIGGRAPH 1986) with next-event estimation of every light and multiple
+//! importance sampling of emitters and sun discs (Veach 1995), BSDF sampling of
 //! the glTF metallic-roughness material (`furnace_brdf`), rows rendered in parallel with rayon
 //! and accumulated in `f64` ([`furnace_render::Film`]). It is meant to be read: the GPU integrator is its twin.
 //!
@@ -21,9 +22,12 @@
 //!    `MetallicRoughness` BSDF with [`RenderSettings::specular`].
 //! 4. **Emission**: `throughput · emissive` is added — on the front of the surface only (emission
 //!    is one-sided, as in the references' conventions; the back of a double-sided emitter is dark).
+//!    Reached by a BSDF-sampled ray (not the camera's), it is weighted by the power heuristic
+//!    against the emitter sample that could have chosen the same point from the previous vertex:
+//!    `w = p_bsdf² / (p_bsdf² + p_light²)` with `p_light = P(triangle) · d² / (area · cos θ_light)`.
 //! 5. If the path already has [`RenderSettings::bounces`] scattering events, it ends here.
 //!    Otherwise this hit is a scattering event:
-//!    * **Sun** (a delta light, gathered *only* here): if `-sun.direction` is above `Ng` and a
+//!    * **Delta sun** (gathered *only* here): if `-sun.direction` is above `Ng` and a
 //!      shadow ray from the offset point (`offset_ray_origin(p, Ng)`) reaches infinity, add
 //!      `throughput · f(wo, wi)·cos θi · E_sun` (`Bsdf::eval` includes the cosine).
 //!    * **Point and spot lights** (delta lights, gathered *only* here): for each, toward `wi`
@@ -31,10 +35,16 @@
 //!      `throughput · f(wo, wi)·cos θi · I(−wi, d) / d²` (`PointLight::intensity_towards`: the
 //!      spot cone and the range window), nothing where that is not finite (a light on the
 //!      surface).
+//!    * **Emitters** (next-event estimation): one emissive triangle chosen in proportion to its
+//!      power by an alias table (`furnace_scene::Emitters`), a point uniform on its area, a
+//!      shadow ray; the sample is weighted by the power heuristic against BSDF sampling.
+//!    * **Sun discs**: one direction uniform in each disc's cone, a shadow ray, weighted
+//!      likewise; a sampled ray that escapes inside the cone sees the disc's radiance, weighted
+//!      against the cone sample ([`RenderSettings::light_sampling`] chooses BSDF only, light
+//!      samples only, or both).
 //!    * **BSDF sample** `wi` from three sampler dimensions; `throughput *= eval/pdf`. A
 //!      direction above `Ns`'s horizon but below `Ng`'s ends the path. The sky is gathered only
-//!      by such sampled rays escaping (step 2), so no light is counted twice and no MIS
-//!      is needed.
+//!      by such sampled rays escaping (step 2).
 //!    * **Russian roulette** (if enabled), from the third event on: survive with probability
 //!      `q = min(1, max(throughput))`, and divide by `q` (unbiased).
 //!
@@ -45,7 +55,9 @@
 //! ## Sampler dimensions
 //!
 //! The path reads the sampler dimensions of [`furnace_render::layout`]: the pixel position
-//! first, then four per scattering event (BSDF direction, lobe choice, Russian roulette).
+//! first, then four per scattering event (BSDF direction, lobe choice, Russian roulette), then
+//! — only in scenes with emitters or a sun disc — a block of eight per event for the light
+//! samples.
 //!
 //! ## Determinism
 //!

@@ -246,6 +246,54 @@ pub fn cosine_hemisphere_to_square(w: Vec3) -> Vec2 {
     Vec2::new(turns_from_xy(w.y, w.x), clamp_unit(sin2_theta))
 }
 
+/// Maps the unit square uniformly onto a triangle, as barycentrics `(b1, b2)` of the point
+/// `(1 − b1 − b2)·v0 + b1·v1 + b2·v2`: Heitz's low-distortion map ("A Low-Distortion Map
+/// Between Triangle and Square", 2019), as pbrt-v4's `SampleUniformTriangle` writes it. The
+/// density is `1 / area` with respect to area, whatever the triangle.
+///
+/// Unlike the square-root map it keeps neighbouring `u` neighbouring on the triangle, so a
+/// stratified pattern stays stratified. For `u ∈ [0, 1)²` the result has `b1, b2 ≥ 0`,
+/// `b1 + b2 ≤ 1`.
+pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
+    // pbrt's (b0, b1); our b1 is its b1 and our b2 its 1 − b0 − b1.
+    let (b0, b1) = if u.x < u.y {
+        let b0 = u.x / 2.0;
+        (b0, u.y - b0)
+    } else {
+        let b1 = u.y / 2.0;
+        (u.x - b1, b1)
+    };
+    Vec2::new(b1, (1.0 - b0 - b1).max(0.0))
+}
+
+/// Maps the unit square uniformly (in solid angle) onto the cone of directions within `θmax`
+/// of `+z`, given as `one_minus_cos = 1 − cos θmax ∈ (0, 2]` (pbrt-v4's `SampleUniformCone`).
+///
+/// The cone is given by `1 − cos θmax`, not by `cos θmax`, so that tiny cones keep their size:
+/// the sun's 0.53° disc has `1 − cos θ = 2.1·10⁻⁵` and a 0.001° disc `3.8·10⁻¹¹`, where
+/// `cos θmax` rounds to 1 in `f32`. The sample's `sin θ = √(t(2 − t))` with `t = u.x·(1 −
+/// cos θmax)` is formed from `t` directly, so the directions of a tiny cone are exact to
+/// float rounding rather than collapsed onto the axis.
+pub fn square_to_uniform_cone(u: Vec2, one_minus_cos: f32) -> Vec3 {
+    let t = u.x * one_minus_cos;
+    let sin_theta = (t * (2.0 - t)).max(0.0).sqrt();
+    let (sin_phi, cos_phi) = sin_cos_turns(u.y);
+    Vec3::new(sin_theta * cos_phi, sin_theta * sin_phi, 1.0 - t)
+}
+
+/// The density of [`square_to_uniform_cone`] with respect to solid angle, inside the cone:
+/// `1 / (2π (1 − cos θmax))`.
+pub fn uniform_cone_pdf(one_minus_cos: f32) -> f32 {
+    INV_TAU / one_minus_cos
+}
+
+/// Whether unit direction `w` lies within the cone of `1 − cos θmax = one_minus_cos` around
+/// unit `axis`: `‖w − axis‖² ≤ 2(1 − cos θmax)`, the chord form of `w·axis ≥ cos θmax`, which
+/// stays exact for cones too small for `cos θmax` to be told from 1 in `f32`.
+pub fn in_cone(w: Vec3, axis: Vec3, one_minus_cos: f32) -> bool {
+    (w - axis).length_squared() <= 2.0 * one_minus_cos
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -537,52 +585,4 @@ mod tests {
             }
         }
     }
-}
-
-/// Maps the unit square uniformly onto a triangle, as barycentrics `(b1, b2)` of the point
-/// `(1 − b1 − b2)·v0 + b1·v1 + b2·v2`: Heitz's low-distortion map ("A Low-Distortion Map
-/// Between Triangle and Square", 2019), as pbrt-v4's `SampleUniformTriangle` writes it. The
-/// density is `1 / area` with respect to area, whatever the triangle.
-///
-/// Unlike the square-root map it keeps neighbouring `u` neighbouring on the triangle, so a
-/// stratified pattern stays stratified. For `u ∈ [0, 1)²` the result has `b1, b2 ≥ 0`,
-/// `b1 + b2 ≤ 1`.
-pub fn square_to_uniform_triangle(u: Vec2) -> Vec2 {
-    // pbrt's (b0, b1); our b1 is its b1 and our b2 its 1 − b0 − b1.
-    let (b0, b1) = if u.x < u.y {
-        let b0 = u.x / 2.0;
-        (b0, u.y - b0)
-    } else {
-        let b1 = u.y / 2.0;
-        (u.x - b1, b1)
-    };
-    Vec2::new(b1, (1.0 - b0 - b1).max(0.0))
-}
-
-/// Maps the unit square uniformly (in solid angle) onto the cone of directions within `θmax`
-/// of `+z`, given as `one_minus_cos = 1 − cos θmax ∈ (0, 2]` (pbrt-v4's `SampleUniformCone`).
-///
-/// The cone is given by `1 − cos θmax`, not by `cos θmax`, so that tiny cones keep their size:
-/// the sun's 0.53° disc has `1 − cos θ = 2.1·10⁻⁵` and a 0.001° disc `3.8·10⁻¹¹`, where
-/// `cos θmax` rounds to 1 in `f32`. The sample's `sin θ = √(t(2 − t))` with `t = u.x·(1 −
-/// cos θmax)` is formed from `t` directly, so the directions of a tiny cone are exact to
-/// float rounding rather than collapsed onto the axis.
-pub fn square_to_uniform_cone(u: Vec2, one_minus_cos: f32) -> Vec3 {
-    let t = u.x * one_minus_cos;
-    let sin_theta = (t * (2.0 - t)).max(0.0).sqrt();
-    let (sin_phi, cos_phi) = sin_cos_turns(u.y);
-    Vec3::new(sin_theta * cos_phi, sin_theta * sin_phi, 1.0 - t)
-}
-
-/// The density of [`square_to_uniform_cone`] with respect to solid angle, inside the cone:
-/// `1 / (2π (1 − cos θmax))`.
-pub fn uniform_cone_pdf(one_minus_cos: f32) -> f32 {
-    INV_TAU / one_minus_cos
-}
-
-/// Whether unit direction `w` lies within the cone of `1 − cos θmax = one_minus_cos` around
-/// unit `axis`: `‖w − axis‖² ≤ 2(1 − cos θmax)`, the chord form of `w·axis ≥ cos θmax`, which
-/// stays exact for cones too small for `cos θmax` to be told from 1 in `f32`.
-pub fn in_cone(w: Vec3, axis: Vec3, one_minus_cos: f32) -> bool {
-    (w - axis).length_squared() <= 2.0 * one_minus_cos
 }
