@@ -45,11 +45,23 @@ fn describe(scene: &Scene) -> String {
             s.texture_bytes
         ),
     );
-    if scene.lights.is_empty() {
+    let emitters = furnace_scene::Emitters::new(scene);
+    if scene.lights.is_empty() && emitters.is_none() {
         line("lights", "none (black sky)".into());
     }
     for light in &scene.lights {
         line("light", light.to_string());
+    }
+    if let Some(e) = &emitters {
+        // Σ luminance · area is the power up to π: π·L·A for a Lambertian emitter.
+        let power = std::f32::consts::PI * e.total_weight();
+        line(
+            "emitters",
+            format!(
+                "{} emissive triangles, luminous power {power:.4} W (luminance-weighted), chosen by power for light samples",
+                e.len()
+            ),
+        );
     }
     if scene.cameras.is_empty() {
         let camera = describe_camera(&scene.default_camera());
@@ -80,6 +92,15 @@ fn describe(scene: &Scene) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The 64-emitter box holds 8 W in all (the references' README): the emitters' line says so
+    /// from the triangles' areas and luminances.
+    #[test]
+    fn describes_the_emitters_with_their_power() {
+        let path = furnace_tests::data::reference("lights/cbox_many_lights.gltf");
+        let text = describe(&Scene::load(path).unwrap());
+        assert!(text.contains("emitters        128 emissive triangles, luminous power 7.99"), "{text}");
+    }
 
     #[test]
     fn describes_the_cornell_box() {

@@ -27,6 +27,11 @@ use glam::Vec3;
 /// ε of the relative MSE, `(c − r)² / (r² + ε)`: keeps dark reference values from dominating.
 pub const REL_MSE_EPSILON: f64 = 1e-2;
 
+/// Relative error floor of the z statistics, `10⁻⁶ · reference`: f32 images of tens of thousands
+/// of samples are not exact to better than that, so a pixel that is the same in every sample
+/// (an emitter seen directly) does not count as a 100σ deviation.
+const REL_ROUNDING: f64 = 1e-6;
+
 /// Floor of the summed variance in the z-score.
 const VAR_FLOOR: f64 = 1e-12;
 
@@ -108,7 +113,10 @@ pub fn score(
                 let (c, r, s) = (channels(candidate[i]), channels(reference[i]), channels(sref[i]));
                 let sc = cand_stderr.map_or([0.0; 3], |sc| channels(sc[i]));
                 (0..3).map(move |k| {
-                    let var = s[k] * s[k] + sc[k] * sc[k];
+                    // Float rounding floors the error: a reference pixel whose every sample is
+                    // the same (an emitter filling it) has a "standard error" of f32 rounding.
+                    let rounding = REL_ROUNDING * r[k];
+                    let var = (s[k] * s[k] + sc[k] * sc[k]).max(rounding * rounding);
                     (finite_or_zero(c[k]) - r[k]) / var.max(VAR_FLOOR).sqrt()
                 })
             })
@@ -283,6 +291,15 @@ mod tests {
         assert!(close(s.rmse, (2.0f64 / 6.0).sqrt()), "{s:?}");
         assert!(close(s.mean_ratio[0], 0.5) && close(s.mean_ratio[1], 1.0), "{s:?}");
         assert!(s.z.is_none());
+    }
+
+    /// A pixel on an emitter: every sample the same, the reference's error f32 rounding; a
+    /// candidate off by 10⁻⁷ relative is not a deviation.
+    #[test]
+    fn float_rounding_floors_the_error() {
+        let r = Vec3::splat(0.2);
+        let s = score(&[r * (1.0 + 1e-7)], &[r], Some(&[Vec3::splat(1e-9)]), None).unwrap();
+        assert!(s.z.unwrap().mean.abs() < 0.2, "{s:?}");
     }
 
     #[test]

@@ -71,6 +71,8 @@ pub const LIGHT_EMITTER_COIN: u32 = 3;
 pub const LIGHT_SUN_DISC: u32 = 4;
 
 const _: () = assert!(LIGHT_SUN_DISC + 2 <= LIGHT_DIMS_PER_EVENT && LIGHT_EMITTER_COIN < LIGHT_SUN_DISC);
+// The bin and the coin are drawn as one pair (an even dimension, then the next).
+const _: () = assert!(LIGHT_EMITTER_COIN == LIGHT_EMITTER_BIN + 1 && LIGHT_EMITTER_BIN.is_multiple_of(2));
 
 /// The first dimension of the light block of a render of `bounces` scattering events:
 /// `4·(bounces + 1)`, past the last BSDF dimension `bounce(bounces − 1) + 3 = 4·bounces + 1`

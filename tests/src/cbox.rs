@@ -304,7 +304,7 @@ pub fn compare_masked(
         errors.add_rgb(m.to_array(), r.to_array());
         let floor = r * Z_ROUNDING_FLOOR;
         let variance = s * s + sr * sr;
-        let denominator = (variance + floor * floor).map(f64::sqrt);
+        let denominator = variance.max(floor * floor).map(f64::sqrt);
         for c in 0..3 {
             // A value without noise on either side (the sky through a hole) has no z.
             if variance[c] > 0.0 {

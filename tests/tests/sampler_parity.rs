@@ -15,8 +15,9 @@ use furnace_sampling::hash::{
     pcg_hash,
 };
 use furnace_sampling::warp::{
-    concentric_disk_pdf, cosine_hemisphere_pdf, square_to_concentric_disk, square_to_cosine_hemisphere,
-    square_to_uniform_hemisphere, uniform_hemisphere_pdf,
+    concentric_disk_pdf, cosine_hemisphere_pdf, in_cone, square_to_concentric_disk,
+    square_to_cosine_hemisphere, square_to_uniform_cone, square_to_uniform_hemisphere,
+    square_to_uniform_triangle, uniform_cone_pdf, uniform_hemisphere_pdf,
 };
 use furnace_sampling::{
     AnySampler, PMJ02_XORS, Sampler, SamplerKind, pmj02_coordinate, sobol_bits, to_unit_f32,
@@ -492,6 +493,101 @@ fn warps_match_to_float_rounding() {
     );
 }
 
+/// Input `[u.x, u.y, t, a, b]`; output: uniform triangle (2), uniform cone of `1 − cos = t` (3),
+/// `uniform_cone_pdf(t)`, `in_cone` of the cone sample against +z (as 0/1), `smp_mul_hi(a, b)`.
+const LIGHT_WARP_KERNEL: &str = r#"
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = invocation_index(gid, groups);
+    if i >= params.x { return; }
+    let r = 5u * i;
+    let u = vec2<f32>(bitcast<f32>(input[r]), bitcast<f32>(input[r + 1u]));
+    let t = bitcast<f32>(input[r + 2u]);
+    let o = 8u * i;
+    let b = warp_uniform_triangle(u);
+    let w = warp_uniform_cone(u, t);
+    output[o] = bitcast<u32>(b.x);
+    output[o + 1u] = bitcast<u32>(b.y);
+    output[o + 2u] = bitcast<u32>(w.x);
+    output[o + 3u] = bitcast<u32>(w.y);
+    output[o + 4u] = bitcast<u32>(w.z);
+    output[o + 5u] = bitcast<u32>(uniform_cone_pdf(t));
+    output[o + 6u] = select(0u, 1u, in_cone(w, vec3<f32>(0.0, 0.0, 1.0), t));
+    output[o + 7u] = smp_mul_hi(input[r + 3u], input[r + 4u]);
+}
+"#;
+
+/// The light-sampling warps (triangle, cone) to [`WARP_TOLERANCE`] relative to the cone's size
+/// (a 0.001° cone's directions differ from +z by 10⁻⁵), the cone pdf bit for bit, `in_cone` on
+/// every sample (away from the rim), and the alias table's 64-bit bin product exactly: cones
+/// from 1 − cos = 2 (the sphere) down to 3.8·10⁻¹¹ (a 0.001° sun).
+#[test]
+fn light_warps_match_and_the_bin_product_is_exact() {
+    let Some(ctx) = test_context() else { return };
+    let mut rng = Rng(0x0001_1647);
+    let cones = [2.0f32, 1.0, 0.1339746, 2.1e-5, 3.8e-11];
+    let mut input = Vec::new();
+    let mut cases = Vec::new();
+    for k in 0..20_000 {
+        let u = Vec2::new(to_unit_f32(rng.u32()), to_unit_f32(rng.u32()));
+        let t = cones[k % cones.len()];
+        // Products at the edges too: 0, 1, u32::MAX.
+        let (a, b) = match k % 5 {
+            0 => (u32::MAX, u32::MAX),
+            1 => (rng.u32(), 1),
+            _ => (rng.u32(), rng.u32() >> (k % 17)),
+        };
+        input.extend([u.x.to_bits(), u.y.to_bits(), t.to_bits(), a, b]);
+        cases.push((u, t, a, b));
+    }
+    let got =
+        kernel::run(&ctx, &shader(LIGHT_WARP_KERNEL), &input, 8 * cases.len(), cases.len() as u32).unwrap();
+    let mut rows = Vec::new();
+    let (mut tri_err, mut cone_err) = (0f32, 0f32);
+    for (k, &(u, t, a, b)) in cases.iter().enumerate() {
+        let g = &got[8 * k..8 * k + 8];
+        let f = |i: usize| f32::from_bits(g[i]);
+        let bary = square_to_uniform_triangle(u);
+        let w = square_to_uniform_cone(u, t);
+        let e_tri = (bary.x - f(0)).abs().max((bary.y - f(1)).abs());
+        // The cone's directions are compared in units of its size, sin θmax ≈ √(2t).
+        let scale = (2.0 * t).sqrt().min(1.0);
+        let e_cone = ((w.x - f(2)).abs().max((w.y - f(3)).abs()) / scale).max((w.z - f(4)).abs());
+        tri_err = tri_err.max(e_tri);
+        cone_err = cone_err.max(e_cone);
+        if !(e_tri <= WARP_TOLERANCE && e_cone <= WARP_TOLERANCE) {
+            rows.push(format!(
+                "  u = {u:?}, t = {t:e}: triangle {bary:?} vs ({}, {}), cone {w:?} vs ({}, {}, {})",
+                f(0),
+                f(1),
+                f(2),
+                f(3),
+                f(4)
+            ));
+        }
+        if uniform_cone_pdf(t).to_bits() != g[5] {
+            rows.push(format!("  uniform_cone_pdf({t:e}): rust {} wgsl {}", uniform_cone_pdf(t), f(5)));
+        }
+        // Samples strictly inside (u.x < 1 − 1e-3) are in the cone on both sides.
+        if u.x < 0.999 && (g[6] != 1 || !in_cone(w, Vec3::Z, t)) {
+            rows.push(format!(
+                "  in_cone(u = {u:?}, t = {t:e}): rust {} wgsl {}",
+                in_cone(w, Vec3::Z, t),
+                g[6]
+            ));
+        }
+        let hi = ((u64::from(a) * u64::from(b)) >> 32) as u32;
+        if hi != g[7] {
+            rows.push(format!("  mul_hi({a}, {b}): rust {hi} wgsl {}", g[7]));
+        }
+    }
+    eprintln!(
+        "{} inputs; largest |WGSL − Rust|: triangle {tri_err:.2e}, cone {cone_err:.2e} (relative to its size)",
+        cases.len()
+    );
+    assert!(rows.is_empty(), "{} mismatches:\n{}", rows.len(), rows[..rows.len().min(SHOW)].join("\n"));
+}
+
 /// The block between `BEGIN GENERATED` and `END GENERATED` is what `wgsl_generated()` emits from
 /// the Rust constants (PMJ02 xors, Sobol directions, kind codes, f32 constants).
 #[test]
@@ -532,7 +628,7 @@ fn module_declares_no_bindings_and_prefixes_private_names() {
     let module = naga::front::wgsl::parse_str(src).unwrap_or_else(|e| panic!("{}", e.emit_to_string(src)));
     let globals: Vec<_> = module.global_variables.iter().map(|(_, g)| g.name.clone()).collect();
     assert!(globals.is_empty(), "sampling.wgsl must not declare global variables or bindings: {globals:?}");
-    const API: [&str; 12] = [
+    const API: [&str; 16] = [
         "sampler_bits",
         "sampler_bits_2d",
         "sampler_value",
@@ -544,6 +640,10 @@ fn module_declares_no_bindings_and_prefixes_private_names() {
         "uniform_hemisphere_pdf",
         "warp_cosine_hemisphere",
         "cosine_hemisphere_pdf",
+        "warp_uniform_triangle",
+        "warp_uniform_cone",
+        "uniform_cone_pdf",
+        "in_cone",
         "SamplerParams",
     ];
     let mut names: Vec<String> = module.functions.iter().filter_map(|(_, f)| f.name.clone()).collect();

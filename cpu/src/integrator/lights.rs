@@ -3,11 +3,9 @@
 
 use super::CpuRenderer;
 use furnace_brdf::{Bsdf, Frame, MetallicRoughness};
-use furnace_render::layout::{
-    self, LIGHT_EMITTER_BIN, LIGHT_EMITTER_COIN, LIGHT_EMITTER_POINT, LIGHT_SUN_DISC,
-};
-use furnace_sampling::Sampler;
+use furnace_render::layout::{self, LIGHT_EMITTER_BIN, LIGHT_EMITTER_POINT, LIGHT_SUN_DISC};
 use furnace_sampling::warp::{in_cone, square_to_uniform_cone, square_to_uniform_triangle, uniform_cone_pdf};
+use furnace_sampling::{Sampler, to_unit_f32};
 use furnace_scene::{Sun, SurfacePoint, geometric_normal, triangle_area};
 use glam::{Vec2, Vec3};
 
@@ -57,8 +55,10 @@ impl CpuRenderer {
     pub(super) fn sample_emitter(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>) -> Vec3 {
         let Some(emitters) = &self.emitters else { return Vec3::ZERO };
         let dim = layout::light(self.settings.bounces, event);
-        let bits = self.sampler.bits(pixel, index, dim + LIGHT_EMITTER_BIN);
-        let coin = self.sampler.value(pixel, index, dim + LIGHT_EMITTER_COIN);
+        // The bin's bits and the coin are a pair (`LIGHT_EMITTER_COIN = LIGHT_EMITTER_BIN + 1`):
+        // one 2-D draw, the same bits as two 1-D ones, cheaper for the pattern samplers.
+        let [bits, coin] = self.sampler.bits_2d(pixel, index, dim + LIGHT_EMITTER_BIN);
+        let coin = to_unit_f32(coin);
         let t = emitters.select(bits, coin) as usize;
         let [u1, u2] = self.sampler.value_2d(pixel, index, dim + LIGHT_EMITTER_POINT);
         let b = square_to_uniform_triangle(Vec2::new(u1, u2));

@@ -135,9 +135,9 @@ fn emitter_select(bits: u32, coin: f32) -> u32 {
 fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: BsdfParams,
                   wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
     let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event;
-    let bits = sampler_bits(params.sampler, pixel, index, dim + LIGHT_EMITTER_BIN);
-    let coin = sampler_value(params.sampler, pixel, index, dim + LIGHT_EMITTER_COIN);
-    let t = emitter_select(bits, coin);
+    // The bin's bits and the coin: one pair (LIGHT_EMITTER_COIN = LIGHT_EMITTER_BIN + 1).
+    let bin_coin = sampler_bits_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_BIN);
+    let t = emitter_select(bin_coin.x, to_unit_f32(bin_coin.y));
     let b = warp_uniform_triangle(sampler_value_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_POINT));
     let tri = scene_triangles[t];
     let v0 = scene_vertices[tri.i0].position;
