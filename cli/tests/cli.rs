@@ -286,32 +286,42 @@ fn resume_two_plus_two_is_bit_identical_to_four() {
             &["--sampler", "pmj02", "--russian-roulette", "on", "--bounces", "6", "--seed", "3"][..],
         ),
     ] {
-        let mut half = extra.to_vec();
-        half.extend_from_slice(&["--spp", "2"]);
-        let two = render_ok(&dir, &format!("{tag}_2"), 16, &half);
-        let mut full = extra.to_vec();
-        full.extend_from_slice(&["--spp", "4"]);
-        let four = render_ok(&dir, &format!("{tag}_4"), 16, &full);
-        // Only --spp on resume: every other setting comes from the file.
-        let resumed = dir.join(format!("{tag}_2_2"));
-        let o = furnace(&[
-            "render",
-            "--quiet",
-            "--resume",
-            two.to_str().unwrap(),
-            "--spp",
-            "4",
-            "--out",
-            resumed.to_str().unwrap(),
-        ]);
-        assert!(o.status.success(), "{tag}: {}", stderr(&o));
-        let resumed = dir.join(format!("{tag}_2_2.exr"));
-        assert_same_render(&resumed, &four);
-        let (_, _, _, meta) = furnace_post::read_exr(&resumed).unwrap();
-        assert_eq!(meta.spp, Some(4), "{tag}");
-        // The file resumed from is left alone when --out is given.
-        assert_eq!(furnace_post::read_exr(&two).unwrap().3.spp, Some(2), "{tag}");
+        resume_matches_one_render(&dir, tag, extra);
     }
+    // A scene that samples lights (the emissive quad box, NEE only; the built-in box with a
+    // 5° sun disc): its light sampling and sun angle are recorded and come back on resume.
+    let area = furnace_tests::data::reference("lights/cbox_area.gltf");
+    resume_matches_one_render(&dir, "area_nee", &[area.to_str().unwrap(), "--light-sampling", "nee"]);
+    resume_matches_one_render(&dir, "sun_disc", &["--sun-angle", "5"]);
+}
+
+/// A render of 2 spp resumed to 4 equals a render of 4 (the f64 sums, bit for bit).
+fn resume_matches_one_render(dir: &Path, tag: &str, extra: &[&str]) {
+    let mut half = extra.to_vec();
+    half.extend_from_slice(&["--spp", "2"]);
+    let two = render_ok(dir, &format!("{tag}_2"), 16, &half);
+    let mut full = extra.to_vec();
+    full.extend_from_slice(&["--spp", "4"]);
+    let four = render_ok(dir, &format!("{tag}_4"), 16, &full);
+    // Only --spp on resume: every other setting comes from the file.
+    let resumed = dir.join(format!("{tag}_2_2"));
+    let o = furnace(&[
+        "render",
+        "--quiet",
+        "--resume",
+        two.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--out",
+        resumed.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{tag}: {}", stderr(&o));
+    let resumed = dir.join(format!("{tag}_2_2.exr"));
+    assert_same_render(&resumed, &four);
+    let (_, _, _, meta) = furnace_post::read_exr(&resumed).unwrap();
+    assert_eq!(meta.spp, Some(4), "{tag}");
+    // The file resumed from is left alone when --out is given.
+    assert_eq!(furnace_post::read_exr(&two).unwrap().3.spp, Some(2), "{tag}");
 }
 
 #[test]
@@ -343,6 +353,8 @@ fn resume_refuses_other_settings_naming_both_values() {
         (&["--compensation", "off"][..], "compensation is on in the file but off now"),
         (&["--specular-sampling", "ndf"][..], "specular sampling is caps in the file but ndf now"),
         (&["--russian-roulette", "on"][..], "russian roulette is off in the file but on now"),
+        (&["--light-sampling", "bsdf"][..], "light sampling is mis in the file but bsdf now"),
+        (&["--sun-angle", "1"][..], "sun angle is (not recorded) in the file but 1 now"),
         (&[cbox.as_str()][..], "scene is <built-in cbox> in the file but cbox.gltf now"),
     ] {
         let mut all = vec!["render", "--quiet", "--resume", file.to_str().unwrap(), "--spp", "4"];
