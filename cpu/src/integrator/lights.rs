@@ -64,7 +64,10 @@ impl CpuRenderer {
         let b = square_to_uniform_triangle(Vec2::new(u1, u2));
         let Some([v0, v1, v2]) = self.scene.geometry.triangle(t) else { return Vec3::ZERO };
         let y = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
-        let to_light = y - v.surface.position;
+        // From the offset origin the shadow ray starts at (as the BSDF ray's distance to a hit
+        // is measured): a point of the emitter's own plane is then strictly behind or in front
+        // of it, never lit by it at a rounding-error cosine.
+        let to_light = y - v.leave;
         let d2 = to_light.length_squared();
         if !(d2 > 0.0) {
             return Vec3::ZERO;

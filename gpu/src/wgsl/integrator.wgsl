@@ -144,7 +144,8 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     let v1 = scene_vertices[tri.i1].position;
     let v2 = scene_vertices[tri.i2].position;
     let y = scene_interpolate3(v0, v1, v2, b.x, b.y);
-    let to_light = y - surface.position;
+    // From the offset origin the shadow ray starts at (CpuRenderer::sample_emitter).
+    let to_light = y - leave;
     let d2 = scene_dot(to_light, to_light);
     if !(d2 > 0.0) {
         return vec3<f32>(0.0);
