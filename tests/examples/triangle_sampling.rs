@@ -121,12 +121,13 @@ fn main() {
     let p = Vec3::ZERO;
     let n = Vec3::Y;
     // Triangles facing down (−Y) above the point, from small and far to large and close.
+    // Counter-clockwise seen from below: the front (the emitting side) faces −Y.
     let facing_down =
-        |c: Vec3, s: f32| [c + Vec3::new(-s, 0.0, -s), c + Vec3::new(0.0, 0.0, s), c + Vec3::new(s, 0.0, -s)];
+        |c: Vec3, s: f32| [c + Vec3::new(-s, 0.0, -s), c + Vec3::new(s, 0.0, -s), c + Vec3::new(0.0, 0.0, s)];
     let cases: Vec<(&str, [Vec3; 3])> = vec![
         ("small, far (side 0.1 at 2 m)", facing_down(Vec3::new(0.3, 2.0, 0.1), 0.05)),
         ("the cbox quad from the floor (0.47 m at 1.97 m)", facing_down(Vec3::new(0.0, 1.97, 0.0), 0.235)),
-        ("the cbox quad from a wall 0.4 m below it", facing_down(Vec3::new(0.8, 0.4, 0.0), 0.235)),
+        ("the cbox quad seen 0.4 m below and 0.8 m aside", facing_down(Vec3::new(0.8, 0.4, 0.0), 0.235)),
         ("large, close (side 2 at 0.2 m)", facing_down(Vec3::new(0.0, 0.2, 0.0), 1.0)),
         ("large, very close (side 2 at 0.02 m)", facing_down(Vec3::new(0.0, 0.02, 0.0), 1.0)),
         ("grazing (1 m wide, 0.05 m above, 1 m away)", facing_down(Vec3::new(1.5, 0.05, 0.0), 0.5)),
@@ -147,8 +148,9 @@ fn main() {
             let w = d / d2.sqrt();
             w.dot(n).max(0.0) * (-w.dot(nl)).max(0.0) / d2 * area
         });
+        // One-sided: a direction reaching the back of the triangle carries nothing.
         let by_angle = run(N, |u| match sample_spherical_triangle(v, p, u) {
-            Some((w, omega)) if hits(v, p, w) => w.dot(n).max(0.0) * omega,
+            Some((w, omega)) if hits(v, p, w) && w.dot(nl) < 0.0 => w.dot(n).max(0.0) * omega,
             _ => 0.0,
         });
         let exact = quadrature(v, p, n);
