@@ -30,7 +30,7 @@ pub const REL_MSE_EPSILON: f64 = 1e-2;
 /// Relative error floor of the z statistics, `10⁻⁶ · reference`: f32 images of tens of thousands
 /// of samples are not exact to better than that, so a pixel that is the same in every sample
 /// (an emitter seen directly) does not count as a 100σ deviation.
-const REL_ROUNDING: f64 = 1e-6;
+pub const Z_ROUNDING_FLOOR: f64 = 1e-6;
 
 /// Floor of the summed variance in the z-score.
 const VAR_FLOOR: f64 = 1e-12;
@@ -115,7 +115,7 @@ pub fn score(
                 (0..3).map(move |k| {
                     // Float rounding floors the error: a reference pixel whose every sample is
                     // the same (an emitter filling it) has a "standard error" of f32 rounding.
-                    let rounding = REL_ROUNDING * r[k];
+                    let rounding = Z_ROUNDING_FLOOR * r[k];
                     let var = (s[k] * s[k] + sc[k] * sc[k]).max(rounding * rounding);
                     (finite_or_zero(c[k]) - r[k]) / var.max(VAR_FLOOR).sqrt()
                 })

@@ -268,7 +268,7 @@ impl Comparison {
 /// exact value misses by 10⁻⁷ relative — a z of 100 that is no bias. 10⁻⁶ of the reference
 /// value is far below any pixel's noise (≥ 10⁻⁴ here) and above that rounding. Pixels with no
 /// error on either side (exactly 0) still have no z.
-pub const Z_ROUNDING_FLOOR: f64 = 1e-6;
+pub use furnace_post::metrics::Z_ROUNDING_FLOOR;
 
 /// Compares `candidate` with `reference` pixel by pixel (same size).
 pub fn compare(candidate: &Estimate, reference: &Reference) -> Comparison {
