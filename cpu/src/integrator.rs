@@ -259,7 +259,7 @@ impl CpuRenderer {
             if !surface.back_face {
                 if self.emitters.is_some() && emission != Vec3::ZERO {
                     let cos_light = -surface.geometric.dot(direction);
-                    let w = self.emission_weight(bsdf_pdf, material_index, t, hit.t, cos_light);
+                    let w = self.emission_weight(bsdf_pdf, origin, material_index, t, hit.t, cos_light);
                     radiance += throughput * emission * w;
                 } else {
                     radiance += throughput * emission;

@@ -36,7 +36,7 @@ use crate::traverse::BvhBuffers;
 use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
 use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
-use furnace_render::{Film, Integrator, LightSampling, RenderError, RenderSettings};
+use furnace_render::{Film, Integrator, LightSampling, RenderError, RenderSettings, TriangleSampling};
 use furnace_sampling::AnySampler;
 use furnace_scene::{AlphaMode, Camera, Emitters, Projection, Scene};
 
@@ -58,6 +58,9 @@ crate::wgsl_consts! {
     /// `FrameParams.flags`: BSDF-sampled rays that reach an emitter or a sun disc add nothing
     /// (`LightSampling::Nee`).
     pub const FRAME_NO_BSDF_LIGHT: u32 = 64;
+    /// `FrameParams.flags`: emissive triangles are sampled by solid angle where it is precise
+    /// (`TriangleSampling::SolidAngle`), else by area.
+    pub const FRAME_SOLID_ANGLE_TRIANGLES: u32 = 128;
 }
 
 crate::gpu_struct! {
@@ -363,6 +366,11 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         point_light_flags_wgsl(),
         wgsl_struct::<GpuPointLight>(false),
         format!("const SHADOW_EPSILON: f32 = {:?};\n", furnace_render::SHADOW_EPSILON),
+        format!(
+            "const SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE: f32 = {:?};\nconst SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE: f32 = {:?};\n",
+            furnace_sampling::warp::SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE,
+            furnace_sampling::warp::SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE
+        ),
         features.wgsl(),
         binding_table(precision, features).wgsl(),
     ]
@@ -823,6 +831,9 @@ fn frame_params_with(
         LightSampling::Nee => FRAME_NO_BSDF_LIGHT,
         LightSampling::Mis => 0,
     };
+    if s.triangle_sampling == TriangleSampling::SolidAngle {
+        flags |= FRAME_SOLID_ANGLE_TRIANGLES;
+    }
     let (sun_direction, sun_irradiance) = match scene.sun() {
         Some(sun) => {
             flags |= FRAME_HAS_SUN;

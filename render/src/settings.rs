@@ -5,7 +5,8 @@ use furnace_sampling::SamplerKind;
 
 /// What to render and how. [`Default`] is 256×256, 4 bounces, Owen-scrambled Sobol, seed 0,
 /// the glTF material model (height-correlated masking, spherical-cap sampling, Turquin
-/// compensation), no Russian roulette, MIS of light and BSDF samples.
+/// compensation), no Russian roulette, MIS of light and BSDF samples, emissive triangles sampled
+/// by solid angle.
 ///
 /// Sobol is the default by measurement (furnace-cpu's `examples/sampler_study.rs`, BENCHMARKS.md "Sampler
 /// choice (cbox)"): on the Cornell box it has the lowest error at equal time of the progressive
@@ -35,6 +36,8 @@ pub struct RenderSettings {
     /// How light from emitters and sun discs is found ([`LightSampling`]); delta lights (the
     /// delta sun, point and spot lights) are always gathered by shadow rays.
     pub light_sampling: LightSampling,
+    /// How a light sample chooses its point on an emissive triangle ([`TriangleSampling`]).
+    pub triangle_sampling: TriangleSampling,
 }
 
 /// The strategies that find light of emitters and sun discs: BSDF-sampled rays that hit them,
@@ -106,6 +109,75 @@ impl std::str::FromStr for LightSampling {
     }
 }
 
+/// How a light sample of an emissive triangle chooses its point: uniformly on the triangle's
+/// **area**, or uniformly in the **solid angle** it subtends at the shading point (spherical
+/// triangles, Arvo 1995; [`furnace_sampling::warp::square_to_spherical_triangle`]). Solid
+/// angle is the default by measurement (docs/accuracy.md, "Area against solid-angle triangle
+/// sampling"): it removes the `cos θ_light / d²` factor from the estimate, which dominates the
+/// variance of emitters seen close or at a grazing angle. Triangles subtending less than
+/// `SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE` or more than `SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE` are
+/// still sampled by area ([`TriangleSampling::solid_angle`]): there the spherical construction
+/// loses precision in `f32`, and a small triangle's area pdf is nearly uniform in solid angle.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum TriangleSampling {
+    /// Uniform on the triangle's area (pdf `d² / (A cos θ_light)` in solid angle).
+    Area,
+    /// Uniform in the triangle's solid angle where that is precise, else by area.
+    #[default]
+    SolidAngle,
+}
+
+impl TriangleSampling {
+    /// Both methods, in CLI order.
+    pub const ALL: [TriangleSampling; 2] = [Self::Area, Self::SolidAngle];
+
+    /// The CLI name: `area`, `solid-angle`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Area => "area",
+            Self::SolidAngle => "solid-angle",
+        }
+    }
+
+    /// The solid angle of the triangle with vertices `a`, `b`, `c` relative to the shading
+    /// point, when this method samples it by solid angle from there; `None` when it is sampled
+    /// by area. The light sample and the MIS weight of a BSDF hit both decide by this, from the
+    /// same point (the offset ray origin), so they always agree on the pdf.
+    #[inline]
+    pub fn solid_angle(self, a: glam::Vec3, b: glam::Vec3, c: glam::Vec3) -> Option<f32> {
+        use furnace_sampling::warp::{
+            SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE, SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE,
+            spherical_triangle_solid_angle,
+        };
+        match self {
+            Self::Area => None,
+            Self::SolidAngle => {
+                let omega = spherical_triangle_solid_angle(a, b, c);
+                (SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE..=SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE)
+                    .contains(&omega)
+                    .then_some(omega)
+            }
+        }
+    }
+}
+
+impl std::fmt::Display for TriangleSampling {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for TriangleSampling {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| format!("unknown triangle sampling {s:?} (area or solid-angle)"))
+    }
+}
+
 /// Veach's power heuristic with β = 2 for one sample of each strategy: `a² / (a² + b²)`,
 /// formed as `1 / (1 + (b/a)²)` so that pdfs near `f32::MAX` (a tiny emitter seen from afar)
 /// do not overflow; 1 when `b` is 0, 0 when `a` is 0 (and 0 for NaN).
@@ -131,6 +203,7 @@ impl Default for RenderSettings {
             specular: SpecularOptions::default(),
             russian_roulette: false,
             light_sampling: LightSampling::Mis,
+            triangle_sampling: TriangleSampling::SolidAngle,
         }
     }
 }

@@ -167,22 +167,27 @@ fn same_samples_give_the_same_image_with_point_and_spot_lights() {
 }
 
 /// The emissive-quad box, the 64-emitter box and the sun-disc box: emitter selection (alias
-/// table), triangle and cone sampling, the MIS weights of light samples and of BSDF hits on
-/// emitters and on the disc, on both sides; and the two single strategies (NEE only on the
-/// emitters, BSDF only on the disc: the flags that switch the weights).
+/// table), triangle sampling by solid angle and by area, cone sampling, the MIS weights of
+/// light samples and of BSDF hits on emitters and on the disc, on both sides; and the two
+/// single strategies (NEE only on the emitters, BSDF only on the disc: the flags that switch
+/// the weights).
 #[test]
 fn same_samples_give_the_same_image_with_emitters_and_a_sun_disc() {
     use furnace_render::LightSampling::{Bsdf, Mis, Nee};
+    use furnace_render::TriangleSampling::{Area, SolidAngle};
     for (file, strategies) in [
-        ("cbox_area", &[Mis][..]),
-        ("cbox_many_lights", &[Mis, Nee][..]),
-        ("cbox_sun_disc", &[Mis, Bsdf][..]),
+        ("cbox_area", &[(Mis, SolidAngle), (Mis, Area)][..]),
+        ("cbox_many_lights", &[(Mis, SolidAngle), (Nee, SolidAngle)][..]),
+        ("cbox_sun_disc", &[(Mis, SolidAngle), (Bsdf, SolidAngle)][..]),
     ] {
         let path = furnace_tests::data::reference(&format!("lights/{file}.gltf"));
         let scene = furnace_scene::Scene::load(&path).unwrap();
-        for &light_sampling in strategies {
-            eprintln!("{file}, light sampling {light_sampling}");
-            same_samples_with(&scene, RenderSettings { light_sampling, ..settings(SamplerKind::Sobol, 3) });
+        for &(light_sampling, triangle_sampling) in strategies {
+            eprintln!("{file}, light sampling {light_sampling}, triangles by {triangle_sampling}");
+            same_samples_with(
+                &scene,
+                RenderSettings { light_sampling, triangle_sampling, ..settings(SamplerKind::Sobol, 3) },
+            );
         }
     }
 }

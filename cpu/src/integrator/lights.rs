@@ -4,7 +4,10 @@
 use super::CpuRenderer;
 use furnace_brdf::{Bsdf, Frame, MetallicRoughness};
 use furnace_render::layout::{self, LIGHT_EMITTER_BIN, LIGHT_EMITTER_POINT, LIGHT_SUN_DISC};
-use furnace_sampling::warp::{in_cone, square_to_uniform_cone, square_to_uniform_triangle, uniform_cone_pdf};
+use furnace_sampling::warp::{
+    in_cone, square_to_spherical_triangle, square_to_uniform_cone, square_to_uniform_triangle,
+    uniform_cone_pdf,
+};
 use furnace_sampling::{Sampler, to_unit_f32};
 use furnace_scene::{Sun, SurfacePoint, geometric_normal, triangle_area};
 use glam::{Vec2, Vec3};
@@ -50,8 +53,9 @@ pub(super) struct Vertex<'a> {
 
 impl CpuRenderer {
     /// One light sample of an emissive triangle at scattering event `event` (throughput
-    /// included): the triangle chosen by power, a point uniform on its area, a shadow ray
-    /// stopping `SHADOW_EPSILON·d` short of it; weighted against BSDF sampling.
+    /// included): the triangle chosen by power, a point on it uniform in solid angle or in area
+    /// ([`furnace_render::TriangleSampling`]), a shadow ray stopping `SHADOW_EPSILON·d` short of
+    /// it; weighted against BSDF sampling.
     pub(super) fn sample_emitter(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>) -> Vec3 {
         let Some(emitters) = &self.emitters else { return Vec3::ZERO };
         let dim = layout::light(self.settings.bounces, event);
@@ -60,13 +64,26 @@ impl CpuRenderer {
         let [bits, coin] = self.sampler.bits_2d(pixel, index, dim + LIGHT_EMITTER_BIN);
         let coin = to_unit_f32(coin);
         let t = emitters.select(bits, coin) as usize;
-        let [u1, u2] = self.sampler.value_2d(pixel, index, dim + LIGHT_EMITTER_POINT);
-        let b = square_to_uniform_triangle(Vec2::new(u1, u2));
         let Some([v0, v1, v2]) = self.scene.geometry.triangle(t) else { return Vec3::ZERO };
-        let y = (1.0 - b.x - b.y) * v0 + b.x * v1 + b.y * v2;
-        // From the offset origin the shadow ray starts at (as the BSDF ray's distance to a hit
-        // is measured): a point of the emitter's own plane is then strictly behind or in front
-        // of it, never lit by it at a rounding-error cosine.
+        // Everything is seen from the offset origin the shadow ray starts at (as the BSDF ray's
+        // distance to a hit is measured): a point of the emitter's own plane is then strictly
+        // behind or in front of it, never lit by it at a rounding-error cosine.
+        let (a, b, c) = (v0 - v.leave, v1 - v.leave, v2 - v.leave);
+        // One-sided: only the front (the side the winding's normal points to) emits, and a
+        // point behind the emitter's plane sees none of it.
+        if !(a.dot((v1 - v0).cross(v2 - v0)) < 0.0) {
+            return Vec3::ZERO;
+        }
+        let u = Vec2::from(self.sampler.value_2d(pixel, index, dim + LIGHT_EMITTER_POINT));
+        let omega = self.settings.triangle_sampling.solid_angle(a, b, c);
+        let bary = match omega {
+            Some(_) => match square_to_spherical_triangle(u, a, b, c) {
+                Some((_, bary)) => bary,
+                None => return Vec3::ZERO,
+            },
+            None => square_to_uniform_triangle(u),
+        };
+        let y = (1.0 - bary.x - bary.y) * v0 + bary.x * v1 + bary.y * v2;
         let to_light = y - v.leave;
         let d2 = to_light.length_squared();
         if !(d2 > 0.0) {
@@ -74,23 +91,26 @@ impl CpuRenderer {
         }
         let d = d2.sqrt();
         let wi = to_light / d;
-        // One-sided: only the front (the side the winding's normal points to) emits.
         let cos_light = -geometric_normal(v0, v1, v2).dot(wi);
         if !(cos_light > 0.0 && wi.dot(v.surface.geometric) > 0.0) {
             return Vec3::ZERO;
         }
-        if self.any_masked && !self.alpha_passes(t as u32, b) {
+        if self.any_masked && !self.alpha_passes(t as u32, bary) {
             return Vec3::ZERO; // a cut-out of an alpha-masked emitter emits nothing
         }
         let material = self.triangle_materials[t] as usize;
-        let emission = self.emission_at(material, t, b);
+        let emission = self.emission_at(material, t, bary);
         let wi_local = v.frame.to_local(wi);
         let f = v.bsdf.eval(v.wo, wi_local);
         if emission == Vec3::ZERO || f == Vec3::ZERO {
             return Vec3::ZERO;
         }
         let area = triangle_area(v0, v1, v2);
-        let pdf = emitters.selection_pdf(material, area) * d2 / (area * cos_light);
+        let selection = emitters.selection_pdf(material, area);
+        let pdf = match omega {
+            Some(omega) => selection / omega,
+            None => selection * d2 / (area * cos_light),
+        };
         let w = self.settings.light_sampling.light_weight(pdf, v.bsdf.pdf(v.wo, wi_local));
         let contribution = v.throughput * f * emission * (w / pdf);
         // A light sample that is not finite (an emitter touching the surface) adds nothing.
@@ -142,11 +162,12 @@ impl CpuRenderer {
     }
 
     /// The MIS weight of emission reached by a BSDF-sampled ray of pdf `bsdf_pdf` (`None`: a
-    /// camera ray) at distance `t` on the front of triangle `triangle` of `material`: against
-    /// the light sample that could have chosen the same point from the previous vertex.
+    /// camera ray) from `origin`, at distance `t` on the front of triangle `triangle` of
+    /// `material`: against the light sample that could have chosen the same point from there.
     pub(super) fn emission_weight(
         &self,
         bsdf_pdf: Option<f32>,
+        origin: Vec3,
         material: usize,
         triangle: usize,
         t: f32,
@@ -159,7 +180,11 @@ impl CpuRenderer {
         if !(selection > 0.0) {
             return 1.0; // never chosen by the light sampler: BSDF sampling is its only strategy
         }
-        let light = selection * (t * t) / (area * cos_light);
+        // The light sample's pdf of this direction, decided as `sample_emitter` decides it.
+        let light = match self.settings.triangle_sampling.solid_angle(v0 - origin, v1 - origin, v2 - origin) {
+            Some(omega) => selection / omega,
+            None => selection * (t * t) / (area * cos_light),
+        };
         self.settings.light_sampling.bsdf_weight(p, light)
     }
 

@@ -132,19 +132,50 @@ fn emitter_select(bits: u32, coin: f32) -> u32 {
 }
 
 // CpuRenderer::sample_emitter: one light sample of an emissive triangle (throughput included).
+// TriangleSampling::solid_angle: the solid angle of the triangle a, b, c (relative to the
+// shading point) when it is sampled by solid angle from there, else −1 (sampled by area).
+fn triangle_solid_angle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
+    if (params.flags & FRAME_SOLID_ANGLE_TRIANGLES) == 0u {
+        return -1.0;
+    }
+    let omega = spherical_triangle_solid_angle(a, b, c);
+    if omega >= SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE && omega <= SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE {
+        return omega;
+    }
+    return -1.0;
+}
+
 fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: BsdfParams,
                   wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
     let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event;
     // The bin's bits and the coin: one pair (LIGHT_EMITTER_COIN = LIGHT_EMITTER_BIN + 1).
     let bin_coin = sampler_bits_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_BIN);
     let t = emitter_select(bin_coin.x, to_unit_f32(bin_coin.y));
-    let b = warp_uniform_triangle(sampler_value_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_POINT));
     let tri = scene_triangles[t];
     let v0 = scene_vertices[tri.i0].position;
     let v1 = scene_vertices[tri.i1].position;
     let v2 = scene_vertices[tri.i2].position;
+    // Seen from the offset origin the shadow ray starts at (CpuRenderer::sample_emitter); a
+    // point behind the one-sided emitter's plane sees none of it.
+    let a = v0 - leave;
+    let b_rel = v1 - leave;
+    let c = v2 - leave;
+    if !(scene_dot(a, scene_cross(v1 - v0, v2 - v0)) < 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let u = sampler_value_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_POINT);
+    let omega = triangle_solid_angle(a, b_rel, c);
+    var b: vec2<f32>;
+    if omega > 0.0 {
+        let st = warp_spherical_triangle(u, a, b_rel, c);
+        if !st.valid {
+            return vec3<f32>(0.0);
+        }
+        b = st.bary;
+    } else {
+        b = warp_uniform_triangle(u);
+    }
     let y = scene_interpolate3(v0, v1, v2, b.x, b.y);
-    // From the offset origin the shadow ray starts at (CpuRenderer::sample_emitter).
     let to_light = y - leave;
     let d2 = scene_dot(to_light, to_light);
     if !(d2 > 0.0) {
@@ -152,7 +183,6 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     }
     let d = sqrt(d2);
     let wi = to_light / d;
-    // One-sided: only the front (the side the winding's normal points to) emits.
     let cos_light = -scene_dot(scene_geometric_normal(v0, v1, v2), wi);
     if !(cos_light > 0.0 && scene_dot(wi, surface.geometric) > 0.0) {
         return vec3<f32>(0.0);
@@ -172,7 +202,13 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
         return vec3<f32>(0.0);
     }
     let area = triangle_area(v0, v1, v2);
-    let pdf = emitter_selection_pdf(material, area) * d2 / (area * cos_light);
+    let selection = emitter_selection_pdf(material, area);
+    var pdf: f32;
+    if omega > 0.0 {
+        pdf = selection / omega;
+    } else {
+        pdf = selection * d2 / (area * cos_light);
+    }
     let w = light_weight(pdf, bsdf_pdf(bsdf, wo, wi_local));
     let contribution = throughput * f * emission * (w / pdf);
     if !(film_is_finite(contribution) && any(contribution != vec3<f32>(0.0))) {
@@ -186,19 +222,28 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
 }
 
 // CpuRenderer::emission_weight: the MIS weight of emission reached by a BSDF sample of pdf
-// `bsdf_pdf_value` (< 0: a camera ray) at distance `t` on the front of `triangle`.
-fn emission_weight(bsdf_pdf_value: f32, material: u32, triangle: u32, t: f32, cos_light: f32) -> f32 {
+// `bsdf_pdf_value` (< 0: a camera ray) from `origin`, at distance `t` on the front of `triangle`.
+fn emission_weight(bsdf_pdf_value: f32, origin: vec3<f32>, material: u32, triangle: u32, t: f32,
+                   cos_light: f32) -> f32 {
     if bsdf_pdf_value < 0.0 {
         return 1.0;
     }
     let tri = scene_triangles[triangle];
-    let area = triangle_area(scene_vertices[tri.i0].position, scene_vertices[tri.i1].position,
-        scene_vertices[tri.i2].position);
+    let v0 = scene_vertices[tri.i0].position;
+    let v1 = scene_vertices[tri.i1].position;
+    let v2 = scene_vertices[tri.i2].position;
+    let area = triangle_area(v0, v1, v2);
     let selection = emitter_selection_pdf(material, area);
     if !(selection > 0.0) {
         return 1.0;
     }
-    let light = selection * (t * t) / (area * cos_light);
+    let omega = triangle_solid_angle(v0 - origin, v1 - origin, v2 - origin);
+    var light: f32;
+    if omega > 0.0 {
+        light = selection / omega;
+    } else {
+        light = selection * (t * t) / (area * cos_light);
+    }
     return bsdf_weight(bsdf_pdf_value, light);
 }
 
@@ -288,7 +333,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // #if HAS_EMITTERS
             if any(ms.emission != vec3<f32>(0.0)) {
                 let cos_light = -scene_dot(surface.geometric, direction);
-                let w = emission_weight(ray_pdf, material, hit.triangle, hit.t, cos_light);
+                let w = emission_weight(ray_pdf, origin, material, hit.triangle, hit.t, cos_light);
                 radiance += throughput * ms.emission * w;
             }
             // #else

@@ -572,6 +572,134 @@ fn in_cone(w: vec3<f32>, axis: vec3<f32>, one_minus_cos: f32) -> bool {
     return d.x * d.x + d.y * d.y + d.z * d.z <= 2.0 * one_minus_cos;
 }
 
+// `spherical_triangle_solid_angle`: Van Oosterom & Strackee, tan(Ω/2) = |a·(b×c)| / (|a||b||c| +
+// (a·b)|c| + (a·c)|b| + (b·c)|a|), the triple product formed from the edges.
+fn spherical_triangle_solid_angle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
+    let det = abs(dot(a, cross(b - a, c - a)));
+    let la = length(a);
+    let lb = length(b);
+    let lc = length(c);
+    let denominator = la * lb * lc + dot(a, b) * lc + dot(a, c) * lb + dot(b, c) * la;
+    return 2.0 * smp_atan2_upper(det, denominator);
+}
+
+// atan2(y, x) for y >= 0, in [0, π], to a few ulp on every device (WGSL's atan2 is bound only
+// to 4096 ulp): the ratio folded into [0, 1], then into |z| <= tan(π/8) by atan z = π/4 +
+// atan((z − 1)/(z + 1)), then the odd Taylor series to z²¹ (remainder < 10⁻⁹).
+fn smp_atan2_upper(y: f32, x: f32) -> f32 {
+    let ax = abs(x);
+    if y == 0.0 && ax == 0.0 {
+        return 0.0;
+    }
+    let swap = y > ax;
+    var z = y / ax;
+    if swap {
+        z = ax / y;
+    }
+    var offset = 0.0;
+    if z > 0.41421357 {
+        z = (z - 1.0) / (z + 1.0);
+        offset = 0.7853982;
+    }
+    let z2 = z * z;
+    var p = 1.0 / 21.0;
+    p = 1.0 / 19.0 - z2 * p;
+    p = 1.0 / 17.0 - z2 * p;
+    p = 1.0 / 15.0 - z2 * p;
+    p = 1.0 / 13.0 - z2 * p;
+    p = 1.0 / 11.0 - z2 * p;
+    p = 1.0 / 9.0 - z2 * p;
+    p = 1.0 / 7.0 - z2 * p;
+    p = 1.0 / 5.0 - z2 * p;
+    p = 1.0 / 3.0 - z2 * p;
+    var r = offset + (z - z * z2 * p);
+    if swap {
+        r = 1.5707964 - r;
+    }
+    if x < 0.0 {
+        r = 3.1415927 - r;
+    }
+    return r;
+}
+
+// sin and cos of x ∈ [0, π] to a few ulp on every device (WGSL's own sin/cos are only bound
+// to 2⁻¹¹ absolute, which the spherical triangle's small angles cannot afford): reflected to
+// [0, π/2] and [0, π/4] with two-part constants, then Taylor polynomials (remainder < 2·10⁻⁹).
+fn smp_sin_cos(x: f32) -> vec2<f32> {
+    var r = x;
+    var cos_sign = 1.0;
+    if r > 1.5707964 {
+        r = (3.1415927 - r) + -8.742278e-8;
+        cos_sign = -1.0;
+    }
+    var swap = false;
+    if r > 0.7853982 {
+        r = (1.5707964 - r) + -4.371139e-8;
+        swap = true;
+    }
+    let r2 = r * r;
+    let s = r + r * r2 * (-1.0 / 6.0 + r2 * (1.0 / 120.0 + r2 * (-1.0 / 5040.0 + r2 * (1.0 / 362880.0))));
+    let c = 1.0 + r2 * (-0.5 + r2 * (1.0 / 24.0 + r2 * (-1.0 / 720.0 + r2 * (1.0 / 40320.0 + r2 * (-1.0 / 3628800.0)))));
+    if swap {
+        return vec2<f32>(c, cos_sign * s);
+    }
+    return vec2<f32>(s, cos_sign * c);
+}
+
+// A direction uniform in a spherical triangle and the barycentrics of the point it reaches.
+struct SphericalTriangleSample {
+    w: vec3<f32>,
+    bary: vec2<f32>,
+    valid: bool,
+}
+
+// `square_to_spherical_triangle`: Arvo 1995, with c' found on the edge a→c from the
+// sub-triangle's solid angle (the quadratic of the Rust doc), for the triangle with vertices
+// a, b, c relative to the viewpoint; `valid` false for a degenerate one.
+fn warp_spherical_triangle(u: vec2<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> SphericalTriangleSample {
+    var out = SphericalTriangleSample(vec3<f32>(0.0), vec2<f32>(0.0), false);
+    let ua = normalize(a);
+    let ub = normalize(b);
+    let ca = c - a;
+    let sc = smp_sin_cos(0.5 * u.x * spherical_triangle_solid_angle(a, b, c));
+    let dab = ua - ub;
+    let one_plus_cab = 2.0 - 0.5 * dot(dab, dab);
+    let d = abs(dot(ua, cross(ub, ca)));
+    let q = d * sc.y - sc.x * dot(ua + ub, ca);
+    let k = one_plus_cab * sc.x;
+    let numerator = 2.0 * k * (length(a) * q + k * dot(a, ca));
+    let denominator = q * q - k * k * dot(ca, ca);
+    let t_raw = numerator / denominator;
+    if t_raw != t_raw {
+        return out;
+    }
+    let cp = normalize(a + clamp(t_raw, 0.0, 1.0) * ca);
+    let dcb = cp - ub;
+    let versine_theta = u.y * 0.5 * dot(dcb, dcb);
+    let sin_theta = sqrt(max(versine_theta * (2.0 - versine_theta), 0.0));
+    let w = (1.0 - versine_theta) * ub + sin_theta * normalize(cp - dot(cp, ub) * ub);
+    let e1 = b - a;
+    let e2 = c - a;
+    let s1 = cross(w, e2);
+    let divisor = dot(s1, e1);
+    if !(abs(divisor) > 0.0) {
+        return out;
+    }
+    let s = -a;
+    var b1 = clamp(dot(s, s1) / divisor, 0.0, 1.0);
+    var b2 = clamp(dot(w, cross(s, e1)) / divisor, 0.0, 1.0);
+    if b1 + b2 > 1.0 {
+        let sum = b1 + b2;
+        b1 /= sum;
+        b2 /= sum;
+    }
+    out.w = w;
+    out.bary = vec2<f32>(b1, b2);
+    // A NaN anywhere above (a direction not finite) makes the sample invalid.
+    out.valid = b1 == b1 && b2 == b2;
+    return out;
+}
+
 // The high 32 bits of the 64-bit product a·b (WGSL has no u64): `AliasTable::sample`'s bin
 // ⌊bits · n / 2³²⌋, exactly.
 fn smp_mul_hi(a: u32, b: u32) -> u32 {
