@@ -3,7 +3,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
-use furnace_render::LightSampling;
+use furnace_render::{LightSampling, TriangleSampling};
 use furnace_sampling::SamplerKind;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -94,6 +94,10 @@ pub struct RenderArgs {
     /// nee (only by light samples with shadow rays) or mis (both, by the power heuristic).
     #[arg(long, value_enum, default_value_t = LightSamplingArg::Mis)]
     pub light_sampling: LightSamplingArg,
+    /// How a light sample picks its point on an emissive triangle: solid-angle (uniform in the
+    /// solid angle it subtends, where that is precise) or area (uniform on its area).
+    #[arg(long, value_enum, default_value_t = TriangleSamplingArg::SolidAngle)]
+    pub triangle_sampling: TriangleSamplingArg,
     /// The sun's angular diameter in degrees (0: a delta sun, hard shadows; the real sun is
     /// about 0.53), replacing the scene's `extras.angular_diameter_deg`.
     #[arg(long, value_name = "DEG", value_parser = parse_sun_angle)]
@@ -189,6 +193,10 @@ pub struct BenchArgs {
     /// How light of emitters and sun discs is found: bsdf, nee or mis (as `furnace render`).
     #[arg(long, value_enum, default_value_t = LightSamplingArg::Mis)]
     pub light_sampling: LightSamplingArg,
+    /// How a light sample picks its point on an emissive triangle: solid-angle or area (as
+    /// `furnace render`).
+    #[arg(long, value_enum, default_value_t = TriangleSamplingArg::SolidAngle)]
+    pub triangle_sampling: TriangleSamplingArg,
     /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
@@ -273,6 +281,10 @@ pub struct ChartArgs {
     /// `furnace render --light-sampling`).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "mis")]
     pub light_sampling: Vec<LightSamplingArg>,
+    /// How a light sample picks its point on an emissive triangle, comma-separated:
+    /// solid-angle, area (as `furnace render --triangle-sampling`).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "solid-angle")]
+    pub triangle_sampling: Vec<TriangleSamplingArg>,
     /// Backends, comma-separated: cpu, gpu.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
     pub backends: Vec<ChartBackend>,
@@ -432,6 +444,24 @@ impl From<LightSamplingArg> for LightSampling {
             LightSamplingArg::Bsdf => LightSampling::Bsdf,
             LightSamplingArg::Nee => LightSampling::Nee,
             LightSamplingArg::Mis => LightSampling::Mis,
+        }
+    }
+}
+
+/// `--triangle-sampling`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TriangleSamplingArg {
+    /// Uniform on the triangle's area.
+    Area,
+    /// Uniform in the solid angle the triangle subtends (by area where that is imprecise).
+    SolidAngle,
+}
+
+impl From<TriangleSamplingArg> for TriangleSampling {
+    fn from(m: TriangleSamplingArg) -> Self {
+        match m {
+            TriangleSamplingArg::Area => TriangleSampling::Area,
+            TriangleSamplingArg::SolidAngle => TriangleSampling::SolidAngle,
         }
     }
 }

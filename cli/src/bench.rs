@@ -43,6 +43,7 @@ struct Report {
     bounces: u32,
     sampler: String,
     light_sampling: &'static str,
+    triangle_sampling: &'static str,
     spp: u32,
     seconds: f64,
     time_to_first_frame_s: f64,
@@ -213,6 +214,7 @@ impl Report {
             "bounces": self.bounces,
             "sampler": self.sampler,
             "light_sampling": self.light_sampling,
+            "triangle_sampling": self.triangle_sampling,
             "spp": self.spp,
             "seconds": finite(Some(self.seconds)),
             "msamples_per_s": finite(Some(self.msamples_per_s())),
@@ -275,6 +277,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         // The warm-up frame and the measured samples.
         sample_count: a.sampler.needs_sample_count().then(|| a.spp.map_or(1, |n| n.saturating_add(1))),
         light_sampling: a.light_sampling.into(),
+        triangle_sampling: a.triangle_sampling.into(),
         ..RenderSettings::default()
     };
     let triangles = scene.geometry.triangle_count() as u64;
@@ -354,6 +357,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         bounces: a.bounces,
         sampler: a.sampler.to_string(),
         light_sampling: settings.light_sampling.name(),
+        triangle_sampling: settings.triangle_sampling.name(),
         spp: done,
         seconds,
         time_to_first_frame_s,

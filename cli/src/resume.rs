@@ -18,7 +18,7 @@
 //! render to the float rounding of each path, not bit for bit (`tests/gpu.rs` checks it). The
 //! record keeps every backend that added samples, and `--resume` says when it changes.
 
-use crate::args::{LightSamplingArg, MaskingArg, RenderArgs, SamplingArg, Switch};
+use crate::args::{LightSamplingArg, MaskingArg, RenderArgs, SamplingArg, Switch, TriangleSamplingArg};
 use clap::ValueEnum;
 use furnace_post::Metadata;
 use furnace_render::resume;
@@ -46,8 +46,12 @@ pub const SPECULAR_SAMPLING: &str = "furnace.specular_sampling";
 pub const CAMERA: &str = "furnace.camera";
 /// `--russian-roulette`.
 pub const RUSSIAN_ROULETTE: &str = "furnace.russian_roulette";
-/// `--spp` asked for (the render may have stopped earlier; `furnace.spp` says where).
+/// `--light-sampling`.
 pub const LIGHT_SAMPLING: &str = "furnace.light_sampling";
+/// `--triangle-sampling`.
+pub const TRIANGLE_SAMPLING: &str = "furnace.triangle_sampling";
+/// The triangle sampling of files that do not record one (made before the choice existed).
+pub const OLD_TRIANGLE_SAMPLING: &str = "area";
 /// The `--sun-angle` given (absent: the scene's own).
 pub const SUN_ANGLE: &str = "furnace.sun_angle_deg";
 /// Attribute: the `--spp` target (for a fixed-N sampler, its N).
@@ -95,6 +99,7 @@ pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, 
         ("russian roulette", extra(RUSSIAN_ROULETTE)),
         // Files from before light sampling had no choice to record.
         ("light sampling", extra(LIGHT_SAMPLING).or_else(|| Some("mis".into()))),
+        ("triangle sampling", extra(TRIANGLE_SAMPLING).or_else(|| Some(OLD_TRIANGLE_SAMPLING.into()))),
         ("sun angle", extra(SUN_ANGLE)),
     ];
     let fixed_n = meta.sampler.as_deref().and_then(|s| SamplerKind::from_str(s).ok());
@@ -185,6 +190,11 @@ pub fn apply_recorded(
         && let Some(v) = meta.extra.get(LIGHT_SAMPLING)
     {
         a.light_sampling = enum_value::<LightSamplingArg>(v).ok_or_else(|| invalid(LIGHT_SAMPLING, v))?;
+    }
+    if !a.given("triangle_sampling") {
+        let v = meta.extra.get(TRIANGLE_SAMPLING).map_or(OLD_TRIANGLE_SAMPLING, String::as_str);
+        a.triangle_sampling =
+            enum_value::<TriangleSamplingArg>(v).ok_or_else(|| invalid(TRIANGLE_SAMPLING, v))?;
     }
     if !a.given("sun_angle")
         && let Some(v) = meta.extra.get(SUN_ANGLE)

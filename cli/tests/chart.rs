@@ -99,17 +99,17 @@ fn a_tiny_study_writes_csv_json_png_and_svg() {
     assert_eq!(
         lines[0],
         "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,cpu_seconds,\
-         light_sampling"
+         light_sampling,triangle_sampling"
     );
     // 4 configurations × checkpoints 1, 2, 4, 8.
     assert_eq!(lines.len(), 1 + 16, "{csv}");
     let mut seen = Vec::new();
     for line in &lines[1..] {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 12, "{line}");
-        // The default light sampling: mis.
-        assert_eq!(f[11], "mis", "{line}");
-        assert_eq!(f[0], format!("{}/{}/{}/comp-{}/{}", f[1], f[2], f[11], f[3], f[4]), "{line}");
+        assert_eq!(f.len(), 13, "{line}");
+        // The default light and triangle sampling: mis, solid-angle.
+        assert_eq!((f[11], f[12]), ("mis", "solid-angle"), "{line}");
+        assert_eq!(f[0], format!("{}/{}/{}/{}/comp-{}/{}", f[1], f[2], f[11], f[12], f[3], f[4]), "{line}");
         let (seconds, rmse, relmse): (f64, f64, f64) =
             (f[6].parse().unwrap(), f[7].parse().unwrap(), f[8].parse().unwrap());
         assert!(seconds > 0.0 && rmse > 0.0 && relmse > 0.0, "{line}");
@@ -177,20 +177,42 @@ fn a_study_resumes_and_refuses_other_settings() {
     assert!(stderr(&o).contains("4 already complete"), "{}", stderr(&o));
     assert_eq!(row_keys(&json(&path)), row_keys(&first));
 
-    // A study saved before the light-sampling axis (no light_sampling in its settings and rows,
-    // names without it) is resumed as one of light sampling mis: nothing is rendered again.
-    let mut old = first.clone();
-    old["settings"].as_object_mut().unwrap().remove("light_sampling");
-    for r in old["rows"].as_array_mut().unwrap() {
-        r.as_object_mut().unwrap().remove("light_sampling");
-        let name = r["config"].as_str().unwrap().replace("/mis/", "/");
-        r["config"] = name.into();
+    // A study saved before the light-sampling axis (no light_sampling or triangle_sampling in its
+    // settings and rows, names without them), and one saved before the triangle-sampling axis
+    // only, are resumed as ones of light sampling mis and triangle sampling area, how they were
+    // rendered: with --triangle-sampling area nothing is rendered again; with today's default,
+    // solid-angle, they are studies of other settings.
+    let as_area = |keys: Vec<(String, u64, f64)>| -> Vec<(String, u64, f64)> {
+        keys.into_iter().map(|(c, spp, s)| (c.replace("/solid-angle/", "/area/"), spp, s)).collect()
+    };
+    for (absent, old_part) in
+        [(&["light_sampling", "triangle_sampling"][..], "/"), (&["triangle_sampling"][..], "/mis/")]
+    {
+        let strip = |v: &mut serde_json::Value| {
+            for k in absent {
+                v.as_object_mut().unwrap().remove(*k);
+            }
+        };
+        let mut old = first.clone();
+        strip(&mut old["settings"]);
+        for r in old["rows"].as_array_mut().unwrap() {
+            strip(r);
+            let name = r["config"].as_str().unwrap().replace("/mis/solid-angle/", old_part);
+            r["config"] = name.into();
+        }
+        std::fs::write(&path, serde_json::to_string_pretty(&old).unwrap()).unwrap();
+        let o = tiny_study(&dir, &reference, &[]);
+        assert_eq!(o.status.code(), Some(1), "{absent:?}");
+        let e = stderr(&o);
+        assert!(e.contains("triangle_sampling: [\"area\"] there, [\"solid-angle\"] now"), "{absent:?}: {e}");
+        let o = tiny_study(&dir, &reference, &["--triangle-sampling", "area"]);
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert!(stderr(&o).contains("4 already complete"), "{absent:?}: {}", stderr(&o));
+        let doc = json(&path);
+        assert_eq!(row_keys(&doc), as_area(row_keys(&first)), "{absent:?}");
+        assert_eq!(doc["settings"]["triangle_sampling"], serde_json::json!(["area"]));
+        assert!(doc["rows"].as_array().unwrap().iter().all(|r| r["triangle_sampling"] == "area"));
     }
-    std::fs::write(&path, serde_json::to_string_pretty(&old).unwrap()).unwrap();
-    let o = tiny_study(&dir, &reference, &[]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert!(stderr(&o).contains("4 already complete"), "{}", stderr(&o));
-    assert_eq!(row_keys(&json(&path)), row_keys(&first));
 
     // Drop the 8-spp rows of sobol/comp-on and hammersley/comp-on, as if Ctrl-C had stopped the
     // study there: hammersley (fixed N: one render per checkpoint) renders only N = 8 again;
@@ -208,12 +230,12 @@ fn a_study_resumes_and_refuses_other_settings() {
     };
     for spp in [1, 2, 4] {
         assert_eq!(
-            time(&after, "hammersley/caps/mis/comp-on/cpu", spp),
-            time(&before, "hammersley/caps/mis/comp-on/cpu", spp)
+            time(&after, "hammersley/caps/mis/solid-angle/comp-on/cpu", spp),
+            time(&before, "hammersley/caps/mis/solid-angle/comp-on/cpu", spp)
         );
         assert_eq!(
-            time(&after, "sobol/caps/mis/comp-off/cpu", spp),
-            time(&before, "sobol/caps/mis/comp-off/cpu", spp)
+            time(&after, "sobol/caps/mis/solid-angle/comp-off/cpu", spp),
+            time(&before, "sobol/caps/mis/solid-angle/comp-off/cpu", spp)
         );
     }
     // The re-rendered sobol rows: same images (same sampler and seed), so the same errors.
@@ -224,8 +246,8 @@ fn a_study_resumes_and_refuses_other_settings() {
     let now = json(&path);
     for spp in [1, 2, 4, 8] {
         assert_eq!(
-            rmse(&now, "sobol/caps/mis/comp-on/cpu", spp),
-            rmse(&first, "sobol/caps/mis/comp-on/cpu", spp)
+            rmse(&now, "sobol/caps/mis/solid-angle/comp-on/cpu", spp),
+            rmse(&first, "sobol/caps/mis/solid-angle/comp-on/cpu", spp)
         );
     }
 
@@ -241,6 +263,13 @@ fn a_study_resumes_and_refuses_other_settings() {
     let o = tiny_study(&dir, &reference, &["--light-sampling", "nee"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("light_sampling: [\"mis\"] there, [\"nee\"] now"), "{}", stderr(&o));
+    let o = tiny_study(&dir, &reference, &["--triangle-sampling", "area"]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("triangle_sampling: [\"solid-angle\"] there, [\"area\"] now"),
+        "{}",
+        stderr(&o)
+    );
     assert_eq!(row_keys(&json(&path)), after, "a refused run leaves the study as it was");
 }
 
@@ -296,12 +325,16 @@ fn light_sampling_is_an_axis() {
         doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
     assert_eq!(
         configs,
-        ["sobol/caps/bsdf/comp-on/cpu", "sobol/caps/nee/comp-on/cpu", "sobol/caps/mis/comp-on/cpu"]
+        [
+            "sobol/caps/bsdf/solid-angle/comp-on/cpu",
+            "sobol/caps/nee/solid-angle/comp-on/cpu",
+            "sobol/caps/mis/solid-angle/comp-on/cpu"
+        ]
     );
     let rmse_at_4 = |light: &str| {
         let rows = doc["rows"].as_array().unwrap();
         let r = rows.iter().find(|r| r["light_sampling"] == light && r["spp"] == 4).unwrap();
-        assert_eq!(r["config"], format!("sobol/caps/{light}/comp-on/cpu"), "{r}");
+        assert_eq!(r["config"], format!("sobol/caps/{light}/solid-angle/comp-on/cpu"), "{r}");
         r["rmse"].as_f64().unwrap()
     };
     let (bsdf, nee, mis) = (rmse_at_4("bsdf"), rmse_at_4("nee"), rmse_at_4("mis"));
@@ -310,6 +343,90 @@ fn light_sampling_is_an_axis() {
     assert_eq!(csv.lines().count(), 1 + 3 * 3, "{csv}");
     let svg = std::fs::read_to_string(out.join("rmse_vs_spp.svg")).unwrap();
     for label in ["sobol bsdf", "sobol nee", "sobol mis"] {
+        assert!(svg.contains(label), "the legend names {label}");
+    }
+}
+
+/// `--triangle-sampling solid-angle,area` with `--light-sampling nee,mis`: the configurations are
+/// the product of the two axes, each named and recorded with its triangle sampling, each rendered
+/// with it (a light sample on the test data's Cornell box's area light lands elsewhere by each,
+/// so their images, and errors, differ), against a 256-spp render of our own at 16×16.
+#[test]
+fn triangle_sampling_is_an_axis() {
+    let dir = temp_dir("triangle_sampling");
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/references/lights/cbox_area.gltf");
+    let o = furnace(&[
+        "render",
+        scene,
+        "--backend",
+        "cpu",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "256",
+        "--seed",
+        "7",
+        "--quiet",
+        "--out",
+        dir.join("ref").to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let reference = dir.join("ref.exr");
+    let out = dir.join("study");
+    let o = furnace(&[
+        "chart",
+        "--reference",
+        reference.to_str().unwrap(),
+        "--scene",
+        scene,
+        "--samplers",
+        "sobol",
+        "--sampling",
+        "caps",
+        "--light-sampling",
+        "nee,mis",
+        "--triangle-sampling",
+        "solid-angle,area",
+        "--spp",
+        "4",
+        "--quiet",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc = json(&out.join("chart.json"));
+    assert_eq!(doc["settings"]["triangle_sampling"], serde_json::json!(["solid-angle", "area"]));
+    let configs: Vec<&str> =
+        doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
+    assert_eq!(
+        configs,
+        [
+            "sobol/caps/nee/solid-angle/comp-on/cpu",
+            "sobol/caps/nee/area/comp-on/cpu",
+            "sobol/caps/mis/solid-angle/comp-on/cpu",
+            "sobol/caps/mis/area/comp-on/cpu"
+        ]
+    );
+    let rmse_at_4 = |light: &str, triangle: &str| {
+        let rows = doc["rows"].as_array().unwrap();
+        let r = rows
+            .iter()
+            .find(|r| r["light_sampling"] == light && r["triangle_sampling"] == triangle && r["spp"] == 4)
+            .unwrap();
+        assert_eq!(r["config"], format!("sobol/caps/{light}/{triangle}/comp-on/cpu"), "{r}");
+        r["rmse"].as_f64().unwrap()
+    };
+    for light in ["nee", "mis"] {
+        let (solid_angle, area) = (rmse_at_4(light, "solid-angle"), rmse_at_4(light, "area"));
+        assert!(solid_angle != area, "{light}: solid-angle {solid_angle}, area {area}");
+    }
+    let csv = std::fs::read_to_string(out.join("chart.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 1 + 4 * 3, "{csv}");
+    assert!(csv.lines().skip(1).all(|l| l.ends_with(",solid-angle") || l.ends_with(",area")), "{csv}");
+    let svg = std::fs::read_to_string(out.join("rmse_vs_spp.svg")).unwrap();
+    for label in ["sobol nee solid-angle", "sobol nee area", "sobol mis solid-angle", "sobol mis area"] {
         assert!(svg.contains(label), "the legend names {label}");
     }
 }

@@ -292,6 +292,8 @@ fn resume_two_plus_two_is_bit_identical_to_four() {
     // 5° sun disc): its light sampling and sun angle are recorded and come back on resume.
     let area = furnace_tests::data::reference("lights/cbox_area.gltf");
     resume_matches_one_render(&dir, "area_nee", &[area.to_str().unwrap(), "--light-sampling", "nee"]);
+    // Its triangle sampling too (area, not the default solid angle).
+    resume_matches_one_render(&dir, "area_by_area", &[area.to_str().unwrap(), "--triangle-sampling", "area"]);
     resume_matches_one_render(&dir, "sun_disc", &["--sun-angle", "5"]);
 }
 
@@ -354,6 +356,7 @@ fn resume_refuses_other_settings_naming_both_values() {
         (&["--specular-sampling", "ndf"][..], "specular sampling is caps in the file but ndf now"),
         (&["--russian-roulette", "on"][..], "russian roulette is off in the file but on now"),
         (&["--light-sampling", "bsdf"][..], "light sampling is mis in the file but bsdf now"),
+        (&["--triangle-sampling", "area"][..], "triangle sampling is solid-angle in the file but area now"),
         (&["--sun-angle", "1"][..], "sun angle is (not recorded) in the file but 1 now"),
         (&[cbox.as_str()][..], "scene is <built-in cbox> in the file but cbox.gltf now"),
     ] {
@@ -478,6 +481,25 @@ fn resume_detects_a_modified_image() {
     let o = furnace(&["render", "--quiet", "--resume", file.to_str().unwrap(), "--spp", "4"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("does not match the image at pixel (1, 1)"), "{}", stderr(&o));
+}
+
+/// A file from before triangle sampling was a choice (no `furnace.triangle_sampling`) was
+/// rendered by area: it resumes as such, equal to an uninterrupted area render.
+#[test]
+fn a_file_without_triangle_sampling_resumes_by_area() {
+    let dir = temp_dir("resume_old_triangles");
+    let area = furnace_tests::data::reference("lights/cbox_area.gltf");
+    let scene = area.to_str().unwrap();
+    let two = render_ok(&dir, "t2", 16, &[scene, "--triangle-sampling", "area", "--spp", "2"]);
+    let four = render_ok(&dir, "t4", 16, &[scene, "--triangle-sampling", "area", "--spp", "4"]);
+    let mut image = exr::prelude::read_all_flat_layers_from_file(&two).unwrap();
+    let removed =
+        image.layer_data[0].attributes.other.remove(&exr::prelude::Text::from("furnace.triangle_sampling"));
+    assert!(removed.is_some(), "the file records no triangle sampling");
+    exr::prelude::WritableImage::write(&image).to_file(&two).unwrap();
+    let o = furnace(&["render", "--quiet", "--resume", two.to_str().unwrap(), "--spp", "4"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_same_render(&two, &four);
 }
 
 #[test]

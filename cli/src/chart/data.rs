@@ -8,7 +8,7 @@ use std::path::Path;
 /// One measurement: a configuration at a checkpoint.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
-    /// The configuration's name (`sobol/caps/mis/comp-off/cpu`, see [`config_name`]).
+    /// The configuration's name (`sobol/caps/mis/solid-angle/comp-off/cpu`, see [`config_name`]).
     pub config: String,
     /// Sampler name.
     pub sampler: String,
@@ -16,6 +16,8 @@ pub struct Row {
     pub sampling: String,
     /// Light sampling (`bsdf`, `nee`, `mis`).
     pub light_sampling: String,
+    /// How a light sample picks its point on an emissive triangle (`solid-angle`, `area`).
+    pub triangle_sampling: String,
     /// Energy compensation (`on`, `off`).
     pub compensation: String,
     /// Backend (`cpu`, `gpu`).
@@ -41,22 +43,27 @@ pub struct Row {
 /// configuration then rendered with the renderer's default, MIS.
 pub const OLD_LIGHT_SAMPLING: &str = "mis";
 
-/// A configuration's name from its axes' CLI names: `sobol/caps/mis/comp-off/cpu`.
+/// The triangle sampling of a row saved before the triangle-sampling axis existed: light
+/// samples then picked their point on an emissive triangle by area.
+pub const OLD_TRIANGLE_SAMPLING: &str = "area";
+
+/// A configuration's name from its axes' CLI names: `sobol/caps/mis/solid-angle/comp-off/cpu`.
 pub fn config_name(
     sampler: &str,
     sampling: &str,
     light_sampling: &str,
+    triangle_sampling: &str,
     compensation: &str,
     backend: &str,
 ) -> String {
-    format!("{sampler}/{sampling}/{light_sampling}/comp-{compensation}/{backend}")
+    format!("{sampler}/{sampling}/{light_sampling}/{triangle_sampling}/comp-{compensation}/{backend}")
 }
 
 /// The CSV header of the study's data file (columns added later go at the end, so that a
 /// reader of the older columns by position still works).
 pub const CSV_HEADER: &str = concat!(
     "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,",
-    "cpu_seconds,light_sampling"
+    "cpu_seconds,light_sampling,triangle_sampling"
 );
 
 /// The rows as CSV (with [`CSV_HEADER`]); numbers in Rust's shortest round-trip form.
@@ -66,7 +73,7 @@ pub fn to_csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.config,
             r.sampler,
             r.sampling,
@@ -78,7 +85,8 @@ pub fn to_csv(rows: &[Row]) -> String {
             r.relmse,
             r.reference_matches,
             if r.cpu_seconds.is_finite() { r.cpu_seconds.to_string() } else { String::new() },
-            r.light_sampling
+            r.light_sampling,
+            r.triangle_sampling
         );
     }
     s
@@ -91,6 +99,7 @@ pub fn row_json(r: &Row) -> Value {
         "sampler": r.sampler,
         "sampling": r.sampling,
         "light_sampling": r.light_sampling,
+        "triangle_sampling": r.triangle_sampling,
         "compensation": r.compensation,
         "backend": r.backend,
         "spp": r.spp,
@@ -108,8 +117,10 @@ fn finite(x: f64) -> Value {
 }
 
 /// A row read back from the JSON of a previous run. A row saved before the light-sampling axis
-/// has no `light_sampling`: it was rendered with [`OLD_LIGHT_SAMPLING`], and its configuration
-/// is renamed to today's name for it, so that a resumed study finds it.
+/// has no `light_sampling`: it was rendered with [`OLD_LIGHT_SAMPLING`]; one saved before the
+/// triangle-sampling axis has no `triangle_sampling`: it was rendered with
+/// [`OLD_TRIANGLE_SAMPLING`]. Such a row's configuration is renamed to today's name for it, so
+/// that a resumed study finds it.
 pub fn row_from_json(v: &Value) -> Result<Row, String> {
     let text = |k: &str| {
         v.get(k).and_then(Value::as_str).map(str::to_string).ok_or_else(|| format!("a row has no '{k}'"))
@@ -126,18 +137,23 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
         .ok_or_else(|| "a row has no valid 'spp'".to_string())?;
     let (config, sampler, sampling, compensation, backend) =
         (text("config")?, text("sampler")?, text("sampling")?, text("compensation")?, text("backend")?);
-    let (config, light_sampling) = match v.get("light_sampling") {
-        Some(_) => (config, text("light_sampling")?),
-        None => (
-            config_name(&sampler, &sampling, OLD_LIGHT_SAMPLING, &compensation, &backend),
-            OLD_LIGHT_SAMPLING.to_string(),
-        ),
+    let axis = |k: &str, old: &str| match v.get(k) {
+        Some(_) => text(k).map(|t| (t, true)),
+        None => Ok((old.to_string(), false)),
+    };
+    let (light_sampling, light_saved) = axis("light_sampling", OLD_LIGHT_SAMPLING)?;
+    let (triangle_sampling, triangle_saved) = axis("triangle_sampling", OLD_TRIANGLE_SAMPLING)?;
+    let config = if light_saved && triangle_saved {
+        config
+    } else {
+        config_name(&sampler, &sampling, &light_sampling, &triangle_sampling, &compensation, &backend)
     };
     Ok(Row {
         config,
         sampler,
         sampling,
         light_sampling,
+        triangle_sampling,
         compensation,
         backend,
         spp,
@@ -294,10 +310,11 @@ mod tests {
     #[test]
     fn csv_and_json_rows_round_trip() {
         let row = Row {
-            config: "sobol/caps/nee/comp-off/cpu".into(),
+            config: "sobol/caps/nee/area/comp-off/cpu".into(),
             sampler: "sobol".into(),
             sampling: "caps".into(),
             light_sampling: "nee".into(),
+            triangle_sampling: "area".into(),
             compensation: "off".into(),
             backend: "cpu".into(),
             spp: 8,
@@ -312,19 +329,19 @@ mod tests {
         assert_eq!(
             csv,
             format!(
-                "{CSV_HEADER}\nsobol/caps/nee/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee\n"
+                "{CSV_HEADER}\nsobol/caps/nee/area/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee,area\n"
             )
         );
     }
 
-    #[test]
-    fn a_row_saved_before_light_sampling_is_mis() {
-        // A row of a study saved before the axis: no light_sampling, the older name.
+    /// A row as saved by an older version: `config` its name then, without the keys of `absent`.
+    fn old_row(config: &str, light_sampling: &str, absent: &[&str]) -> Value {
         let mut v = row_json(&Row {
-            config: "sobol/caps/comp-off/cpu".into(),
+            config: config.into(),
             sampler: "sobol".into(),
             sampling: "caps".into(),
-            light_sampling: String::new(),
+            light_sampling: light_sampling.into(),
+            triangle_sampling: String::new(),
             compensation: "off".into(),
             backend: "cpu".into(),
             spp: 4,
@@ -334,14 +351,35 @@ mod tests {
             relmse: 0.125,
             reference_matches: true,
         });
-        v.as_object_mut().unwrap().remove("light_sampling");
+        for k in absent {
+            v.as_object_mut().unwrap().remove(*k);
+        }
+        v
+    }
+
+    #[test]
+    fn a_row_saved_before_light_sampling_is_mis() {
+        // A row of a study saved before both axes: neither key, the older name.
+        let v = old_row("sobol/caps/comp-off/cpu", "", &["light_sampling", "triangle_sampling"]);
         let row = row_from_json(&v).unwrap();
         assert_eq!(
-            (row.config.as_str(), row.light_sampling.as_str()),
-            ("sobol/caps/mis/comp-off/cpu", "mis")
+            (row.config.as_str(), row.light_sampling.as_str(), row.triangle_sampling.as_str()),
+            ("sobol/caps/mis/area/comp-off/cpu", "mis", "area")
         );
         assert_eq!((row.spp, row.rmse), (4, 0.25));
         assert!(row.cpu_seconds.is_nan());
+    }
+
+    #[test]
+    fn a_row_saved_before_triangle_sampling_is_area() {
+        // A row of a study saved after the light-sampling axis but before this one.
+        let v = old_row("sobol/caps/nee/comp-off/cpu", "nee", &["triangle_sampling"]);
+        let row = row_from_json(&v).unwrap();
+        assert_eq!(
+            (row.config.as_str(), row.light_sampling.as_str(), row.triangle_sampling.as_str()),
+            ("sobol/caps/nee/area/comp-off/cpu", "nee", "area")
+        );
+        assert_eq!((row.spp, row.rmse, row.relmse), (4, 0.25, 0.125));
     }
 
     #[test]

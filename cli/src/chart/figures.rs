@@ -4,9 +4,10 @@
 use super::data::{self, ExternalPoint, Row, rows_of, slope};
 use super::plot::{self, Labels, Marker, Series, Style};
 use super::study::{Config, Study, dedup};
-use crate::args::{ChartBackend, ChartTime, LightSamplingArg, SamplingArg, Switch};
+use crate::args::{ChartBackend, ChartTime, LightSamplingArg, SamplingArg, Switch, TriangleSamplingArg};
 use crate::resume;
 use furnace_sampling::SamplerKind;
+use plotters::style::RGBColor;
 
 /// One error metric that is charted.
 struct Metric {
@@ -21,8 +22,7 @@ struct Metric {
 }
 
 /// Colour per sampler (matplotlib's tab10, grey for random).
-fn sampler_color(s: SamplerKind) -> plotters::style::RGBColor {
-    use plotters::style::RGBColor;
+fn sampler_color(s: SamplerKind) -> RGBColor {
     match s {
         SamplerKind::Sobol => RGBColor(31, 119, 180),
         SamplerKind::Pmj02 => RGBColor(255, 127, 14),
@@ -32,18 +32,28 @@ fn sampler_color(s: SamplerKind) -> plotters::style::RGBColor {
     }
 }
 
+/// `c` moved by `t` of the way towards `to`.
+fn mix(c: RGBColor, to: RGBColor, t: f64) -> RGBColor {
+    let f = |v: u8, w: u8| (f64::from(v) + (f64::from(w) - f64::from(v)) * t).round() as u8;
+    RGBColor(f(c.0, to.0), f(c.1, to.1), f(c.2, to.2))
+}
+
 /// `c` shaded by light sampling: lighter for bsdf, darker for nee, as is for mis.
-fn shade(c: plotters::style::RGBColor, light: LightSamplingArg) -> plotters::style::RGBColor {
-    use plotters::style::RGBColor;
+fn shade(c: RGBColor, light: LightSamplingArg) -> RGBColor {
     // Towards white by half, towards black by 40%.
-    let mix = |to: f64, t: f64| {
-        let f = |v: u8| (f64::from(v) + (to - f64::from(v)) * t).round() as u8;
-        RGBColor(f(c.0), f(c.1), f(c.2))
-    };
     match light {
-        LightSamplingArg::Bsdf => mix(255.0, 0.5),
-        LightSamplingArg::Nee => mix(0.0, 0.4),
+        LightSamplingArg::Bsdf => mix(c, RGBColor(255, 255, 255), 0.5),
+        LightSamplingArg::Nee => mix(c, RGBColor(0, 0, 0), 0.4),
         LightSamplingArg::Mis => c,
+    }
+}
+
+/// `c` tinted by triangle sampling: towards amber for area, as is for solid-angle (a tint, not
+/// a lightness, so that it stays apart from the light-sampling shades, grey included).
+fn tint(c: RGBColor, triangle: TriangleSamplingArg) -> RGBColor {
+    match triangle {
+        TriangleSamplingArg::Area => mix(c, RGBColor(230, 160, 0), 0.45),
+        TriangleSamplingArg::SolidAngle => c,
     }
 }
 
@@ -51,12 +61,13 @@ fn fmt_slope(k: f64) -> String {
     format!("{k:.2}").replace('-', "−")
 }
 
-/// How many samplers, sampling methods, light samplings, compensation states and backends the
-/// study has: a legend entry names only what varies.
+/// How many samplers, sampling methods, light samplings, triangle samplings, compensation states
+/// and backends the study has: a legend entry names only what varies.
 struct Varying {
     samplers: usize,
     sampling: usize,
     light_sampling: usize,
+    triangle_sampling: usize,
     compensations: usize,
     backends: usize,
 }
@@ -67,6 +78,7 @@ impl Varying {
             samplers: dedup(&study.args.samplers).len(),
             sampling: dedup(&study.args.sampling).len(),
             light_sampling: dedup(&study.args.light_sampling).len(),
+            triangle_sampling: dedup(&study.args.triangle_sampling).len(),
             compensations: study.compensations().len(),
             backends: dedup(&study.args.backends).len(),
         }
@@ -81,6 +93,9 @@ impl Varying {
         }
         if vary(self.light_sampling) {
             parts.push(resume::cli_name(&c.light_sampling));
+        }
+        if vary(self.triangle_sampling) {
+            parts.push(resume::cli_name(&c.triangle_sampling));
         }
         if vary(self.compensations) {
             parts.push(format!("comp {}", resume::cli_name(&c.compensation)));
@@ -116,8 +131,9 @@ pub(super) fn save_charts(study: &Study, rows: &[Row], external: &[ExternalPoint
     Ok(())
 }
 
-/// One series per configuration with rows: colour by sampler (shaded by light sampling when it
-/// varies), marker by sampling method, dashed with compensation, hollow on the GPU.
+/// One series per configuration with rows: colour by sampler (shaded by light sampling, tinted by
+/// triangle sampling, each when it varies), marker by sampling method, dashed with compensation,
+/// hollow on the GPU.
 fn config_series(
     study: &Study,
     rows: &[Row],
@@ -147,12 +163,15 @@ fn config_series(
             .iter()
             .map(|r| (if by_time { time_of(r) } else { f64::from(r.spp) }, (metric.row)(r)))
             .collect();
+        let mut color = sampler_color(c.sampler);
+        if varying.light_sampling > 1 {
+            color = shade(color, c.light_sampling);
+        }
+        if varying.triangle_sampling > 1 {
+            color = tint(color, c.triangle_sampling);
+        }
         let style = Style {
-            color: if varying.light_sampling > 1 {
-                shade(sampler_color(c.sampler), c.light_sampling)
-            } else {
-                sampler_color(c.sampler)
-            },
+            color,
             marker: match c.sampling {
                 SamplingArg::Caps => Marker::Circle,
                 SamplingArg::Vndf => Marker::Triangle,
@@ -188,12 +207,7 @@ fn external_series(external: &[ExternalPoint], metric: &Metric, by_time: bool) -
             text.push_str(&format!("  slope {}", fmt_slope(k)));
         }
         let (r, g, b) = ext_colors[k % ext_colors.len()];
-        let style = Style {
-            color: plotters::style::RGBColor(r, g, b),
-            marker: Marker::Cross,
-            dashed: false,
-            hollow: false,
-        };
+        let style = Style { color: RGBColor(r, g, b), marker: Marker::Cross, dashed: false, hollow: false };
         series.push(Series { label: text, points, style });
     }
     series
@@ -248,6 +262,12 @@ fn note(study: &Study, varying: &Varying, metric: &Metric, by_time: bool) -> Str
         note.push_str(
             " Light sampling: bsdf (BSDF rays only, lighter), nee (light samples only, darker), mis (both, \
              power heuristic).",
+        );
+    }
+    if varying.triangle_sampling > 1 {
+        note.push_str(
+            " Triangle sampling: solid-angle (light samples uniform in the solid angle), area (uniform on \
+             the triangle's area, tinted amber).",
         );
     }
     if study.configs.iter().any(|c| c.compensation == Switch::On) {

@@ -31,6 +31,7 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
             compensation: c.compensation == Switch::On,
         },
         light_sampling: c.light_sampling.into(),
+        triangle_sampling: c.triangle_sampling.into(),
         ..study.settings
     };
     let choice = match c.backend {

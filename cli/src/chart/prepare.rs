@@ -56,15 +56,18 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
     for backend in dedup(&a.backends) {
         for compensation in study.compensations() {
             for light_sampling in dedup(&a.light_sampling) {
-                for sampling in dedup(&a.sampling) {
-                    for sampler in dedup(&a.samplers) {
-                        study.configs.push(Config {
-                            sampler,
-                            sampling,
-                            light_sampling,
-                            compensation,
-                            backend,
-                        });
+                for triangle_sampling in dedup(&a.triangle_sampling) {
+                    for sampling in dedup(&a.sampling) {
+                        for sampler in dedup(&a.samplers) {
+                            study.configs.push(Config {
+                                sampler,
+                                sampling,
+                                light_sampling,
+                                triangle_sampling,
+                                compensation,
+                                backend,
+                            });
+                        }
                     }
                 }
             }
@@ -72,7 +75,8 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
     }
     if study.configs.is_empty() {
         return Err(
-            "no configurations: give at least one sampler, sampling method, light sampling and backend"
+            "no configurations: give at least one sampler, sampling method, light sampling, triangle \
+             sampling and backend"
                 .into(),
         );
     }

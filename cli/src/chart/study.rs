@@ -1,10 +1,12 @@
-//! The study: its configurations (sampler × BRDF sampling × light sampling × compensation ×
-//! backend), their checkpoints, the references they are scored against, and what is left to
-//! render.
+//! The study: its configurations (sampler × BRDF sampling × light sampling × triangle sampling
+//! × compensation × backend), their checkpoints, the references they are scored against, and
+//! what is left to render.
 
 use super::data::{Row, config_name, rows_of};
 use super::reference::Reference;
-use crate::args::{ChartArgs, ChartBackend, LightSamplingArg, MaskingArg, SamplingArg, Switch};
+use crate::args::{
+    ChartArgs, ChartBackend, LightSamplingArg, MaskingArg, SamplingArg, Switch, TriangleSamplingArg,
+};
 use crate::resume;
 use furnace_render::{RenderSettings, Timing};
 use furnace_sampling::SamplerKind;
@@ -17,17 +19,19 @@ pub(super) struct Config {
     pub(super) sampler: SamplerKind,
     pub(super) sampling: SamplingArg,
     pub(super) light_sampling: LightSamplingArg,
+    pub(super) triangle_sampling: TriangleSamplingArg,
     pub(super) compensation: Switch,
     pub(super) backend: ChartBackend,
 }
 
 impl Config {
-    /// `sobol/caps/mis/comp-off/cpu`.
+    /// `sobol/caps/mis/solid-angle/comp-off/cpu`.
     pub(super) fn name(&self) -> String {
         config_name(
             &self.sampler.to_string(),
             &resume::cli_name(&self.sampling),
             &resume::cli_name(&self.light_sampling),
+            &resume::cli_name(&self.triangle_sampling),
             &resume::cli_name(&self.compensation),
             &resume::cli_name(&self.backend),
         )
@@ -39,6 +43,7 @@ impl Config {
             sampler: self.sampler.to_string(),
             sampling: resume::cli_name(&self.sampling),
             light_sampling: resume::cli_name(&self.light_sampling),
+            triangle_sampling: resume::cli_name(&self.triangle_sampling),
             compensation: resume::cli_name(&self.compensation),
             backend: resume::cli_name(&self.backend),
             spp,
@@ -117,6 +122,8 @@ impl Study {
             "samplers": names(dedup(&self.args.samplers).iter().map(ToString::to_string).collect()),
             "sampling": names(dedup(&self.args.sampling).iter().map(resume::cli_name).collect()),
             "light_sampling": names(dedup(&self.args.light_sampling).iter().map(resume::cli_name).collect()),
+            "triangle_sampling":
+                names(dedup(&self.args.triangle_sampling).iter().map(resume::cli_name).collect()),
             "compensation": names(self.compensations().iter().map(resume::cli_name).collect()),
             "backends": names(dedup(&self.args.backends).iter().map(resume::cli_name).collect()),
             "adapter": self.args.adapter,
