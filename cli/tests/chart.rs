@@ -273,13 +273,11 @@ fn a_study_resumes_and_refuses_other_settings() {
     assert_eq!(row_keys(&json(&path)), after, "a refused run leaves the study as it was");
 }
 
-/// `--light-sampling bsdf,nee,mis`: one configuration per strategy, each named and recorded with
-/// it, each rendered with it (the area light of the test data's Cornell box is found differently
-/// by each, so their images, and errors, differ), against a 256-spp render of our own at 16×16.
-#[test]
-fn light_sampling_is_an_axis() {
-    let dir = temp_dir("light_sampling");
+/// A 4-spp study of the emissive-quad box at 16×16 with `axes`, against a 256-spp CPU render of
+/// our own (seed 7); the study's folder.
+fn area_box_study(dir: &Path, axes: &[&str]) -> PathBuf {
     let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/references/lights/cbox_area.gltf");
+    let reference = dir.join("ref");
     let o = furnace(&[
         "render",
         scene,
@@ -295,12 +293,12 @@ fn light_sampling_is_an_axis() {
         "7",
         "--quiet",
         "--out",
-        dir.join("ref").to_str().unwrap(),
+        reference.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
     let reference = dir.join("ref.exr");
     let out = dir.join("study");
-    let o = furnace(&[
+    let mut args = vec![
         "chart",
         "--reference",
         reference.to_str().unwrap(),
@@ -310,15 +308,25 @@ fn light_sampling_is_an_axis() {
         "sobol",
         "--sampling",
         "caps",
-        "--light-sampling",
-        "bsdf,nee,mis",
         "--spp",
         "4",
         "--quiet",
         "--out",
         out.to_str().unwrap(),
-    ]);
+    ];
+    args.extend_from_slice(axes);
+    let o = furnace(&args);
     assert!(o.status.success(), "{}", stderr(&o));
+    out
+}
+
+/// `--light-sampling bsdf,nee,mis`: one configuration per strategy, each named and recorded with
+/// it, each rendered with it (the area light of the test data's Cornell box is found differently
+/// by each, so their images, and errors, differ), against a 256-spp render of our own at 16×16.
+#[test]
+fn light_sampling_is_an_axis() {
+    let dir = temp_dir("light_sampling");
+    let out = area_box_study(&dir, &["--light-sampling", "bsdf,nee,mis"]);
     let doc = json(&out.join("chart.json"));
     assert_eq!(doc["settings"]["light_sampling"], serde_json::json!(["bsdf", "nee", "mis"]));
     let configs: Vec<&str> =
@@ -354,48 +362,8 @@ fn light_sampling_is_an_axis() {
 #[test]
 fn triangle_sampling_is_an_axis() {
     let dir = temp_dir("triangle_sampling");
-    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/references/lights/cbox_area.gltf");
-    let o = furnace(&[
-        "render",
-        scene,
-        "--backend",
-        "cpu",
-        "--width",
-        "16",
-        "--height",
-        "16",
-        "--spp",
-        "256",
-        "--seed",
-        "7",
-        "--quiet",
-        "--out",
-        dir.join("ref").to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
-    let reference = dir.join("ref.exr");
-    let out = dir.join("study");
-    let o = furnace(&[
-        "chart",
-        "--reference",
-        reference.to_str().unwrap(),
-        "--scene",
-        scene,
-        "--samplers",
-        "sobol",
-        "--sampling",
-        "caps",
-        "--light-sampling",
-        "nee,mis",
-        "--triangle-sampling",
-        "solid-angle,area",
-        "--spp",
-        "4",
-        "--quiet",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    let out =
+        area_box_study(&dir, &["--light-sampling", "nee,mis", "--triangle-sampling", "solid-angle,area"]);
     let doc = json(&out.join("chart.json"));
     assert_eq!(doc["settings"]["triangle_sampling"], serde_json::json!(["solid-angle", "area"]));
     let configs: Vec<&str> =

@@ -339,8 +339,9 @@ pub const SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE: f32 = 6.22;
 /// Returns the unit direction and the barycentrics `(b1, b2)` of the point it reaches on the
 /// triangle (clamped onto it), or `None` for a degenerate triangle (an edge seen end-on). Use it
 /// for solid angles in [`SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE`, `SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE`];
-/// the pdf is `1 / `[`spherical_triangle_solid_angle`].
-pub fn square_to_spherical_triangle(u: Vec2, a: Vec3, b: Vec3, c: Vec3) -> Option<(Vec3, Vec2)> {
+/// `omega` is the triangle's solid angle, [`spherical_triangle_solid_angle`]`(a, b, c)`, which
+/// the caller has formed to choose the method and the pdf `1 / omega`.
+pub fn square_to_spherical_triangle(u: Vec2, a: Vec3, b: Vec3, c: Vec3, omega: f32) -> Option<(Vec3, Vec2)> {
     let (ua, ub) = (a.normalize(), b.normalize());
     let ca = c - a;
     // With p(t) = a + t(c − a), L = |p|, cab = ua·ub, the sub-triangle (ua, ub, p) has
@@ -348,7 +349,7 @@ pub fn square_to_spherical_triangle(u: Vec2, a: Vec3, b: Vec3, c: Vec3) -> Optio
     // s, k = sin, cos of x/2, a quadratic in t with the root 0 (x = 0) and
     // t = 2K(|a|Q + K a·(c − a)) / (Q² − K²|c − a|²), K = (1 + cab)·s, Q = D·k − s (ua + ub)·(c − a)
     // (multiplied through by k², so x/2 = π/2 needs no infinite tangent).
-    let (sin_half, cos_half) = (0.5 * u.x * spherical_triangle_solid_angle(a, b, c)).sin_cos();
+    let (sin_half, cos_half) = (0.5 * u.x * omega).sin_cos();
     let one_plus_cab = 2.0 - 0.5 * (ua - ub).length_squared();
     let d = ua.dot(ub.cross(ca)).abs();
     let q = d * cos_half - sin_half * (ua + ub).dot(ca);
@@ -740,7 +741,13 @@ mod tests {
             for i in 0..n {
                 for j in 0..n {
                     let u = Vec2::new((i as f32 + 0.5) / n as f32, (j as f32 + 0.5) / n as f32);
-                    let Some((_, b)) = square_to_spherical_triangle(u, v[0], v[1], v[2]) else {
+                    let Some((_, b)) = square_to_spherical_triangle(
+                        u,
+                        v[0],
+                        v[1],
+                        v[2],
+                        spherical_triangle_solid_angle(v[0], v[1], v[2]),
+                    ) else {
                         invalid += 1;
                         continue;
                     };

@@ -132,7 +132,7 @@ fn spherical_triangle_case(v: [Vec3; 3], seed: u32) -> ChiSquareResult {
     };
     harness(seed).run(
         |u, _| {
-            let (w, bary) = square_to_spherical_triangle(u, a, b, c)?;
+            let (w, bary) = square_to_spherical_triangle(u, a, b, c, omega)?;
             let p = (1.0 - bary.x - bary.y) * a + bary.x * b + bary.y * c;
             let along = w * (p.z / w.z);
             assert!(

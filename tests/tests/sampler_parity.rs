@@ -603,8 +603,9 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let b = vec3<f32>(bitcast<f32>(input[r + 5u]), bitcast<f32>(input[r + 6u]), bitcast<f32>(input[r + 7u]));
     let c = vec3<f32>(bitcast<f32>(input[r + 8u]), bitcast<f32>(input[r + 9u]), bitcast<f32>(input[r + 10u]));
     let o = 7u * i;
-    output[o] = bitcast<u32>(spherical_triangle_solid_angle(a, b, c));
-    let s = warp_spherical_triangle(u, a, b, c);
+    let omega = spherical_triangle_solid_angle(a, b, c);
+    output[o] = bitcast<u32>(omega);
+    let s = warp_spherical_triangle(u, a, b, c, omega);
     output[o + 1u] = bitcast<u32>(s.w.x);
     output[o + 2u] = bitcast<u32>(s.w.y);
     output[o + 3u] = bitcast<u32>(s.w.z);
@@ -669,7 +670,7 @@ fn spherical_triangle_warp_matches() {
         if !(e_omega <= SOLID_ANGLE_TOLERANCE) {
             rows.push(format!("  solid angle of {v:?}: rust {omega:e} wgsl {:e}", f(0)));
         }
-        match (square_to_spherical_triangle(u, v[0], v[1], v[2]), g[6]) {
+        match (square_to_spherical_triangle(u, v[0], v[1], v[2], omega), g[6]) {
             (Some((w, b)), 1) => {
                 let e = (w - Vec3::new(f(1), f(2), f(3)))
                     .abs()

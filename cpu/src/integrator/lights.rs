@@ -77,7 +77,7 @@ impl CpuRenderer {
         let u = Vec2::from(self.sampler.value_2d(pixel, index, dim + LIGHT_EMITTER_POINT));
         let omega = self.settings.triangle_sampling.solid_angle(a, b, c);
         let bary = match omega {
-            Some(_) => match square_to_spherical_triangle(u, a, b, c) {
+            Some(omega) => match square_to_spherical_triangle(u, a, b, c, omega) {
                 Some((_, bary)) => bary,
                 None => return Vec3::ZERO,
             },

@@ -167,7 +167,7 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     let omega = triangle_solid_angle(a, b_rel, c);
     var b: vec2<f32>;
     if omega > 0.0 {
-        let st = warp_spherical_triangle(u, a, b_rel, c);
+        let st = warp_spherical_triangle(u, a, b_rel, c, omega);
         if !st.valid {
             return vec3<f32>(0.0);
         }

@@ -655,13 +655,13 @@ struct SphericalTriangleSample {
 
 // `square_to_spherical_triangle`: Arvo 1995, with c' found on the edge a→c from the
 // sub-triangle's solid angle (the quadratic of the Rust doc), for the triangle with vertices
-// a, b, c relative to the viewpoint; `valid` false for a degenerate one.
-fn warp_spherical_triangle(u: vec2<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> SphericalTriangleSample {
+// a, b, c relative to the viewpoint, of solid angle `omega`; `valid` false for a degenerate one.
+fn warp_spherical_triangle(u: vec2<f32>, a: vec3<f32>, b: vec3<f32>, c: vec3<f32>, omega: f32) -> SphericalTriangleSample {
     var out = SphericalTriangleSample(vec3<f32>(0.0), vec2<f32>(0.0), false);
     let ua = normalize(a);
     let ub = normalize(b);
     let ca = c - a;
-    let sc = smp_sin_cos(0.5 * u.x * spherical_triangle_solid_angle(a, b, c));
+    let sc = smp_sin_cos(0.5 * u.x * omega);
     let dab = ua - ub;
     let one_plus_cab = 2.0 - 0.5 * dot(dab, dab);
     let d = abs(dot(ua, cross(ub, ca)));
