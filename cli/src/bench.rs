@@ -278,6 +278,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         sample_count: a.sampler.needs_sample_count().then(|| a.spp.map_or(1, |n| n.saturating_add(1))),
         light_sampling: a.light_sampling.into(),
         triangle_sampling: a.triangle_sampling.into(),
+        light_selection: Default::default(),
         ..RenderSettings::default()
     };
     let triangles = scene.geometry.triangle_count() as u64;

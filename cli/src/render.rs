@@ -124,6 +124,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         russian_roulette: args.russian_roulette == Switch::On,
         light_sampling: args.light_sampling.into(),
         triangle_sampling: args.triangle_sampling.into(),
+        light_selection: Default::default(),
     };
     let job = Job { scene_name: scene.name.clone(), scene_hash, camera, settings, args };
     let a = &job.args;

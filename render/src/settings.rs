@@ -5,8 +5,8 @@ use furnace_sampling::SamplerKind;
 
 /// What to render and how. [`Default`] is 256×256, 4 bounces, Owen-scrambled Sobol, seed 0,
 /// the glTF material model (height-correlated masking, spherical-cap sampling, Turquin
-/// compensation), no Russian roulette, MIS of light and BSDF samples, emissive triangles sampled
-/// by solid angle.
+/// compensation), no Russian roulette, MIS of light and BSDF samples, emissive triangles chosen
+/// by the light BVH and sampled by solid angle.
 ///
 /// Sobol is the default by measurement (furnace-cpu's `examples/sampler_study.rs`, BENCHMARKS.md "Sampler
 /// choice (cbox)"): on the Cornell box it has the lowest error at equal time of the progressive
@@ -38,6 +38,8 @@ pub struct RenderSettings {
     pub light_sampling: LightSampling,
     /// How a light sample chooses its point on an emissive triangle ([`TriangleSampling`]).
     pub triangle_sampling: TriangleSampling,
+    /// How a light sample chooses which emissive triangle to sample ([`LightSelection`]).
+    pub light_selection: LightSelection,
 }
 
 /// The strategies that find light of emitters and sun discs: BSDF-sampled rays that hit them,
@@ -178,6 +180,53 @@ impl std::str::FromStr for TriangleSampling {
     }
 }
 
+/// How a light sample chooses the emissive triangle it samples: in proportion to the
+/// triangles' **power** (an alias table, the same choice at every shading point), or by a
+/// **light BVH** (Conty Estevez & Kulla 2018, pbrt-v4's `BVHLightSampler`) that descends a tree
+/// of the emitters' bounds, choosing each child in proportion to a conservative bound of what it
+/// sends to the shading point (power, distance, the emitters' and the receiver's orientation).
+/// The BVH costs a descent of about `log₂ n` levels per light sample where the alias table costs
+/// one lookup; it pays where emitters differ in distance or face away from much of the scene
+/// (docs/accuracy.md, "Light selection").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum LightSelection {
+    /// In proportion to power (luminance × area), by an alias table.
+    Power,
+    /// By the light BVH's importance at the shading point.
+    #[default]
+    Bvh,
+}
+
+impl LightSelection {
+    /// Both methods, in CLI order.
+    pub const ALL: [LightSelection; 2] = [Self::Power, Self::Bvh];
+
+    /// The CLI name: `power`, `bvh`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Power => "power",
+            Self::Bvh => "bvh",
+        }
+    }
+}
+
+impl std::fmt::Display for LightSelection {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+impl std::str::FromStr for LightSelection {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, String> {
+        Self::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
+            .ok_or_else(|| format!("unknown light selection {s:?} (power or bvh)"))
+    }
+}
+
 /// Veach's power heuristic with β = 2 for one sample of each strategy: `a² / (a² + b²)`,
 /// formed as `1 / (1 + (b/a)²)` so that pdfs near `f32::MAX` (a tiny emitter seen from afar)
 /// do not overflow; 1 when `b` is 0, 0 when `a` is 0 (and 0 for NaN).
@@ -204,6 +253,7 @@ impl Default for RenderSettings {
             russian_roulette: false,
             light_sampling: LightSampling::Mis,
             triangle_sampling: TriangleSampling::SolidAngle,
+            light_selection: LightSelection::Bvh,
         }
     }
 }
