@@ -5,9 +5,9 @@ use furnace_brdf::{Bsdf, Frame, MetallicRoughness, MetallicRoughnessParams, Spec
 use furnace_render::layout::{
     self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
 };
-use furnace_render::{Film, Integrator, LightSampling, RenderError, RenderSettings};
+use furnace_render::{Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings};
 use furnace_sampling::{AnySampler, Sampler};
-use furnace_scene::{AlphaMode, Camera, Emitters, MaterialSample, Scene, oct_decode};
+use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, MaterialSample, Scene, oct_decode};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -44,8 +44,11 @@ pub struct CpuRenderer {
     suns: Vec<furnace_scene::Sun>,
     /// The scene's sun discs ([`Scene::suns`] with one).
     sun_discs: Vec<SunDisc>,
-    /// The emissive triangles, chosen for light samples by power; `None` without any.
+    /// The emissive triangles; `None` without any.
     emitters: Option<Emitters>,
+    /// The light BVH over them when light samples choose by it
+    /// ([`furnace_render::LightSelection::Bvh`]), else `None` (chosen by power).
+    light_bvh: Option<LightBvh>,
     /// Point and spot lights ([`Scene::point_lights`]).
     point_lights: Vec<furnace_scene::PointLight>,
     /// Radiance of an escaping ray ([`Scene::sky`]).
@@ -104,10 +107,16 @@ impl CpuRenderer {
         let normals = g.normals.iter().map(|&e| oct_decode(e)).collect();
         let (lo, hi) = g.bounds();
         let offset_scale = offset_scale_of_bounds(lo, hi);
+        let emitters = Emitters::new(&scene);
+        let light_bvh = emitters
+            .as_ref()
+            .filter(|_| settings.light_selection == LightSelection::Bvh)
+            .map(|e| e.light_bvh(&scene));
         Ok(Self {
             suns: scene.suns().filter(|s| !s.is_disc()).copied().collect(),
             sun_discs: scene.suns().filter(|s| s.is_disc()).map(SunDisc::new).collect(),
-            emitters: Emitters::new(&scene),
+            emitters,
+            light_bvh,
             point_lights: scene.point_lights().copied().collect(),
             sky: scene.sky(),
             film: Film::new(settings.width, settings.height),
@@ -223,6 +232,9 @@ impl CpuRenderer {
         // The solid-angle pdf of the BSDF sample that made the ray (`None`: the camera's), for
         // the MIS weights of the lights it reaches.
         let mut bsdf_pdf: Option<f32> = None;
+        // The receiving side (geometric normal) of the vertex the ray left, for the light BVH's
+        // probabilities in those weights.
+        let mut normal = Vec3::ZERO;
         loop {
             let Some(hit) = self.closest_hit(origin, direction) else {
                 // The ray leaves the scene: the sky and the sun discs it sees.
@@ -259,7 +271,8 @@ impl CpuRenderer {
             if !surface.back_face {
                 if self.emitters.is_some() && emission != Vec3::ZERO {
                     let cos_light = -surface.geometric.dot(direction);
-                    let w = self.emission_weight(bsdf_pdf, origin, material_index, t, hit.t, cos_light);
+                    let w =
+                        self.emission_weight(bsdf_pdf, origin, normal, material_index, t, hit.t, cos_light);
                     radiance += throughput * emission * w;
                 } else {
                     radiance += throughput * emission;
@@ -332,6 +345,7 @@ impl CpuRenderer {
                 throughput /= survive;
             }
             origin = leave;
+            normal = surface.geometric;
             direction = wi;
         }
         radiance

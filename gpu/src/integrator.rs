@@ -36,9 +36,11 @@ use crate::traverse::BvhBuffers;
 use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
 use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
-use furnace_render::{Film, Integrator, LightSampling, RenderError, RenderSettings, TriangleSampling};
+use furnace_render::{
+    Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings, TriangleSampling,
+};
 use furnace_sampling::AnySampler;
-use furnace_scene::{AlphaMode, Camera, Emitters, Projection, Scene};
+use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, Projection, Scene};
 
 crate::wgsl_consts! {
     /// The `FRAME_*` flags as WGSL `const` declarations (composed into the integrator shader).
@@ -199,6 +201,37 @@ pub fn emitter_words(e: &Emitters) -> Vec<u32> {
     words
 }
 
+crate::wgsl_consts! {
+    /// The light BVH's constants as WGSL `const` declarations (composed with `light_bvh.wgsl`).
+    fn light_bvh_consts_wgsl;
+    /// Words per light-BVH node in the `emitters` buffer ([`light_bvh_words`]).
+    pub const LIGHT_BVH_NODE_WORDS: u32 = 12;
+    /// A node's `child` word holds a leaf's item ([`furnace_scene::LIGHT_BVH_LEAF`]).
+    pub const LIGHT_BVH_LEAF: u32 = furnace_scene::LIGHT_BVH_LEAF;
+}
+
+/// The `emitters` buffer when light samples choose by the [`LightBvh`] `bvh` of `e`
+/// ([`LightSelection::Bvh`]), as `u32` words: per emitter its triangle and its path from the
+/// root (two words, levels 0–31 then 32–63) — `3·n` words — then the nodes, depth first,
+/// [`LIGHT_BVH_NODE_WORDS`] each (`lo.xyz`, `φ`, `hi.xyz`, `cos θo`, `axis.xyz`, `child`, the
+/// floats as bits): 12 bytes per emitter and 48 per node, `2n − 1` nodes.
+pub fn light_bvh_words(e: &Emitters, bvh: &LightBvh) -> Vec<u32> {
+    let mut words = Vec::with_capacity(3 * e.len() + LIGHT_BVH_NODE_WORDS as usize * bvh.nodes().len());
+    for (&t, &trail) in e.triangles().iter().zip(bvh.trails()) {
+        words.extend([t, trail as u32, (trail >> 32) as u32]);
+    }
+    for node in bvh.nodes() {
+        let b = &node.bounds;
+        words.extend(b.lo.to_array().map(f32::to_bits));
+        words.push(b.phi.to_bits());
+        words.extend(b.hi.to_array().map(f32::to_bits));
+        words.push(b.cos_theta_o.to_bits());
+        words.extend(b.axis.to_array().map(f32::to_bits));
+        words.push(node.child);
+    }
+    words
+}
+
 /// Words of the counter buffer (`ray_counter`): rays, nodes and triangles as 64-bit pairs, then
 /// fallbacks and the deepest stack.
 const COUNTER_WORDS: usize = 8;
@@ -317,19 +350,22 @@ pub struct SceneFeatures {
     pub emitters: bool,
     /// A sun with a disc (its cone samples, and its radiance seen by escaping rays).
     pub sun_disc: bool,
+    /// Emitters chosen by the light BVH ([`LightSelection::Bvh`]; with `emitters` only).
+    pub light_bvh: bool,
 }
 
 impl SceneFeatures {
-    /// The features `scene` uses.
-    pub fn of(scene: &Scene) -> Self {
-        Self::with_emitters(scene, Emitters::new(scene).is_some())
+    /// The features `scene` uses when rendered with `settings`.
+    pub fn of(scene: &Scene, settings: &RenderSettings) -> Self {
+        Self::with_emitters(scene, settings, Emitters::new(scene).is_some())
     }
 
-    fn with_emitters(scene: &Scene, emitters: bool) -> Self {
+    fn with_emitters(scene: &Scene, settings: &RenderSettings, emitters: bool) -> Self {
         Self {
             point_lights: scene.point_lights().next().is_some(),
             emitters,
             sun_disc: scene.sun().is_some_and(|s| s.is_disc()),
+            light_bvh: emitters && settings.light_selection == LightSelection::Bvh,
         }
     }
 
@@ -339,10 +375,12 @@ impl SceneFeatures {
     }
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
-    /// `HAS_EMITTERS`, `HAS_SUN_DISC`, and `SAMPLES_LIGHTS` (either: the MIS weights).
+    /// `HAS_EMITTERS`, `HAS_SUN_DISC`, `SAMPLES_LIGHTS` (either: the MIS weights) and
+    /// `LIGHT_BVH`.
     pub fn enabled(self, name: &str) -> bool {
         match name {
             "HAS_EMITTERS" => self.emitters,
+            "LIGHT_BVH" => self.emitters && self.light_bvh,
             "HAS_SUN_DISC" => self.sun_disc,
             "SAMPLES_LIGHTS" => self.emitters || self.sun_disc,
             "HAS_POINT_LIGHTS" => self.point_lights,
@@ -375,6 +413,8 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         binding_table(precision, features).wgsl(),
     ]
     .concat();
+    let light_bvh =
+        if features.enabled("LIGHT_BVH") { light_bvh_consts_wgsl() + wgsl::LIGHT_BVH } else { String::new() };
     let integrator = wgsl::select(include_str!("wgsl/integrator.wgsl"), |name| features.enabled(name));
     wgsl::compose(&[
         &generated,
@@ -382,6 +422,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         wgsl::BRDF,
         wgsl::SCENE,
         wgsl::TRAVERSE,
+        &light_bvh,
         precision.wgsl(),
         wgsl::PATH,
         &integrator,
@@ -433,12 +474,19 @@ impl GpuRenderer {
         let point_lights =
             storage_buffer(&ctx, "point lights", bytemuck::cast_slice(&point_light_records(scene)))?;
         let scene_emitters = Emitters::new(scene);
+        let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
         // No buffer (and no binding) for a scene without emitters.
         let emitters = scene_emitters
             .as_ref()
-            .map(|e| storage_buffer(&ctx, "emitters", &emitter_words(e)))
+            .map(|e| {
+                let words = if features.light_bvh {
+                    light_bvh_words(e, &e.light_bvh(scene))
+                } else {
+                    emitter_words(e)
+                };
+                storage_buffer(&ctx, "emitters", &words)
+            })
             .transpose()?;
-        let features = SceneFeatures::with_emitters(scene, scene_emitters.is_some());
         let precision = FilmPrecision::for_context(&ctx);
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());

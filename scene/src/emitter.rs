@@ -12,7 +12,7 @@
 //! A textured emitter is weighted by its texture's mean, not per triangle: the estimator stays
 //! unbiased (any positive weight is), only less efficient where the texture varies a lot.
 
-use crate::{Material, Scene};
+use crate::{LightBounds, LightBvh, Material, Scene};
 use furnace_sampling::{AliasBin, AliasTable};
 use glam::{Vec2, Vec3};
 
@@ -105,6 +105,35 @@ impl Emitters {
     /// `area` (0 for a non-emitting material).
     pub fn selection_pdf(&self, material: usize, area: f32) -> f32 {
         self.material_weights.get(material).map_or(0.0, |w| w * area / self.total)
+    }
+
+    /// The [`LightBvh`] over these emitters (item `i` is `triangles()[i]`), each triangle's
+    /// power its selection weight (`wₘ · area`, as the alias table's).
+    pub fn light_bvh(&self, scene: &Scene) -> LightBvh {
+        let bounds: Vec<LightBounds> = self
+            .triangles
+            .iter()
+            .map(|&t| {
+                let t = t as usize;
+                let [v0, v1, v2] = scene.geometry.triangle(t).expect("an emitter is a triangle of the scene");
+                let phi = self.material_weights[scene.triangle_material(t)] * triangle_area(v0, v1, v2);
+                // A triangle with no normal has no area, so it is no emitter: the fallback is never used.
+                LightBounds::triangle(v0, v1, v2, phi).unwrap_or(LightBounds {
+                    lo: v0,
+                    hi: v0,
+                    phi: 0.0,
+                    axis: Vec3::Z,
+                    cos_theta_o: 1.0,
+                })
+            })
+            .collect();
+        LightBvh::new(&bounds).expect("emitters are never empty")
+    }
+
+    /// The emitter index (into [`Emitters::triangles`]) of scene triangle `t`, if it is one
+    /// (a binary search: the triangles are in order).
+    pub fn index_of(&self, t: u32) -> Option<usize> {
+        self.triangles.binary_search(&t).ok()
     }
 
     /// Bytes these emitters take on a GPU: 12 per emitter (triangle, alias bin) and 4 per

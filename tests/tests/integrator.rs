@@ -112,16 +112,24 @@ fn dispatches_cover_every_pixel_once() {
 #[test]
 fn absent_light_features_compose_no_code() {
     let bare = shader_source(FilmPrecision::F64, SceneFeatures::default());
-    for absent in ["sample_emitter", "sun_disc", "ray_pdf", "emitters", "power_heuristic", "#if"] {
+    for absent in ["sample_emitter", "sun_disc", "ray_pdf", "emitters", "power_heuristic", "light_bvh", "#if"]
+    {
         assert!(!bare.contains(absent), "{absent} in the shader of a scene without light samples");
     }
     let all = shader_source(
         FilmPrecision::F64,
-        SceneFeatures { point_lights: true, emitters: true, sun_disc: true },
+        SceneFeatures { point_lights: true, emitters: true, sun_disc: true, light_bvh: false },
     );
     for present in ["fn sample_emitter", "fn sample_sun_disc", "var ray_pdf", "var<storage, read> emitters"] {
         assert!(all.contains(present), "{present} missing from the shader of a scene with every light");
     }
+    // Chosen by power: no light-BVH code; by the BVH: no alias-table code.
+    assert!(!all.contains("light_bvh") && all.contains("fn emitter_select"));
+    let bvh = shader_source(
+        FilmPrecision::F64,
+        SceneFeatures { point_lights: true, emitters: true, sun_disc: true, light_bvh: true },
+    );
+    assert!(bvh.contains("fn light_bvh_sample") && !bvh.contains("fn emitter_select"));
 }
 
 #[test]
@@ -130,11 +138,14 @@ fn frame_params_layout_matches_wgsl() {
         FilmPrecision::F64,
         SceneFeatures::default(),
     ));
-    // Every feature composed at once: the code behind each HAS_* constant must validate.
-    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(
-        FilmPrecision::F32Pass,
-        SceneFeatures { point_lights: true, emitters: true, sun_disc: true },
-    ));
+    // Every feature composed at once: the code behind each HAS_* constant must validate, with
+    // either light selection.
+    for light_bvh in [false, true] {
+        furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(
+            FilmPrecision::F32Pass,
+            SceneFeatures { point_lights: true, emitters: true, sun_disc: true, light_bvh },
+        ));
+    }
     furnace_tests::layout::assert_gpu_struct::<GpuPointLight>(&shader_source(
         FilmPrecision::F64,
         SceneFeatures::default(),
@@ -174,19 +185,27 @@ fn same_samples_give_the_same_image_with_point_and_spot_lights() {
 #[test]
 fn same_samples_give_the_same_image_with_emitters_and_a_sun_disc() {
     use furnace_render::LightSampling::{Bsdf, Mis, Nee};
+    use furnace_render::LightSelection::{Bvh, Power};
     use furnace_render::TriangleSampling::{Area, SolidAngle};
     for (file, strategies) in [
-        ("cbox_area", &[(Mis, SolidAngle), (Mis, Area)][..]),
-        ("cbox_many_lights", &[(Mis, SolidAngle), (Nee, SolidAngle)][..]),
-        ("cbox_sun_disc", &[(Mis, SolidAngle), (Bsdf, SolidAngle)][..]),
+        ("cbox_area", &[(Mis, SolidAngle, Bvh), (Mis, Area, Power)][..]),
+        ("cbox_many_lights", &[(Mis, SolidAngle, Bvh), (Mis, SolidAngle, Power), (Nee, SolidAngle, Bvh)][..]),
+        ("cbox_sun_disc", &[(Mis, SolidAngle, Bvh), (Bsdf, SolidAngle, Bvh)][..]),
     ] {
         let path = furnace_tests::data::reference(&format!("lights/{file}.gltf"));
         let scene = furnace_scene::Scene::load(&path).unwrap();
-        for &(light_sampling, triangle_sampling) in strategies {
-            eprintln!("{file}, light sampling {light_sampling}, triangles by {triangle_sampling}");
+        for &(light_sampling, triangle_sampling, light_selection) in strategies {
+            eprintln!(
+                "{file}, light sampling {light_sampling}, triangles by {triangle_sampling}, chosen by {light_selection}"
+            );
             same_samples_with(
                 &scene,
-                RenderSettings { light_sampling, triangle_sampling, ..settings(SamplerKind::Sobol, 3) },
+                RenderSettings {
+                    light_sampling,
+                    triangle_sampling,
+                    light_selection,
+                    ..settings(SamplerKind::Sobol, 3)
+                },
             );
         }
     }

@@ -53,17 +53,26 @@ pub(super) struct Vertex<'a> {
 
 impl CpuRenderer {
     /// One light sample of an emissive triangle at scattering event `event` (throughput
-    /// included): the triangle chosen by power, a point on it uniform in solid angle or in area
+    /// included): the triangle chosen by the light BVH or by power
+    /// ([`furnace_render::LightSelection`]), a point on it uniform in solid angle or in area
     /// ([`furnace_render::TriangleSampling`]), a shadow ray stopping `SHADOW_EPSILON·d` short of
     /// it; weighted against BSDF sampling.
     pub(super) fn sample_emitter(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>) -> Vec3 {
         let Some(emitters) = &self.emitters else { return Vec3::ZERO };
         let dim = layout::light(self.settings.bounces, event);
         // The bin's bits and the coin are a pair (`LIGHT_EMITTER_COIN = LIGHT_EMITTER_BIN + 1`):
-        // one 2-D draw, the same bits as two 1-D ones, cheaper for the pattern samplers.
+        // one 2-D draw, the same bits as two 1-D ones, cheaper for the pattern samplers. The
+        // light BVH descends by the bits alone.
         let [bits, coin] = self.sampler.bits_2d(pixel, index, dim + LIGHT_EMITTER_BIN);
-        let coin = to_unit_f32(coin);
-        let t = emitters.select(bits, coin) as usize;
+        // The triangle and, for the BVH, its probability (the alias table's follows from the
+        // material and the area below).
+        let (t, bvh_pmf) = match &self.light_bvh {
+            Some(bvh) => match bvh.sample(v.leave, v.surface.geometric, to_unit_f32(bits)) {
+                Some((item, pmf)) => (emitters.triangles()[item] as usize, Some(pmf)),
+                None => return Vec3::ZERO, // no emitter can light this point
+            },
+            None => (emitters.select(bits, to_unit_f32(coin)) as usize, None),
+        };
         let Some([v0, v1, v2]) = self.scene.geometry.triangle(t) else { return Vec3::ZERO };
         // Everything is seen from the offset origin the shadow ray starts at (as the BSDF ray's
         // distance to a hit is measured): a point of the emitter's own plane is then strictly
@@ -106,7 +115,7 @@ impl CpuRenderer {
             return Vec3::ZERO;
         }
         let area = triangle_area(v0, v1, v2);
-        let selection = emitters.selection_pdf(material, area);
+        let selection = bvh_pmf.unwrap_or_else(|| emitters.selection_pdf(material, area));
         let pdf = match omega {
             Some(omega) => selection / omega,
             None => selection * d2 / (area * cos_light),
@@ -162,12 +171,15 @@ impl CpuRenderer {
     }
 
     /// The MIS weight of emission reached by a BSDF-sampled ray of pdf `bsdf_pdf` (`None`: a
-    /// camera ray) from `origin`, at distance `t` on the front of triangle `triangle` of
-    /// `material`: against the light sample that could have chosen the same point from there.
+    /// camera ray) from `origin` (the previous vertex's offset origin, whose receiving side was
+    /// `normal`), at distance `t` on the front of triangle `triangle` of `material`: against the
+    /// light sample that could have chosen the same point from there.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn emission_weight(
         &self,
         bsdf_pdf: Option<f32>,
         origin: Vec3,
+        normal: Vec3,
         material: usize,
         triangle: usize,
         t: f32,
@@ -176,7 +188,10 @@ impl CpuRenderer {
         let (Some(p), Some(emitters)) = (bsdf_pdf, &self.emitters) else { return 1.0 };
         let Some([v0, v1, v2]) = self.scene.geometry.triangle(triangle) else { return 1.0 };
         let area = triangle_area(v0, v1, v2);
-        let selection = emitters.selection_pdf(material, area);
+        let selection = match &self.light_bvh {
+            Some(bvh) => emitters.index_of(triangle as u32).map_or(0.0, |i| bvh.pmf(origin, normal, i)),
+            None => emitters.selection_pdf(material, area),
+        };
         if !(selection > 0.0) {
             return 1.0; // never chosen by the light sampler: BSDF sampling is its only strategy
         }

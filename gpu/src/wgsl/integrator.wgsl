@@ -115,6 +115,7 @@ fn triangle_area(v0: vec3<f32>, v1: vec3<f32>, v2: vec3<f32>) -> f32 {
     return 0.5 * sqrt(scene_dot(c, c));
 }
 
+// #if !LIGHT_BVH
 // Emitters::selection_pdf: the probability of choosing a triangle of `material` and `area`.
 fn emitter_selection_pdf(material: u32, area: f32) -> f32 {
     let w = bitcast<f32>(emitters[3u * params.emitter_count + material]);
@@ -130,6 +131,26 @@ fn emitter_select(bits: u32, coin: f32) -> u32 {
     }
     return emitters[3u * item];
 }
+// #else
+// Emitters::index_of: the emitter whose triangle is `triangle` (a binary search of the ordered
+// triangles), or 0xffffffff.
+fn emitter_index_of(triangle: u32) -> u32 {
+    var lo = 0u;
+    var hi = params.emitter_count;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if emitters[3u * mid] < triangle {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    if lo < params.emitter_count && emitters[3u * lo] == triangle {
+        return lo;
+    }
+    return 0xffffffffu;
+}
+// #endif
 
 // CpuRenderer::sample_emitter: one light sample of an emissive triangle (throughput included).
 // TriangleSampling::solid_angle: the solid angle of the triangle a, b, c (relative to the
@@ -150,7 +171,16 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event;
     // The bin's bits and the coin: one pair (LIGHT_EMITTER_COIN = LIGHT_EMITTER_BIN + 1).
     let bin_coin = sampler_bits_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_BIN);
+    // #if LIGHT_BVH
+    // The light BVH descends by the bits alone; its nodes follow the 3 words per emitter.
+    let choice = light_bvh_sample(3u * params.emitter_count, leave, surface.geometric, to_unit_f32(bin_coin.x));
+    if !(choice.pmf > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let t = emitters[3u * choice.item];
+    // #else
     let t = emitter_select(bin_coin.x, to_unit_f32(bin_coin.y));
+    // #endif
     let tri = scene_triangles[t];
     let v0 = scene_vertices[tri.i0].position;
     let v1 = scene_vertices[tri.i1].position;
@@ -202,7 +232,11 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
         return vec3<f32>(0.0);
     }
     let area = triangle_area(v0, v1, v2);
+    // #if LIGHT_BVH
+    let selection = choice.pmf;
+    // #else
     let selection = emitter_selection_pdf(material, area);
+    // #endif
     var pdf: f32;
     if omega > 0.0 {
         pdf = selection / omega;
@@ -222,9 +256,10 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
 }
 
 // CpuRenderer::emission_weight: the MIS weight of emission reached by a BSDF sample of pdf
-// `bsdf_pdf_value` (< 0: a camera ray) from `origin`, at distance `t` on the front of `triangle`.
-fn emission_weight(bsdf_pdf_value: f32, origin: vec3<f32>, material: u32, triangle: u32, t: f32,
-                   cos_light: f32) -> f32 {
+// `bsdf_pdf_value` (< 0: a camera ray) from `origin` (whose receiving side was `normal`), at
+// distance `t` on the front of `triangle`.
+fn emission_weight(bsdf_pdf_value: f32, origin: vec3<f32>, normal: vec3<f32>, material: u32,
+                   triangle: u32, t: f32, cos_light: f32) -> f32 {
     if bsdf_pdf_value < 0.0 {
         return 1.0;
     }
@@ -233,7 +268,16 @@ fn emission_weight(bsdf_pdf_value: f32, origin: vec3<f32>, material: u32, triang
     let v1 = scene_vertices[tri.i1].position;
     let v2 = scene_vertices[tri.i2].position;
     let area = triangle_area(v0, v1, v2);
+    // #if LIGHT_BVH
+    var selection = 0.0;
+    let item = emitter_index_of(triangle);
+    if item != 0xffffffffu {
+        let trail = vec2<u32>(emitters[3u * item + 1u], emitters[3u * item + 2u]);
+        selection = light_bvh_pmf(3u * params.emitter_count, trail, origin, normal);
+    }
+    // #else
     let selection = emitter_selection_pdf(material, area);
+    // #endif
     if !(selection > 0.0) {
         return 1.0;
     }
@@ -305,6 +349,10 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
     // The pdf of the BSDF sample that made the ray (−1: the camera's), for MIS weights.
     var ray_pdf = -1.0;
     // #endif
+    // #if HAS_EMITTERS
+    // The receiving side (geometric normal) of the vertex the ray left, for the light BVH.
+    var normal = vec3<f32>(0.0);
+    // #endif
     let inf = bitcast<f32>(0x7f800000u);
     loop {
         rays_traced += 1u;
@@ -333,7 +381,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // #if HAS_EMITTERS
             if any(ms.emission != vec3<f32>(0.0)) {
                 let cos_light = -scene_dot(surface.geometric, direction);
-                let w = emission_weight(ray_pdf, origin, material, hit.triangle, hit.t, cos_light);
+                let w = emission_weight(ray_pdf, origin, normal, material, hit.triangle, hit.t, cos_light);
                 radiance += throughput * ms.emission * w;
             }
             // #else
@@ -409,6 +457,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             throughput /= survive;
         }
         origin = leave;
+        // #if HAS_EMITTERS
+        normal = surface.geometric;
+        // #endif
         direction = wi;
     }
     return radiance;
