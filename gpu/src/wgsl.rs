@@ -25,8 +25,8 @@ pub const BRDF: &str = include_str!("wgsl/brdf.wgsl");
 pub const SCENE: &str = include_str!("wgsl/scene.wgsl");
 
 /// `furnace-scene`'s light BVH (`LightBounds::importance`, `LightBvh::sample` and `pmf`) over
-/// the nodes in the `emitters` buffer ([`crate::integrator::light_bvh_words`]). Needs
-/// [`SCENE`] (`scene_dot`) and the constants of `light_bvh_consts_wgsl`.
+/// the nodes in the `emitters` buffer ([`crate::integrator::light_bvh_words`]). Needs only
+/// that buffer and the constants of [`crate::integrator::light_bvh_consts_wgsl`].
 pub const LIGHT_BVH: &str = include_str!("wgsl/light_bvh.wgsl");
 
 /// CWBVH traversal of `furnace-accel`'s GPU buffers: closest hit and any hit (shadow rays).

@@ -320,8 +320,9 @@ fn negative_emission_is_a_warning_and_black() {
     }
 }
 
-/// 10⁵ emissive squares (2·10⁵ triangles) over the floor: the alias table's build time and the
-/// bytes the GPU keeps per emitter, printed; the render is finite and matches the CPU's mean.
+/// 10⁵ emissive squares (2·10⁵ triangles) over the floor: the alias table's and the light
+/// BVH's build times and the bytes the GPU keeps per emitter for each, printed; the render
+/// (chosen by the BVH, the default) is finite and matches the CPU's mean.
 #[test]
 fn a_hundred_thousand_emitters() {
     let mut scene = floor();
@@ -354,6 +355,19 @@ fn a_hundred_thousand_emitters() {
         emitters.gpu_bytes(),
         emitters.gpu_bytes() as f64 / emitters.len() as f64
     );
+    let start = Instant::now();
+    let bvh = emitters.light_bvh(&scene);
+    let build = start.elapsed().as_secs_f64();
+    let bytes = 4 * furnace_gpu::integrator::light_bvh_words(&emitters, &bvh).len();
+    println!(
+        "light BVH built in {:.1} ms, depth {}, {} nodes, {bytes} bytes on the GPU ({:.1} per emitter)",
+        build * 1e3,
+        bvh.depth(),
+        bvh.nodes().len(),
+        bytes as f64 / emitters.len() as f64
+    );
+    assert_eq!(bvh.nodes().len(), 2 * emitters.len() - 1);
+    assert!(bvh.depth() <= 64);
     assert_eq!(emitters.len(), 2 * n * n);
     let mut means = Vec::new();
     for backend in Backend::ALL {

@@ -3,7 +3,8 @@
 //
 // Requires: `emitters: array<u32>` holding the nodes from word `base` on, LIGHT_BVH_NODE_WORDS
 // words each (furnace_gpu::integrator::light_bvh_words: lo.xyz, phi, hi.xyz, cos_theta_o,
-// axis.xyz, child), and LIGHT_BVH_LEAF (generated from furnace_scene::LIGHT_BVH_LEAF).
+// axis.xyz, child), and LIGHT_BVH_LEAF (generated from furnace_scene::LIGHT_BVH_LEAF). Nothing
+// else: it composes alone (the parity tests run it so).
 
 struct LightBvhBounds {
     lo: vec3<f32>,
@@ -30,6 +31,11 @@ fn light_bvh_node(base: u32, index: u32) -> LightBvhBounds {
     );
 }
 
+// Vec3::dot: (x·x' + y·y') + z·z' (scene.wgsl's scene_dot, repeated so the module stands alone).
+fn light_bvh_dot(a: vec3<f32>, b: vec3<f32>) -> f32 {
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
 fn light_bvh_safe_sqrt(x: f32) -> f32 {
     return sqrt(max(x, 0.0));
 }
@@ -54,9 +60,9 @@ fn light_bvh_sin_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
 fn light_bvh_importance(b: LightBvhBounds, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let centre = 0.5 * (b.lo + b.hi);
     let half = 0.5 * (b.hi - b.lo);
-    let r2 = scene_dot(half, half);
+    let r2 = light_bvh_dot(half, half);
     let to_p = p - centre;
-    let dist2 = scene_dot(to_p, to_p);
+    let dist2 = light_bvh_dot(to_p, to_p);
     if !(dist2 > r2) {
         if r2 > 0.0 {
             return b.phi / r2;
@@ -67,7 +73,7 @@ fn light_bvh_importance(b: LightBvhBounds, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let sin2_b = r2 / dist2;
     let sin_b = sqrt(sin2_b);
     let cos_b = light_bvh_safe_sqrt(1.0 - sin2_b);
-    let cos_w = scene_dot(b.axis, wi);
+    let cos_w = light_bvh_dot(b.axis, wi);
     let sin_w = light_bvh_safe_sqrt(1.0 - cos_w * cos_w);
     let sin_o = light_bvh_safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o);
     let cos_x = light_bvh_cos_sub(sin_w, cos_w, sin_o, b.cos_theta_o);
@@ -78,7 +84,7 @@ fn light_bvh_importance(b: LightBvhBounds, p: vec3<f32>, n: vec3<f32>) -> f32 {
     }
     var importance = b.phi * cos_p / dist2;
     if any(n != vec3<f32>(0.0)) {
-        let cos_i = -scene_dot(wi, n);
+        let cos_i = -light_bvh_dot(wi, n);
         let sin_i = light_bvh_safe_sqrt(1.0 - cos_i * cos_i);
         let cos_pi = light_bvh_cos_sub(sin_i, cos_i, sin_b, cos_b);
         if !(cos_pi > 0.0) {
