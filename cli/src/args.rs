@@ -3,7 +3,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
-use furnace_render::{LightSampling, TriangleSampling};
+use furnace_render::{LightSampling, LightSelection, TriangleSampling};
 use furnace_sampling::SamplerKind;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -98,6 +98,11 @@ pub struct RenderArgs {
     /// solid angle it subtends, where that is precise) or area (uniform on its area).
     #[arg(long, value_enum, default_value_t = TriangleSamplingArg::SolidAngle)]
     pub triangle_sampling: TriangleSamplingArg,
+    /// How a light sample chooses the emissive triangle: bvh (default) descends a light BVH by
+    /// each node's importance at the shading point (power, distance, orientation; Conty Estevez &
+    /// Kulla 2018), power picks in proportion to power by an alias table.
+    #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
+    pub light_selection: LightSelectionArg,
     /// The sun's angular diameter in degrees (0: a delta sun, hard shadows; the real sun is
     /// about 0.53), replacing the scene's `extras.angular_diameter_deg`.
     #[arg(long, value_name = "DEG", value_parser = parse_sun_angle)]
@@ -197,6 +202,10 @@ pub struct BenchArgs {
     /// `furnace render`).
     #[arg(long, value_enum, default_value_t = TriangleSamplingArg::SolidAngle)]
     pub triangle_sampling: TriangleSamplingArg,
+    /// How a light sample chooses the emissive triangle: bvh (by a light BVH's importance at the
+    /// shading point) or power (in proportion to power; as `furnace render`).
+    #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
+    pub light_selection: LightSelectionArg,
     /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
@@ -285,6 +294,10 @@ pub struct ChartArgs {
     /// solid-angle, area (as `furnace render --triangle-sampling`).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "solid-angle")]
     pub triangle_sampling: Vec<TriangleSamplingArg>,
+    /// How a light sample chooses the emissive triangle, comma-separated: bvh, power (as
+    /// `furnace render --light-selection`).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "bvh")]
+    pub light_selection: Vec<LightSelectionArg>,
     /// Backends, comma-separated: cpu, gpu.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
     pub backends: Vec<ChartBackend>,
@@ -462,6 +475,24 @@ impl From<TriangleSamplingArg> for TriangleSampling {
         match m {
             TriangleSamplingArg::Area => TriangleSampling::Area,
             TriangleSamplingArg::SolidAngle => TriangleSampling::SolidAngle,
+        }
+    }
+}
+
+/// `--light-selection`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LightSelectionArg {
+    /// In proportion to the triangles' power, by an alias table (the same choice everywhere).
+    Power,
+    /// By a light BVH's importance at the shading point (power, distance, orientation).
+    Bvh,
+}
+
+impl From<LightSelectionArg> for LightSelection {
+    fn from(m: LightSelectionArg) -> Self {
+        match m {
+            LightSelectionArg::Power => LightSelection::Power,
+            LightSelectionArg::Bvh => LightSelection::Bvh,
         }
     }
 }

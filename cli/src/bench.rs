@@ -44,6 +44,7 @@ struct Report {
     sampler: String,
     light_sampling: &'static str,
     triangle_sampling: &'static str,
+    light_selection: &'static str,
     spp: u32,
     seconds: f64,
     time_to_first_frame_s: f64,
@@ -215,6 +216,7 @@ impl Report {
             "sampler": self.sampler,
             "light_sampling": self.light_sampling,
             "triangle_sampling": self.triangle_sampling,
+            "light_selection": self.light_selection,
             "spp": self.spp,
             "seconds": finite(Some(self.seconds)),
             "msamples_per_s": finite(Some(self.msamples_per_s())),
@@ -278,7 +280,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         sample_count: a.sampler.needs_sample_count().then(|| a.spp.map_or(1, |n| n.saturating_add(1))),
         light_sampling: a.light_sampling.into(),
         triangle_sampling: a.triangle_sampling.into(),
-        light_selection: Default::default(),
+        light_selection: a.light_selection.into(),
         ..RenderSettings::default()
     };
     let triangles = scene.geometry.triangle_count() as u64;
@@ -359,6 +361,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         sampler: a.sampler.to_string(),
         light_sampling: settings.light_sampling.name(),
         triangle_sampling: settings.triangle_sampling.name(),
+        light_selection: settings.light_selection.name(),
         spp: done,
         seconds,
         time_to_first_frame_s,

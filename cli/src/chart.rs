@@ -1,8 +1,8 @@
 //! `furnace chart`: speed against accuracy. Renders one scene progressively under several
-//! configurations — sampler × BRDF sampling method × light sampling × energy compensation × backend — and records
-//! at checkpoints of 1, 2, 4, … samples per pixel (and `--spp`) the wall time and the error
-//! against a reference image; writes the data as CSV and JSON and draws error-vs-spp and
-//! error-vs-time charts (PNG and SVG).
+//! configurations — sampler × BRDF sampling method × light sampling × triangle sampling × light
+//! selection × energy compensation × backend — and records at checkpoints of 1, 2, 4, … samples
+//! per pixel (and `--spp`) the wall time and the error against a reference image; writes the
+//! data as CSV and JSON and draws error-vs-spp and error-vs-time charts (PNG and SVG).
 //!
 //! * **Error**: `furnace_post::metrics::score` (the metrics of `furnace compare`): RMSE over all channel values, and relative MSE
 //!   `mean((x − r)² / (r² + ε))` over all pixels and channels with ε = 1e-2.

@@ -50,6 +50,7 @@ impl Job {
                 (resume::RUSSIAN_ROULETTE, resume::cli_name(&a.russian_roulette)),
                 (resume::LIGHT_SAMPLING, resume::cli_name(&a.light_sampling)),
                 (resume::TRIANGLE_SAMPLING, resume::cli_name(&a.triangle_sampling)),
+                (resume::LIGHT_SELECTION, resume::cli_name(&a.light_selection)),
                 (resume::TARGET_SPP, a.spp.to_string()),
                 (resume::TONEMAP, a.tonemap.to_string()),
                 (resume::EXPOSURE, a.exposure.to_string()),
@@ -124,7 +125,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         russian_roulette: args.russian_roulette == Switch::On,
         light_sampling: args.light_sampling.into(),
         triangle_sampling: args.triangle_sampling.into(),
-        light_selection: Default::default(),
+        light_selection: args.light_selection.into(),
     };
     let job = Job { scene_name: scene.name.clone(), scene_hash, camera, settings, args };
     let a = &job.args;

@@ -5,11 +5,12 @@
 //! (`furnace_post::write_exr_with_state`) — and, as `furnace.*` text attributes, every setting
 //! that decides the film: scene identity (name and a hash of its loaded content), size,
 //! bounces, sampler, seed, masking, compensation, specular sampling, camera, Russian roulette,
-//! and N for the fixed-N samplers. `--resume` restores the film from the sums and continues at
-//! sample index `furnace.spp`: each pixel's sum keeps adding samples in index order, so the
-//! result is bit-identical to an uninterrupted render on the same backend and adapter (on a GPU
-//! without `f64` shaders, whose film sums each pass in `f32`, only where the pass boundaries
-//! agree, as after Ctrl-C or `--time-limit`).
+//! light sampling, triangle sampling, light selection, and N for the fixed-N samplers.
+//! `--resume` restores the film from the sums and continues at sample index `furnace.spp`: each
+//! pixel's sum keeps adding samples in index order, so the result is bit-identical to an
+//! uninterrupted render on the same backend and adapter (on a GPU without `f64` shaders, whose
+//! film sums each pass in `f32`, only where the pass boundaries agree, as after Ctrl-C or
+//! `--time-limit`).
 //!
 //! The backend is recorded (`furnace.backend`, `furnace_render::resume::backend_record`) but does not decide the
 //! film: a render started on the CPU may be continued on a GPU, or the reverse. Both integrators
@@ -18,7 +19,9 @@
 //! render to the float rounding of each path, not bit for bit (`tests/gpu.rs` checks it). The
 //! record keeps every backend that added samples, and `--resume` says when it changes.
 
-use crate::args::{LightSamplingArg, MaskingArg, RenderArgs, SamplingArg, Switch, TriangleSamplingArg};
+use crate::args::{
+    LightSamplingArg, LightSelectionArg, MaskingArg, RenderArgs, SamplingArg, Switch, TriangleSamplingArg,
+};
 use clap::ValueEnum;
 use furnace_post::Metadata;
 use furnace_render::resume;
@@ -52,6 +55,11 @@ pub const LIGHT_SAMPLING: &str = "furnace.light_sampling";
 pub const TRIANGLE_SAMPLING: &str = "furnace.triangle_sampling";
 /// The triangle sampling of files that do not record one (made before the choice existed).
 pub const OLD_TRIANGLE_SAMPLING: &str = "area";
+/// `--light-selection`.
+pub const LIGHT_SELECTION: &str = "furnace.light_selection";
+/// The light selection of files that do not record one (made before the light BVH existed,
+/// when every light sample chose its triangle in proportion to power).
+pub const OLD_LIGHT_SELECTION: &str = "power";
 /// The `--sun-angle` given (absent: the scene's own).
 pub const SUN_ANGLE: &str = "furnace.sun_angle_deg";
 /// Attribute: the `--spp` target (for a fixed-N sampler, its N).
@@ -100,6 +108,7 @@ pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, 
         // Files from before light sampling had no choice to record.
         ("light sampling", extra(LIGHT_SAMPLING).or_else(|| Some("mis".into()))),
         ("triangle sampling", extra(TRIANGLE_SAMPLING).or_else(|| Some(OLD_TRIANGLE_SAMPLING.into()))),
+        ("light selection", extra(LIGHT_SELECTION).or_else(|| Some(OLD_LIGHT_SELECTION.into()))),
         ("sun angle", extra(SUN_ANGLE)),
     ];
     let fixed_n = meta.sampler.as_deref().and_then(|s| SamplerKind::from_str(s).ok());
@@ -196,6 +205,10 @@ pub fn apply_recorded(
         a.triangle_sampling =
             enum_value::<TriangleSamplingArg>(v).ok_or_else(|| invalid(TRIANGLE_SAMPLING, v))?;
     }
+    if !a.given("light_selection") {
+        let v = meta.extra.get(LIGHT_SELECTION).map_or(OLD_LIGHT_SELECTION, String::as_str);
+        a.light_selection = enum_value::<LightSelectionArg>(v).ok_or_else(|| invalid(LIGHT_SELECTION, v))?;
+    }
     if !a.given("sun_angle")
         && let Some(v) = meta.extra.get(SUN_ANGLE)
     {
@@ -287,5 +300,19 @@ mod tests {
         let m = Metadata { scene: Some("scenes/a.glb".into()), ..Metadata::default() };
         let n = Metadata { scene: Some("./../x/scenes/a.glb".into()), ..Metadata::default() };
         assert_eq!(identity(&m, 1, 1), identity(&n, 1, 1));
+    }
+
+    #[test]
+    fn a_file_without_light_selection_was_rendered_by_power() {
+        // Files made before the light BVH record no light selection: they chose by power.
+        let old = Metadata::default();
+        let mut bvh = old.clone();
+        bvh.extra.insert(LIGHT_SELECTION.into(), "bvh".into());
+        let mut power = old.clone();
+        power.extra.insert(LIGHT_SELECTION.into(), "power".into());
+        let file = Path::new("old.exr");
+        assert!(check_same(file, &old, &identity(&old, 2, 2), &identity(&power, 2, 2), false).is_ok());
+        let e = check_same(file, &old, &identity(&old, 2, 2), &identity(&bvh, 2, 2), false).unwrap_err();
+        assert!(e.ends_with("light selection is power in the file but bvh now"), "{e}");
     }
 }

@@ -294,6 +294,8 @@ fn resume_two_plus_two_is_bit_identical_to_four() {
     resume_matches_one_render(&dir, "area_nee", &[area.to_str().unwrap(), "--light-sampling", "nee"]);
     // Its triangle sampling too (area, not the default solid angle).
     resume_matches_one_render(&dir, "area_by_area", &[area.to_str().unwrap(), "--triangle-sampling", "area"]);
+    // Its light selection too (power, not the default light BVH).
+    resume_matches_one_render(&dir, "area_by_power", &[area.to_str().unwrap(), "--light-selection", "power"]);
     resume_matches_one_render(&dir, "sun_disc", &["--sun-angle", "5"]);
 }
 
@@ -357,6 +359,7 @@ fn resume_refuses_other_settings_naming_both_values() {
         (&["--russian-roulette", "on"][..], "russian roulette is off in the file but on now"),
         (&["--light-sampling", "bsdf"][..], "light sampling is mis in the file but bsdf now"),
         (&["--triangle-sampling", "area"][..], "triangle sampling is solid-angle in the file but area now"),
+        (&["--light-selection", "power"][..], "light selection is bvh in the file but power now"),
         (&["--sun-angle", "1"][..], "sun angle is (not recorded) in the file but 1 now"),
         (&[cbox.as_str()][..], "scene is <built-in cbox> in the file but cbox.gltf now"),
     ] {
@@ -502,6 +505,43 @@ fn a_file_without_triangle_sampling_resumes_by_area() {
     assert_same_render(&two, &four);
 }
 
+/// A file from before the light BVH (no `furnace.light_selection`) chose its emissive triangles
+/// in proportion to power: it resumes as such (recording it now), equal to an uninterrupted
+/// power render, and refuses the light BVH, naming both.
+#[test]
+fn a_file_without_light_selection_resumes_by_power() {
+    let dir = temp_dir("resume_old_selection");
+    let area = furnace_tests::data::reference("lights/cbox_area.gltf");
+    let scene = area.to_str().unwrap();
+    let two = render_ok(&dir, "s2", 16, &[scene, "--light-selection", "power", "--spp", "2"]);
+    let four = render_ok(&dir, "s4", 16, &[scene, "--light-selection", "power", "--spp", "4"]);
+    let mut image = exr::prelude::read_all_flat_layers_from_file(&two).unwrap();
+    let removed =
+        image.layer_data[0].attributes.other.remove(&exr::prelude::Text::from("furnace.light_selection"));
+    assert!(
+        matches!(&removed, Some(exr::prelude::AttributeValue::Text(t)) if t == "power"),
+        "the file records its light selection: {removed:?}"
+    );
+    exr::prelude::WritableImage::write(&image).to_file(&two).unwrap();
+    let o = furnace(&[
+        "render",
+        "--quiet",
+        "--resume",
+        two.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--light-selection",
+        "bvh",
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("light selection is power in the file but bvh now"), "{}", stderr(&o));
+    let o = furnace(&["render", "--quiet", "--resume", two.to_str().unwrap(), "--spp", "4"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_same_render(&two, &four);
+    let (_, _, _, meta) = furnace_post::read_exr(&two).unwrap();
+    assert_eq!(meta.extra.get("furnace.light_selection").map(String::as_str), Some("power"));
+}
+
 #[test]
 fn camera_flag_selects_among_the_scene_cameras() {
     let dir = temp_dir("camera");
@@ -637,6 +677,11 @@ fn bench_cpu_prints_json_with_every_field() {
     assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(32), Some(32)));
     assert_eq!((v["spp"].as_u64(), v["bounces"].as_u64()), (Some(4), Some(4)));
     assert!(v["triangles"].as_u64().is_some_and(|t| t > 0));
+    // The light-sample settings, the defaults.
+    assert_eq!(
+        (&v["light_sampling"], &v["triangle_sampling"], &v["light_selection"]),
+        (&serde_json::json!("mis"), &serde_json::json!("solid-angle"), &serde_json::json!("bvh"))
+    );
     for key in ["seconds", "msamples_per_s", "ms_per_frame", "time_to_first_frame_s"] {
         assert!(v[key].as_f64().is_some_and(|x| x > 0.0 && x.is_finite()), "{key}: {}", v[key]);
     }
@@ -676,6 +721,8 @@ fn bench_writes_the_json_file_and_the_table() {
         "--bounces",
         "1",
         "--no-rays",
+        "--light-selection",
+        "power",
         "--quiet",
         "--json",
         path.to_str().unwrap(),
@@ -686,6 +733,7 @@ fn bench_writes_the_json_file_and_the_table() {
     assert!(table.contains("| cpu |") && table.contains("16×16"), "{table}");
     let v: serde_json::Value = serde_json::from_slice(&std::fs::read(&path).unwrap()).unwrap();
     assert_eq!(v["spp"].as_u64(), Some(1));
+    assert_eq!(v["light_selection"], "power");
     assert!(v["mrays_per_s"].is_null());
     assert_eq!(v["rays_counted"], "not counted: --no-rays");
     assert_eq!(std::fs::read_dir(&dir).unwrap().count(), 1, "no temporary file is left");

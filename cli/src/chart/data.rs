@@ -8,7 +8,8 @@ use std::path::Path;
 /// One measurement: a configuration at a checkpoint.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
-    /// The configuration's name (`sobol/caps/mis/solid-angle/comp-off/cpu`, see [`config_name`]).
+    /// The configuration's name (`sobol/caps/mis/solid-angle/bvh/comp-off/cpu`, see
+    /// [`config_name`]).
     pub config: String,
     /// Sampler name.
     pub sampler: String,
@@ -18,6 +19,8 @@ pub struct Row {
     pub light_sampling: String,
     /// How a light sample picks its point on an emissive triangle (`solid-angle`, `area`).
     pub triangle_sampling: String,
+    /// How a light sample chooses the emissive triangle (`bvh`, `power`).
+    pub light_selection: String,
     /// Energy compensation (`on`, `off`).
     pub compensation: String,
     /// Backend (`cpu`, `gpu`).
@@ -47,23 +50,31 @@ pub const OLD_LIGHT_SAMPLING: &str = "mis";
 /// samples then picked their point on an emissive triangle by area.
 pub const OLD_TRIANGLE_SAMPLING: &str = "area";
 
-/// A configuration's name from its axes' CLI names: `sobol/caps/mis/solid-angle/comp-off/cpu`.
+/// The light selection of a row saved before the light-selection axis existed: light samples
+/// then chose their emissive triangle in proportion to power.
+pub const OLD_LIGHT_SELECTION: &str = "power";
+
+/// A configuration's name from its axes' CLI names: `sobol/caps/mis/solid-angle/bvh/comp-off/cpu`
+/// (the light-selection part after the triangle sampling, the other part of the light sample).
 pub fn config_name(
     sampler: &str,
     sampling: &str,
     light_sampling: &str,
     triangle_sampling: &str,
+    light_selection: &str,
     compensation: &str,
     backend: &str,
 ) -> String {
-    format!("{sampler}/{sampling}/{light_sampling}/{triangle_sampling}/comp-{compensation}/{backend}")
+    format!(
+        "{sampler}/{sampling}/{light_sampling}/{triangle_sampling}/{light_selection}/comp-{compensation}/{backend}"
+    )
 }
 
 /// The CSV header of the study's data file (columns added later go at the end, so that a
 /// reader of the older columns by position still works).
 pub const CSV_HEADER: &str = concat!(
     "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,",
-    "cpu_seconds,light_sampling,triangle_sampling"
+    "cpu_seconds,light_sampling,triangle_sampling,light_selection"
 );
 
 /// The rows as CSV (with [`CSV_HEADER`]); numbers in Rust's shortest round-trip form.
@@ -73,7 +84,7 @@ pub fn to_csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.config,
             r.sampler,
             r.sampling,
@@ -86,7 +97,8 @@ pub fn to_csv(rows: &[Row]) -> String {
             r.reference_matches,
             if r.cpu_seconds.is_finite() { r.cpu_seconds.to_string() } else { String::new() },
             r.light_sampling,
-            r.triangle_sampling
+            r.triangle_sampling,
+            r.light_selection
         );
     }
     s
@@ -100,6 +112,7 @@ pub fn row_json(r: &Row) -> Value {
         "sampling": r.sampling,
         "light_sampling": r.light_sampling,
         "triangle_sampling": r.triangle_sampling,
+        "light_selection": r.light_selection,
         "compensation": r.compensation,
         "backend": r.backend,
         "spp": r.spp,
@@ -119,8 +132,9 @@ fn finite(x: f64) -> Value {
 /// A row read back from the JSON of a previous run. A row saved before the light-sampling axis
 /// has no `light_sampling`: it was rendered with [`OLD_LIGHT_SAMPLING`]; one saved before the
 /// triangle-sampling axis has no `triangle_sampling`: it was rendered with
-/// [`OLD_TRIANGLE_SAMPLING`]. Such a row's configuration is renamed to today's name for it, so
-/// that a resumed study finds it.
+/// [`OLD_TRIANGLE_SAMPLING`]; one saved before the light-selection axis has no
+/// `light_selection`: it was rendered with [`OLD_LIGHT_SELECTION`]. Such a row's configuration
+/// is renamed to today's name for it, so that a resumed study finds it.
 pub fn row_from_json(v: &Value) -> Result<Row, String> {
     let text = |k: &str| {
         v.get(k).and_then(Value::as_str).map(str::to_string).ok_or_else(|| format!("a row has no '{k}'"))
@@ -143,10 +157,19 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
     };
     let (light_sampling, light_saved) = axis("light_sampling", OLD_LIGHT_SAMPLING)?;
     let (triangle_sampling, triangle_saved) = axis("triangle_sampling", OLD_TRIANGLE_SAMPLING)?;
-    let config = if light_saved && triangle_saved {
+    let (light_selection, selection_saved) = axis("light_selection", OLD_LIGHT_SELECTION)?;
+    let config = if light_saved && triangle_saved && selection_saved {
         config
     } else {
-        config_name(&sampler, &sampling, &light_sampling, &triangle_sampling, &compensation, &backend)
+        config_name(
+            &sampler,
+            &sampling,
+            &light_sampling,
+            &triangle_sampling,
+            &light_selection,
+            &compensation,
+            &backend,
+        )
     };
     Ok(Row {
         config,
@@ -154,6 +177,7 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
         sampling,
         light_sampling,
         triangle_sampling,
+        light_selection,
         compensation,
         backend,
         spp,
@@ -310,11 +334,12 @@ mod tests {
     #[test]
     fn csv_and_json_rows_round_trip() {
         let row = Row {
-            config: "sobol/caps/nee/area/comp-off/cpu".into(),
+            config: "sobol/caps/nee/area/power/comp-off/cpu".into(),
             sampler: "sobol".into(),
             sampling: "caps".into(),
             light_sampling: "nee".into(),
             triangle_sampling: "area".into(),
+            light_selection: "power".into(),
             compensation: "off".into(),
             backend: "cpu".into(),
             spp: 8,
@@ -329,19 +354,20 @@ mod tests {
         assert_eq!(
             csv,
             format!(
-                "{CSV_HEADER}\nsobol/caps/nee/area/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee,area\n"
+                "{CSV_HEADER}\nsobol/caps/nee/area/power/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee,area,power\n"
             )
         );
     }
 
     /// A row as saved by an older version: `config` its name then, without the keys of `absent`.
-    fn old_row(config: &str, light_sampling: &str, absent: &[&str]) -> Value {
+    fn old_row(config: &str, light_sampling: &str, triangle_sampling: &str, absent: &[&str]) -> Value {
         let mut v = row_json(&Row {
             config: config.into(),
             sampler: "sobol".into(),
             sampling: "caps".into(),
             light_sampling: light_sampling.into(),
-            triangle_sampling: String::new(),
+            triangle_sampling: triangle_sampling.into(),
+            light_selection: String::new(),
             compensation: "off".into(),
             backend: "cpu".into(),
             spp: 4,
@@ -357,29 +383,54 @@ mod tests {
         v
     }
 
+    /// A row's config, light sampling, triangle sampling and light selection.
+    fn axes(row: &Row) -> (&str, &str, &str, &str) {
+        (&row.config, &row.light_sampling, &row.triangle_sampling, &row.light_selection)
+    }
+
     #[test]
     fn a_row_saved_before_light_sampling_is_mis() {
-        // A row of a study saved before both axes: neither key, the older name.
-        let v = old_row("sobol/caps/comp-off/cpu", "", &["light_sampling", "triangle_sampling"]);
-        let row = row_from_json(&v).unwrap();
-        assert_eq!(
-            (row.config.as_str(), row.light_sampling.as_str(), row.triangle_sampling.as_str()),
-            ("sobol/caps/mis/area/comp-off/cpu", "mis", "area")
+        // A row of a study saved before all three axes: no key of them, the older name.
+        let v = old_row(
+            "sobol/caps/comp-off/cpu",
+            "",
+            "",
+            &["light_sampling", "triangle_sampling", "light_selection"],
         );
+        let row = row_from_json(&v).unwrap();
+        assert_eq!(axes(&row), ("sobol/caps/mis/area/power/comp-off/cpu", "mis", "area", "power"));
         assert_eq!((row.spp, row.rmse), (4, 0.25));
         assert!(row.cpu_seconds.is_nan());
     }
 
     #[test]
     fn a_row_saved_before_triangle_sampling_is_area() {
-        // A row of a study saved after the light-sampling axis but before this one.
-        let v = old_row("sobol/caps/nee/comp-off/cpu", "nee", &["triangle_sampling"]);
+        // A row of a study saved after the light-sampling axis but before this one (and the
+        // light-selection axis).
+        let v = old_row("sobol/caps/nee/comp-off/cpu", "nee", "", &["triangle_sampling", "light_selection"]);
+        let row = row_from_json(&v).unwrap();
+        assert_eq!(axes(&row), ("sobol/caps/nee/area/power/comp-off/cpu", "nee", "area", "power"));
+        assert_eq!((row.spp, row.rmse, row.relmse), (4, 0.25, 0.125));
+    }
+
+    #[test]
+    fn a_row_saved_before_light_selection_is_power() {
+        // A row of a study saved after the triangle-sampling axis but before this one: light
+        // samples then chose their triangle in proportion to power.
+        let v =
+            old_row("sobol/caps/nee/solid-angle/comp-off/cpu", "nee", "solid-angle", &["light_selection"]);
         let row = row_from_json(&v).unwrap();
         assert_eq!(
-            (row.config.as_str(), row.light_sampling.as_str(), row.triangle_sampling.as_str()),
-            ("sobol/caps/nee/area/comp-off/cpu", "nee", "area")
+            axes(&row),
+            ("sobol/caps/nee/solid-angle/power/comp-off/cpu", "nee", "solid-angle", "power")
         );
         assert_eq!((row.spp, row.rmse, row.relmse), (4, 0.25, 0.125));
+        // A row that has the key keeps its name and value.
+        let mut v = v;
+        v["light_selection"] = "bvh".into();
+        v["config"] = "sobol/caps/nee/solid-angle/bvh/comp-off/cpu".into();
+        let row = row_from_json(&v).unwrap();
+        assert_eq!(axes(&row), ("sobol/caps/nee/solid-angle/bvh/comp-off/cpu", "nee", "solid-angle", "bvh"));
     }
 
     #[test]

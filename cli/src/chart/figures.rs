@@ -4,7 +4,9 @@
 use super::data::{self, ExternalPoint, Row, rows_of, slope};
 use super::plot::{self, Labels, Marker, Series, Style};
 use super::study::{Config, Study, dedup};
-use crate::args::{ChartBackend, ChartTime, LightSamplingArg, SamplingArg, Switch, TriangleSamplingArg};
+use crate::args::{
+    ChartBackend, ChartTime, LightSamplingArg, LightSelectionArg, SamplingArg, Switch, TriangleSamplingArg,
+};
 use crate::resume;
 use furnace_sampling::SamplerKind;
 use plotters::style::RGBColor;
@@ -57,17 +59,27 @@ fn tint(c: RGBColor, triangle: TriangleSamplingArg) -> RGBColor {
     }
 }
 
+/// `c` tinted by light selection: towards violet for power, as is for bvh (a hue of its own,
+/// apart from the light-sampling shades and the triangle-sampling amber).
+fn tint_selection(c: RGBColor, selection: LightSelectionArg) -> RGBColor {
+    match selection {
+        LightSelectionArg::Power => mix(c, RGBColor(148, 0, 211), 0.45),
+        LightSelectionArg::Bvh => c,
+    }
+}
+
 fn fmt_slope(k: f64) -> String {
     format!("{k:.2}").replace('-', "−")
 }
 
-/// How many samplers, sampling methods, light samplings, triangle samplings, compensation states
-/// and backends the study has: a legend entry names only what varies.
+/// How many samplers, sampling methods, light samplings, triangle samplings, light selections,
+/// compensation states and backends the study has: a legend entry names only what varies.
 struct Varying {
     samplers: usize,
     sampling: usize,
     light_sampling: usize,
     triangle_sampling: usize,
+    light_selection: usize,
     compensations: usize,
     backends: usize,
 }
@@ -79,6 +91,7 @@ impl Varying {
             sampling: dedup(&study.args.sampling).len(),
             light_sampling: dedup(&study.args.light_sampling).len(),
             triangle_sampling: dedup(&study.args.triangle_sampling).len(),
+            light_selection: dedup(&study.args.light_selection).len(),
             compensations: study.compensations().len(),
             backends: dedup(&study.args.backends).len(),
         }
@@ -96,6 +109,9 @@ impl Varying {
         }
         if vary(self.triangle_sampling) {
             parts.push(resume::cli_name(&c.triangle_sampling));
+        }
+        if vary(self.light_selection) {
+            parts.push(resume::cli_name(&c.light_selection));
         }
         if vary(self.compensations) {
             parts.push(format!("comp {}", resume::cli_name(&c.compensation)));
@@ -132,8 +148,8 @@ pub(super) fn save_charts(study: &Study, rows: &[Row], external: &[ExternalPoint
 }
 
 /// One series per configuration with rows: colour by sampler (shaded by light sampling, tinted by
-/// triangle sampling, each when it varies), marker by sampling method, dashed with compensation,
-/// hollow on the GPU.
+/// triangle sampling and by light selection, each when it varies), marker by sampling method,
+/// dashed with compensation, hollow on the GPU.
 fn config_series(
     study: &Study,
     rows: &[Row],
@@ -169,6 +185,9 @@ fn config_series(
         }
         if varying.triangle_sampling > 1 {
             color = tint(color, c.triangle_sampling);
+        }
+        if varying.light_selection > 1 {
+            color = tint_selection(color, c.light_selection);
         }
         let style = Style {
             color,
@@ -268,6 +287,12 @@ fn note(study: &Study, varying: &Varying, metric: &Metric, by_time: bool) -> Str
         note.push_str(
             " Triangle sampling: solid-angle (light samples uniform in the solid angle), area (uniform on \
              the triangle's area, tinted amber).",
+        );
+    }
+    if varying.light_selection > 1 {
+        note.push_str(
+            " Light selection: bvh (the emissive triangle chosen by a light BVH's importance at the \
+             shading point), power (in proportion to power, tinted violet).",
         );
     }
     if study.configs.iter().any(|c| c.compensation == Switch::On) {

@@ -57,16 +57,19 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
         for compensation in study.compensations() {
             for light_sampling in dedup(&a.light_sampling) {
                 for triangle_sampling in dedup(&a.triangle_sampling) {
-                    for sampling in dedup(&a.sampling) {
-                        for sampler in dedup(&a.samplers) {
-                            study.configs.push(Config {
-                                sampler,
-                                sampling,
-                                light_sampling,
-                                triangle_sampling,
-                                compensation,
-                                backend,
-                            });
+                    for light_selection in dedup(&a.light_selection) {
+                        for sampling in dedup(&a.sampling) {
+                            for sampler in dedup(&a.samplers) {
+                                study.configs.push(Config {
+                                    sampler,
+                                    sampling,
+                                    light_sampling,
+                                    triangle_sampling,
+                                    light_selection,
+                                    compensation,
+                                    backend,
+                                });
+                            }
                         }
                     }
                 }
@@ -76,7 +79,7 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
     if study.configs.is_empty() {
         return Err(
             "no configurations: give at least one sampler, sampling method, light sampling, triangle \
-             sampling and backend"
+             sampling, light selection and backend"
                 .into(),
         );
     }

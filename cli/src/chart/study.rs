@@ -1,11 +1,12 @@
 //! The study: its configurations (sampler × BRDF sampling × light sampling × triangle sampling
-//! × compensation × backend), their checkpoints, the references they are scored against, and
-//! what is left to render.
+//! × light selection × compensation × backend), their checkpoints, the references they are
+//! scored against, and what is left to render.
 
 use super::data::{Row, config_name, rows_of};
 use super::reference::Reference;
 use crate::args::{
-    ChartArgs, ChartBackend, LightSamplingArg, MaskingArg, SamplingArg, Switch, TriangleSamplingArg,
+    ChartArgs, ChartBackend, LightSamplingArg, LightSelectionArg, MaskingArg, SamplingArg, Switch,
+    TriangleSamplingArg,
 };
 use crate::resume;
 use furnace_render::{RenderSettings, Timing};
@@ -20,18 +21,20 @@ pub(super) struct Config {
     pub(super) sampling: SamplingArg,
     pub(super) light_sampling: LightSamplingArg,
     pub(super) triangle_sampling: TriangleSamplingArg,
+    pub(super) light_selection: LightSelectionArg,
     pub(super) compensation: Switch,
     pub(super) backend: ChartBackend,
 }
 
 impl Config {
-    /// `sobol/caps/mis/solid-angle/comp-off/cpu`.
+    /// `sobol/caps/mis/solid-angle/bvh/comp-off/cpu`.
     pub(super) fn name(&self) -> String {
         config_name(
             &self.sampler.to_string(),
             &resume::cli_name(&self.sampling),
             &resume::cli_name(&self.light_sampling),
             &resume::cli_name(&self.triangle_sampling),
+            &resume::cli_name(&self.light_selection),
             &resume::cli_name(&self.compensation),
             &resume::cli_name(&self.backend),
         )
@@ -44,6 +47,7 @@ impl Config {
             sampling: resume::cli_name(&self.sampling),
             light_sampling: resume::cli_name(&self.light_sampling),
             triangle_sampling: resume::cli_name(&self.triangle_sampling),
+            light_selection: resume::cli_name(&self.light_selection),
             compensation: resume::cli_name(&self.compensation),
             backend: resume::cli_name(&self.backend),
             spp,
@@ -124,6 +128,8 @@ impl Study {
             "light_sampling": names(dedup(&self.args.light_sampling).iter().map(resume::cli_name).collect()),
             "triangle_sampling":
                 names(dedup(&self.args.triangle_sampling).iter().map(resume::cli_name).collect()),
+            "light_selection":
+                names(dedup(&self.args.light_selection).iter().map(resume::cli_name).collect()),
             "compensation": names(self.compensations().iter().map(resume::cli_name).collect()),
             "backends": names(dedup(&self.args.backends).iter().map(resume::cli_name).collect()),
             "adapter": self.args.adapter,
