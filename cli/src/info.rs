@@ -58,7 +58,8 @@ fn describe(scene: &Scene) -> String {
         line(
             "emitters",
             format!(
-                "{} emissive triangles, luminous power {power:.4} W (luminance-weighted), chosen by power for light samples",
+                "{} emissive triangles, luminous power {power:.4} W (luminance-weighted), chosen for light samples by \
+                 the light BVH (--light-selection power: by power)",
                 e.len()
             ),
         );

@@ -13,6 +13,7 @@ R=$PWD/tests/data/references/lights
 W=/tmp/res; mkdir -p $W /tmp/sc /tmp/mo /tmp/mr
 cp $R/*.gltf $R/*.bin /tmp/sc/
 export ORACLE_SCENES=/tmp/sc ORACLE_OUT=/tmp/mo ORACLE_RESULTS=/tmp/mr
+save() { tar -czf $OUT/results.tgz -C $W .; }  # after each section: a timeout keeps what is done
 mi() { (cd .dev/oracle && python3 render_ref.py "$@" > /tmp/mi.log 2>&1) || tail -5 /tmp/mi.log; }
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 for s in cbox_area cbox_many_lights; do
@@ -36,6 +37,7 @@ for s in cbox_area cbox_many_lights; do
   done
   /tmp/fn chart --reference $R/${s}_ref_bounces4.exr --scene $R/$s.gltf --masking separable --compensation off --samplers sobol,random --sampling caps --light-sampling mis --light-selection power,bvh --spp 1024 --backends gpu --external $W/mitsuba_$s.csv --out $W/chart_$s -q > $W/chart_$s.log 2>&1 || tail -3 $W/chart_$s.log
   grep -E ",(64|256|1024)," $W/chart_$s/chart.csv
+  save
 done
 echo "== real assets: power vs bvh at 512^2 against a 16384-spp furnace render (bvh), speed at 1080p"
 S=$PWD/tests/data/scenes
@@ -49,6 +51,7 @@ for a in CornellBox-cetra/cornell_box.gltf DamagedHelmet/glTF-Binary/DamagedHelm
   /tmp/fn chart --reference $W/ref_$n.exr --scene $S/$a --samplers sobol --sampling caps --light-selection power,bvh --spp 1024 --backends gpu --out $W/chart_$n -q > $W/chart_$n.log 2>&1 || tail -3 $W/chart_$n.log
   grep -E ",(64|256|1024)," $W/chart_$n/chart.csv
   rm -f $W/ref_$n.exr $W/ref_$n.png
+  save
 done
 echo "== full size (256^2, 65536 spp, GPU, Sobol, MIS, solid angle, bvh) against the references"
 for s in cbox_area cbox_many_lights; do
@@ -56,5 +59,5 @@ for s in cbox_area cbox_many_lights; do
   /tmp/fn compare $W/full_$s.exr $R/${s}_ref_bounces4.exr --stderr $R/${s}_ref_bounces4_stderr.exr | sed -n 3,9p
 done
 rm -f $W/full_*.exr $W/full_*.png
-tar -czf $OUT/results.tgz -C $W .
+save
 ls -la $OUT

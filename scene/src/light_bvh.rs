@@ -146,6 +146,10 @@ impl LightBounds {
 /// estimator stays unbiased, since [`LightBvh::pmf`] agrees with the sampling, only noisier).
 fn cone_union(a: Vec3, cos_a: f32, b: Vec3, cos_b: f32) -> (Vec3, f32) {
     use std::f64::consts::PI;
+    if a == b {
+        // Same axis (emitters facing one way, the common case): the wider cone, no trigonometry.
+        return (a, cos_a.min(cos_b));
+    }
     let (wa, wb) = (a.as_dvec3(), b.as_dvec3());
     let theta_a = f64::from(cos_a).clamp(-1.0, 1.0).acos();
     let theta_b = f64::from(cos_b).clamp(-1.0, 1.0).acos();

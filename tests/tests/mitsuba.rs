@@ -172,23 +172,27 @@
 //! | sun disc | 64² | 1.046, 1.027 (± 0.06 %) | 1.022, 1.010 (± 0.05 %) | 1.012, 1.002 | — |
 //! | sun disc | 32² | 1.008, 1.051 (± 0.14 %) | 1.013, 0.993 (± 0.10 %) | 1.026, 1.023 | — |
 //!
-//! The 64-emitter box is the noisiest: light samples chosen by power go mostly to the bright
-//! squares across the room while a wall point is lit mostly by the dim ones near it (a light
-//! BVH would fix that; BENCHMARKS.md measures it against Mitsuba). Hence the **CPU at 64²: the
-//! emissive quad 512 passes of 1 spp, the 64 emitters 4096 (16.8 M paths, the heaviest CPU
-//! test: 34 s), the sun disc 512**; the **GPU at 32²: the emissive quad 256 passes of 2 spp, the
-//! sun disc 128 of 2** (24 s and 13 s of lavapipe on the idle 2-core VM, ≈ 2·10⁴ paths a
-//! second). The GPU has no 64-emitter test in CI: at 32² it would need ≈ 4096 spp (4.2 M paths,
-//! 3–4 minutes of lavapipe, a sixth of CI's budget) for a ratio error of 0.15 %; the GPU traces the same paths as the CPU from the same samples
-//! (`tests/tests/integrator.rs`, 4096/4096 pixels within 10⁻⁴ on this box) and matches the
-//! reference at full size on the H200 (BENCHMARKS.md: ratios 0.9992–0.9999). Fixed seed 11:
+//! The budgets above were measured with light samples chosen by power (an alias table). The
+//! 64-emitter box is the noisiest that way: power sends most light samples to the bright squares
+//! across the room while a wall point is lit mostly by the dim ones near it. The light BVH, now
+//! the default, weighs distance and orientation too: the same test's standard error fell from
+//! 0.14 % to 0.09 % (variance ×0.4) and its z std from 1.067 to 1.026, so the budgets are
+//! conservative. Hence the **CPU at 64²: the emissive quad 512 passes of 1 spp, the 64 emitters
+//! 4096 (16.8 M paths, the heaviest CPU test: 40 s), the sun disc 512**; the **GPU at 32²: the
+//! emissive quad 256 passes of 2 spp, the sun disc 128 of 2** (23 s and 8 s of lavapipe on the
+//! idle 2-core VM, ≈ 2·10⁴ paths a second). The GPU has no 64-emitter test in CI: at 32² it
+//! would need ≈ 4096 spp (4.2 M paths, 3–4 minutes of lavapipe, a sixth of CI's budget) for a
+//! ratio error of 0.15 %; the GPU traces the same paths as the CPU from the same samples, by
+//! power and by the light BVH (`tests/tests/integrator.rs`, 4095/4096 pixels within 10⁻⁴ on
+//! this box) and matches the reference at full size on the H200 (BENCHMARKS.md). Fixed seed 11,
+//! light BVH:
 //!
 //! | box | backend | ratio R, G, B (± se) | z std |
 //! |---|---|---|---|
-//! | emissive quad | CPU 64² | 0.9991, 0.9989, 0.9990 (± 0.0008) | 1.038 |
-//! | 64 emitters | CPU 64² | 0.9978, 0.9989, 0.9974 (± 0.0014) | 1.067 |
+//! | emissive quad | CPU 64² | 0.9995, 0.9992, 0.9993 (± 0.0008) | 1.053 |
+//! | 64 emitters | CPU 64² | 0.9995, 1.0000, 0.9999 (± 0.0009) | 1.026 |
 //! | sun disc | CPU 64² | 0.9999, 1.0003, 1.0005 (± 0.0005) | 1.005 |
-//! | emissive quad | GPU 32² | 1.0006, 0.9999, 0.9996 (± 0.0016) | 1.075 |
+//! | emissive quad | GPU 32² | 1.0015, 1.0006, 1.0005 (± 0.0016) | 1.088 |
 //! | sun disc | GPU 32² | 0.9991, 0.9997, 0.9988 (± 0.0014) | 1.045 |
 //!
 //! ## It can fail
