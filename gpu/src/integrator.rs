@@ -211,14 +211,16 @@ crate::wgsl_consts! {
 }
 
 /// The `emitters` buffer when light samples choose by the [`LightBvh`] `bvh` of `e`
-/// ([`LightSelection::Bvh`]), as `u32` words: per emitter its triangle and its path from the
-/// root (two words, levels 0–31 then 32–63) — `3·n` words — then the nodes, depth first,
-/// [`LIGHT_BVH_NODE_WORDS`] each (`lo.xyz`, `φ`, `hi.xyz`, `cos θo`, `axis.xyz`, `child`, the
-/// floats as bits): 12 bytes per emitter and 48 per node, `2n − 1` nodes.
+/// ([`LightSelection::Bvh`]), as `u32` words read by the shader as `vec4<u32>`: per emitter
+/// its triangle, its path from the root (two words, levels 0–31 then 32–63) and a pad —
+/// `4·n` words — then the nodes, depth first, [`LIGHT_BVH_NODE_WORDS`] each (`lo.xyz`, `φ`,
+/// `hi.xyz`, `cos θo`, `axis.xyz`, `child`, the floats as bits): 16 bytes per emitter and 48
+/// per node, `2n − 1` nodes. 16-byte records let a node be three 16-byte loads (twelve 4-byte
+/// ones cost more on the H200, BENCHMARKS.md).
 pub fn light_bvh_words(e: &Emitters, bvh: &LightBvh) -> Vec<u32> {
-    let mut words = Vec::with_capacity(3 * e.len() + LIGHT_BVH_NODE_WORDS as usize * bvh.nodes().len());
+    let mut words = Vec::with_capacity(4 * e.len() + LIGHT_BVH_NODE_WORDS as usize * bvh.nodes().len());
     for (&t, &trail) in e.triangles().iter().zip(bvh.trails()) {
-        words.extend([t, trail as u32, (trail >> 32) as u32]);
+        words.extend([t, trail as u32, (trail >> 32) as u32, 0]);
     }
     for node in bvh.nodes() {
         let b = &node.bounds;
@@ -334,7 +336,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     bindings.push(Binding::read("turquin_table", "array<f32>"));
     bindings.push(Binding::read("point_lights", "array<PointLight>"));
     if features.emitters {
-        bindings.push(Binding::read("emitters", "array<u32>"));
+        // Chosen by the light BVH: 16-byte records and nodes, read as vec4 (three loads a node).
+        let ty = if features.light_bvh { "array<vec4<u32>>" } else { "array<u32>" };
+        bindings.push(Binding::read("emitters", ty));
     }
     bindings.push(Binding::read_write("ray_counter", &format!("array<atomic<u32>, {COUNTER_WORDS}>")));
     BindingTable::new(0, 0, bindings)

@@ -139,13 +139,13 @@ fn emitter_index_of(triangle: u32) -> u32 {
     var hi = params.emitter_count;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if emitters[3u * mid] < triangle {
+        if emitters[mid].x < triangle {
             lo = mid + 1u;
         } else {
             hi = mid;
         }
     }
-    if lo < params.emitter_count && emitters[3u * lo] == triangle {
+    if lo < params.emitter_count && emitters[lo].x == triangle {
         return lo;
     }
     return 0xffffffffu;
@@ -172,12 +172,12 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     // The bin's bits and the coin: one pair (LIGHT_EMITTER_COIN = LIGHT_EMITTER_BIN + 1).
     let bin_coin = sampler_bits_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_BIN);
     // #if LIGHT_BVH
-    // The light BVH descends by the bits alone; its nodes follow the 3 words per emitter.
-    let choice = light_bvh_sample(3u * params.emitter_count, leave, surface.geometric, to_unit_f32(bin_coin.x));
+    // The light BVH descends by the bits alone; its nodes follow the emitters' records.
+    let choice = light_bvh_sample(params.emitter_count, leave, surface.geometric, to_unit_f32(bin_coin.x));
     if !(choice.pmf > 0.0) {
         return vec3<f32>(0.0);
     }
-    let t = emitters[3u * choice.item];
+    let t = emitters[choice.item].x;
     // #else
     let t = emitter_select(bin_coin.x, to_unit_f32(bin_coin.y));
     // #endif
@@ -272,8 +272,7 @@ fn emission_weight(bsdf_pdf_value: f32, origin: vec3<f32>, normal: vec3<f32>, ma
     var selection = 0.0;
     let item = emitter_index_of(triangle);
     if item != 0xffffffffu {
-        let trail = vec2<u32>(emitters[3u * item + 1u], emitters[3u * item + 2u]);
-        selection = light_bvh_pmf(3u * params.emitter_count, trail, origin, normal);
+        selection = light_bvh_pmf(params.emitter_count, emitters[item].yz, origin, normal);
     }
     // #else
     let selection = emitter_selection_pdf(material, area);

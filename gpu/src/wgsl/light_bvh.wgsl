@@ -1,9 +1,9 @@
 // furnace-gpu: the light BVH, twin of furnace_scene::LightBvh (sample, pmf) and
 // LightBounds::importance, the same f32 arithmetic in the same order.
 //
-// Requires: `emitters: array<u32>` holding the nodes from word `base` on, LIGHT_BVH_NODE_WORDS
-// words each (furnace_gpu::integrator::light_bvh_words: lo.xyz, phi, hi.xyz, cos_theta_o,
-// axis.xyz, child), and LIGHT_BVH_LEAF (generated from furnace_scene::LIGHT_BVH_LEAF). Nothing
+// Requires: `emitters: array<vec4<u32>>` holding the nodes from element `base` on, three
+// vec4 each (furnace_gpu::integrator::light_bvh_words: lo.xyz, phi | hi.xyz, cos_theta_o |
+// axis.xyz, child; 16-byte loads), and LIGHT_BVH_LEAF (generated from furnace_scene::LIGHT_BVH_LEAF). Nothing
 // else: it composes alone (the parity tests run it so).
 
 struct LightBvhBounds {
@@ -15,20 +15,12 @@ struct LightBvhBounds {
     child: u32,
 }
 
-fn light_bvh_f32(k: u32) -> f32 {
-    return bitcast<f32>(emitters[k]);
-}
-
 fn light_bvh_node(base: u32, index: u32) -> LightBvhBounds {
-    let k = base + LIGHT_BVH_NODE_WORDS * index;
-    return LightBvhBounds(
-        vec3<f32>(light_bvh_f32(k), light_bvh_f32(k + 1u), light_bvh_f32(k + 2u)),
-        light_bvh_f32(k + 3u),
-        vec3<f32>(light_bvh_f32(k + 4u), light_bvh_f32(k + 5u), light_bvh_f32(k + 6u)),
-        light_bvh_f32(k + 7u),
-        vec3<f32>(light_bvh_f32(k + 8u), light_bvh_f32(k + 9u), light_bvh_f32(k + 10u)),
-        emitters[k + 11u],
-    );
+    let k = base + 3u * index;
+    let a = bitcast<vec4<f32>>(emitters[k]);
+    let b = bitcast<vec4<f32>>(emitters[k + 1u]);
+    let c = emitters[k + 2u];
+    return LightBvhBounds(a.xyz, a.w, b.xyz, b.w, bitcast<vec3<f32>>(c.xyz), c.w);
 }
 
 // Vec3::dot: (x·x' + y·y') + z·z' (scene.wgsl's scene_dot, repeated so the module stands alone).
@@ -69,20 +61,24 @@ fn light_bvh_importance(b: LightBvhBounds, p: vec3<f32>, n: vec3<f32>) -> f32 {
         }
         return 0.0;
     }
-    let wi = to_p / sqrt(dist2);
-    let sin2_b = r2 / dist2;
+    let inv_dist2 = 1.0 / dist2;
+    let wi = to_p * (1.0 / sqrt(dist2));
+    let sin2_b = r2 * inv_dist2;
     let sin_b = sqrt(sin2_b);
     let cos_b = light_bvh_safe_sqrt(1.0 - sin2_b);
     let cos_w = light_bvh_dot(b.axis, wi);
     let sin_w = light_bvh_safe_sqrt(1.0 - cos_w * cos_w);
-    let sin_o = light_bvh_safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o);
+    var sin_o = 0.0;
+    if b.cos_theta_o < 1.0 {
+        sin_o = light_bvh_safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o);
+    }
     let cos_x = light_bvh_cos_sub(sin_w, cos_w, sin_o, b.cos_theta_o);
     let sin_x = light_bvh_sin_sub(sin_w, cos_w, sin_o, b.cos_theta_o);
     let cos_p = light_bvh_cos_sub(sin_x, cos_x, sin_b, cos_b);
     if !(cos_p > 0.0) {
         return 0.0;
     }
-    var importance = b.phi * cos_p / dist2;
+    var importance = b.phi * cos_p * inv_dist2;
     if any(n != vec3<f32>(0.0)) {
         let cos_i = -light_bvh_dot(wi, n);
         let sin_i = light_bvh_safe_sqrt(1.0 - cos_i * cos_i);
