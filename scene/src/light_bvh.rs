@@ -220,7 +220,7 @@ const BUCKETS: usize = 12;
 /// use glam::Vec3;
 /// // Two unit triangles facing down at heights 1 and 10, equally powerful.
 /// let tri = |h: f32| {
-///     LightBounds::triangle(Vec3::new(0.0, h, 0.0), Vec3::new(0.0, h, 1.0), Vec3::new(1.0, h, 0.0), 1.0)
+///     LightBounds::triangle(Vec3::new(0.0, h, 0.0), Vec3::new(1.0, h, 0.0), Vec3::new(0.0, h, 1.0), 1.0)
 /// };
 /// let bvh = LightBvh::new(&[tri(1.0).unwrap(), tri(10.0).unwrap()]).unwrap();
 /// let (p, n) = (Vec3::new(0.3, 0.0, 0.3), Vec3::Y);
