@@ -486,6 +486,15 @@ fn resume_detects_a_modified_image() {
     assert!(stderr(&o).contains("does not match the image at pixel (1, 1)"), "{}", stderr(&o));
 }
 
+/// Removes attribute `key` from the EXR `file` (as a file made before the setting was recorded
+/// would lack it) and returns what it held.
+fn remove_attribute(file: &std::path::Path, key: &str) -> Option<exr::prelude::AttributeValue> {
+    let mut image = exr::prelude::read_all_flat_layers_from_file(file).unwrap();
+    let removed = image.layer_data[0].attributes.other.remove(&exr::prelude::Text::from(key));
+    exr::prelude::WritableImage::write(&image).to_file(file).unwrap();
+    removed
+}
+
 /// A file from before triangle sampling was a choice (no `furnace.triangle_sampling`) was
 /// rendered by area: it resumes as such, equal to an uninterrupted area render.
 #[test]
@@ -495,11 +504,8 @@ fn a_file_without_triangle_sampling_resumes_by_area() {
     let scene = area.to_str().unwrap();
     let two = render_ok(&dir, "t2", 16, &[scene, "--triangle-sampling", "area", "--spp", "2"]);
     let four = render_ok(&dir, "t4", 16, &[scene, "--triangle-sampling", "area", "--spp", "4"]);
-    let mut image = exr::prelude::read_all_flat_layers_from_file(&two).unwrap();
-    let removed =
-        image.layer_data[0].attributes.other.remove(&exr::prelude::Text::from("furnace.triangle_sampling"));
+    let removed = remove_attribute(&two, "furnace.triangle_sampling");
     assert!(removed.is_some(), "the file records no triangle sampling");
-    exr::prelude::WritableImage::write(&image).to_file(&two).unwrap();
     let o = furnace(&["render", "--quiet", "--resume", two.to_str().unwrap(), "--spp", "4"]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert_same_render(&two, &four);
@@ -515,14 +521,11 @@ fn a_file_without_light_selection_resumes_by_power() {
     let scene = area.to_str().unwrap();
     let two = render_ok(&dir, "s2", 16, &[scene, "--light-selection", "power", "--spp", "2"]);
     let four = render_ok(&dir, "s4", 16, &[scene, "--light-selection", "power", "--spp", "4"]);
-    let mut image = exr::prelude::read_all_flat_layers_from_file(&two).unwrap();
-    let removed =
-        image.layer_data[0].attributes.other.remove(&exr::prelude::Text::from("furnace.light_selection"));
+    let removed = remove_attribute(&two, "furnace.light_selection");
     assert!(
         matches!(&removed, Some(exr::prelude::AttributeValue::Text(t)) if t == "power"),
         "the file records its light selection: {removed:?}"
     );
-    exr::prelude::WritableImage::write(&image).to_file(&two).unwrap();
     let o = furnace(&[
         "render",
         "--quiet",
