@@ -3,6 +3,35 @@
 use furnace_brdf::SpecularOptions;
 use furnace_sampling::SamplerKind;
 
+/// `Display` (the CLI name) and `FromStr` (any case; the error lists the names, "a, b or c") of a
+/// settings enum with `ALL` and `name()`.
+macro_rules! named_choice {
+    ($ty:ty, $what:literal) => {
+        impl std::fmt::Display for $ty {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.name())
+            }
+        }
+
+        impl std::str::FromStr for $ty {
+            type Err = String;
+
+            fn from_str(s: &str) -> Result<Self, String> {
+                Self::ALL.into_iter().find(|k| k.name().eq_ignore_ascii_case(s.trim())).ok_or_else(|| {
+                    let names: Vec<&str> = Self::ALL.iter().map(|k| k.name()).collect();
+                    let (last, rest) = names.split_last().expect("a choice has names");
+                    let list = if rest.is_empty() {
+                        last.to_string()
+                    } else {
+                        format!("{} or {last}", rest.join(", "))
+                    };
+                    format!(concat!("unknown ", $what, " {:?} ({})"), s, list)
+                })
+            }
+        }
+    };
+}
+
 /// What to render and how. [`Default`] is 256×256, 4 bounces, Owen-scrambled Sobol, seed 0,
 /// the glTF material model (height-correlated masking, spherical-cap sampling, Turquin
 /// compensation), no Russian roulette, MIS of light and BSDF samples, emissive triangles chosen
@@ -94,22 +123,7 @@ impl LightSampling {
     }
 }
 
-impl std::fmt::Display for LightSampling {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for LightSampling {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL
-            .into_iter()
-            .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| format!("unknown light sampling {s:?} (bsdf, nee or mis)"))
-    }
-}
+named_choice!(LightSampling, "light sampling");
 
 /// How a light sample of an emissive triangle chooses its point: uniformly on the triangle's
 /// **area**, or uniformly in the **solid angle** it subtends at the shading point (spherical
@@ -163,22 +177,7 @@ impl TriangleSampling {
     }
 }
 
-impl std::fmt::Display for TriangleSampling {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for TriangleSampling {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL
-            .into_iter()
-            .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| format!("unknown triangle sampling {s:?} (area or solid-angle)"))
-    }
-}
+named_choice!(TriangleSampling, "triangle sampling");
 
 /// How a light sample chooses the emissive triangle it samples: in proportion to the
 /// triangles' **power** (an alias table, the same choice at every shading point), or by a
@@ -210,22 +209,7 @@ impl LightSelection {
     }
 }
 
-impl std::fmt::Display for LightSelection {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-impl std::str::FromStr for LightSelection {
-    type Err = String;
-
-    fn from_str(s: &str) -> Result<Self, String> {
-        Self::ALL
-            .into_iter()
-            .find(|k| k.name().eq_ignore_ascii_case(s.trim()))
-            .ok_or_else(|| format!("unknown light selection {s:?} (power or bvh)"))
-    }
-}
+named_choice!(LightSelection, "light selection");
 
 /// Veach's power heuristic with β = 2 for one sample of each strategy: `a² / (a² + b²)`,
 /// formed as `1 / (1 + (b/a)²)` so that pdfs near `f32::MAX` (a tiny emitter seen from afar)
@@ -255,5 +239,26 @@ impl Default for RenderSettings {
             triangle_sampling: TriangleSampling::SolidAngle,
             light_selection: LightSelection::Bvh,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn choices_parse_their_names_and_list_them_when_wrong() {
+        assert_eq!("MIS".parse::<LightSampling>(), Ok(LightSampling::Mis));
+        assert_eq!(" solid-angle".parse::<TriangleSampling>(), Ok(TriangleSampling::SolidAngle));
+        assert_eq!(LightSelection::Bvh.to_string(), "bvh");
+        assert_eq!(
+            "x".parse::<LightSampling>(),
+            Err("unknown light sampling \"x\" (bsdf, nee or mis)".to_string())
+        );
+        assert_eq!(
+            "x".parse::<TriangleSampling>(),
+            Err("unknown triangle sampling \"x\" (area or solid-angle)".into())
+        );
+        assert_eq!("x".parse::<LightSelection>(), Err("unknown light selection \"x\" (power or bvh)".into()));
     }
 }

@@ -305,10 +305,7 @@ impl LightBvh {
                 return (index > 0 || node.bounds.importance(p, n) > 0.0)
                     .then_some(((node.child & !LEAF) as usize, pmf));
             }
-            let second = node.child as usize;
-            let c0 = self.nodes[index + 1].bounds.importance(p, n);
-            let c1 = self.nodes[second].bounds.importance(p, n);
-            let sum = c0 + c1;
+            let (second, c0, c1, sum) = self.children(index, p, n);
             if !(sum > 0.0) {
                 return None;
             }
@@ -325,6 +322,16 @@ impl LightBvh {
         }
     }
 
+    /// Interior node `index`'s second child and both children's importances at `p`, `n`, with
+    /// their sum: one level of a descent, shared by [`LightBvh::sample`] and [`LightBvh::pmf`]
+    /// so that both form the same numbers.
+    fn children(&self, index: usize, p: Vec3, n: Vec3) -> (usize, f32, f32, f32) {
+        let second = self.nodes[index].child as usize;
+        let c0 = self.nodes[index + 1].bounds.importance(p, n);
+        let c1 = self.nodes[second].bounds.importance(p, n);
+        (second, c0, c1, c0 + c1)
+    }
+
     /// The probability with which [`LightBvh::sample`] chooses `item` at `p`, `n` (0 when it
     /// cannot), formed by the same arithmetic along the item's path.
     pub fn pmf(&self, p: Vec3, n: Vec3, item: usize) -> f32 {
@@ -337,10 +344,7 @@ impl LightBvh {
             if node.child & LEAF != 0 {
                 return if index > 0 || node.bounds.importance(p, n) > 0.0 { pmf } else { 0.0 };
             }
-            let second = node.child as usize;
-            let c0 = self.nodes[index + 1].bounds.importance(p, n);
-            let c1 = self.nodes[second].bounds.importance(p, n);
-            let sum = c0 + c1;
+            let (second, c0, c1, sum) = self.children(index, p, n);
             if !(sum > 0.0) {
                 return 0.0;
             }

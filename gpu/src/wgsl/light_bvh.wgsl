@@ -16,7 +16,7 @@ struct LightBvhBounds {
 }
 
 fn light_bvh_node(base: u32, index: u32) -> LightBvhBounds {
-    let k = base + 3u * index;
+    let k = base + (LIGHT_BVH_NODE_WORDS / 4u) * index;
     let a = bitcast<vec4<f32>>(emitters[k]);
     let b = bitcast<vec4<f32>>(emitters[k + 1u]);
     let c = emitters[k + 2u];
@@ -91,6 +91,14 @@ fn light_bvh_importance(b: LightBvhBounds, p: vec3<f32>, n: vec3<f32>) -> f32 {
     return importance;
 }
 
+// LightBvh::children: the importances of interior node `index`'s children (the first follows
+// it, the second is `second`) and their sum.
+fn light_bvh_children(base: u32, index: u32, second: u32, p: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let c0 = light_bvh_importance(light_bvh_node(base, index + 1u), p, n);
+    let c1 = light_bvh_importance(light_bvh_node(base, second), p, n);
+    return vec3<f32>(c0, c1, c0 + c1);
+}
+
 // LightBvh::sample: the item and its probability; pmf 0 when no item can light p.
 struct LightBvhChoice {
     item: u32,
@@ -110,10 +118,11 @@ fn light_bvh_sample(base: u32, p: vec3<f32>, n: vec3<f32>, u_in: f32) -> LightBv
             }
             return LightBvhChoice(0u, 0.0);
         }
+        let level_children = light_bvh_children(base, index, node.child, p, n);
         let second = node.child;
-        let c0 = light_bvh_importance(light_bvh_node(base, index + 1u), p, n);
-        let c1 = light_bvh_importance(light_bvh_node(base, second), p, n);
-        let sum = c0 + c1;
+        let c0 = level_children.x;
+        let c1 = level_children.y;
+        let sum = level_children.z;
         if !(sum > 0.0) {
             return LightBvhChoice(0u, 0.0);
         }
@@ -144,10 +153,11 @@ fn light_bvh_pmf(base: u32, trail: vec2<u32>, p: vec3<f32>, n: vec3<f32>) -> f32
             }
             return 0.0;
         }
+        let level_children = light_bvh_children(base, index, node.child, p, n);
         let second = node.child;
-        let c0 = light_bvh_importance(light_bvh_node(base, index + 1u), p, n);
-        let c1 = light_bvh_importance(light_bvh_node(base, second), p, n);
-        let sum = c0 + c1;
+        let c0 = level_children.x;
+        let c1 = level_children.y;
+        let sum = level_children.z;
         if !(sum > 0.0) {
             return 0.0;
         }
