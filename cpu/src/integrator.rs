@@ -8,6 +8,7 @@ use furnace_render::layout::{
 use furnace_render::{Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings};
 use furnace_sampling::{AnySampler, Sampler};
 use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, MaterialSample, Scene, oct_decode};
+use furnace_scene::{Environment, EnvironmentSampler};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -53,6 +54,14 @@ pub struct CpuRenderer {
     point_lights: Vec<furnace_scene::PointLight>,
     /// Radiance of an escaping ray ([`Scene::sky`]).
     sky: Vec3,
+    /// The environment map ([`Scene::environment`]).
+    environment: Option<Environment>,
+    /// Its importance sampler when light samples take it
+    /// ([`furnace_render::EnvSampling::effective`] not `Off`, the map not black).
+    env_sampler: Option<EnvironmentSampler>,
+    /// How the environment's light samples and BSDF rays are weighted
+    /// ([`furnace_render::EnvSampling::weights`]).
+    env_weights: LightSampling,
 }
 
 /// A material's emission and BSDF, when they are the same everywhere on its surface.
@@ -112,7 +121,16 @@ impl CpuRenderer {
             .as_ref()
             .filter(|_| settings.light_selection == LightSelection::Bvh)
             .map(|e| e.light_bvh(&scene));
+        let environment = scene.environment().cloned();
+        let env_sampling = settings.env_sampling.effective(settings.light_sampling);
+        let env_sampler = environment
+            .as_ref()
+            .filter(|_| env_sampling != furnace_render::EnvSampling::Off)
+            .and_then(|e| e.sampler(env_sampling == furnace_render::EnvSampling::Compensated));
         Ok(Self {
+            environment,
+            env_sampler,
+            env_weights: settings.env_sampling.weights(settings.light_sampling),
             suns: scene.suns().filter(|s| !s.is_disc()).copied().collect(),
             sun_discs: scene.suns().filter(|s| s.is_disc()).map(SunDisc::new).collect(),
             emitters,
@@ -237,8 +255,11 @@ impl CpuRenderer {
         let mut normal = Vec3::ZERO;
         loop {
             let Some(hit) = self.closest_hit(origin, direction) else {
-                // The ray leaves the scene: the sky and the sun discs it sees.
+                // The ray leaves the scene: the sky, the environment and the sun discs it sees.
                 radiance += throughput * self.sky;
+                if let Some(env) = &self.environment {
+                    radiance += throughput * self.environment_seen(env, direction, bsdf_pdf);
+                }
                 if !self.sun_discs.is_empty() {
                     radiance += throughput * self.sun_discs_seen(direction, bsdf_pdf);
                 }
@@ -309,9 +330,10 @@ impl CpuRenderer {
                 radiance += self.gather_point_lights(throughput, bsdf, wo, frame, &surface, leave);
             }
 
-            // Emitters and sun discs: one light sample each (next-event estimation).
+            // Emitters, sun discs and the environment: one light sample each (next-event
+            // estimation).
             if self.settings.light_sampling != LightSampling::Bsdf
-                && (self.emitters.is_some() || !self.sun_discs.is_empty())
+                && (self.emitters.is_some() || !self.sun_discs.is_empty() || self.env_sampler.is_some())
             {
                 let vertex = Vertex { throughput, bsdf, wo, frame, surface: &surface, leave };
                 if self.emitters.is_some() {
@@ -319,6 +341,9 @@ impl CpuRenderer {
                 }
                 if !self.sun_discs.is_empty() {
                     radiance += self.sample_sun_discs(pixel, index, event, &vertex);
+                }
+                if self.env_sampler.is_some() {
+                    radiance += self.sample_environment(pixel, index, event, &vertex);
                 }
             }
 

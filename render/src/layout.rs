@@ -11,7 +11,7 @@
 //! | `L + 2 + 8k` | the emitter's bin in the alias table, 32 bits ([`LIGHT_EMITTER_BIN`]) |
 //! | `L + 3 + 8k` | the alias table's coin ([`LIGHT_EMITTER_COIN`]) |
 //! | `L + 4 + 8k`, `L + 5 + 8k` | direction in the sun's disc ([`LIGHT_SUN_DISC`]) |
-//! | `L + 6 + 8k`, `L + 7 + 8k` | reserved for environment sampling |
+//! | `L + 6 + 8k`, `L + 7 + 8k` | the environment map's light sample: row, then column ([`LIGHT_ENVIRONMENT`]) |
 //!
 //! where `L = 4·(bounces + 1)` ([`light_block`]) is the first group of four after every
 //! event's BSDF dimensions. The light dimensions come after the whole BSDF block, not
@@ -69,8 +69,12 @@ pub const LIGHT_EMITTER_BIN: u32 = 2;
 pub const LIGHT_EMITTER_COIN: u32 = 3;
 /// Offset of the two dimensions of the direction inside a sun's disc.
 pub const LIGHT_SUN_DISC: u32 = 4;
+/// Offset of the two dimensions of an environment map's light sample (the first chooses the
+/// column within the row, the second the row: `Distribution2D::sample`'s `u.x`, `u.y`).
+pub const LIGHT_ENVIRONMENT: u32 = 6;
 
-const _: () = assert!(LIGHT_SUN_DISC + 2 <= LIGHT_DIMS_PER_EVENT && LIGHT_EMITTER_COIN < LIGHT_SUN_DISC);
+const _: () = assert!(LIGHT_SUN_DISC + 2 <= LIGHT_ENVIRONMENT && LIGHT_EMITTER_COIN < LIGHT_SUN_DISC);
+const _: () = assert!(LIGHT_ENVIRONMENT + 2 <= LIGHT_DIMS_PER_EVENT && LIGHT_ENVIRONMENT.is_multiple_of(2));
 // The bin and the coin are drawn as one pair (an even dimension, then the next).
 const _: () = assert!(LIGHT_EMITTER_COIN == LIGHT_EMITTER_BIN + 1 && LIGHT_EMITTER_BIN.is_multiple_of(2));
 
@@ -104,6 +108,7 @@ pub fn wgsl() -> String {
         ("LIGHT_EMITTER_BIN", LIGHT_EMITTER_BIN),
         ("LIGHT_EMITTER_COIN", LIGHT_EMITTER_COIN),
         ("LIGHT_SUN_DISC", LIGHT_SUN_DISC),
+        ("LIGHT_ENVIRONMENT", LIGHT_ENVIRONMENT),
     ]
     .iter()
     .map(|(name, v)| format!("const {name}: u32 = {v}u;\n"))

@@ -67,7 +67,9 @@ pub use film::{Film, FilmRow, FilmSizeError};
 pub use integrator::{Integrator, RenderError};
 pub use layout::SAMPLER_LAYOUT_VERSION;
 pub use session::{Budget, Progress, Session, Stop, Timing, process_cpu_seconds};
-pub use settings::{LightSampling, LightSelection, RenderSettings, TriangleSampling, power_heuristic};
+pub use settings::{
+    EnvSampling, LightSampling, LightSelection, RenderSettings, TriangleSampling, power_heuristic,
+};
 
 /// A shadow ray towards a point light stops this fraction of the distance short of it (pbrt's
 /// `ShadowEpsilon`), so that a light mounted on a surface is not shadowed by that surface. Both

@@ -69,6 +69,8 @@ pub struct RenderSettings {
     pub triangle_sampling: TriangleSampling,
     /// How a light sample chooses which emissive triangle to sample ([`LightSelection`]).
     pub light_selection: LightSelection,
+    /// How an environment map is gathered ([`EnvSampling`]).
+    pub env_sampling: EnvSampling,
 }
 
 /// The strategies that find light of emitters and sun discs: BSDF-sampled rays that hit them,
@@ -211,6 +213,61 @@ impl LightSelection {
 
 named_choice!(LightSelection, "light selection");
 
+/// How paths gather an environment map (`furnace_scene::Environment`): by BSDF-sampled rays
+/// that escape only (**off**), or also by light samples of the map's importance distribution
+/// (luminance × sin θ over its texels, pbrt's and Mitsuba's `envmap`) combined with them by
+/// [`RenderSettings::light_sampling`] (**importance**), or of its **compensated** distribution
+/// (Karlík et al. 2019, "MIS compensation": the luminance minus its mean, clamped at 0, so light
+/// samples go where the map outshines its average and BSDF sampling, weighted by MIS, covers the
+/// rest). Compensation needs MIS: with [`LightSampling::Nee`] the plain distribution is used
+/// ([`EnvSampling::effective`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
+pub enum EnvSampling {
+    /// BSDF-sampled rays only.
+    Off,
+    /// Light samples in proportion to the map's luminance × sin θ.
+    #[default]
+    Importance,
+    /// Light samples of the MIS-compensated distribution.
+    Compensated,
+}
+
+impl EnvSampling {
+    /// The three methods, in CLI order.
+    pub const ALL: [EnvSampling; 3] = [Self::Off, Self::Importance, Self::Compensated];
+
+    /// The CLI name: `off`, `importance`, `compensated`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Off => "off",
+            Self::Importance => "importance",
+            Self::Compensated => "compensated",
+        }
+    }
+
+    /// The method actually used with `light_sampling`: none without light samples
+    /// ([`LightSampling::Bsdf`]), the plain distribution instead of the compensated one without
+    /// MIS ([`LightSampling::Nee`]: a compensated light-only estimator would miss the dim part).
+    pub fn effective(self, light_sampling: LightSampling) -> Self {
+        match (light_sampling, self) {
+            (LightSampling::Bsdf, _) => Self::Off,
+            (LightSampling::Nee, Self::Compensated) => Self::Importance,
+            (_, s) => s,
+        }
+    }
+
+    /// How the environment's two strategies are weighted: as `light_sampling` says when it is
+    /// light-sampled, else all by BSDF rays.
+    pub fn weights(self, light_sampling: LightSampling) -> LightSampling {
+        match self.effective(light_sampling) {
+            Self::Off => LightSampling::Bsdf,
+            _ => light_sampling,
+        }
+    }
+}
+
+named_choice!(EnvSampling, "environment sampling");
+
 /// Veach's power heuristic with β = 2 for one sample of each strategy: `a² / (a² + b²)`,
 /// formed as `1 / (1 + (b/a)²)` so that pdfs near `f32::MAX` (a tiny emitter seen from afar)
 /// do not overflow; 1 when `b` is 0, 0 when `a` is 0 (and 0 for NaN).
@@ -238,6 +295,7 @@ impl Default for RenderSettings {
             light_sampling: LightSampling::Mis,
             triangle_sampling: TriangleSampling::SolidAngle,
             light_selection: LightSelection::Bvh,
+            env_sampling: EnvSampling::Importance,
         }
     }
 }

@@ -30,7 +30,7 @@
 //!
 //! [`warp`] maps the unit square to the disk, the hemisphere, a cone and a triangle; each warp
 //! comes with its pdf. [`AliasTable`] samples one of many items (lights) by weight in constant
-//! time.
+//! time; [`Distribution2D`] samples a piecewise-constant density on the square (environment maps).
 //!
 //! Each warp and sampler is checked by a chi-square test against its pdf (the workspace's
 //! `furnace-tests` crate holds the harness).
@@ -51,6 +51,7 @@
 
 mod alias;
 mod cmj;
+mod distribution;
 mod error;
 pub mod fixed;
 mod hammersley;
@@ -64,6 +65,7 @@ pub mod warp;
 
 pub use alias::{AliasBin, AliasTable};
 pub use cmj::{Cmj, cmj_point};
+pub use distribution::Distribution2D;
 pub use error::SamplerError;
 pub use fixed::to_unit_f32;
 pub use hammersley::{Hammersley, hammersley_point};

@@ -54,6 +54,17 @@ pub enum SceneError {
         /// The decoder's message.
         message: String,
     },
+    /// The environment map the scene names (`scenes[0].extras.environment.uri`) could not be
+    /// used.
+    #[error("{file}: {path}: {source}")]
+    Environment {
+        /// The scene file.
+        file: String,
+        /// The glTF JSON path of the reference.
+        path: String,
+        /// What is wrong with the map (names the map's file).
+        source: crate::EnvironmentError,
+    },
     /// The file is valid but yields no renderable triangle.
     #[error("{file}: nothing to render: {reason}")]
     NothingToRender {
@@ -73,6 +84,7 @@ impl SceneError {
             Self::Invalid { .. } => "invalid",
             Self::UnsupportedExtension { .. } => "unsupported-extension",
             Self::Image { .. } => "image",
+            Self::Environment { .. } => "environment",
             Self::NothingToRender { .. } => "nothing-to-render",
         }
     }

@@ -38,6 +38,15 @@ impl Scene {
             h.len(image.texels.len());
             image.texels.iter().for_each(|&t| h.word(u32::from_le_bytes(t)));
         }
+        // Environment maps by their texels (their Debug text gives only source and size).
+        for env in self.lights.iter().filter_map(|l| match l {
+            crate::Light::Environment(e) => Some(e),
+            _ => None,
+        }) {
+            h.word(env.map.width());
+            h.word(env.map.height());
+            env.map.texels().iter().flat_map(|t| t.to_array()).for_each(|c| h.word(c.to_bits()));
+        }
         // The small parts by their Debug text: every field, floats in round-trip precision.
         let small =
             format!("{:?}|{:?}|{:?}|{}", self.materials, self.textures, self.cameras, self.lights_debug());

@@ -19,6 +19,11 @@
 //!   `[i, i+1] × [j, j+1]` with row 0 at the top; the sun is a KHR_lights_punctual directional
 //!   light whose irradiance is `color × intensity` W/m² travelling along the node's −Z; the sky is
 //!   `scenes[i].extras.background_radiance_rgb`.
+//! * **Environment maps** ([`Environment`], [`EnvironmentMap`]): latitude-longitude `.hdr` /
+//!   `.exr` images from `scenes[i].extras.environment = {"uri", "intensity"}` or set by the
+//!   caller, looked up texel-centred as the references are, importance-sampled by
+//!   [`EnvironmentSampler`]; [`EnvironmentMap::studio`] is the neutral light for scenes without
+//!   one ([`Scene::has_own_light`]).
 //! * **Built-in scenes** ([`builtin`]): the reference Cornell box and a white-furnace sphere.
 //!
 //! Unsupported features (transmission, point lights, BLEND...) give one [`Warning`] each, never a
@@ -39,6 +44,7 @@ mod accessor;
 pub mod builtin;
 mod camera;
 mod emitter;
+mod environment;
 mod error;
 mod geometry;
 mod hash;
@@ -51,6 +57,10 @@ mod texture;
 
 pub use camera::{Camera, DEFAULT_YFOV, Projection, Ray};
 pub use emitter::{Emitters, luminance, triangle_area};
+pub use environment::{
+    Environment, EnvironmentError, EnvironmentMap, EnvironmentSample, EnvironmentSampler,
+    MAX_ENVIRONMENT_TEXELS, direction_to_uv, uv_to_direction,
+};
 pub use error::{SceneError, Warning};
 pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, oct_decode, oct_encode};
 pub use light::{Light, PointLight, Sky, SpotCone, Sun};

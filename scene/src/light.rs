@@ -142,7 +142,7 @@ impl PointLight {
 }
 
 /// A light of a scene.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 #[non_exhaustive]
 pub enum Light {
     /// A directional light, gathered by shadow rays.
@@ -151,6 +151,9 @@ pub enum Light {
     Sky(Sky),
     /// A point or spot light, gathered by shadow rays.
     Point(PointLight),
+    /// Radiance at infinity from an HDR image, gathered by rays that escape and by light
+    /// samples of its importance distribution.
+    Environment(crate::Environment),
 }
 
 impl std::fmt::Display for Light {
@@ -166,6 +169,21 @@ impl std::fmt::Display for Light {
                 Ok(())
             }
             Light::Sky(s) => write!(f, "sky of radiance {}", v(s.radiance)),
+            Light::Environment(e) => {
+                write!(
+                    f,
+                    "environment map {} ({} × {} texels), intensity {}, rotated {:.1}° about +Y",
+                    e.map.source(),
+                    e.map.width(),
+                    e.map.height(),
+                    e.intensity,
+                    e.rotation.to_degrees()
+                )?;
+                if !e.visible {
+                    write!(f, ", not seen by the camera")?;
+                }
+                Ok(())
+            }
             Light::Point(p) => {
                 write!(
                     f,
@@ -310,7 +328,37 @@ impl Scene {
     /// triangles ([`crate::Emitters`]) or a sun disc. Such scenes read the sampler's light
     /// dimensions (`furnace_render::layout`).
     pub fn samples_lights(&self) -> bool {
-        self.suns().any(Sun::is_disc) || crate::Emitters::new(self).is_some()
+        self.suns().any(Sun::is_disc) || self.environment().is_some() || crate::Emitters::new(self).is_some()
+    }
+
+    /// The environment map light, if any (the first: a scene has at most one).
+    pub fn environment(&self) -> Option<&crate::Environment> {
+        self.lights.iter().find_map(|l| match l {
+            Light::Environment(e) => Some(e),
+            _ => None,
+        })
+    }
+
+    /// Replaces the scene's environment map by `env` (none for `None`).
+    pub fn set_environment(&mut self, env: Option<crate::Environment>) {
+        self.lights.retain(|l| !matches!(l, Light::Environment(_)));
+        if let Some(e) = env {
+            self.lights.push(Light::Environment(e));
+        }
+    }
+
+    /// Whether the scene brings a light of its own: a sun, a sky, a point or spot light, an
+    /// environment map, or an emissive material without an emissive texture. Emissive
+    /// **textures** alone do not count: in glTF assets they are glow details (decals, screens,
+    /// indicator lamps) drawn for a viewer that lights the model with an environment, and such
+    /// assets (DamagedHelmet) would render black but for them. A scene without a light of its
+    /// own is lit by the built-in studio environment in `furnace render`.
+    pub fn has_own_light(&self) -> bool {
+        let lamp = self.materials.iter().any(|m| m.emissive != Vec3::ZERO && m.emissive_texture.is_none());
+        lamp || self.lights.iter().any(|l| match l {
+            Light::Sky(s) => s.radiance != Vec3::ZERO,
+            _ => true,
+        })
     }
 
     /// Replaces the scene's skies by one of `radiance` (none for black).

@@ -1,15 +1,18 @@
-//! Light samples of the CPU path tracer: next-event estimation of emissive triangles and sun
-//! discs, with the MIS weights of both strategies ([`furnace_render::LightSampling`]).
+//! Light samples of the CPU path tracer: next-event estimation of emissive triangles, sun discs
+//! and the environment map, with the MIS weights of both strategies
+//! ([`furnace_render::LightSampling`], [`furnace_render::EnvSampling`]).
 
 use super::CpuRenderer;
 use furnace_brdf::{Bsdf, Frame, MetallicRoughness};
-use furnace_render::layout::{self, LIGHT_EMITTER_BIN, LIGHT_EMITTER_POINT, LIGHT_SUN_DISC};
+use furnace_render::layout::{
+    self, LIGHT_EMITTER_BIN, LIGHT_EMITTER_POINT, LIGHT_ENVIRONMENT, LIGHT_SUN_DISC,
+};
 use furnace_sampling::warp::{
     in_cone, square_to_spherical_triangle, square_to_uniform_cone, square_to_uniform_triangle,
     uniform_cone_pdf,
 };
 use furnace_sampling::{Sampler, to_unit_f32};
-use furnace_scene::{Sun, SurfacePoint, geometric_normal, triangle_area};
+use furnace_scene::{Environment, Sun, SurfacePoint, geometric_normal, triangle_area};
 use glam::{Vec2, Vec3};
 
 /// A sun disc, with what its sampling needs formed once.
@@ -155,6 +158,45 @@ impl CpuRenderer {
             }
         }
         sum
+    }
+
+    /// One light sample of the environment map at scattering event `event` (throughput
+    /// included): a direction from its importance distribution, a shadow ray to infinity,
+    /// weighted against BSDF sampling.
+    pub(super) fn sample_environment(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>) -> Vec3 {
+        let (Some(env), Some(sampler)) = (&self.environment, &self.env_sampler) else { return Vec3::ZERO };
+        let dim = layout::light(self.settings.bounces, event) + LIGHT_ENVIRONMENT;
+        let u = Vec2::from(self.sampler.value_2d(pixel, index, dim));
+        let Some(s) = sampler.sample(env, u) else { return Vec3::ZERO };
+        if !(s.direction.dot(v.surface.geometric) > 0.0) || s.radiance == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let wi_local = v.frame.to_local(s.direction);
+        let f = v.bsdf.eval(v.wo, wi_local);
+        if f == Vec3::ZERO {
+            return Vec3::ZERO;
+        }
+        let w = self.env_weights.light_weight(s.pdf, v.bsdf.pdf(v.wo, wi_local));
+        let contribution = v.throughput * f * s.radiance * (w / s.pdf);
+        if !(contribution.is_finite() && contribution != Vec3::ZERO) || self.occluded(v.leave, s.direction) {
+            return Vec3::ZERO;
+        }
+        contribution
+    }
+
+    /// The environment's radiance along an escaping ray (`direction`), weighted against its
+    /// light samples at the previous vertex (`bsdf_pdf`; `None` for a camera ray: weight 1, and
+    /// nothing where the camera does not see the environment).
+    pub(super) fn environment_seen(&self, env: &Environment, direction: Vec3, bsdf_pdf: Option<f32>) -> Vec3 {
+        let w = match (bsdf_pdf, &self.env_sampler) {
+            (None, _) if !env.visible => return Vec3::ZERO,
+            (Some(p), Some(sampler)) => self.env_weights.bsdf_weight(p, sampler.pdf(env, direction)),
+            _ => 1.0,
+        };
+        if w == 0.0 {
+            return Vec3::ZERO;
+        }
+        env.radiance(direction) * w
     }
 
     /// The sun discs' radiance along an escaping ray (`direction`), each weighted against its

@@ -40,6 +40,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
 
     let scene = nodes::scene_to_render(&ctx, &doc)?;
     let sky = nodes::read_sky(&mut ctx, &scene);
+    let environment = nodes::read_environment(&mut ctx, &scene)?;
     let meshes = Meshes::new(&buffers, needs_uv, needs_tangent, default_material);
     let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes)?;
     let (mut geo, dropped) = (flat.meshes.geo, flat.meshes.dropped);
@@ -63,6 +64,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
             .into_iter()
             .chain((sky != Vec3::ZERO).then_some(Light::Sky(Sky { radiance: sky })))
             .chain(flat.lights)
+            .chain(environment.map(Light::Environment))
             .collect(),
         warnings: ctx.warnings,
         dropped_triangles: dropped,

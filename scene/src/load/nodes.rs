@@ -54,6 +54,56 @@ pub(super) fn read_sky(ctx: &mut Ctx<'_>, scene: &gltf::Scene<'_>) -> Vec3 {
     sky
 }
 
+/// The environment map of `extras.environment = {"uri": "NAME.exr", "intensity": k}` (the
+/// references' convention; the URI relative to the scene file), if the scene names one. A
+/// malformed entry is ignored with a warning; a map that cannot be read is an error naming both
+/// files.
+pub(super) fn read_environment(
+    ctx: &mut Ctx<'_>,
+    scene: &gltf::Scene<'_>,
+) -> Result<Option<crate::Environment>, SceneError> {
+    let Some(raw) = scene.extras() else { return Ok(None) };
+    let Ok(v) = gltf::json::deserialize::from_str::<gltf::json::Value>(raw.get()) else { return Ok(None) };
+    let Some(env) = v.get("environment") else { return Ok(None) };
+    let path = format!("scenes[{}].extras.environment", scene.index());
+    let Some(uri) = env.get("uri").and_then(|u| u.as_str()) else {
+        ctx.warn(&path, "no \"uri\" string: environment ignored");
+        return Ok(None);
+    };
+    let intensity = match env.get("intensity") {
+        None => 1.0,
+        Some(k) => match k.as_f64() {
+            Some(k) if k.is_finite() && k >= 0.0 => k as f32,
+            _ => {
+                ctx.warn(format!("{path}.intensity"), "not a non-negative number: 1 used");
+                1.0
+            }
+        },
+    };
+    if uri.contains("://") || uri.starts_with("data:") {
+        ctx.warn(
+            format!("{path}.uri"),
+            format!("'{uri}': only relative file URIs are supported: environment ignored"),
+        );
+        return Ok(None);
+    }
+    let Some(base) = ctx.base else {
+        ctx.warn(
+            format!("{path}.uri"),
+            "a scene loaded from memory cannot resolve a file: environment ignored",
+        );
+        return Ok(None);
+    };
+    let (map, warning) =
+        crate::EnvironmentMap::load(base.join(super::resources::percent_decode(uri))).map_err(|source| {
+            SceneError::Environment { file: ctx.file.to_string(), path: format!("{path}.uri"), source }
+        })?;
+    if let Some(w) = warning {
+        ctx.warn(format!("{path}.uri"), w);
+    }
+    Ok(Some(crate::Environment { intensity, ..crate::Environment::new(std::sync::Arc::new(map)) }))
+}
+
 /// Walks `scene`'s nodes depth-first (children in file order), each once, adding what they
 /// hold to `meshes` and the cameras and lights; a subtree with a non-finite transform is
 /// skipped with a warning.

@@ -16,7 +16,7 @@ fn base64_decode(s: &str) -> Option<Vec<u8>> {
 }
 
 /// Percent-decodes a relative URI into a path string (byte-wise: never splits UTF-8).
-fn percent_decode(s: &str) -> String {
+pub(super) fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&urlencoding::decode_binary(s.as_bytes())).into_owned()
 }
 
