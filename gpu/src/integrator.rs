@@ -37,7 +37,8 @@ use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
 use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
 use furnace_render::{
-    Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings, TriangleSampling,
+    EnvSampling, Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings,
+    TriangleSampling,
 };
 use furnace_sampling::AnySampler;
 use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, Projection, Scene};
@@ -120,10 +121,31 @@ crate::gpu_struct! {
         pub emitter_count: u32 => WgslType::U32,
         /// [`Emitters::total_weight`], the selection pdfs' denominator.
         pub emitter_total: f32 => WgslType::F32,
+        /// The environment map's columns (0: none).
+        pub env_width: u32 => WgslType::U32,
+        /// Its rows.
+        pub env_height: u32 => WgslType::U32,
+        /// Its intensity.
+        pub env_intensity: f32 => WgslType::F32,
+        /// Cosine of its rotation about +Y ([`furnace_scene::Environment::rotation_cos_sin`]).
+        pub env_cos: f32 => WgslType::F32,
+        /// Sine of its rotation.
+        pub env_sin: f32 => WgslType::F32,
+        /// [`ENV_VISIBLE`].
+        pub env_flags: u32 => WgslType::U32,
+        /// Rust-only padding to a multiple of 16 bytes.
+        pub env_pad: [u32; 2] => WgslType::PAD,
     }
 }
 
-const _: () = assert!(size_of::<FrameParams>() == 192);
+const _: () = assert!(size_of::<FrameParams>() == 224);
+
+crate::wgsl_consts! {
+    /// The `ENV_*` flags as WGSL `const` declarations.
+    fn env_flags_wgsl;
+    /// `FrameParams.env_flags`: camera rays that leave the scene see the environment.
+    pub const ENV_VISIBLE: u32 = 1;
+}
 
 crate::gpu_struct! {
     /// A point or spot light as the WGSL reads it (`furnace_scene::PointLight`), 64 bytes.
@@ -234,6 +256,28 @@ pub fn light_bvh_words(e: &Emitters, bvh: &LightBvh) -> Vec<u32> {
     words
 }
 
+/// The `environment` buffer of an environment map, as `f32` bits: its texels (RGB, row-major,
+/// row 0 at the top; 12 bytes each, `f32` as the CPU holds them: a sun of 10⁶ W/(m²·sr) does not
+/// fit `f16`, whose largest value is 65 504, nor RGB9E5's 65 408), then, when `sampler` is given
+/// (the map is light-sampled), its conditional CDFs (W per row) and marginal CDF (H) — the same
+/// `f32` values the CPU samples with: 16 bytes per texel in all, 12 without sampling.
+pub fn environment_words(
+    env: &furnace_scene::Environment,
+    sampler: Option<&furnace_scene::EnvironmentSampler>,
+) -> Vec<u32> {
+    let map = &env.map;
+    let cdfs = sampler
+        .map_or(0, |s| s.distribution().conditional_cdf().len() + s.distribution().marginal_cdf().len());
+    let mut words = Vec::with_capacity(3 * map.texels().len() + cdfs);
+    words.extend(map.texels().iter().flat_map(|t| t.to_array()).map(f32::to_bits));
+    if let Some(s) = sampler {
+        let d = s.distribution();
+        words.extend(d.conditional_cdf().iter().map(|c| c.to_bits()));
+        words.extend(d.marginal_cdf().iter().map(|c| c.to_bits()));
+    }
+    words
+}
+
 /// Words of the counter buffer (`ray_counter`): rays, nodes and triangles as 64-bit pairs, then
 /// fallbacks and the deepest stack.
 const COUNTER_WORDS: usize = 8;
@@ -300,6 +344,7 @@ pub struct GpuRenderer {
     turquin: wgpu::Buffer,
     point_lights: wgpu::Buffer,
     emitters: Option<wgpu::Buffer>,
+    environment: Option<wgpu::Buffer>,
     features: SceneFeatures,
     bytes_per_triangle: f64,
     bvh_bytes: u64,
@@ -340,6 +385,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
         let ty = if features.light_bvh { "array<vec4<u32>>" } else { "array<u32>" };
         bindings.push(Binding::read("emitters", ty));
     }
+    if features.environment {
+        bindings.push(Binding::read("environment", "array<f32>"));
+    }
     bindings.push(Binding::read_write("ray_counter", &format!("array<atomic<u32>, {COUNTER_WORDS}>")));
     BindingTable::new(0, 0, bindings)
 }
@@ -356,6 +404,10 @@ pub struct SceneFeatures {
     pub sun_disc: bool,
     /// Emitters chosen by the light BVH ([`LightSelection::Bvh`]; with `emitters` only).
     pub light_bvh: bool,
+    /// An environment map (its lookup by escaping rays; its texels bound).
+    pub environment: bool,
+    /// The environment map is light-sampled (its CDFs bound, its light samples and MIS weights).
+    pub env_sampling: bool,
 }
 
 impl SceneFeatures {
@@ -370,6 +422,9 @@ impl SceneFeatures {
             emitters,
             sun_disc: scene.sun().is_some_and(|s| s.is_disc()),
             light_bvh: emitters && settings.light_selection == LightSelection::Bvh,
+            environment: scene.environment().is_some(),
+            env_sampling: scene.environment().is_some_and(|e| !e.is_black())
+                && settings.env_sampling.effective(settings.light_sampling) != EnvSampling::Off,
         }
     }
 
@@ -379,14 +434,16 @@ impl SceneFeatures {
     }
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
-    /// `HAS_EMITTERS`, `HAS_SUN_DISC`, `SAMPLES_LIGHTS` (either: the MIS weights) and
-    /// `LIGHT_BVH`.
+    /// `HAS_EMITTERS`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
+    /// `SAMPLES_LIGHTS` (any light sample: the MIS weights) and `LIGHT_BVH`.
     pub fn enabled(self, name: &str) -> bool {
         match name {
             "HAS_EMITTERS" => self.emitters,
             "LIGHT_BVH" => self.emitters && self.light_bvh,
             "HAS_SUN_DISC" => self.sun_disc,
-            "SAMPLES_LIGHTS" => self.emitters || self.sun_disc,
+            "HAS_ENVIRONMENT" => self.environment,
+            "SAMPLES_ENVIRONMENT" => self.environment && self.env_sampling,
+            "SAMPLES_LIGHTS" => self.emitters || self.sun_disc || (self.environment && self.env_sampling),
             "HAS_POINT_LIGHTS" => self.point_lights,
             _ => panic!("no scene feature {name} (integrator.wgsl's #if)"),
         }
@@ -419,6 +476,11 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
     .concat();
     let light_bvh =
         if features.enabled("LIGHT_BVH") { light_bvh_consts_wgsl() + wgsl::LIGHT_BVH } else { String::new() };
+    let environment = if features.enabled("HAS_ENVIRONMENT") {
+        env_flags_wgsl() + &wgsl::select(wgsl::ENVIRONMENT, |name| features.enabled(name))
+    } else {
+        String::new()
+    };
     let integrator = wgsl::select(include_str!("wgsl/integrator.wgsl"), |name| features.enabled(name));
     wgsl::compose(&[
         &generated,
@@ -427,6 +489,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         wgsl::SCENE,
         wgsl::TRAVERSE,
         &light_bvh,
+        &environment,
         precision.wgsl(),
         wgsl::PATH,
         &integrator,
@@ -491,6 +554,24 @@ impl GpuRenderer {
                 storage_buffer(&ctx, "emitters", &words)
             })
             .transpose()?;
+        // The environment's texels, and its CDFs when it is light-sampled; no buffer (and no
+        // binding) without one.
+        let environment = match scene.environment() {
+            Some(env) => {
+                let env_sampling = settings.env_sampling.effective(settings.light_sampling);
+                let sampler = features
+                    .env_sampling
+                    .then(|| env.sampler(env_sampling == EnvSampling::Compensated))
+                    .flatten();
+                let words = environment_words(env, sampler.as_ref());
+                let bytes = 4 * words.len() as u64;
+                if bytes > limit {
+                    return Err(GpuError::TooLarge { what: "environment map".into(), bytes, limit });
+                }
+                Some(storage_buffer(&ctx, "environment", &words)?)
+            }
+            None => None,
+        };
         let precision = FilmPrecision::for_context(&ctx);
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
@@ -530,7 +611,9 @@ impl GpuRenderer {
         Ok(Self {
             bytes_per_triangle: gpu_scene.bytes_per_triangle(),
             bvh_bytes,
-            scene_bytes: gpu_scene.bytes + emitters.as_ref().map_or(0, wgpu::Buffer::size),
+            scene_bytes: gpu_scene.bytes
+                + emitters.as_ref().map_or(0, wgpu::Buffer::size)
+                + environment.as_ref().map_or(0, wgpu::Buffer::size),
             ray_counter,
             ctx,
             settings,
@@ -544,6 +627,7 @@ impl GpuRenderer {
             turquin,
             point_lights,
             emitters,
+            environment,
             features,
             samples_per_dispatch,
             max_samples_per_invocation,
@@ -754,6 +838,9 @@ impl GpuRenderer {
         if let Some(e) = &self.emitters {
             resources.push(e.as_entire_binding());
         }
+        if let Some(e) = &self.environment {
+            resources.push(e.as_entire_binding());
+        }
         resources.push(self.ray_counter.as_entire_binding());
         let entries = binding_table(self.film.precision(), self.features).bind_entries(resources);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
@@ -922,5 +1009,12 @@ fn frame_params_with(
         point_light_count: scene.point_lights().count() as u32,
         emitter_count: emitters.map_or(0, |e| e.len() as u32),
         emitter_total: emitters.map_or(0.0, Emitters::total_weight),
+        env_width: scene.environment().map_or(0, |e| e.map.width()),
+        env_height: scene.environment().map_or(0, |e| e.map.height()),
+        env_intensity: scene.environment().map_or(0.0, |e| e.intensity),
+        env_cos: scene.environment().map_or(1.0, |e| e.rotation_cos_sin().0),
+        env_sin: scene.environment().map_or(0.0, |e| e.rotation_cos_sin().1),
+        env_flags: if scene.environment().is_some_and(|e| e.visible) { ENV_VISIBLE } else { 0 },
+        env_pad: [0; 2],
     }
 }

@@ -29,6 +29,12 @@ pub const SCENE: &str = include_str!("wgsl/scene.wgsl");
 /// that buffer and the constants of [`crate::integrator::light_bvh_consts_wgsl`].
 pub const LIGHT_BVH: &str = include_str!("wgsl/light_bvh.wgsl");
 
+/// `furnace-scene`'s environment maps (the texel-centred lat-long lookup, the rotation,
+/// `EnvironmentSampler::sample` and `pdf` over `furnace_sampling::Distribution2D`'s CDFs) over
+/// the `environment` buffer ([`crate::integrator::environment_words`]); its sampling half is
+/// in a `// #if SAMPLES_ENVIRONMENT` block ([`select`]).
+pub const ENVIRONMENT: &str = include_str!("wgsl/environment.wgsl");
+
 /// CWBVH traversal of `furnace-accel`'s GPU buffers: closest hit and any hit (shadow rays).
 pub const TRAVERSE: &str = include_str!("wgsl/traverse.wgsl");
 

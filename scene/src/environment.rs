@@ -75,9 +75,9 @@ pub enum EnvironmentError {
     },
 }
 
-/// Most texels a map may have: 2³¹, so that texel and CDF indices fit the GPU's `u32`
-/// arithmetic with room (an 8192 × 4096 map has 2²⁵).
-pub const MAX_ENVIRONMENT_TEXELS: u64 = 1 << 31;
+/// Most texels a map may have: 2²⁸ (a 23 170² map; 16384 × 8192 is 2²⁷), so that the GPU's
+/// `u32` word indices into its texels and CDFs (4 words per texel) cannot overflow.
+pub const MAX_ENVIRONMENT_TEXELS: u64 = 1 << 28;
 
 /// A latitude-longitude HDR image of radiance: `width` columns × `height` rows, row 0 at the top
 /// (+Y), linear RGB in W/(m²·sr).
@@ -118,7 +118,7 @@ impl EnvironmentMap {
             return Err(size_error("it has no texels"));
         }
         if n > MAX_ENVIRONMENT_TEXELS {
-            return Err(size_error("more than 2³¹ texels"));
+            return Err(size_error("more than 2²⁸ texels"));
         }
         if texels.len() as u64 != n {
             return Err(size_error("the texel count does not match the size"));
@@ -407,10 +407,15 @@ impl Environment {
         self.intensity * self.map.lookup(self.to_map(d))
     }
 
+    /// Whether it sends no light (intensity 0 or every texel black): nothing to sample.
+    pub fn is_black(&self) -> bool {
+        !(self.intensity > 0.0) || self.map.texels.iter().all(|t| *t == Vec3::ZERO)
+    }
+
     /// The importance sampler of this environment (`compensated`: MIS compensation); `None` when
-    /// the map is black (nothing to sample).
+    /// it is black ([`Environment::is_black`]: nothing to sample).
     pub fn sampler(&self, compensated: bool) -> Option<EnvironmentSampler> {
-        if !(self.intensity > 0.0) {
+        if self.is_black() {
             return None;
         }
         let m = &self.map;
@@ -445,20 +450,21 @@ impl EnvironmentSampler {
         &self.distribution
     }
 
-    /// A direction for uniform `u ∈ [0, 1)²`, or `None` at a pole (`sin θ = 0`, a set of
-    /// measure zero).
+    /// A direction for uniform `u ∈ [0, 1)²`, or `None` (a set of measure zero: a pole, or a
+    /// point on the edge of a cell whose direction rounds into a neighbour of probability 0).
+    ///
+    /// The pdf reported is [`EnvironmentSampler::pdf`] of the direction — the function the MIS
+    /// weight of a BSDF ray reaching the environment evaluates — not the sampled cell's density
+    /// directly: the two differ only where the direction's round trip through `(u, v)` crosses
+    /// a cell edge (f32 rounding), and there the estimator must use one pdf for both strategies.
     pub fn sample(&self, env: &Environment, u: Vec2) -> Option<EnvironmentSample> {
-        let (uv, _, pdf_uv) = self.distribution.sample(u);
-        let m = uv_to_direction(uv);
-        let sin_theta = (m.x * m.x + m.z * m.z).sqrt();
-        if !(sin_theta > 0.0 && pdf_uv > 0.0) {
+        let (uv, _, _) = self.distribution.sample(u);
+        let direction = env.to_world(uv_to_direction(uv));
+        let pdf = self.pdf(env, direction);
+        if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
-        Some(EnvironmentSample {
-            direction: env.to_world(m),
-            pdf: pdf_uv / (TWO_PI_SQUARED * sin_theta),
-            radiance: env.intensity * env.map.lookup_uv(uv),
-        })
+        Some(EnvironmentSample { direction, pdf, radiance: env.intensity * env.map.lookup_uv(uv) })
     }
 
     /// The solid-angle pdf with which [`EnvironmentSampler::sample`] chooses world direction `d`.

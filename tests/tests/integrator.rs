@@ -112,13 +112,23 @@ fn dispatches_cover_every_pixel_once() {
 #[test]
 fn absent_light_features_compose_no_code() {
     let bare = shader_source(FilmPrecision::F64, SceneFeatures::default());
-    for absent in ["sample_emitter", "sun_disc", "ray_pdf", "emitters", "power_heuristic", "light_bvh", "#if"]
-    {
+    for absent in [
+        "sample_emitter",
+        "sun_disc",
+        "ray_pdf",
+        "emitters",
+        "power_heuristic",
+        "light_bvh",
+        "environment",
+        "fn env_",
+        "ENV_VISIBLE",
+        "#if",
+    ] {
         assert!(!bare.contains(absent), "{absent} in the shader of a scene without light samples");
     }
     let all = shader_source(
         FilmPrecision::F64,
-        SceneFeatures { point_lights: true, emitters: true, sun_disc: true, light_bvh: false },
+        SceneFeatures { point_lights: true, emitters: true, sun_disc: true, ..Default::default() },
     );
     for present in ["fn sample_emitter", "fn sample_sun_disc", "var ray_pdf", "var<storage, read> emitters"] {
         assert!(all.contains(present), "{present} missing from the shader of a scene with every light");
@@ -127,9 +137,31 @@ fn absent_light_features_compose_no_code() {
     assert!(!all.contains("light_bvh") && all.contains("fn emitter_select"));
     let bvh = shader_source(
         FilmPrecision::F64,
-        SceneFeatures { point_lights: true, emitters: true, sun_disc: true, light_bvh: true },
+        SceneFeatures {
+            point_lights: true,
+            emitters: true,
+            sun_disc: true,
+            light_bvh: true,
+            ..Default::default()
+        },
     );
     assert!(bvh.contains("fn light_bvh_sample") && !bvh.contains("fn emitter_select"));
+    // An environment only looked up: its texels, no CDFs, no light samples, no MIS weights.
+    let env = shader_source(FilmPrecision::F64, SceneFeatures { environment: true, ..Default::default() });
+    assert!(env.contains("fn env_radiance") && env.contains("var<storage, read> environment"));
+    for absent in ["env_sample", "env_pdf", "sample_environment", "ray_pdf", "power_heuristic"] {
+        assert!(!env.contains(absent), "{absent} in the shader of an environment without light samples");
+    }
+    let sampled = shader_source(
+        FilmPrecision::F64,
+        SceneFeatures { environment: true, env_sampling: true, ..Default::default() },
+    );
+    for present in ["fn env_sample", "fn env_pdf", "fn sample_environment", "var ray_pdf"] {
+        assert!(
+            sampled.contains(present),
+            "{present} missing from the shader of a light-sampled environment"
+        );
+    }
 }
 
 #[test]
@@ -143,7 +175,14 @@ fn frame_params_layout_matches_wgsl() {
     for light_bvh in [false, true] {
         furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(
             FilmPrecision::F32Pass,
-            SceneFeatures { point_lights: true, emitters: true, sun_disc: true, light_bvh },
+            SceneFeatures {
+                point_lights: true,
+                emitters: true,
+                sun_disc: true,
+                light_bvh,
+                environment: true,
+                env_sampling: true,
+            },
         ));
     }
     furnace_tests::layout::assert_gpu_struct::<GpuPointLight>(&shader_source(
@@ -209,6 +248,32 @@ fn same_samples_give_the_same_image_with_emitters_and_a_sun_disc() {
             );
         }
     }
+}
+
+/// The environment-map reference scene (a 512 × 256 HDR sky with a 1° sun of 2·10⁴): the
+/// lookup, importance sampling (plain and compensated) and the MIS weights of both strategies,
+/// BSDF rays only (`off`), light samples only (`nee`); rotated 70° and unseen by the camera.
+#[test]
+fn same_samples_give_the_same_image_with_an_environment_map() {
+    use furnace_render::EnvSampling::{Compensated, Importance, Off};
+    use furnace_render::LightSampling::{Mis, Nee};
+    let path = furnace_tests::data::reference("envmap/envmap_spheres.gltf");
+    let mut scene = furnace_scene::Scene::load(&path).unwrap();
+    for (light_sampling, env_sampling) in
+        [(Mis, Importance), (Mis, Compensated), (Mis, Off), (Nee, Importance)]
+    {
+        eprintln!("environment: light sampling {light_sampling}, env sampling {env_sampling}");
+        same_samples_with(
+            &scene,
+            RenderSettings { light_sampling, env_sampling, ..settings(SamplerKind::Sobol, 3) },
+        );
+    }
+    let mut env = scene.environment().unwrap().clone();
+    env.rotation = 70f32.to_radians();
+    env.visible = false;
+    scene.set_environment(Some(env));
+    eprintln!("environment rotated 70°, not visible");
+    same_samples_with(&scene, settings(SamplerKind::Sobol, 3));
 }
 
 fn same_samples(scene: &furnace_scene::Scene) {

@@ -223,6 +223,7 @@ const SEED: u32 = 11;
 
 /// What a backend renders: its image size and one-sample passes per reference.
 struct Plan {
+    /// Width; the height keeps the reference's aspect ratio.
     size: u32,
     bounces: u32,
     passes: u32,
@@ -238,11 +239,13 @@ fn plan(backend: Backend, stem: &str) -> Plan {
         (Backend::Cpu, "cbox_area_ref_bounces4") => (64, 4, 512, 1),
         (Backend::Cpu, "cbox_many_lights_ref_bounces4") => (64, 4, 4096, 1),
         (Backend::Cpu, "cbox_sun_disc_ref_bounces4") => (64, 4, 512, 1),
+        (Backend::Cpu, "envmap_spheres_ref_bounces4") => (20, 4, 32768, 1),
         (Backend::Gpu, "cbox_ref_direct") => (32, 1, 1024, 1),
         (Backend::Gpu, "cbox_ref_bounces4") => (32, 4, 256, 1),
         (Backend::Gpu, "cbox_point_ref_bounces4") => (32, 4, 512, 2),
         (Backend::Gpu, "cbox_area_ref_bounces4") => (32, 4, 256, 2),
         (Backend::Gpu, "cbox_sun_disc_ref_bounces4") => (32, 4, 128, 2),
+        (Backend::Gpu, "envmap_spheres_ref_bounces4") => (40, 4, 128, 2),
         _ => panic!("no plan for {backend}, {stem}"),
     };
     Plan { size, bounces, passes, spp_per_pass }
@@ -265,11 +268,18 @@ fn case(stem: &str) -> (&'static str, furnace_scene::Scene) {
             assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
             ("lights", scene)
         }
+        "envmap_spheres_ref_bounces4" => {
+            let path = furnace_tests::data::reference("envmap/envmap_spheres.gltf");
+            let scene = furnace_scene::Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+            assert!(scene.environment().is_some(), "the scene names its environment map");
+            ("envmap", scene)
+        }
         _ => panic!("no scene for {stem}"),
     }
 }
 
-/// `{stem}.exr` and `{stem}_stderr.exr` of `folder`, downsampled to `size`².
+/// `{stem}.exr` and `{stem}_stderr.exr` of `folder`, downsampled to `size` pixels wide.
 fn reference(folder: &str, stem: &str, size: u32) -> Reference {
     let full = Reference::load_in(folder, stem);
     if full.mean.width == size as usize {
@@ -283,15 +293,15 @@ fn reference(folder: &str, stem: &str, size: u32) -> Reference {
 fn render(
     backend: Backend,
     scene: &furnace_scene::Scene,
-    size: u32,
+    (width, height): (u32, u32),
     bounces: u32,
     specular: SpecularOptions,
     passes: u32,
     spp_per_pass: u32,
 ) -> Option<Estimate> {
     let settings = RenderSettings {
-        width: size,
-        height: size,
+        width,
+        height,
         bounces,
         sampler: SamplerKind::Random,
         seed: SEED,
@@ -311,16 +321,15 @@ fn table(
     backend: Backend,
     stem: &str,
     model: &str,
-    size: u32,
+    (size, height, block): (u32, u32, u32),
     passes: (u32, u32),
     c: &Comparison,
     seconds: f64,
 ) -> String {
-    let block = 256 / size;
     format!(
         "| backend | reference | model | size | passes × spp | ratio R, G, B (± se) | z mean | z std | \\|z\\| > 3 | max \\|z\\| | z values | time |\n\
          |---|---|---|---|---|---|---|---|---|---|---|---|\n\
-         | {backend} | {stem} | {model} | {size}² ({block}×{block} blocks) | {} × {} | {} | {seconds:.1} s |",
+         | {backend} | {stem} | {model} | {size}×{height} ({block}×{block} blocks) | {} × {} | {} | {seconds:.1} s |",
         passes.0,
         passes.1,
         c.cells()
@@ -362,13 +371,17 @@ fn evaluate(backend: Backend, stem: &str, specular: SpecularOptions, model: &str
     let plan = plan(backend, stem);
     let (bounces, passes) = (plan.bounces, plan.passes);
     let (folder, scene) = case(stem);
+    let full_width = Reference::load_in(folder, stem).mean.width as u32;
     let reference = reference(folder, stem, plan.size);
+    let height = reference.mean.height as u32;
     let start = Instant::now();
-    let candidate = render(backend, &scene, plan.size, bounces, specular, passes, plan.spp_per_pass)?;
+    let candidate =
+        render(backend, &scene, (plan.size, height), bounces, specular, passes, plan.spp_per_pass)?;
     let seconds = start.elapsed().as_secs_f64();
     let mask = cbox::pixels_without_visible_emitters(&scene, plan.size);
     let comparison = cbox::compare_masked(&candidate, &reference, mask.as_deref());
-    let table = table(backend, stem, model, plan.size, (passes, plan.spp_per_pass), &comparison, seconds);
+    let shape = (plan.size, height, full_width / plan.size);
+    let table = table(backend, stem, model, shape, (passes, plan.spp_per_pass), &comparison, seconds);
     println!("{table}");
     let name = format!("{stem}_{backend}_{}_{model}", plan.size).replace(' ', "_");
     Some(Outcome { name, reference, candidate, comparison, table })
@@ -485,6 +498,16 @@ fn sun_disc_matches_mitsuba_cpu() {
 #[test]
 fn sun_disc_matches_mitsuba_gpu() {
     compare(Backend::Gpu, "cbox_sun_disc_ref_bounces4");
+}
+
+#[test]
+fn environment_map_matches_mitsuba_cpu() {
+    compare(Backend::Cpu, "envmap_spheres_ref_bounces4");
+}
+
+#[test]
+fn environment_map_matches_mitsuba_gpu() {
+    compare(Backend::Gpu, "envmap_spheres_ref_bounces4");
 }
 
 #[test]

@@ -1035,3 +1035,167 @@ fn light_bvh_matches_the_cpu() {
         assert!(found * 2 > n, "{path}: only {found} of {n} points could sample a light");
     }
 }
+
+/// A kernel over `environment.wgsl` (its sampling half composed): per case a world direction and
+/// a uniform pair in; out the radiance seen along the direction, the sample's direction, pdf
+/// and radiance, and the pdf of the input direction.
+fn environment_kernel(env: &furnace_scene::Environment) -> String {
+    let (c, s) = env.rotation_cos_sin();
+    let body = format!(
+        r#"
+@group(0) @binding(3) var<storage, read> environment: array<f32>;
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {{
+    let i = invocation_index(gid, groups);
+    if i >= params.x {{ return; }}
+    let env = EnvMap({w}u, {h}u, bitcast<f32>({k}u), bitcast<f32>({c}u), bitcast<f32>({s}u));
+    let r = 5u * i;
+    let d = vec3<f32>(bitcast<f32>(input[r]), bitcast<f32>(input[r + 1u]), bitcast<f32>(input[r + 2u]));
+    let u = vec2<f32>(bitcast<f32>(input[r + 3u]), bitcast<f32>(input[r + 4u]));
+    let seen = env_radiance(env, d);
+    let smp = env_sample(env, u);
+    let o = 11u * i;
+    output[o] = bitcast<u32>(seen.x);
+    output[o + 1u] = bitcast<u32>(seen.y);
+    output[o + 2u] = bitcast<u32>(seen.z);
+    output[o + 3u] = bitcast<u32>(smp.direction.x);
+    output[o + 4u] = bitcast<u32>(smp.direction.y);
+    output[o + 5u] = bitcast<u32>(smp.direction.z);
+    output[o + 6u] = bitcast<u32>(smp.pdf);
+    output[o + 7u] = bitcast<u32>(smp.radiance.x);
+    output[o + 8u] = bitcast<u32>(smp.radiance.y);
+    output[o + 9u] = bitcast<u32>(smp.radiance.z);
+    output[o + 10u] = bitcast<u32>(env_pdf(env, d));
+}}
+"#,
+        w = env.map.width(),
+        h = env.map.height(),
+        k = env.intensity.to_bits(),
+        c = c.to_bits(),
+        s = s.to_bits(),
+    );
+    let module = wgsl::select(wgsl::ENVIRONMENT, |name| name == "SAMPLES_ENVIRONMENT");
+    wgsl::compose(&[kernel::PREAMBLE, &module, &body])
+}
+
+/// The environment twins on maps of 1 × 1, 7 × 5 (odd, not 2:1), 64 × 2 (rows far wider than
+/// tall), a random 16 × 8 rotated 37°, and the reference's 512 × 256 sky with its 1° sun, at
+/// 2·10⁴ random directions and uniform pairs each (directions include the −Z seam and points
+/// 10⁻⁴ from the poles; exactly at a pole the lookup's u is atan2(0, 0), which WGSL leaves
+/// undefined: a set of measure zero).
+///
+/// Tolerances: the lookup's `atan2` and `acos` are the GPU's (WGSL bounds them to a few ulp of
+/// the angle; a texel is 2π/W of it), then the same bilinear arithmetic: a shifted position
+/// moves the value by at most (ulp × W) × the largest neighbour difference, relative 10⁻³ of
+/// the map's maximum at 512 columns. The sampled directions come from the same CDF cells (the
+/// search compares the same f32 values) and the GPU's `sin`/`cos`: 10⁻⁵ absolute. A sample's
+/// pdf is the pdf of its direction (`env_pdf`): the same cell's CDF differences over the GPU's
+/// `sqrt`, 10⁻⁴ relative, except where the direction lies within rounding of a cell edge (the
+/// GPU's trigonometry may then put it in the neighbour: counted with the input directions
+/// below). A direction's pdf may be a neighbouring cell's where the GPU's `atan2`/`acos` put the direction across a cell
+/// edge (lavapipe: 0.6 % of directions on the 512-column map, 0.02 % on the small ones): any
+/// other pdf fails, and at most 4 % of the 2·2·10⁴ pdfs (sampled and given) may take a
+/// neighbour.
+#[test]
+fn environment_matches_the_cpu() {
+    use furnace_scene::{Environment, EnvironmentMap};
+    use std::sync::Arc;
+    let Some(ctx) = test_context() else { return };
+    let mut rng = Rng(0xe_4f1);
+    let mut random_map = |w: u32, h: u32| {
+        let texels = (0..w * h).map(|_| Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 4.0).collect();
+        Arc::new(EnvironmentMap::new(w, h, texels, format!("random {w}×{h}")).unwrap().0)
+    };
+    let reference = furnace_tests::data::reference("envmap/envmap_spheres_env.exr");
+    let sky = Arc::new(EnvironmentMap::load(&reference).unwrap().0);
+    let envs = [
+        Environment::new(Arc::new(EnvironmentMap::constant(Vec3::new(0.5, 1.0, 2.0)))),
+        Environment::new(random_map(7, 5)),
+        Environment::new(random_map(64, 2)),
+        Environment { intensity: 2.5, rotation: 37f32.to_radians(), ..Environment::new(random_map(16, 8)) },
+        Environment::new(sky),
+    ];
+    let mut rng = Rng(0x5eed);
+    for env in &envs {
+        let sampler = env.sampler(false).unwrap();
+        let words = furnace_gpu::integrator::environment_words(env, Some(&sampler));
+        let max = env.map.texels().iter().map(|t| t.max_element()).fold(0.0f32, f32::max) * env.intensity;
+        let n = 20_000;
+        let mut input = Vec::with_capacity(5 * n);
+        let mut cases = Vec::with_capacity(n);
+        for k in 0..n {
+            let d = match k {
+                // Next to the poles (exactly at one, u is atan2(0, 0): undefined in WGSL).
+                0 => Vec3::new(1e-4, 1.0, 3e-4).normalize(),
+                1 => Vec3::new(-2e-4, -1.0, 1e-4).normalize(),
+                2 => Vec3::NEG_Z,
+                3 => Vec3::new(1e-7, 0.0, -1.0).normalize(),
+                _ => rng.unit_vector(),
+            };
+            let u = Vec2::new(rng.f32(), rng.f32());
+            input.extend(d.to_array().map(f32::to_bits));
+            input.extend(u.to_array().map(f32::to_bits));
+            cases.push((d, u));
+        }
+        let got =
+            kernel::run_with(&ctx, &environment_kernel(env), &input, &[&words], 11 * n, n as u32).unwrap();
+        let f = |k: usize| f32::from_bits(got[k]);
+        let rel = |a: f32, b: f32| if a == b { 0.0 } else { (a - b).abs() / a.abs().max(b.abs()) };
+        let (mut seen_err, mut dir_err, mut pdf_err, mut rad_err, mut pdf_differ) =
+            (0f32, 0f32, 0f32, 0f32, 0);
+        for (k, &(d, u)) in cases.iter().enumerate() {
+            let o = 11 * k;
+            let seen = env.radiance(d);
+            let e = (seen - Vec3::new(f(o), f(o + 1), f(o + 2))).abs().max_element() / max;
+            if e > 1e-3 {
+                eprintln!("  lookup at {d}: cpu {seen}, gpu {:?}", [f(o), f(o + 1), f(o + 2)]);
+            }
+            seen_err = seen_err.max(e);
+            match sampler.sample(env, u) {
+                Some(s) => {
+                    let gd = Vec3::new(f(o + 3), f(o + 4), f(o + 5));
+                    dir_err = dir_err.max((s.direction - gd).abs().max_element());
+                    if rel(s.pdf, f(o + 6)) > 1e-4 {
+                        pdf_differ += 1;
+                    } else {
+                        pdf_err = pdf_err.max(rel(s.pdf, f(o + 6)));
+                    }
+                    let gr = Vec3::new(f(o + 7), f(o + 8), f(o + 9));
+                    rad_err = rad_err.max((s.radiance - gr).abs().max_element() / max);
+                }
+                None => pdf_differ += usize::from(f(o + 6) != 0.0),
+            }
+            // The GPU's pdf of `d` is that of its cell or, where `d` lies within rounding of a
+            // cell edge, of a neighbour.
+            if rel(sampler.pdf(env, d), f(o + 10)) > 1e-4 {
+                pdf_differ += 1;
+                let m = env.to_map(d);
+                let jacobian =
+                    2.0 * std::f32::consts::PI * std::f32::consts::PI * (m.x * m.x + m.z * m.z).sqrt();
+                let uv = furnace_scene::direction_to_uv(m);
+                let (w, h) = (env.map.width() as i64, env.map.height() as i64);
+                let (i, j) = ((uv.x * w as f32) as i64, (uv.y * h as f32) as i64);
+                let neighbour = (-1..=1).flat_map(|a| (-1..=1).map(move |b| (a, b))).any(|(a, b)| {
+                    let (ii, jj) = ((i + a).rem_euclid(w) as u32, (j + b).clamp(0, h - 1) as u32);
+                    rel(sampler.distribution().cell_pdf(ii, jj) / jacobian, f(o + 10)) <= 1e-4
+                });
+                assert!(
+                    neighbour,
+                    "{}: the pdf of {d} is {} on the GPU, of no cell near the CPU's",
+                    env.map.source(),
+                    f(o + 10)
+                );
+            }
+        }
+        eprintln!(
+            "{}: lookup {seen_err:e} of the maximum, sampled direction {dir_err:e}, pdf {pdf_err:e}, radiance \
+             {rad_err:e}; {pdf_differ} of {n} direction pdfs differ",
+            env.map.source()
+        );
+        assert!(seen_err <= 1e-3, "{}: lookup differs by {seen_err:e} of the maximum", env.map.source());
+        assert!(dir_err <= 1e-5, "{}: sampled direction differs by {dir_err:e}", env.map.source());
+        assert!(pdf_err <= 1e-4, "{}: sampled pdf differs by {pdf_err:e}", env.map.source());
+        assert!(rad_err <= 1e-3, "{}: sampled radiance differs by {rad_err:e}", env.map.source());
+        assert!(pdf_differ * 25 <= 2 * n, "{}: {pdf_differ} of {n} direction pdfs differ", env.map.source());
+    }
+}

@@ -337,6 +337,42 @@ fn sun_disc_seen(direction: vec3<f32>, bsdf_pdf_value: f32) -> vec3<f32> {
 
 // #endif
 
+// #if HAS_ENVIRONMENT
+// The environment of this frame (FrameParams' env_* fields).
+fn frame_env() -> EnvMap {
+    return EnvMap(params.env_width, params.env_height, params.env_intensity, params.env_cos, params.env_sin);
+}
+
+// #if SAMPLES_ENVIRONMENT
+// CpuRenderer::sample_environment: one light sample of the environment map (throughput
+// included): a direction from its importance distribution, a shadow ray to infinity.
+fn sample_environment(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: BsdfParams,
+                      wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
+    let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event + LIGHT_ENVIRONMENT;
+    let u = sampler_value_2d(params.sampler, pixel, index, dim);
+    let s = env_sample(frame_env(), u);
+    if !(s.pdf > 0.0) || !(scene_dot(s.direction, surface.geometric) > 0.0) || all(s.radiance == vec3<f32>(0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let wi_local = frame_to_local(frame, s.direction);
+    let f = bsdf_eval(bsdf, wo, wi_local);
+    if all(f == vec3<f32>(0.0)) {
+        return vec3<f32>(0.0);
+    }
+    let w = light_weight(s.pdf, bsdf_pdf(bsdf, wo, wi_local));
+    let contribution = throughput * f * s.radiance * (w / s.pdf);
+    if !(film_is_finite(contribution) && any(contribution != vec3<f32>(0.0))) {
+        return vec3<f32>(0.0);
+    }
+    rays_traced += 1u;
+    if trace_any(leave, s.direction, bitcast<f32>(0x7f800000u)) {
+        return vec3<f32>(0.0);
+    }
+    return contribution;
+}
+// #endif
+// #endif
+
 // Renderer::trace: radiance arriving at `origin` from −`direction`.
 fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f32>) -> vec3<f32> {
     var origin = origin_in;
@@ -357,8 +393,23 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         rays_traced += 1u;
         let hit = trace_closest(origin, direction, inf);
         if !hit.hit {
-            // The ray leaves the scene: the sky (and the sun disc) it sees.
+            // The ray leaves the scene: the sky and what else is at infinity.
             radiance += throughput * params.sky.xyz;
+            // #if HAS_ENVIRONMENT
+            // CpuRenderer::environment_seen: a camera ray (no event yet) sees it only if visible;
+            // a BSDF ray is weighted against the environment's light samples.
+            if event > 0u || (params.env_flags & ENV_VISIBLE) != 0u {
+                var w = 1.0;
+                // #if SAMPLES_ENVIRONMENT
+                if event > 0u {
+                    w = bsdf_weight(ray_pdf, env_pdf(frame_env(), direction));
+                }
+                // #endif
+                if w != 0.0 {
+                    radiance += throughput * (env_radiance(frame_env(), direction) * w);
+                }
+            }
+            // #endif
             // #if HAS_SUN_DISC
             radiance += throughput * sun_disc_seen(direction, ray_pdf);
             // #endif
@@ -426,6 +477,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // #endif
             // #if HAS_SUN_DISC
             radiance += sample_sun_disc(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+            // #endif
+            // #if SAMPLES_ENVIRONMENT
+            radiance += sample_environment(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
             // #endif
         }
         // #endif
