@@ -3,7 +3,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
-use furnace_render::{LightSampling, LightSelection, TriangleSampling};
+use furnace_render::{EnvSampling, LightSampling, LightSelection, TriangleSampling};
 use furnace_sampling::SamplerKind;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
@@ -107,6 +107,16 @@ pub struct RenderArgs {
     /// about 0.53), replacing the scene's `extras.angular_diameter_deg`.
     #[arg(long, value_name = "DEG", value_parser = parse_sun_angle)]
     pub sun_angle: Option<f32>,
+    // The environment map and how it is placed (--env, --env-intensity, --env-rotation,
+    // --env-visible).
+    #[command(flatten)]
+    pub environment: EnvArgs,
+    /// How light samples gather the environment map: off (only BSDF rays that escape),
+    /// importance (also light samples in proportion to its luminance, weighted by
+    /// --light-sampling), compensated (light samples where it outshines its mean; needs
+    /// --light-sampling mis).
+    #[arg(long, value_enum, default_value_t = EnvSamplingArg::Importance)]
+    pub env_sampling: EnvSamplingArg,
     /// Where to render: cpu (the reference integrator), gpu (wgpu: Vulkan, Metal or DX12), or
     /// auto (a hardware GPU if there is one, else the CPU; software GPUs such as lavapipe are
     /// slower than the CPU integrator and used only when asked for).
@@ -206,6 +216,13 @@ pub struct BenchArgs {
     /// shading point) or power (in proportion to power; as `furnace render`).
     #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
     pub light_selection: LightSelectionArg,
+    // The environment map and how it is placed (as `furnace render`).
+    #[command(flatten)]
+    pub environment: EnvArgs,
+    /// How light samples gather the environment map: off, importance or compensated (as
+    /// `furnace render`).
+    #[arg(long, value_enum, default_value_t = EnvSamplingArg::Importance)]
+    pub env_sampling: EnvSamplingArg,
     /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
@@ -298,6 +315,15 @@ pub struct ChartArgs {
     /// `furnace render --light-selection`).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "bvh")]
     pub light_selection: Vec<LightSelectionArg>,
+    /// How light samples gather the environment map, comma-separated: off, importance,
+    /// compensated (as `furnace render --env-sampling`; compensated is not combined with
+    /// --light-sampling nee).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "importance")]
+    pub env_sampling: Vec<EnvSamplingArg>,
+    // The environment map of the study's scene and how it is placed (as `furnace render`; the
+    // reference must have been rendered with the same).
+    #[command(flatten)]
+    pub environment: EnvArgs,
     /// Backends, comma-separated: cpu, gpu.
     #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
     pub backends: Vec<ChartBackend>,
@@ -494,6 +520,107 @@ impl From<LightSelectionArg> for LightSelection {
             LightSelectionArg::Power => LightSelection::Power,
             LightSelectionArg::Bvh => LightSelection::Bvh,
         }
+    }
+}
+
+/// `--env-sampling`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum EnvSamplingArg {
+    /// Only BSDF-sampled rays that escape.
+    Off,
+    /// Also light samples in proportion to the map's luminance × sin θ.
+    Importance,
+    /// Light samples of the MIS-compensated distribution (needs --light-sampling mis).
+    Compensated,
+}
+
+impl From<EnvSamplingArg> for EnvSampling {
+    fn from(m: EnvSamplingArg) -> Self {
+        match m {
+            EnvSamplingArg::Off => EnvSampling::Off,
+            EnvSamplingArg::Importance => EnvSampling::Importance,
+            EnvSamplingArg::Compensated => EnvSampling::Compensated,
+        }
+    }
+}
+
+/// `--env`: a map file, the built-in studio, or no environment.
+#[derive(Debug, Clone, PartialEq)]
+pub enum EnvArg {
+    /// A latitude-longitude .hdr/.exr map.
+    File(PathBuf),
+    /// The built-in studio map (`EnvironmentMap::studio`).
+    Studio,
+    /// No environment, not even the default light.
+    None,
+}
+
+impl std::fmt::Display for EnvArg {
+    /// As given: the path, `studio` or `none` (what the EXR records).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Self::File(p) => write!(f, "{}", p.display()),
+            Self::Studio => f.write_str("studio"),
+            Self::None => f.write_str("none"),
+        }
+    }
+}
+
+/// The environment options of `furnace render`, `bench` and `chart`.
+#[derive(Debug, Clone, Default, Args)]
+pub struct EnvArgs {
+    /// The environment map: FILE (a latitude-longitude .hdr or .exr; ./studio for a file of
+    /// that name), studio (the built-in neutral studio light) or none (no environment). It
+    /// replaces the scene's own. Without it, a scene with no light of its own (no sun, sky,
+    /// lamp, emissive material or environment) is lit by the built-in studio.
+    #[arg(long, value_name = "FILE|studio|none", value_parser = parse_env)]
+    pub env: Option<EnvArg>,
+    /// Scale of the environment's radiance (the scene's own or --env's) [default: the scene's,
+    /// else 1].
+    #[arg(long, value_name = "X", allow_negative_numbers = true, value_parser = parse_env_intensity)]
+    pub env_intensity: Option<f32>,
+    /// Rotation of the environment about +Y in degrees, right-handed (+X turns towards −Z)
+    /// [default: the scene's, else 0].
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true, value_parser = parse_env_rotation)]
+    pub env_rotation: Option<f32>,
+    /// Whether camera rays that leave the scene see the environment (off: they see the scene's
+    /// constant sky, black without one; it still lights the scene and shows in reflections)
+    /// [default: on].
+    #[arg(long, value_enum, value_name = "on|off")]
+    pub env_visible: Option<Switch>,
+}
+
+impl EnvArgs {
+    /// Whether an option that changes an environment (intensity, rotation, visibility) was given.
+    pub fn adjusts(&self) -> bool {
+        self.env_intensity.is_some() || self.env_rotation.is_some() || self.env_visible.is_some()
+    }
+}
+
+pub(crate) fn parse_env(s: &str) -> Result<EnvArg, String> {
+    match s {
+        "" => Err("--env needs a file, studio or none".into()),
+        "studio" => Ok(EnvArg::Studio),
+        "none" => Ok(EnvArg::None),
+        _ => Ok(EnvArg::File(PathBuf::from(s))),
+    }
+}
+
+fn parse_env_intensity(s: &str) -> Result<f32, String> {
+    let x: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number"))?;
+    if x.is_finite() && x >= 0.0 {
+        Ok(x)
+    } else {
+        Err(format!("the environment's intensity must be a finite number ≥ 0 (got {s})"))
+    }
+}
+
+fn parse_env_rotation(s: &str) -> Result<f32, String> {
+    let d: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of degrees"))?;
+    if d.is_finite() {
+        Ok(d)
+    } else {
+        Err(format!("the environment's rotation must be a finite number of degrees (got {s})"))
     }
 }
 

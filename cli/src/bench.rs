@@ -45,6 +45,7 @@ struct Report {
     light_sampling: &'static str,
     triangle_sampling: &'static str,
     light_selection: &'static str,
+    env_sampling: &'static str,
     spp: u32,
     seconds: f64,
     time_to_first_frame_s: f64,
@@ -217,6 +218,7 @@ impl Report {
             "light_sampling": self.light_sampling,
             "triangle_sampling": self.triangle_sampling,
             "light_selection": self.light_selection,
+            "env_sampling": self.env_sampling,
             "spp": self.spp,
             "seconds": finite(Some(self.seconds)),
             "msamples_per_s": finite(Some(self.msamples_per_s())),
@@ -259,11 +261,13 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
             a.sampler
         ));
     }
+    crate::env::check_sampling(a.env_sampling, a.light_sampling)?;
     let start = Instant::now();
-    let scene = load(&a.scene)?;
+    let mut scene = load(&a.scene)?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
+    crate::env::apply(&mut scene, &a.environment)?;
     let camera = scene.default_camera();
     let (width, height) = match (a.width, a.height, &a.scene) {
         // The reference size for the Cornell box.
@@ -281,6 +285,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         light_sampling: a.light_sampling.into(),
         triangle_sampling: a.triangle_sampling.into(),
         light_selection: a.light_selection.into(),
+        env_sampling: a.env_sampling.into(),
         ..RenderSettings::default()
     };
     let triangles = scene.geometry.triangle_count() as u64;
@@ -362,6 +367,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         light_sampling: settings.light_sampling.name(),
         triangle_sampling: settings.triangle_sampling.name(),
         light_selection: settings.light_selection.name(),
+        env_sampling: settings.env_sampling.name(),
         spp: done,
         seconds,
         time_to_first_frame_s,

@@ -64,6 +64,14 @@ fn describe(scene: &Scene) -> String {
             ),
         );
     }
+    if !scene.has_own_light() {
+        line(
+            "default light",
+            "none of its own: `furnace render` lights it with the built-in studio environment (--env FILE \
+             for another, --env none for none)"
+                .into(),
+        );
+    }
     if scene.cameras.is_empty() {
         let camera = describe_camera(&scene.default_camera());
         line("camera", format!("none in the file; framed around the geometry: {camera}"));
@@ -110,6 +118,23 @@ mod tests {
         assert!(text.contains("light           sun travelling"), "{text}");
         assert!(text.contains("light           sky of radiance"), "{text}");
         assert!(text.contains("perspective, yfov 45.00°"), "{text}");
+        assert!(!text.contains("default light"), "{text}");
+    }
+
+    #[test]
+    fn says_when_the_studio_would_light_the_scene() {
+        let mut scene = furnace_scene::builtin::cornell_box().unwrap();
+        scene.lights.clear();
+        for m in &mut scene.materials {
+            m.emissive = Vec3::ZERO;
+        }
+        let text = describe(&scene);
+        assert!(
+            text.contains(
+                "default light   none of its own: `furnace render` lights it with the built-in studio"
+            ),
+            "{text}"
+        );
     }
 
     #[test]

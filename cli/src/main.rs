@@ -29,6 +29,7 @@ mod args;
 mod bench;
 mod chart;
 mod compare;
+mod env;
 mod info;
 mod interrupt;
 mod render;

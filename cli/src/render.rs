@@ -51,12 +51,14 @@ impl Job {
                 (resume::LIGHT_SAMPLING, resume::cli_name(&a.light_sampling)),
                 (resume::TRIANGLE_SAMPLING, resume::cli_name(&a.triangle_sampling)),
                 (resume::LIGHT_SELECTION, resume::cli_name(&a.light_selection)),
+                (resume::ENV_SAMPLING, resume::cli_name(&a.env_sampling)),
                 (resume::TARGET_SPP, a.spp.to_string()),
                 (resume::TONEMAP, a.tonemap.to_string()),
                 (resume::EXPOSURE, a.exposure.to_string()),
             ]
             .into_iter()
             .chain(a.sun_angle.map(|d| (resume::SUN_ANGLE, d.to_string())))
+            .chain(resume::env_records(&a.environment))
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
         }
@@ -91,6 +93,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         None => None,
     };
 
+    crate::env::check_sampling(args.env_sampling, args.light_sampling)?;
     let mut scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
         // The scene came from the file's record: say so, and how to point at it.
         (Some(file), None) => {
@@ -106,6 +109,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     {
         eprintln!("warning: {}: --sun-angle {deg} is ignored: the scene has no sun", scene.name);
     }
+    crate::env::apply(&mut scene, &args.environment)?;
     let samples_lights = scene.samples_lights();
     let scene_hash = scene.content_hash();
     let (camera, view) = select_camera(&scene, args.camera)?;
@@ -126,6 +130,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         light_sampling: args.light_sampling.into(),
         triangle_sampling: args.triangle_sampling.into(),
         light_selection: args.light_selection.into(),
+        env_sampling: args.env_sampling.into(),
     };
     let job = Job { scene_name: scene.name.clone(), scene_hash, camera, settings, args };
     let a = &job.args;

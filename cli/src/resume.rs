@@ -5,7 +5,11 @@
 //! (`furnace_post::write_exr_with_state`) — and, as `furnace.*` text attributes, every setting
 //! that decides the film: scene identity (name and a hash of its loaded content), size,
 //! bounces, sampler, seed, masking, compensation, specular sampling, camera, Russian roulette,
-//! light sampling, triangle sampling, light selection, and N for the fixed-N samplers.
+//! light sampling, triangle sampling, light selection, environment sampling, the environment
+//! options given (`--env`, `--env-intensity`, `--env-rotation`, `--env-visible`), and N for the
+//! fixed-N samplers. The scene hash covers the environment itself (its texels, intensity,
+//! rotation and visibility), so the same options rebuild the same scene, the default studio
+//! light of a scene without one included.
 //! `--resume` restores the film from the sums and continues at sample index `furnace.spp`: each
 //! pixel's sum keeps adding samples in index order, so the result is bit-identical to an
 //! uninterrupted render on the same backend and adapter (on a GPU without `f64` shaders, whose
@@ -20,7 +24,8 @@
 //! record keeps every backend that added samples, and `--resume` says when it changes.
 
 use crate::args::{
-    LightSamplingArg, LightSelectionArg, MaskingArg, RenderArgs, SamplingArg, Switch, TriangleSamplingArg,
+    EnvArgs, EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, RenderArgs, SamplingArg,
+    Switch, TriangleSamplingArg,
 };
 use clap::ValueEnum;
 use furnace_post::Metadata;
@@ -62,6 +67,20 @@ pub const LIGHT_SELECTION: &str = "furnace.light_selection";
 pub const OLD_LIGHT_SELECTION: &str = "power";
 /// The `--sun-angle` given (absent: the scene's own).
 pub const SUN_ANGLE: &str = "furnace.sun_angle_deg";
+/// `--env-sampling`.
+pub const ENV_SAMPLING: &str = "furnace.env_sampling";
+/// The environment sampling of files that do not record one (made before environment maps, when
+/// no scene had one; importance is today's default).
+pub const OLD_ENV_SAMPLING: &str = "importance";
+/// The `--env` given, as given: the map's path, `studio` or `none` (absent: the scene's own, or
+/// the default studio for a scene without a light of its own).
+pub const ENV: &str = "furnace.env";
+/// The `--env-intensity` given (absent: the scene's own, else 1).
+pub const ENV_INTENSITY: &str = "furnace.env_intensity";
+/// The `--env-rotation` given, in degrees (absent: the scene's own, else 0).
+pub const ENV_ROTATION: &str = "furnace.env_rotation_deg";
+/// The `--env-visible` given, `on` or `off` (absent: the scene's own, else on).
+pub const ENV_VISIBLE: &str = "furnace.env_visible";
 /// Attribute: the `--spp` target (for a fixed-N sampler, its N).
 pub const TARGET_SPP: &str = "furnace.target_spp";
 /// `--tonemap` (PNG only; free to change on resume).
@@ -110,12 +129,29 @@ pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, 
         ("triangle sampling", extra(TRIANGLE_SAMPLING).or_else(|| Some(OLD_TRIANGLE_SAMPLING.into()))),
         ("light selection", extra(LIGHT_SELECTION).or_else(|| Some(OLD_LIGHT_SELECTION.into()))),
         ("sun angle", extra(SUN_ANGLE)),
+        ("environment", extra(ENV)),
+        ("environment intensity", extra(ENV_INTENSITY)),
+        ("environment rotation (degrees)", extra(ENV_ROTATION)),
+        ("environment visible", extra(ENV_VISIBLE)),
+        ("environment sampling", extra(ENV_SAMPLING).or_else(|| Some(OLD_ENV_SAMPLING.into()))),
     ];
     let fixed_n = meta.sampler.as_deref().and_then(|s| SamplerKind::from_str(s).ok());
     if fixed_n.is_some_and(|k| k.needs_sample_count()) {
         out.push(("sample count N of the fixed-N sampler (--spp)", extra(TARGET_SPP)));
     }
     out
+}
+
+/// The EXR records of the environment options given (none for those not given).
+pub fn env_records(e: &EnvArgs) -> impl Iterator<Item = (&'static str, String)> + use<> {
+    [
+        e.env.as_ref().map(|v| (ENV, v.to_string())),
+        e.env_intensity.map(|x| (ENV_INTENSITY, x.to_string())),
+        e.env_rotation.map(|d| (ENV_ROTATION, d.to_string())),
+        e.env_visible.map(|v| (ENV_VISIBLE, cli_name(&v))),
+    ]
+    .into_iter()
+    .flatten()
 }
 
 /// `Err` naming `file` and, for each setting that differs between its record and this
@@ -213,6 +249,37 @@ pub fn apply_recorded(
         && let Some(v) = meta.extra.get(SUN_ANGLE)
     {
         a.sun_angle = Some(v.parse().map_err(|_| invalid(SUN_ANGLE, v))?);
+    }
+    if !a.given("env_sampling") {
+        let v = meta.extra.get(ENV_SAMPLING).map_or(OLD_ENV_SAMPLING, String::as_str);
+        a.env_sampling = enum_value::<EnvSamplingArg>(v).ok_or_else(|| invalid(ENV_SAMPLING, v))?;
+    }
+    let e = &mut a.environment;
+    if !a.given.contains("env")
+        && let Some(v) = meta.extra.get(ENV)
+    {
+        e.env = Some(crate::args::parse_env(v).map_err(|_| invalid(ENV, v))?);
+    }
+    if !a.given.contains("env_intensity")
+        && let Some(v) = meta.extra.get(ENV_INTENSITY)
+    {
+        e.env_intensity = Some(
+            v.parse()
+                .ok()
+                .filter(|x: &f32| x.is_finite() && *x >= 0.0)
+                .ok_or_else(|| invalid(ENV_INTENSITY, v))?,
+        );
+    }
+    if !a.given.contains("env_rotation")
+        && let Some(v) = meta.extra.get(ENV_ROTATION)
+    {
+        e.env_rotation =
+            Some(v.parse().ok().filter(|x: &f32| x.is_finite()).ok_or_else(|| invalid(ENV_ROTATION, v))?);
+    }
+    if !a.given.contains("env_visible")
+        && let Some(v) = meta.extra.get(ENV_VISIBLE)
+    {
+        e.env_visible = Some(enum_value::<Switch>(v).ok_or_else(|| invalid(ENV_VISIBLE, v))?);
     }
     if !a.given("spp") {
         let v = extra(TARGET_SPP)?;

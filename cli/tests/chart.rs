@@ -99,16 +99,16 @@ fn a_tiny_study_writes_csv_json_png_and_svg() {
     assert_eq!(
         lines[0],
         "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,cpu_seconds,\
-         light_sampling,triangle_sampling,light_selection"
+         light_sampling,triangle_sampling,light_selection,env_sampling"
     );
     // 4 configurations × checkpoints 1, 2, 4, 8.
     assert_eq!(lines.len(), 1 + 16, "{csv}");
     let mut seen = Vec::new();
     for line in &lines[1..] {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 14, "{line}");
+        assert_eq!(f.len(), 15, "{line}");
         // The default light sampling, triangle sampling and light selection: mis, solid-angle, bvh.
-        assert_eq!((f[11], f[12], f[13]), ("mis", "solid-angle", "bvh"), "{line}");
+        assert_eq!((f[11], f[12], f[13], f[14]), ("mis", "solid-angle", "bvh", "importance"), "{line}");
         assert_eq!(
             f[0],
             format!("{}/{}/{}/{}/{}/comp-{}/{}", f[1], f[2], f[11], f[12], f[13], f[3], f[4]),
@@ -186,14 +186,15 @@ fn a_study_resumes_and_refuses_other_settings() {
     // triangle-sampling axis, and one saved before the light-selection axis only, are resumed as
     // ones of light sampling mis, triangle sampling area (where the key is absent) and light
     // selection power, how they were rendered: with those settings nothing is rendered again;
-    // with today's defaults, solid-angle and bvh, they are studies of other settings.
+    // with today's defaults, solid-angle and bvh, they are studies of other settings. None of
+    // them has env_sampling: it is importance, the default, whose names have no part of it.
     let renamed = |keys: Vec<(String, u64, f64)>, now: &str| -> Vec<(String, u64, f64)> {
         keys.into_iter().map(|(c, spp, s)| (c.replace("/mis/solid-angle/bvh/", now), spp, s)).collect()
     };
     for (absent, old_part, triangle) in [
-        (&["light_sampling", "triangle_sampling", "light_selection"][..], "/", "area"),
-        (&["triangle_sampling", "light_selection"][..], "/mis/", "area"),
-        (&["light_selection"][..], "/mis/solid-angle/", "solid-angle"),
+        (&["light_sampling", "triangle_sampling", "light_selection", "env_sampling"][..], "/", "area"),
+        (&["triangle_sampling", "light_selection", "env_sampling"][..], "/mis/", "area"),
+        (&["light_selection", "env_sampling"][..], "/mis/solid-angle/", "solid-angle"),
     ] {
         let strip = |v: &mut serde_json::Value| {
             for k in absent {
@@ -423,7 +424,9 @@ fn triangle_sampling_is_an_axis() {
     let csv = std::fs::read_to_string(out.join("chart.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 4 * 3, "{csv}");
     assert!(
-        csv.lines().skip(1).all(|l| l.ends_with(",solid-angle,bvh") || l.ends_with(",area,bvh")),
+        csv.lines()
+            .skip(1)
+            .all(|l| l.ends_with(",solid-angle,bvh,importance") || l.ends_with(",area,bvh,importance")),
         "{csv}"
     );
     let svg = std::fs::read_to_string(out.join("rmse_vs_spp.svg")).unwrap();
@@ -478,8 +481,14 @@ fn light_selection_is_an_axis() {
     }
     let csv = std::fs::read_to_string(out.join("chart.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 4 * 3, "{csv}");
-    assert!(csv.lines().next().unwrap().ends_with(",triangle_sampling,light_selection"), "{csv}");
-    assert!(csv.lines().skip(1).all(|l| l.ends_with(",power") || l.ends_with(",bvh")), "{csv}");
+    assert!(
+        csv.lines().next().unwrap().ends_with(",triangle_sampling,light_selection,env_sampling"),
+        "{csv}"
+    );
+    assert!(
+        csv.lines().skip(1).all(|l| l.ends_with(",power,importance") || l.ends_with(",bvh,importance")),
+        "{csv}"
+    );
     let svg = std::fs::read_to_string(out.join("rmse_vs_spp.svg")).unwrap();
     for label in ["sobol solid-angle power", "sobol solid-angle bvh", "sobol area power", "sobol area bvh"] {
         assert!(svg.contains(label), "the legend names {label}");
@@ -611,4 +620,93 @@ fn gpu_rows_match_the_cpu_rows() {
         let (c, g) = (rmse("cpu", spp), rmse("gpu", spp));
         assert!((c - g).abs() <= 1e-6, "spp {spp}: cpu {c}, gpu {g}");
     }
+}
+
+/// Environment sampling is an axis (compensated left out with nee, which cannot weigh it), and
+/// `--env` sets the study's scene: the cube lit by the built-in studio against a reference
+/// rendered so, by default light and by `--env studio` alike (the same scene).
+#[test]
+fn env_sampling_is_an_axis() {
+    let dir = temp_dir("env_sampling");
+    let cube = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/scenes/Box/glTF/Box.gltf");
+    let reference = dir.join("ref");
+    let o = furnace(&[
+        "render",
+        cube,
+        "--backend",
+        "cpu",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "64",
+        "--seed",
+        "7",
+        "--quiet",
+        "--out",
+        reference.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let out = dir.join("study");
+    let ref_exr = dir.join("ref.exr");
+    let study = |extra: &[&str]| {
+        let mut args = vec![
+            "chart",
+            "--reference",
+            ref_exr.to_str().unwrap(),
+            "--scene",
+            cube,
+            "--samplers",
+            "sobol",
+            "--sampling",
+            "caps",
+            "--spp",
+            "2",
+            "--quiet",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        furnace(&args)
+    };
+    let o = study(&[
+        "--env",
+        "studio",
+        "--light-sampling",
+        "nee,mis",
+        "--env-sampling",
+        "off,importance,compensated",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(
+        stderr(&o).contains("--env-sampling compensated is not combined with --light-sampling nee"),
+        "{}",
+        stderr(&o)
+    );
+    let doc = json(&out.join("chart.json"));
+    assert_eq!(doc["settings"]["env_sampling"], serde_json::json!(["off", "importance", "compensated"]));
+    let configs: Vec<&str> =
+        doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
+    assert_eq!(
+        configs,
+        [
+            "sobol/caps/nee/solid-angle/bvh/env-off/comp-on/cpu",
+            "sobol/caps/nee/solid-angle/bvh/comp-on/cpu",
+            "sobol/caps/mis/solid-angle/bvh/env-off/comp-on/cpu",
+            "sobol/caps/mis/solid-angle/bvh/comp-on/cpu",
+            "sobol/caps/mis/solid-angle/bvh/env-compensated/comp-on/cpu",
+        ]
+    );
+    for r in doc["rows"].as_array().unwrap() {
+        assert!(r["rmse"].as_f64().is_some_and(|e| e > 0.0), "{r}");
+    }
+    // Another environment is another scene than the reference's: refused, naming the hash.
+    let o = study(&["--env", "studio", "--env-rotation", "90"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("was rendered from another scene"), "{}", stderr(&o));
+    // Only compensated with nee: nothing to render, said as render says it.
+    let o = study(&["--light-sampling", "nee", "--env-sampling", "compensated"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("--env-sampling compensated needs --light-sampling mis"), "{}", stderr(&o));
 }

@@ -180,6 +180,10 @@ fn bad_flag_values_fail_clearly() {
         (&["render", "--masking", "smith"][..], "smith"),
         (&["render", "--width", "0"][..], "0"),
         (&["render", "--nope"][..], "--nope"),
+        (&["render", "--env-intensity", "-1"][..], "intensity must be a finite number ≥ 0"),
+        (&["render", "--env-rotation", "nan"][..], "rotation must be a finite number of degrees"),
+        (&["render", "--env-visible", "maybe"][..], "maybe"),
+        (&["render", "--env-sampling", "always"][..], "always"),
     ] {
         let o = furnace(args);
         assert_eq!(o.status.code(), Some(1), "{args:?}");
@@ -682,8 +686,13 @@ fn bench_cpu_prints_json_with_every_field() {
     assert!(v["triangles"].as_u64().is_some_and(|t| t > 0));
     // The light-sample settings, the defaults.
     assert_eq!(
-        (&v["light_sampling"], &v["triangle_sampling"], &v["light_selection"]),
-        (&serde_json::json!("mis"), &serde_json::json!("solid-angle"), &serde_json::json!("bvh"))
+        (&v["light_sampling"], &v["triangle_sampling"], &v["light_selection"], &v["env_sampling"]),
+        (
+            &serde_json::json!("mis"),
+            &serde_json::json!("solid-angle"),
+            &serde_json::json!("bvh"),
+            &serde_json::json!("importance")
+        )
     );
     for key in ["seconds", "msamples_per_s", "ms_per_frame", "time_to_first_frame_s"] {
         assert!(v[key].as_f64().is_some_and(|x| x > 0.0 && x.is_finite()), "{key}: {}", v[key]);
@@ -761,4 +770,155 @@ fn bench_bad_scene_is_one_line() {
     let o = furnace(&["bench", "--backend", "cpu", "--sampler", "cmj"]);
     assert_eq!(o.status.code(), Some(1));
     assert!(stderr(&o).contains("--spp"), "{}", stderr(&o));
+}
+
+/// Writes a `width × height` float EXR environment map whose texel `(x, y)` is `texel(x, y)`.
+fn write_env_map(path: &Path, width: usize, height: usize, texel: impl Fn(usize, usize) -> [f32; 3] + Sync) {
+    exr::prelude::write_rgb_file(path, width, height, |x, y| {
+        let [r, g, b] = texel(x, y);
+        (r, g, b)
+    })
+    .unwrap();
+}
+
+/// The mean of the EXR's R, G and B over all pixels.
+fn mean_radiance(exr: &Path) -> f64 {
+    let (_, _, pixels, _) = furnace_post::read_exr(exr).unwrap();
+    pixels.iter().map(|p| f64::from(p.x + p.y + p.z) / 3.0).sum::<f64>() / pixels.len() as f64
+}
+
+/// A scene without a light of its own (DamagedHelmet: only emissive textures) is lit by the
+/// built-in studio, saying so in one line; `--env none` leaves it dark but for its glow.
+#[test]
+fn a_scene_without_lights_is_lit_by_the_studio_unless_env_none() {
+    let dir = temp_dir("env_default_light");
+    let helmet = data("DamagedHelmet/glTF-Binary/DamagedHelmet.glb");
+    let run = |name: &str, extra: &[&str]| {
+        let out = dir.join(name);
+        let mut all = vec!["render", "--quiet", "--backend", "cpu", "--width", "32", "--height", "32"];
+        all.extend_from_slice(&["--spp", "4", &helmet, "--out", out.to_str().unwrap()]);
+        all.extend_from_slice(extra);
+        let o = furnace(&all);
+        assert!(o.status.success(), "{extra:?}: {}", stderr(&o));
+        (stderr(&o), mean_radiance(&dir.join(format!("{name}.exr"))))
+    };
+    let (err, lit) = run("studio", &[]);
+    let note = "note: DamagedHelmet.glb has no light of its own: lit by the built-in studio environment \
+                (--env FILE to choose another, --env none for none)";
+    let notes: Vec<&str> = err.lines().filter(|l| l.starts_with("note:")).collect();
+    assert_eq!(notes, [note], "one line, even with --quiet: {err}");
+    let (err, dark) = run("none", &["--env", "none"]);
+    assert!(!err.contains("note:"), "{err}");
+    assert!(lit > 0.1, "studio-lit mean {lit}");
+    assert!(dark < 0.05 * lit, "unlit mean {dark} (emission only) against {lit}");
+    // Options without an environment to act on are ignored, with a warning.
+    let (err, _) = run("none_turned", &["--env", "none", "--env-rotation", "30"]);
+    assert!(
+        err.contains(
+            "warning: DamagedHelmet.glb: --env-rotation 30 is ignored: no environment map (--env none)"
+        ),
+        "{err}"
+    );
+    // `furnace info` says so.
+    let o = furnace(&["info", &helmet]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("default light   none of its own"), "{o:?}");
+}
+
+#[test]
+fn a_missing_or_broken_env_map_is_one_line_naming_it() {
+    let dir = temp_dir("env_bad_map");
+    let missing = dir.join("missing.hdr");
+    let nan = dir.join("nan.exr");
+    write_env_map(&nan, 4, 2, |x, y| if (x, y) == (2, 1) { [0.5, f32::NAN, 0.5] } else { [1.0; 3] });
+    for (file, needle) in [(&missing, "cannot read the environment map"), (&nan, "texel (2, 1)")] {
+        let out = dir.join("x");
+        let o = furnace(&[
+            "render",
+            "--quiet",
+            "--backend",
+            "cpu",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--spp",
+            "1",
+            "--env",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.starts_with("error: ") && err.contains(file.to_str().unwrap()) && err.contains(needle),
+            "{err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+        assert!(!dir.join("x.exr").exists(), "nothing written");
+    }
+}
+
+#[test]
+fn env_sampling_compensated_needs_mis() {
+    for cmd in ["render", "bench"] {
+        let o =
+            furnace(&[cmd, "--backend", "cpu", "--env-sampling", "compensated", "--light-sampling", "nee"]);
+        assert_eq!(o.status.code(), Some(1), "{cmd}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.starts_with("error: --env-sampling compensated needs --light-sampling mis"),
+            "{cmd}: {err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    }
+}
+
+/// A render lit by a map file, turned by 30°, continues bit-identically from the file's record
+/// alone; another rotation is refused, naming it (and the scene hash that follows from it). A
+/// scene lit by the default studio continues too.
+#[test]
+fn resume_keeps_the_environment_and_refuses_another_rotation() {
+    let dir = temp_dir("env_resume");
+    let map = dir.join("sky.exr");
+    write_env_map(&map, 16, 8, |x, y| [1.0 + x as f32, 0.5, 2.0 / (1.0 + y as f32)]);
+    let cube = data("Box/glTF/Box.gltf");
+    let extra = [
+        cube.as_str(),
+        "--env",
+        map.to_str().unwrap(),
+        "--env-rotation",
+        "30",
+        "--env-sampling",
+        "compensated",
+    ];
+    resume_matches_one_render(&dir, "map", &extra);
+    let (_, _, _, meta) = furnace_post::read_exr(dir.join("map_2_2.exr")).unwrap();
+    let record = |k: &str| meta.extra.get(k).map(String::as_str);
+    assert_eq!(record("furnace.env"), map.to_str());
+    assert_eq!(record("furnace.env_rotation_deg"), Some("30"));
+    assert_eq!(record("furnace.env_sampling"), Some("compensated"));
+    assert_eq!(record("furnace.env_intensity"), None, "not given, not recorded");
+    let two = dir.join("map_2.exr");
+    for (args, needle) in [
+        (&["--env-rotation", "45"][..], "environment rotation (degrees) is 30 in the file but 45 now"),
+        (
+            &["--env-sampling", "importance"][..],
+            "environment sampling is compensated in the file but importance now",
+        ),
+        (&["--env", "studio"][..], "environment is "),
+    ] {
+        let mut all = vec!["render", "--quiet", "--resume", two.to_str().unwrap(), "--spp", "4"];
+        all.extend_from_slice(args);
+        let o = furnace(&all);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(
+            err.contains("map_2.exr: cannot resume with different settings") && err.contains(needle),
+            "{args:?}: {err}"
+        );
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    }
+    // The cube has no light of its own: the default studio, rebuilt on resume.
+    resume_matches_one_render(&dir, "studio", &[cube.as_str(), "--env-intensity", "0.5"]);
 }

@@ -21,6 +21,8 @@ pub struct Row {
     pub triangle_sampling: String,
     /// How a light sample chooses the emissive triangle (`bvh`, `power`).
     pub light_selection: String,
+    /// How light samples gather the environment map (`off`, `importance`, `compensated`).
+    pub env_sampling: String,
     /// Energy compensation (`on`, `off`).
     pub compensation: String,
     /// Backend (`cpu`, `gpu`).
@@ -54,19 +56,28 @@ pub const OLD_TRIANGLE_SAMPLING: &str = "area";
 /// then chose their emissive triangle in proportion to power.
 pub const OLD_LIGHT_SELECTION: &str = "power";
 
+/// The environment sampling of a row saved before the environment-sampling axis existed (no
+/// scene had an environment map; importance is the default).
+pub const OLD_ENV_SAMPLING: &str = "importance";
+
 /// A configuration's name from its axes' CLI names: `sobol/caps/mis/solid-angle/bvh/comp-off/cpu`
 /// (the light-selection part after the triangle sampling, the other part of the light sample).
+/// The environment sampling follows it as `env-off` or `env-compensated`, and is left out for
+/// the default, importance: a study's names from before the axis stay valid.
+#[allow(clippy::too_many_arguments)]
 pub fn config_name(
     sampler: &str,
     sampling: &str,
     light_sampling: &str,
     triangle_sampling: &str,
     light_selection: &str,
+    env_sampling: &str,
     compensation: &str,
     backend: &str,
 ) -> String {
+    let env = if env_sampling == OLD_ENV_SAMPLING { String::new() } else { format!("env-{env_sampling}/") };
     format!(
-        "{sampler}/{sampling}/{light_sampling}/{triangle_sampling}/{light_selection}/comp-{compensation}/{backend}"
+        "{sampler}/{sampling}/{light_sampling}/{triangle_sampling}/{light_selection}/{env}comp-{compensation}/{backend}"
     )
 }
 
@@ -74,7 +85,7 @@ pub fn config_name(
 /// reader of the older columns by position still works).
 pub const CSV_HEADER: &str = concat!(
     "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,",
-    "cpu_seconds,light_sampling,triangle_sampling,light_selection"
+    "cpu_seconds,light_sampling,triangle_sampling,light_selection,env_sampling"
 );
 
 /// The rows as CSV (with [`CSV_HEADER`]); numbers in Rust's shortest round-trip form.
@@ -84,7 +95,7 @@ pub fn to_csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.config,
             r.sampler,
             r.sampling,
@@ -98,7 +109,8 @@ pub fn to_csv(rows: &[Row]) -> String {
             if r.cpu_seconds.is_finite() { r.cpu_seconds.to_string() } else { String::new() },
             r.light_sampling,
             r.triangle_sampling,
-            r.light_selection
+            r.light_selection,
+            r.env_sampling
         );
     }
     s
@@ -113,6 +125,7 @@ pub fn row_json(r: &Row) -> Value {
         "light_sampling": r.light_sampling,
         "triangle_sampling": r.triangle_sampling,
         "light_selection": r.light_selection,
+        "env_sampling": r.env_sampling,
         "compensation": r.compensation,
         "backend": r.backend,
         "spp": r.spp,
@@ -134,7 +147,9 @@ fn finite(x: f64) -> Value {
 /// triangle-sampling axis has no `triangle_sampling`: it was rendered with
 /// [`OLD_TRIANGLE_SAMPLING`]; one saved before the light-selection axis has no
 /// `light_selection`: it was rendered with [`OLD_LIGHT_SELECTION`]. Such a row's configuration
-/// is renamed to today's name for it, so that a resumed study finds it.
+/// is renamed to today's name for it, so that a resumed study finds it. One saved before the
+/// environment-sampling axis has no `env_sampling`: it is [`OLD_ENV_SAMPLING`], whose name has
+/// no part of its own (its name stays).
 pub fn row_from_json(v: &Value) -> Result<Row, String> {
     let text = |k: &str| {
         v.get(k).and_then(Value::as_str).map(str::to_string).ok_or_else(|| format!("a row has no '{k}'"))
@@ -158,6 +173,7 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
     let (light_sampling, light_saved) = axis("light_sampling", OLD_LIGHT_SAMPLING)?;
     let (triangle_sampling, triangle_saved) = axis("triangle_sampling", OLD_TRIANGLE_SAMPLING)?;
     let (light_selection, selection_saved) = axis("light_selection", OLD_LIGHT_SELECTION)?;
+    let (env_sampling, _) = axis("env_sampling", OLD_ENV_SAMPLING)?;
     let config = if light_saved && triangle_saved && selection_saved {
         config
     } else {
@@ -167,6 +183,7 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
             &light_sampling,
             &triangle_sampling,
             &light_selection,
+            &env_sampling,
             &compensation,
             &backend,
         )
@@ -178,6 +195,7 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
         light_sampling,
         triangle_sampling,
         light_selection,
+        env_sampling,
         compensation,
         backend,
         spp,
@@ -340,6 +358,7 @@ mod tests {
             light_sampling: "nee".into(),
             triangle_sampling: "area".into(),
             light_selection: "power".into(),
+            env_sampling: "importance".into(),
             compensation: "off".into(),
             backend: "cpu".into(),
             spp: 8,
@@ -354,7 +373,7 @@ mod tests {
         assert_eq!(
             csv,
             format!(
-                "{CSV_HEADER}\nsobol/caps/nee/area/power/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee,area,power\n"
+                "{CSV_HEADER}\nsobol/caps/nee/area/power/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee,area,power,importance\n"
             )
         );
     }
@@ -368,6 +387,7 @@ mod tests {
             light_sampling: light_sampling.into(),
             triangle_sampling: triangle_sampling.into(),
             light_selection: String::new(),
+            env_sampling: String::new(),
             compensation: "off".into(),
             backend: "cpu".into(),
             spp: 4,
@@ -377,6 +397,7 @@ mod tests {
             relmse: 0.125,
             reference_matches: true,
         });
+        v.as_object_mut().unwrap().remove("env_sampling");
         for k in absent {
             v.as_object_mut().unwrap().remove(*k);
         }
@@ -431,6 +452,28 @@ mod tests {
         v["config"] = "sobol/caps/nee/solid-angle/bvh/comp-off/cpu".into();
         let row = row_from_json(&v).unwrap();
         assert_eq!(axes(&row), ("sobol/caps/nee/solid-angle/bvh/comp-off/cpu", "nee", "solid-angle", "bvh"));
+    }
+
+    #[test]
+    fn a_row_saved_before_env_sampling_is_importance_and_keeps_its_name() {
+        let v = old_row("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", "mis", "solid-angle", &[]);
+        let mut v = v;
+        v["light_selection"] = "bvh".into();
+        let row = row_from_json(&v).unwrap();
+        assert_eq!(
+            (row.config.as_str(), row.env_sampling.as_str()),
+            ("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", "importance")
+        );
+        // The other methods have a part of their own in the name.
+        assert_eq!(
+            config_name("sobol", "caps", "mis", "solid-angle", "bvh", "compensated", "off", "cpu"),
+            "sobol/caps/mis/solid-angle/bvh/env-compensated/comp-off/cpu"
+        );
+        let mut row = row;
+        row.env_sampling = "off".into();
+        row.config = config_name("sobol", "caps", "mis", "solid-angle", "bvh", "off", "off", "cpu");
+        let back = row_from_json(&row_json(&row)).unwrap();
+        assert_eq!((back.config, back.env_sampling), (row.config, row.env_sampling));
     }
 
     #[test]

@@ -5,7 +5,8 @@ use super::data::{self, ExternalPoint, Row, rows_of, slope};
 use super::plot::{self, Labels, Marker, Series, Style};
 use super::study::{Config, Study, dedup};
 use crate::args::{
-    ChartBackend, ChartTime, LightSamplingArg, LightSelectionArg, SamplingArg, Switch, TriangleSamplingArg,
+    ChartBackend, ChartTime, EnvSamplingArg, LightSamplingArg, LightSelectionArg, SamplingArg, Switch,
+    TriangleSamplingArg,
 };
 use crate::resume;
 use furnace_sampling::SamplerKind;
@@ -68,6 +69,16 @@ fn tint_selection(c: RGBColor, selection: LightSelectionArg) -> RGBColor {
     }
 }
 
+/// `c` tinted by environment sampling: towards teal for off, towards crimson for compensated,
+/// as is for importance (hues of their own, apart from the other axes' shades and tints).
+fn tint_env(c: RGBColor, env: EnvSamplingArg) -> RGBColor {
+    match env {
+        EnvSamplingArg::Off => mix(c, RGBColor(0, 150, 136), 0.45),
+        EnvSamplingArg::Importance => c,
+        EnvSamplingArg::Compensated => mix(c, RGBColor(200, 0, 60), 0.45),
+    }
+}
+
 fn fmt_slope(k: f64) -> String {
     format!("{k:.2}").replace('-', "−")
 }
@@ -80,6 +91,7 @@ struct Varying {
     light_sampling: usize,
     triangle_sampling: usize,
     light_selection: usize,
+    env_sampling: usize,
     compensations: usize,
     backends: usize,
 }
@@ -92,6 +104,7 @@ impl Varying {
             light_sampling: dedup(&study.args.light_sampling).len(),
             triangle_sampling: dedup(&study.args.triangle_sampling).len(),
             light_selection: dedup(&study.args.light_selection).len(),
+            env_sampling: dedup(&study.args.env_sampling).len(),
             compensations: study.compensations().len(),
             backends: dedup(&study.args.backends).len(),
         }
@@ -112,6 +125,9 @@ impl Varying {
         }
         if vary(self.light_selection) {
             parts.push(resume::cli_name(&c.light_selection));
+        }
+        if vary(self.env_sampling) {
+            parts.push(format!("env {}", resume::cli_name(&c.env_sampling)));
         }
         if vary(self.compensations) {
             parts.push(format!("comp {}", resume::cli_name(&c.compensation)));
@@ -148,7 +164,7 @@ pub(super) fn save_charts(study: &Study, rows: &[Row], external: &[ExternalPoint
 }
 
 /// One series per configuration with rows: colour by sampler (shaded by light sampling, tinted by
-/// triangle sampling and by light selection, each when it varies), marker by sampling method,
+/// triangle sampling, by light selection and by environment sampling, each when it varies), marker by sampling method,
 /// dashed with compensation, hollow on the GPU.
 fn config_series(
     study: &Study,
@@ -188,6 +204,9 @@ fn config_series(
         }
         if varying.light_selection > 1 {
             color = tint_selection(color, c.light_selection);
+        }
+        if varying.env_sampling > 1 {
+            color = tint_env(color, c.env_sampling);
         }
         let style = Style {
             color,
@@ -293,6 +312,12 @@ fn note(study: &Study, varying: &Varying, metric: &Metric, by_time: bool) -> Str
         note.push_str(
             " Light selection: bvh (the emissive triangle chosen by a light BVH's importance at the \
              shading point), power (in proportion to power, tinted violet).",
+        );
+    }
+    if varying.env_sampling > 1 {
+        note.push_str(
+            " Environment sampling: importance (light samples by the map's luminance), off (BSDF rays \
+             only, tinted teal), compensated (MIS compensation, tinted crimson).",
         );
     }
     if study.configs.iter().any(|c| c.compensation == Switch::On) {

@@ -33,6 +33,7 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
         light_sampling: c.light_sampling.into(),
         triangle_sampling: c.triangle_sampling.into(),
         light_selection: c.light_selection.into(),
+        env_sampling: c.env_sampling.into(),
         ..study.settings
     };
     let choice = match c.backend {

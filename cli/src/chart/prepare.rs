@@ -4,7 +4,7 @@
 
 use super::reference::Reference;
 use super::study::{Config, Study, checkpoints, dedup};
-use crate::args::{ChartArgs, MaskingArg, SceneArg, Switch};
+use crate::args::{ChartArgs, EnvSamplingArg, LightSamplingArg, MaskingArg, SceneArg, Switch};
 use crate::resume;
 use furnace_render::RenderSettings;
 use furnace_scene::{Scene, builtin};
@@ -20,10 +20,11 @@ fn load_scene(scene: &SceneArg) -> Result<(Scene, String), String> {
 /// Resolves the study from the arguments and the references, checking what a furnace reference
 /// records; prints warnings about biased or correlated comparisons.
 pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
-    let (scene, scene_name) = load_scene(&a.scene)?;
+    let (mut scene, scene_name) = load_scene(&a.scene)?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
+    crate::env::apply(&mut scene, &a.environment)?;
     let (reference, compensated) = load_references(a)?;
     let recorded_bounces = check_recorded(a, &reference, compensated.as_ref(), &scene, &scene_name)?;
     let masking = study_masking(a, &reference, compensated.as_ref());
@@ -58,17 +59,26 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
             for light_sampling in dedup(&a.light_sampling) {
                 for triangle_sampling in dedup(&a.triangle_sampling) {
                     for light_selection in dedup(&a.light_selection) {
-                        for sampling in dedup(&a.sampling) {
-                            for sampler in dedup(&a.samplers) {
-                                study.configs.push(Config {
-                                    sampler,
-                                    sampling,
-                                    light_sampling,
-                                    triangle_sampling,
-                                    light_selection,
-                                    compensation,
-                                    backend,
-                                });
+                        for env_sampling in dedup(&a.env_sampling) {
+                            if env_sampling == EnvSamplingArg::Compensated
+                                && light_sampling == LightSamplingArg::Nee
+                            {
+                                // Compensation needs MIS (crate::env::check_sampling).
+                                continue;
+                            }
+                            for sampling in dedup(&a.sampling) {
+                                for sampler in dedup(&a.samplers) {
+                                    study.configs.push(Config {
+                                        sampler,
+                                        sampling,
+                                        light_sampling,
+                                        triangle_sampling,
+                                        light_selection,
+                                        env_sampling,
+                                        compensation,
+                                        backend,
+                                    });
+                                }
                             }
                         }
                     }
@@ -77,10 +87,25 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
         }
     }
     if study.configs.is_empty() {
+        let only = dedup(&a.env_sampling) == [EnvSamplingArg::Compensated]
+            && dedup(&a.light_sampling) == [LightSamplingArg::Nee];
+        if only {
+            return Err(
+                crate::env::check_sampling(EnvSamplingArg::Compensated, LightSamplingArg::Nee).unwrap_err()
+            );
+        }
         return Err(
             "no configurations: give at least one sampler, sampling method, light sampling, triangle \
-             sampling, light selection and backend"
+             sampling, light selection, environment sampling and backend"
                 .into(),
+        );
+    }
+    if dedup(&a.env_sampling).contains(&EnvSamplingArg::Compensated)
+        && dedup(&a.light_sampling).contains(&LightSamplingArg::Nee)
+    {
+        eprintln!(
+            "note: --env-sampling compensated is not combined with --light-sampling nee (compensation \
+             needs MIS): those configurations are left out"
         );
     }
     warn_compensation_mismatch(&study);
@@ -141,8 +166,23 @@ fn check_recorded(
         }
         let extra = |k: &str| r.metadata.extra.get(k).map(String::as_str);
         if extra(resume::SCENE_HASH) != Some(scene_hash.as_str()) {
+            // The environment options are part of the scene: name those the reference had.
+            let env: Vec<String> = [
+                (resume::ENV, "--env"),
+                (resume::ENV_INTENSITY, "--env-intensity"),
+                (resume::ENV_ROTATION, "--env-rotation"),
+                (resume::ENV_VISIBLE, "--env-visible"),
+            ]
+            .iter()
+            .filter_map(|(k, flag)| extra(k).map(|v| format!("{flag} {v}")))
+            .collect();
+            let hint = if env.is_empty() {
+                String::new()
+            } else {
+                format!(" (it was rendered with {}: give the same)", env.join(" "))
+            };
             return Err(format!(
-                "{p} was rendered from another scene (or another version of it) than {scene_name}"
+                "{p} was rendered from another scene (or another version of it) than {scene_name}{hint}"
             ));
         }
         if let Some(c) = extra(resume::CAMERA).filter(|&c| c != "0" && c != resume::FRAMED) {

@@ -31,11 +31,13 @@ pub(super) fn load_saved(dir: &Path, now: &Value) -> Result<Vec<Row>, String> {
     let mut recorded = v.get("settings").cloned().unwrap_or(Value::Null);
     // A study saved before the light-sampling axis rendered every configuration with MIS; one
     // saved before the triangle-sampling axis sampled emissive triangles by area; one saved
-    // before the light-selection axis chose them in proportion to power.
+    // before the light-selection axis chose them in proportion to power; one saved before the
+    // environment-sampling axis had the default, importance.
     if let Some(s) = recorded.as_object_mut() {
         s.entry("light_sampling").or_insert_with(|| json!([data::OLD_LIGHT_SAMPLING]));
         s.entry("triangle_sampling").or_insert_with(|| json!([data::OLD_TRIANGLE_SAMPLING]));
         s.entry("light_selection").or_insert_with(|| json!([data::OLD_LIGHT_SELECTION]));
+        s.entry("env_sampling").or_insert_with(|| json!([data::OLD_ENV_SAMPLING]));
     }
     if let Some((key, was, is)) = data::first_difference(&recorded, now) {
         return Err(format!(
@@ -91,6 +93,7 @@ fn configs_json(study: &Study, rows: &[Row]) -> Vec<Value> {
                 "light_sampling": resume::cli_name(&c.light_sampling),
                 "triangle_sampling": resume::cli_name(&c.triangle_sampling),
                 "light_selection": resume::cli_name(&c.light_selection),
+                "env_sampling": resume::cli_name(&c.env_sampling),
                 "compensation": resume::cli_name(&c.compensation),
                 "backend": resume::cli_name(&c.backend),
                 "reference": r.path.display().to_string(),

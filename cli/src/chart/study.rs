@@ -1,12 +1,12 @@
 //! The study: its configurations (sampler × BRDF sampling × light sampling × triangle sampling
-//! × light selection × compensation × backend), their checkpoints, the references they are
+//! × light selection × environment sampling × compensation × backend), their checkpoints, the references they are
 //! scored against, and what is left to render.
 
 use super::data::{Row, config_name, rows_of};
 use super::reference::Reference;
 use crate::args::{
-    ChartArgs, ChartBackend, LightSamplingArg, LightSelectionArg, MaskingArg, SamplingArg, Switch,
-    TriangleSamplingArg,
+    ChartArgs, ChartBackend, EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, SamplingArg,
+    Switch, TriangleSamplingArg,
 };
 use crate::resume;
 use furnace_render::{RenderSettings, Timing};
@@ -22,12 +22,14 @@ pub(super) struct Config {
     pub(super) light_sampling: LightSamplingArg,
     pub(super) triangle_sampling: TriangleSamplingArg,
     pub(super) light_selection: LightSelectionArg,
+    pub(super) env_sampling: EnvSamplingArg,
     pub(super) compensation: Switch,
     pub(super) backend: ChartBackend,
 }
 
 impl Config {
-    /// `sobol/caps/mis/solid-angle/bvh/comp-off/cpu`.
+    /// `sobol/caps/mis/solid-angle/bvh/comp-off/cpu` (`…/bvh/env-off/comp-off/cpu` for an
+    /// environment sampling other than importance).
     pub(super) fn name(&self) -> String {
         config_name(
             &self.sampler.to_string(),
@@ -35,6 +37,7 @@ impl Config {
             &resume::cli_name(&self.light_sampling),
             &resume::cli_name(&self.triangle_sampling),
             &resume::cli_name(&self.light_selection),
+            &resume::cli_name(&self.env_sampling),
             &resume::cli_name(&self.compensation),
             &resume::cli_name(&self.backend),
         )
@@ -48,6 +51,7 @@ impl Config {
             light_sampling: resume::cli_name(&self.light_sampling),
             triangle_sampling: resume::cli_name(&self.triangle_sampling),
             light_selection: resume::cli_name(&self.light_selection),
+            env_sampling: resume::cli_name(&self.env_sampling),
             compensation: resume::cli_name(&self.compensation),
             backend: resume::cli_name(&self.backend),
             spp,
@@ -130,6 +134,7 @@ impl Study {
                 names(dedup(&self.args.triangle_sampling).iter().map(resume::cli_name).collect()),
             "light_selection":
                 names(dedup(&self.args.light_selection).iter().map(resume::cli_name).collect()),
+            "env_sampling": names(dedup(&self.args.env_sampling).iter().map(resume::cli_name).collect()),
             "compensation": names(self.compensations().iter().map(resume::cli_name).collect()),
             "backends": names(dedup(&self.args.backends).iter().map(resume::cli_name).collect()),
             "adapter": self.args.adapter,
