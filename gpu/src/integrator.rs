@@ -256,26 +256,23 @@ pub fn light_bvh_words(e: &Emitters, bvh: &LightBvh) -> Vec<u32> {
     words
 }
 
-/// The `environment` buffer of an environment map, as `f32` bits: its texels (RGB, row-major,
-/// row 0 at the top; 12 bytes each, `f32` as the CPU holds them: a sun of 10⁶ W/(m²·sr) does not
-/// fit `f16`, whose largest value is 65 504, nor RGB9E5's 65 408), then, when `sampler` is given
-/// (the map is light-sampled), its conditional CDFs (W per row) and marginal CDF (H) — the same
-/// `f32` values the CPU samples with: 16 bytes per texel in all, 12 without sampling.
+/// The `environment` and `environment_cdf` buffers of an environment map, as `f32` bits: its
+/// texels (RGB, row-major, row 0 at the top; 12 bytes each, `f32` as the CPU holds them: a sun of
+/// 10⁶ W/(m²·sr) does not fit `f16`, whose largest value is 65 504, nor RGB9E5's 65 408), and,
+/// when `sampler` is given (the map is light-sampled), its conditional CDFs (W per row) then its
+/// marginal CDF (H) — the same `f32` values the CPU samples with (4 bytes a texel; none
+/// without sampling). Two buffers, so that a 4096 × 2048 map (96 + 32 MiB) fits the 128 MiB a
+/// binding may have on every adapter.
 pub fn environment_words(
     env: &furnace_scene::Environment,
     sampler: Option<&furnace_scene::EnvironmentSampler>,
-) -> Vec<u32> {
-    let map = &env.map;
-    let cdfs = sampler
-        .map_or(0, |s| s.distribution().conditional_cdf().len() + s.distribution().marginal_cdf().len());
-    let mut words = Vec::with_capacity(3 * map.texels().len() + cdfs);
-    words.extend(map.texels().iter().flat_map(|t| t.to_array()).map(f32::to_bits));
-    if let Some(s) = sampler {
+) -> [Vec<u32>; 2] {
+    let texels = env.map.texels().iter().flat_map(|t| t.to_array()).map(f32::to_bits).collect();
+    let cdfs = sampler.map_or_else(Vec::new, |s| {
         let d = s.distribution();
-        words.extend(d.conditional_cdf().iter().map(|c| c.to_bits()));
-        words.extend(d.marginal_cdf().iter().map(|c| c.to_bits()));
-    }
-    words
+        d.conditional_cdf().iter().chain(d.marginal_cdf()).map(|c| c.to_bits()).collect()
+    });
+    [texels, cdfs]
 }
 
 /// Words of the counter buffer (`ray_counter`): rays, nodes and triangles as 64-bit pairs, then
@@ -344,7 +341,8 @@ pub struct GpuRenderer {
     turquin: wgpu::Buffer,
     point_lights: wgpu::Buffer,
     emitters: Option<wgpu::Buffer>,
-    environment: Option<wgpu::Buffer>,
+    /// The environment's texels and, when light-sampled, its CDFs (empty without one).
+    environment: Vec<wgpu::Buffer>,
     features: SceneFeatures,
     bytes_per_triangle: f64,
     bvh_bytes: u64,
@@ -387,6 +385,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     }
     if features.environment {
         bindings.push(Binding::read("environment", "array<f32>"));
+        if features.env_sampling {
+            bindings.push(Binding::read("environment_cdf", "array<f32>"));
+        }
     }
     bindings.push(Binding::read_write("ray_counter", &format!("array<atomic<u32>, {COUNTER_WORDS}>")));
     BindingTable::new(0, 0, bindings)
@@ -556,22 +557,25 @@ impl GpuRenderer {
             .transpose()?;
         // The environment's texels, and its CDFs when it is light-sampled; no buffer (and no
         // binding) without one.
-        let environment = match scene.environment() {
-            Some(env) => {
-                let env_sampling = settings.env_sampling.effective(settings.light_sampling);
-                let sampler = features
-                    .env_sampling
-                    .then(|| env.sampler(env_sampling == EnvSampling::Compensated))
-                    .flatten();
-                let words = environment_words(env, sampler.as_ref());
-                let bytes = 4 * words.len() as u64;
+        let mut environment = Vec::new();
+        if let Some(env) = scene.environment() {
+            let env_sampling = settings.env_sampling.effective(settings.light_sampling);
+            let sampler = features
+                .env_sampling
+                .then(|| env.sampler(env_sampling == EnvSampling::Compensated))
+                .flatten();
+            let words = environment_words(env, sampler.as_ref());
+            for (what, w) in [("environment map", &words[0]), ("environment map's CDFs", &words[1])] {
+                let bytes = 4 * w.len() as u64;
                 if bytes > limit {
-                    return Err(GpuError::TooLarge { what: "environment map".into(), bytes, limit });
+                    return Err(GpuError::TooLarge { what: what.into(), bytes, limit });
                 }
-                Some(storage_buffer(&ctx, "environment", &words)?)
             }
-            None => None,
-        };
+            environment.push(storage_buffer(&ctx, "environment", &words[0])?);
+            if sampler.is_some() {
+                environment.push(storage_buffer(&ctx, "environment cdf", &words[1])?);
+            }
+        }
         let precision = FilmPrecision::for_context(&ctx);
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
@@ -613,7 +617,7 @@ impl GpuRenderer {
             bvh_bytes,
             scene_bytes: gpu_scene.bytes
                 + emitters.as_ref().map_or(0, wgpu::Buffer::size)
-                + environment.as_ref().map_or(0, wgpu::Buffer::size),
+                + environment.iter().map(wgpu::Buffer::size).sum::<u64>(),
             ray_counter,
             ctx,
             settings,
@@ -838,9 +842,7 @@ impl GpuRenderer {
         if let Some(e) = &self.emitters {
             resources.push(e.as_entire_binding());
         }
-        if let Some(e) = &self.environment {
-            resources.push(e.as_entire_binding());
-        }
+        resources.extend(self.environment.iter().map(wgpu::Buffer::as_entire_binding));
         resources.push(self.ray_counter.as_entire_binding());
         let entries = binding_table(self.film.precision(), self.features).bind_entries(resources);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {

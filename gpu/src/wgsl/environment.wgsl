@@ -2,10 +2,10 @@
 // lat-long lookup, the rotation about +Y, EnvironmentSampler) and of furnace-sampling's
 // Distribution2D (CDF inversion).
 //
-// Requires a binding `environment: array<f32>` (furnace_gpu::integrator::environment_words): the
-// map's texels (RGB, row-major, row 0 at the top), then — only when it is light-sampled
-// (SAMPLES_ENVIRONMENT) — the conditional CDFs (W per row, the end of each cell) and the marginal
-// CDF (H), the same f32 values the CPU samples with.
+// Requires a binding `environment: array<f32>` of the map's texels (RGB, row-major, row 0 at the
+// top) and, only when it is light-sampled (SAMPLES_ENVIRONMENT), `environment_cdf: array<f32>`
+// of its conditional CDFs (W per row, the end of each cell) then its marginal CDF (H), the same
+// f32 values the CPU samples with (furnace_gpu::integrator::environment_words).
 
 // An environment as the integrator places it: the map's size, its intensity and the cosine and
 // sine of its rotation (furnace_scene::Environment::rotation_cos_sin).
@@ -88,7 +88,7 @@ fn env_find(start: u32, n: u32, u: f32) -> u32 {
     var hi = n;
     while lo < hi {
         let mid = (lo + hi) / 2u;
-        if environment[start + mid] <= u {
+        if environment_cdf[start + mid] <= u {
             lo = mid + 1u;
         } else {
             hi = mid;
@@ -102,7 +102,7 @@ fn env_cdf_start(start: u32, k: u32) -> f32 {
     if k == 0u {
         return 0.0;
     }
-    return environment[start + k - 1u];
+    return environment_cdf[start + k - 1u];
 }
 
 // furnace_scene::EnvironmentSample; pdf 0: no sample (a pole).
@@ -112,29 +112,31 @@ struct EnvSample {
     radiance: vec3<f32>,
 }
 
-// EnvironmentSampler::sample (Distribution2D::sample, then the sphere; the pdf is env_pdf of the
-// direction, as the MIS weight of a BSDF ray evaluates it).
+// EnvironmentSampler::sample (Distribution2D::sample, then the sphere; the pdf is the sampled
+// cell's density over the Jacobian).
 fn env_sample(env: EnvMap, u: vec2<f32>) -> EnvSample {
     let w = env.width;
     let h = env.height;
-    let conditional = 3u * w * h;
-    let marginal = conditional + w * h;
+    // The conditional CDFs start at word 0, the marginal CDF after them.
+    let marginal = w * h;
     let j = env_find(marginal, h, u.y);
     let m0 = env_cdf_start(marginal, j);
-    let m1 = environment[marginal + j];
+    let m1 = environment_cdf[marginal + j];
     let dv = clamp((u.y - m0) / (m1 - m0), 0.0, ENV_ONE_MINUS_EPSILON);
-    let row = conditional + j * w;
+    let row = j * w;
     let i = env_find(row, w, u.x);
     let c0 = env_cdf_start(row, i);
-    let c1 = environment[row + i];
+    let c1 = environment_cdf[row + i];
     let du = clamp((u.x - c0) / (c1 - c0), 0.0, ENV_ONE_MINUS_EPSILON);
     let uv = vec2<f32>((f32(i) + du) / f32(w), (f32(j) + dv) / f32(h));
-    let direction = env_to_world(env, env_uv_to_direction(uv));
-    let pdf = env_pdf(env, direction);
-    if !(pdf > 0.0 && pdf <= 3.40282347e38) {
+    let pdf_uv = (m1 - m0) * (c1 - c0) * (f32(w) * f32(h));
+    let m = env_uv_to_direction(uv);
+    let sin_theta = sqrt(m.x * m.x + m.z * m.z);
+    if !(sin_theta > 0.0 && pdf_uv > 0.0) {
         return EnvSample(vec3<f32>(0.0), 0.0, vec3<f32>(0.0));
     }
-    return EnvSample(direction, pdf, env.intensity * env_lookup_uv(env, uv));
+    return EnvSample(env_to_world(env, m), pdf_uv / (ENV_TWO_PI_SQUARED * sin_theta),
+                     env.intensity * env_lookup_uv(env, uv));
 }
 
 // EnvironmentSampler::pdf: the solid-angle pdf of sampling world direction d.
@@ -149,11 +151,10 @@ fn env_pdf(env: EnvMap, d: vec3<f32>) -> f32 {
     let h = env.height;
     let i = min(u32(uv.x * f32(w)), w - 1u);
     let j = min(u32(uv.y * f32(h)), h - 1u);
-    let conditional = 3u * w * h;
-    let marginal = conditional + w * h;
-    let row = conditional + j * w;
-    let pm = environment[marginal + j] - env_cdf_start(marginal, j);
-    let pc = environment[row + i] - env_cdf_start(row, i);
+    let marginal = w * h;
+    let row = j * w;
+    let pm = environment_cdf[marginal + j] - env_cdf_start(marginal, j);
+    let pc = environment_cdf[row + i] - env_cdf_start(row, i);
     return pm * pc * (f32(w) * f32(h)) / (ENV_TWO_PI_SQUARED * sin_theta);
 }
 // #endif
