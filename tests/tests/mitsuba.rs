@@ -195,6 +195,25 @@
 //! | emissive quad | GPU 32² | 1.0015, 1.0006, 1.0005 (± 0.0016) | 1.088 |
 //! | sun disc | GPU 32² | 0.9991, 0.9997, 0.9988 (± 0.0014) | 1.045 |
 //!
+//! # The environment map
+//!
+//! `envmap/envmap_spheres` (a floor and three spheres, Lambert and GGX α 0.3 and 0.05, lit only
+//! by a 512 × 256 HDR sky with a 1° sun of 2·10⁴), 4 bounces, environment importance sampling
+//! and BSDF sampling by MIS. The sun reflected by the α 0.05 sphere makes a **caustic** on the
+//! floor beside it, found only when a floor point's cosine-sampled ray happens to hit the small
+//! part of the sphere that mirrors the sun (for every path tracer, Mitsuba's included): pixels
+//! there have heavily skewed estimates, whose rare large samples most renders of a few thousand
+//! spp per pixel have not yet drawn, so their mean and estimated error are both low and z is
+//! large and negative (seed 11 at 80×60, 4096 spp: z mean −0.17, std 1.21, a cluster of
+//! z ≈ −10 at the caustic, while the mean over that region agrees within 0.03 % — skew, not
+//! bias). Only more samples per compared pixel cure it, so the comparison pools more: **20×15
+//! (16×16 blocks) at 32 768 spp** (9.8 M paths, 16 s on 2 cores), measured z std 0.996, 1.094,
+//! 1.011 for seeds 11, 12, 13, ratios within ±0.27 % (± 0.13 %); at 4096 spp z std was 1.22,
+//! at 40×30 and 16 384 spp 1.15. On the GPU the same plan is 512 passes of 64 spp — minutes of
+//! lavapipe, so that test is ignored in CI and run on the H200 (`docs/device/environment.sh`);
+//! in CI the GPU traces the CPU's paths from the same samples on this scene
+//! (`tests/integrator.rs`, every environment-sampling mode, within 1.3·10⁻⁵ of the image mean).
+//!
 //! ## It can fail
 //!
 //! `gltf_default_model_fails_the_bar_gpu` renders the 4-bounce configuration with the glTF default
@@ -239,13 +258,14 @@ fn plan(backend: Backend, stem: &str) -> Plan {
         (Backend::Cpu, "cbox_area_ref_bounces4") => (64, 4, 512, 1),
         (Backend::Cpu, "cbox_many_lights_ref_bounces4") => (64, 4, 4096, 1),
         (Backend::Cpu, "cbox_sun_disc_ref_bounces4") => (64, 4, 512, 1),
+        // The caustic's skew needs many samples per compared pixel (module docs).
         (Backend::Cpu, "envmap_spheres_ref_bounces4") => (20, 4, 32768, 1),
         (Backend::Gpu, "cbox_ref_direct") => (32, 1, 1024, 1),
         (Backend::Gpu, "cbox_ref_bounces4") => (32, 4, 256, 1),
         (Backend::Gpu, "cbox_point_ref_bounces4") => (32, 4, 512, 2),
         (Backend::Gpu, "cbox_area_ref_bounces4") => (32, 4, 256, 2),
         (Backend::Gpu, "cbox_sun_disc_ref_bounces4") => (32, 4, 128, 2),
-        (Backend::Gpu, "envmap_spheres_ref_bounces4") => (40, 4, 128, 2),
+        (Backend::Gpu, "envmap_spheres_ref_bounces4") => (20, 4, 512, 64),
         _ => panic!("no plan for {backend}, {stem}"),
     };
     Plan { size, bounces, passes, spp_per_pass }
@@ -506,6 +526,7 @@ fn environment_map_matches_mitsuba_cpu() {
 }
 
 #[test]
+#[ignore = "32 768 spp: minutes on a software adapter; run with --ignored on a hardware GPU (docs/device/environment.sh)"]
 fn environment_map_matches_mitsuba_gpu() {
     compare(Backend::Gpu, "envmap_spheres_ref_bounces4");
 }
