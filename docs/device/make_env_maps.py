@@ -78,9 +78,18 @@ def write(path, img):
         return write_hdr(path, img)
     try:
         import mitsuba as mi
-        mi.set_variant("scalar_rgb") if "scalar_rgb" in mi.variants() else mi.set_variant(mi.variants()[0])
-        mi.Bitmap(img).write(path)
     except ImportError:
+        mi = None
+    if mi is not None:
+        # mi.variants() lists every variant built, also those pruned from a packed install.
+        for variant in ("cuda_ad_rgb", "llvm_ad_rgb", "scalar_rgb"):
+            try:
+                mi.set_variant(variant)
+                break
+            except Exception:
+                continue
+        mi.Bitmap(img).write(path)
+    else:
         import OpenEXR
         OpenEXR.File({"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage},
                      {"RGB": img}).write(path)
