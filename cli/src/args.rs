@@ -113,9 +113,9 @@ pub struct RenderArgs {
     pub environment: EnvArgs,
     /// How light samples gather the environment map: off (only BSDF rays that escape),
     /// importance (also light samples in proportion to its luminance, weighted by
-    /// --light-sampling), compensated (light samples where it outshines its mean; needs
-    /// --light-sampling mis).
-    #[arg(long, value_enum, default_value_t = EnvSamplingArg::Importance)]
+    /// --light-sampling), compensated (the default: light samples where it outshines its mean,
+    /// MIS compensation; with --light-sampling nee the plain importance distribution is used).
+    #[arg(long, value_enum, default_value_t = EnvSamplingArg::Compensated)]
     pub env_sampling: EnvSamplingArg,
     /// Where to render: cpu (the reference integrator), gpu (wgpu: Vulkan, Metal or DX12), or
     /// auto (a hardware GPU if there is one, else the CPU; software GPUs such as lavapipe are
@@ -220,9 +220,9 @@ pub struct BenchArgs {
     #[command(flatten)]
     pub environment: EnvArgs,
     /// How light samples gather the environment map: off, importance or compensated (as
-    /// `furnace render`).
-    #[arg(long, value_enum, default_value_t = EnvSamplingArg::Importance)]
-    pub env_sampling: EnvSamplingArg,
+    /// `furnace render`) [default: compensated; importance with --light-sampling nee].
+    #[arg(long, value_enum)]
+    pub env_sampling: Option<EnvSamplingArg>,
     /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
@@ -318,7 +318,7 @@ pub struct ChartArgs {
     /// How light samples gather the environment map, comma-separated: off, importance,
     /// compensated (as `furnace render --env-sampling`; compensated is not combined with
     /// --light-sampling nee).
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "importance")]
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "compensated")]
     pub env_sampling: Vec<EnvSamplingArg>,
     // The environment map of the study's scene and how it is placed (as `furnace render`; the
     // reference must have been rendered with the same).

@@ -261,7 +261,10 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
             a.sampler
         ));
     }
-    crate::env::check_sampling(a.env_sampling, a.light_sampling)?;
+    // Compensated given with nee is refused; the default under nee is the plain distribution.
+    if let Some(e) = a.env_sampling {
+        crate::env::check_sampling(e, a.light_sampling)?;
+    }
     let start = Instant::now();
     let mut scene = load(&a.scene)?;
     for w in &scene.warnings {
@@ -285,7 +288,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         light_sampling: a.light_sampling.into(),
         triangle_sampling: a.triangle_sampling.into(),
         light_selection: a.light_selection.into(),
-        env_sampling: a.env_sampling.into(),
+        env_sampling: a.env_sampling.map_or_else(Default::default, Into::into),
         ..RenderSettings::default()
     };
     let triangles = scene.geometry.triangle_count() as u64;
@@ -367,7 +370,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         light_sampling: settings.light_sampling.name(),
         triangle_sampling: settings.triangle_sampling.name(),
         light_selection: settings.light_selection.name(),
-        env_sampling: settings.env_sampling.name(),
+        env_sampling: settings.env_sampling.effective(settings.light_sampling).name(),
         spp: done,
         seconds,
         time_to_first_frame_s,

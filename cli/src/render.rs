@@ -93,7 +93,11 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         None => None,
     };
 
-    crate::env::check_sampling(args.env_sampling, args.light_sampling)?;
+    // Compensated given with nee is refused; by default (or from a file's record) it means the
+    // plain distribution under nee (`EnvSampling::effective`).
+    if args.given("env_sampling") {
+        crate::env::check_sampling(args.env_sampling, args.light_sampling)?;
+    }
     let mut scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
         // The scene came from the file's record: say so, and how to point at it.
         (Some(file), None) => {

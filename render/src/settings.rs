@@ -221,14 +221,19 @@ named_choice!(LightSelection, "light selection");
 /// samples go where the map outshines its average and BSDF sampling, weighted by MIS, covers the
 /// rest). Compensation needs MIS: with [`LightSampling::Nee`] the plain distribution is used
 /// ([`EnvSampling::effective`]).
+///
+/// Compensated is the default by measurement (docs/accuracy.md, "Environment maps"): on the
+/// H200 it halved the MSE at equal samples on the reference sky (RMSE 0.0298 against 0.0414 at
+/// 1024 spp) and on a map with a 0.1° sun in one texel (0.0447 against 0.0659), and was 12 %
+/// faster per sample (fewer shadow rays sent to the dim sky, which BSDF rays find anyway).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum EnvSampling {
     /// BSDF-sampled rays only.
     Off,
     /// Light samples in proportion to the map's luminance × sin θ.
-    #[default]
     Importance,
     /// Light samples of the MIS-compensated distribution.
+    #[default]
     Compensated,
 }
 
@@ -295,7 +300,7 @@ impl Default for RenderSettings {
             light_sampling: LightSampling::Mis,
             triangle_sampling: TriangleSampling::SolidAngle,
             light_selection: LightSelection::Bvh,
-            env_sampling: EnvSampling::Importance,
+            env_sampling: EnvSampling::Compensated,
         }
     }
 }
