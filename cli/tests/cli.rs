@@ -691,7 +691,7 @@ fn bench_cpu_prints_json_with_every_field() {
             &serde_json::json!("mis"),
             &serde_json::json!("solid-angle"),
             &serde_json::json!("bvh"),
-            &serde_json::json!("importance")
+            &serde_json::json!("compensated")
         )
     );
     for key in ["seconds", "msamples_per_s", "ms_per_frame", "time_to_first_frame_s"] {

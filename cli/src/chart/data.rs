@@ -56,14 +56,23 @@ pub const OLD_TRIANGLE_SAMPLING: &str = "area";
 /// then chose their emissive triangle in proportion to power.
 pub const OLD_LIGHT_SELECTION: &str = "power";
 
-/// The environment sampling of a row saved before the environment-sampling axis existed (no
-/// scene had an environment map; importance is the default).
-pub const OLD_ENV_SAMPLING: &str = "importance";
+/// The environment sampling of a row saved before the environment-sampling axis existed: no
+/// scene had an environment map then, so the method changed nothing; such rows are read as
+/// today's default for their light sampling ([`default_env_sampling`]), whose name has no part
+/// of its own. (The study-level record of such studies: this.)
+pub const OLD_ENV_SAMPLING: &str = "compensated";
+
+/// The environment sampling a render uses by default with `light_sampling`: compensated, or
+/// importance under `nee` (compensation needs MIS).
+pub fn default_env_sampling(light_sampling: &str) -> &'static str {
+    if light_sampling == "nee" { "importance" } else { "compensated" }
+}
 
 /// A configuration's name from its axes' CLI names: `sobol/caps/mis/solid-angle/bvh/comp-off/cpu`
 /// (the light-selection part after the triangle sampling, the other part of the light sample).
-/// The environment sampling follows it as `env-off` or `env-compensated`, and is left out for
-/// the default, importance: a study's names from before the axis stay valid.
+/// The environment sampling follows it as `env-off`, `env-importance` or `env-compensated`, and
+/// is left out where it is the default for the light sampling ([`default_env_sampling`]): a
+/// study's names from before the axis stay valid.
 #[allow(clippy::too_many_arguments)]
 pub fn config_name(
     sampler: &str,
@@ -75,7 +84,11 @@ pub fn config_name(
     compensation: &str,
     backend: &str,
 ) -> String {
-    let env = if env_sampling == OLD_ENV_SAMPLING { String::new() } else { format!("env-{env_sampling}/") };
+    let env = if env_sampling == default_env_sampling(light_sampling) {
+        String::new()
+    } else {
+        format!("env-{env_sampling}/")
+    };
     format!(
         "{sampler}/{sampling}/{light_sampling}/{triangle_sampling}/{light_selection}/{env}comp-{compensation}/{backend}"
     )
@@ -173,7 +186,7 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
     let (light_sampling, light_saved) = axis("light_sampling", OLD_LIGHT_SAMPLING)?;
     let (triangle_sampling, triangle_saved) = axis("triangle_sampling", OLD_TRIANGLE_SAMPLING)?;
     let (light_selection, selection_saved) = axis("light_selection", OLD_LIGHT_SELECTION)?;
-    let (env_sampling, _) = axis("env_sampling", OLD_ENV_SAMPLING)?;
+    let (env_sampling, _) = axis("env_sampling", default_env_sampling(&light_sampling))?;
     let config = if light_saved && triangle_saved && selection_saved {
         config
     } else {
@@ -455,19 +468,19 @@ mod tests {
     }
 
     #[test]
-    fn a_row_saved_before_env_sampling_is_importance_and_keeps_its_name() {
+    fn a_row_saved_before_env_sampling_is_compensated_and_keeps_its_name() {
         let v = old_row("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", "mis", "solid-angle", &[]);
         let mut v = v;
         v["light_selection"] = "bvh".into();
         let row = row_from_json(&v).unwrap();
         assert_eq!(
             (row.config.as_str(), row.env_sampling.as_str()),
-            ("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", "importance")
+            ("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", "compensated")
         );
         // The other methods have a part of their own in the name.
         assert_eq!(
-            config_name("sobol", "caps", "mis", "solid-angle", "bvh", "compensated", "off", "cpu"),
-            "sobol/caps/mis/solid-angle/bvh/env-compensated/comp-off/cpu"
+            config_name("sobol", "caps", "mis", "solid-angle", "bvh", "importance", "off", "cpu"),
+            "sobol/caps/mis/solid-angle/bvh/env-importance/comp-off/cpu"
         );
         let mut row = row;
         row.env_sampling = "off".into();

@@ -59,12 +59,16 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
             for light_sampling in dedup(&a.light_sampling) {
                 for triangle_sampling in dedup(&a.triangle_sampling) {
                     for light_selection in dedup(&a.light_selection) {
-                        for env_sampling in dedup(&a.env_sampling) {
+                        for mut env_sampling in dedup(&a.env_sampling) {
                             if env_sampling == EnvSamplingArg::Compensated
                                 && light_sampling == LightSamplingArg::Nee
                             {
-                                // Compensation needs MIS (crate::env::check_sampling).
-                                continue;
+                                // Compensation needs MIS: under nee a render samples the plain
+                                // distribution (EnvSampling::effective), once.
+                                if a.env_sampling.contains(&EnvSamplingArg::Importance) {
+                                    continue;
+                                }
+                                env_sampling = EnvSamplingArg::Importance;
                             }
                             for sampling in dedup(&a.sampling) {
                                 for sampler in dedup(&a.samplers) {
@@ -87,25 +91,19 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
         }
     }
     if study.configs.is_empty() {
-        let only = dedup(&a.env_sampling) == [EnvSamplingArg::Compensated]
-            && dedup(&a.light_sampling) == [LightSamplingArg::Nee];
-        if only {
-            return Err(
-                crate::env::check_sampling(EnvSamplingArg::Compensated, LightSamplingArg::Nee).unwrap_err()
-            );
-        }
         return Err(
             "no configurations: give at least one sampler, sampling method, light sampling, triangle \
              sampling, light selection, environment sampling and backend"
                 .into(),
         );
     }
-    if dedup(&a.env_sampling).contains(&EnvSamplingArg::Compensated)
+    if dedup(&a.env_sampling).len() > 1
+        && dedup(&a.env_sampling).contains(&EnvSamplingArg::Compensated)
         && dedup(&a.light_sampling).contains(&LightSamplingArg::Nee)
     {
         eprintln!(
-            "note: --env-sampling compensated is not combined with --light-sampling nee (compensation \
-             needs MIS): those configurations are left out"
+            "note: under --light-sampling nee the environment is sampled by importance (compensation \
+             needs MIS): the compensated configurations with nee are the importance ones"
         );
     }
     warn_compensation_mismatch(&study);
