@@ -121,3 +121,42 @@ fn a_scene_names_its_environment() {
         "{e}"
     );
 }
+
+/// Bad maps: a missing file, garbage bytes, a truncated EXR, an infinite texel — one error each,
+/// naming the file (and the texel); negative texels and a map that is not 2:1 load with a
+/// warning naming them.
+#[test]
+fn bad_maps_are_one_clear_error_or_a_warning() {
+    let dir = furnace_tests::data::output_dir("environment");
+    let missing = dir.join("no-such-map.hdr");
+    let e = EnvironmentMap::load(&missing).unwrap_err().to_string();
+    assert!(e.contains("no-such-map.hdr") && e.contains("cannot read"), "{e}");
+
+    let garbage = dir.join("garbage.hdr");
+    std::fs::write(&garbage, b"#?RADIANCE\nthis is not a header\n\x00\x01\x02").unwrap();
+    let e = EnvironmentMap::load(&garbage).unwrap_err().to_string();
+    assert!(e.contains("garbage.hdr") && e.contains("cannot decode"), "{e}");
+
+    let exr = furnace_tests::data::reference("envmap/envmap_spheres_env.exr");
+    let bytes = std::fs::read(&exr).unwrap();
+    let truncated = dir.join("truncated.exr");
+    std::fs::write(&truncated, &bytes[..bytes.len() / 3]).unwrap();
+    let e = EnvironmentMap::load(&truncated).unwrap_err().to_string();
+    assert!(e.contains("truncated.exr") && e.contains("cannot decode"), "{e}");
+
+    let e = EnvironmentMap::new(
+        3,
+        2,
+        vec![Vec3::ONE, Vec3::ONE, Vec3::ONE, Vec3::ONE, Vec3::new(0.0, 0.0, f32::INFINITY), Vec3::ONE],
+        "inf.exr",
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(e.contains("inf.exr") && e.contains("(1, 1)") && e.contains("B = inf"), "{e}");
+
+    let (_, w) = EnvironmentMap::new(7, 5, vec![Vec3::ONE; 35], "odd.hdr").unwrap();
+    let w = w.expect("a warning");
+    assert!(w.contains("odd.hdr") && w.contains("not 2:1"), "{w}");
+    let (_, w) = EnvironmentMap::new(4, 2, vec![Vec3::ONE; 8], "fine.hdr").unwrap();
+    assert!(w.is_none(), "{w:?}");
+}
