@@ -497,9 +497,14 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
     ])
 }
 
+/// A storage buffer of `words`, padded to 16 bytes (a binding cannot be empty); large buffers
+/// (an environment map's texels) are not copied on the way.
 fn storage_buffer(ctx: &GpuContext, label: &str, words: &[u32]) -> Result<wgpu::Buffer, GpuError> {
+    if words.len() >= 4 {
+        return ctx.buffer_init(label, bytemuck::cast_slice(words), wgpu::BufferUsages::STORAGE);
+    }
     let mut v = words.to_vec();
-    v.resize(v.len().max(4), 0);
+    v.resize(4, 0);
     ctx.buffer_init(label, bytemuck::cast_slice(&v), wgpu::BufferUsages::STORAGE)
 }
 

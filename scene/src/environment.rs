@@ -90,9 +90,11 @@ pub struct EnvironmentMap {
 }
 
 impl std::fmt::Debug for EnvironmentMap {
-    /// The source and size (the content hash reads the texels themselves).
+    /// The size only: the content hash reads this and the texels themselves, and, as a scene's
+    /// name, where a map came from is not its content (the same file by another path is the
+    /// same light).
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "EnvironmentMap({:?}, {}×{})", self.source, self.width, self.height)
+        write!(f, "EnvironmentMap({}×{})", self.width, self.height)
     }
 }
 
@@ -271,42 +273,46 @@ impl EnvironmentMap {
     /// constant map) the plain weights are returned.
     pub fn sampling_weights(&self, compensated: bool) -> Vec<f64> {
         let (w, h) = (i64::from(self.width), i64::from(self.height));
-        let lum = |i: i64, j: i64| f64::from(luminance(self.texel(i, j)));
         let k = [1.0 / 8.0, 6.0 / 8.0, 1.0 / 8.0];
-        // Horizontal pass first (per row), then vertical.
-        let mut horizontal = vec![0.0f64; (w * h) as usize];
-        for j in 0..h {
-            for i in 0..w {
-                horizontal[(j * w + i) as usize] =
-                    k[0] * lum(i - 1, j) + k[1] * lum(i, j) + k[2] * lum(i + 1, j);
-            }
-        }
-        let row = |i: i64, j: i64| horizontal[(j.clamp(0, h - 1) * w + i) as usize];
-        let sin_mean = |j: i64| {
-            let (t0, t1) = (PI64 * j as f64 / h as f64, PI64 * (j + 1) as f64 / h as f64);
-            (t0.cos() - t1.cos()) / (t1 - t0)
+        // Row j of the horizontal pass (per row, columns wrapping); the vertical pass reads three
+        // of them at a time, so only the output holds a value per cell (an 8192 × 4096 map:
+        // 256 MiB of f64 and three rows, not three full arrays).
+        let horizontal = |j: i64| -> Vec<f64> {
+            let j = j.clamp(0, h - 1);
+            let lum = |i: i64| f64::from(luminance(self.texel(i, j)));
+            (0..w).map(|i| k[0] * lum(i - 1) + k[1] * lum(i) + k[2] * lum(i + 1)).collect()
         };
-        let mut mean_lum = Vec::with_capacity((w * h) as usize);
+        let mut out = Vec::with_capacity((w * h) as usize);
+        let (mut above, mut here) = (horizontal(-1), horizontal(0));
         for j in 0..h {
-            for i in 0..w {
-                mean_lum.push(k[0] * row(i, j - 1) + k[1] * row(i, j) + k[2] * row(i, j + 1));
-            }
+            let below = horizontal(j + 1);
+            out.extend((0..w as usize).map(|i| k[0] * above[i] + k[1] * here[i] + k[2] * below[i]));
+            (above, here) = (here, below);
         }
-        let sines: Vec<f64> = (0..h).map(sin_mean).collect();
-        let weights = |offset: f64| -> Vec<f64> {
-            mean_lum.iter().enumerate().map(|(c, &l)| (l - offset).max(0.0) * sines[c / w as usize]).collect()
-        };
+        let sines: Vec<f64> = (0..h)
+            .map(|j| {
+                let (t0, t1) = (PI64 * j as f64 / h as f64, PI64 * (j + 1) as f64 / h as f64);
+                (t0.cos() - t1.cos()) / (t1 - t0)
+            })
+            .collect();
+        let row_of = |c: usize| c / w as usize;
+        let mut offset = 0.0;
         if compensated {
-            // The mean over the sphere: cells weighted by their solid angle (∝ the row's sin θ).
-            let (num, den) = mean_lum.iter().enumerate().fold((0.0, 0.0), |(n, d), (c, &l)| {
-                (n + l * sines[c / w as usize], d + sines[c / w as usize])
-            });
-            let v = weights(num / den);
-            if v.iter().any(|&x| x > 0.0) {
-                return v;
+            // The mean over the sphere: cells weighted by their solid angle (∝ the row's sin θ);
+            // a map with nothing above its mean (a constant one) keeps the plain weights.
+            let (num, den) = out
+                .iter()
+                .enumerate()
+                .fold((0.0, 0.0), |(n, d), (c, &l)| (n + l * sines[row_of(c)], d + sines[row_of(c)]));
+            let mean = num / den;
+            if out.iter().any(|&l| l - mean > 0.0) {
+                offset = mean;
             }
         }
-        weights(0.0)
+        for (c, l) in out.iter_mut().enumerate() {
+            *l = (*l - offset).max(0.0) * sines[row_of(c)];
+        }
+        out
     }
 }
 
