@@ -56,15 +56,29 @@ pub fn run(a: &CompareArgs) -> Result<(), String> {
     let sref = a.stderr.as_deref().map(|p| load_same_size(p, &a.reference, (w, h))).transpose()?;
     let scand = a.candidate_stderr.as_deref().map(|p| load_same_size(p, &a.candidate, (w, h))).transpose()?;
     let scores = score(&cand, &reference, sref.as_deref(), scand.as_deref()).map_err(|e| e.to_string())?;
-    println!("candidate       {} ({w}×{h})", a.candidate.display());
-    println!("reference       {}", a.reference.display());
-    print!("{}", report(&scores, scand.is_some()));
+    let mut text = format!(
+        "candidate       {} ({w}×{h})\nreference       {}\n{}",
+        a.candidate.display(),
+        a.reference.display(),
+        report(&scores, scand.is_some())
+    );
     if let Some(path) = &a.error_map {
         let map = to_srgb8(&error_map(&cand, &reference), 0.0, Tonemap::Clamp);
         write_png(path, w, h, &map).map_err(|e| e.to_string())?;
-        println!("wrote           {}", path.display());
+        text.push_str(&format!("wrote           {}\n", path.display()));
     }
-    Ok(())
+    emit(&text)
+}
+
+/// Writes `text` to stdout; a reader that closed the pipe early (`furnace compare … | head`) is
+/// not an error (`println!` would panic there).
+fn emit(text: &str) -> Result<(), String> {
+    use std::io::Write as _;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(format!("writing the report: {e}")),
+        _ => Ok(()),
+    }
 }
 
 #[cfg(test)]

@@ -384,6 +384,9 @@ fn light_sampling_is_an_axis() {
     for label in ["sobol bsdf", "sobol nee", "sobol mis"] {
         assert!(svg.contains(label), "the legend names {label}");
     }
+    // The title names the scene by its file name, not the path it was given by.
+    assert!(svg.contains("cbox_area.gltf 16×16"), "the title names the scene's file");
+    assert!(!svg.contains("references/lights/cbox_area.gltf"), "the title holds the scene's path");
 }
 
 /// `--triangle-sampling solid-angle,area` with `--light-sampling nee,mis`: the configurations are

@@ -254,7 +254,11 @@ fn external_series(external: &[ExternalPoint], metric: &Metric, by_time: bool) -
 /// The chart's titles and note, and the x part of its file name (`spp` or `time`).
 fn labels(study: &Study, varying: &Varying, metric: &Metric, by_time: bool) -> (Labels, &'static str) {
     let s = &study.settings;
-    let what = format!("{} {}×{}, {} bounces", study.scene_name, s.width, s.height, s.bounces);
+    // The scene's file name: its full path belongs in chart.json, not in a title.
+    let scene = std::path::Path::new(&study.scene_name)
+        .file_name()
+        .map_or_else(|| study.scene_name.clone(), |n| n.to_string_lossy().into_owned());
+    let what = format!("{scene} {}×{}, {} bounces", s.width, s.height, s.bounces);
     let (x, file_x) = match (by_time, study.args.time) {
         (false, _) => ("samples per pixel", "spp"),
         (true, ChartTime::Wall) => ("seconds (wall time of the render passes)", "time"),
