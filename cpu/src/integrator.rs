@@ -56,6 +56,8 @@ pub struct CpuRenderer {
     sky: Vec3,
     /// The environment map ([`Scene::environment`]).
     environment: Option<Environment>,
+    /// Its rotation's cosine and sine, formed once ([`Environment::y_rotation`]).
+    env_rotation: furnace_scene::YRotation,
     /// Its importance sampler when light samples take it
     /// ([`furnace_render::EnvSampling::effective`] not `Off`, the map not black).
     env_sampler: Option<EnvironmentSampler>,
@@ -122,12 +124,14 @@ impl CpuRenderer {
             .filter(|_| settings.light_selection == LightSelection::Bvh)
             .map(|e| e.light_bvh(&scene));
         let environment = scene.environment().cloned();
-        let env_sampling = settings.env_sampling.effective(settings.light_sampling);
         let env_sampler = environment
             .as_ref()
-            .filter(|_| env_sampling != furnace_render::EnvSampling::Off)
-            .and_then(|e| e.sampler(env_sampling == furnace_render::EnvSampling::Compensated));
+            .zip(settings.env_sampling.light_samples(settings.light_sampling))
+            .and_then(|(e, compensated)| e.sampler(compensated));
         Ok(Self {
+            env_rotation: environment
+                .as_ref()
+                .map_or(furnace_scene::YRotation::IDENTITY, Environment::y_rotation),
             environment,
             env_sampler,
             env_weights: settings.env_sampling.weights(settings.light_sampling),

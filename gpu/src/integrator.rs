@@ -37,8 +37,7 @@ use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
 use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
 use furnace_render::{
-    EnvSampling, Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings,
-    TriangleSampling,
+    Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings, TriangleSampling,
 };
 use furnace_sampling::AnySampler;
 use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, Projection, Scene};
@@ -425,7 +424,7 @@ impl SceneFeatures {
             light_bvh: emitters && settings.light_selection == LightSelection::Bvh,
             environment: scene.environment().is_some(),
             env_sampling: scene.environment().is_some_and(|e| !e.is_black())
-                && settings.env_sampling.effective(settings.light_sampling) != EnvSampling::Off,
+                && settings.env_sampling.light_samples(settings.light_sampling).is_some(),
         }
     }
 
@@ -564,11 +563,10 @@ impl GpuRenderer {
         // binding) without one.
         let mut environment = Vec::new();
         if let Some(env) = scene.environment() {
-            let env_sampling = settings.env_sampling.effective(settings.light_sampling);
-            let sampler = features
+            let sampler = settings
                 .env_sampling
-                .then(|| env.sampler(env_sampling == EnvSampling::Compensated))
-                .flatten();
+                .light_samples(settings.light_sampling)
+                .and_then(|compensated| env.sampler(compensated));
             let words = environment_words(env, sampler.as_ref());
             for (what, w) in [("environment map", &words[0]), ("environment map's CDFs", &words[1])] {
                 let bytes = 4 * w.len() as u64;
@@ -988,6 +986,8 @@ fn frame_params_with(
         }
         None => ([0.0; 4], [0.0; 4]),
     };
+    let env = scene.environment();
+    let rotation = env.map_or(furnace_scene::YRotation::IDENTITY, |e| e.y_rotation());
     FrameParams {
         cam_x: v4(m.matrix3.x_axis),
         cam_y: v4(m.matrix3.y_axis),
@@ -1016,12 +1016,12 @@ fn frame_params_with(
         point_light_count: scene.point_lights().count() as u32,
         emitter_count: emitters.map_or(0, |e| e.len() as u32),
         emitter_total: emitters.map_or(0.0, Emitters::total_weight),
-        env_width: scene.environment().map_or(0, |e| e.map.width()),
-        env_height: scene.environment().map_or(0, |e| e.map.height()),
-        env_intensity: scene.environment().map_or(0.0, |e| e.intensity),
-        env_cos: scene.environment().map_or(1.0, |e| e.rotation_cos_sin().0),
-        env_sin: scene.environment().map_or(0.0, |e| e.rotation_cos_sin().1),
-        env_flags: if scene.environment().is_some_and(|e| e.visible) { ENV_VISIBLE } else { 0 },
+        env_width: env.map_or(0, |e| e.map.width()),
+        env_height: env.map_or(0, |e| e.map.height()),
+        env_intensity: env.map_or(0.0, |e| e.intensity),
+        env_cos: rotation.cos,
+        env_sin: rotation.sin,
+        env_flags: if env.is_some_and(|e| e.visible) { ENV_VISIBLE } else { 0 },
         env_pad: [0; 2],
     }
 }

@@ -261,6 +261,15 @@ impl EnvSampling {
         }
     }
 
+    /// Whether light samples take the environment with `light_sampling`, and from which
+    /// distribution: `Some(compensated)`, or `None` (BSDF rays only).
+    pub fn light_samples(self, light_sampling: LightSampling) -> Option<bool> {
+        match self.effective(light_sampling) {
+            Self::Off => None,
+            s => Some(s == Self::Compensated),
+        }
+    }
+
     /// How the environment's two strategies are weighted: as `light_sampling` says when it is
     /// light-sampled, else all by BSDF rays.
     pub fn weights(self, light_sampling: LightSampling) -> LightSampling {
@@ -323,5 +332,9 @@ mod tests {
             Err("unknown triangle sampling \"x\" (area or solid-angle)".into())
         );
         assert_eq!("x".parse::<LightSelection>(), Err("unknown light selection \"x\" (power or bvh)".into()));
+        assert_eq!(EnvSampling::Compensated.light_samples(LightSampling::Mis), Some(true));
+        assert_eq!(EnvSampling::Compensated.light_samples(LightSampling::Nee), Some(false));
+        assert_eq!(EnvSampling::Importance.light_samples(LightSampling::Bsdf), None);
+        assert_eq!(EnvSampling::Off.light_samples(LightSampling::Mis), None);
     }
 }

@@ -394,23 +394,33 @@ impl Environment {
         (r.cos() as f32, r.sin() as f32)
     }
 
+    /// The rotation as its cosine and sine ([`Environment::rotation_cos_sin`]), formed once for
+    /// per-ray use.
+    pub fn y_rotation(&self) -> YRotation {
+        let (cos, sin) = self.rotation_cos_sin();
+        YRotation { cos, sin }
+    }
+
     /// World direction → the map's frame (`R⁻¹ d`).
-    #[inline]
     pub fn to_map(&self, d: Vec3) -> Vec3 {
-        let (c, s) = self.rotation_cos_sin();
-        Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z)
+        self.y_rotation().to_map(d)
     }
 
     /// The map's frame → world direction (`R m`).
-    #[inline]
     pub fn to_world(&self, m: Vec3) -> Vec3 {
-        let (c, s) = self.rotation_cos_sin();
-        Vec3::new(c * m.x + s * m.z, m.y, -s * m.x + c * m.z)
+        self.y_rotation().to_world(m)
     }
 
     /// The radiance seen along world direction `d`.
     pub fn radiance(&self, d: Vec3) -> Vec3 {
-        self.intensity * self.map.lookup(self.to_map(d))
+        self.radiance_with(self.y_rotation(), d)
+    }
+
+    /// [`Environment::radiance`] with its rotation formed once ([`Environment::y_rotation`]):
+    /// the integrators' escaping rays call this.
+    #[inline]
+    pub fn radiance_with(&self, rotation: YRotation, d: Vec3) -> Vec3 {
+        self.intensity * self.map.lookup(rotation.to_map(d))
     }
 
     /// Whether it sends no light (intensity 0 or every texel black): nothing to sample.
@@ -426,7 +436,35 @@ impl Environment {
         }
         let m = &self.map;
         Distribution2D::new(m.width, m.height, &m.sampling_weights(compensated))
-            .map(|distribution| EnvironmentSampler { distribution })
+            .map(|distribution| EnvironmentSampler { distribution, rotation: self.y_rotation() })
+    }
+}
+
+/// A rotation about +Y by its cosine and sine, right-handed (+X turns towards −Z).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct YRotation {
+    /// Cosine of the angle.
+    pub cos: f32,
+    /// Sine of the angle.
+    pub sin: f32,
+}
+
+impl YRotation {
+    /// No rotation.
+    pub const IDENTITY: Self = Self { cos: 1.0, sin: 0.0 };
+
+    /// World direction → the map's frame (`R⁻¹ d`).
+    #[inline]
+    pub fn to_map(self, d: Vec3) -> Vec3 {
+        let (c, s) = (self.cos, self.sin);
+        Vec3::new(c * d.x - s * d.z, d.y, s * d.x + c * d.z)
+    }
+
+    /// The map's frame → world direction (`R m`).
+    #[inline]
+    pub fn to_world(self, m: Vec3) -> Vec3 {
+        let (c, s) = (self.cos, self.sin);
+        Vec3::new(c * m.x + s * m.z, m.y, -s * m.x + c * m.z)
     }
 }
 
@@ -444,10 +482,12 @@ pub struct EnvironmentSample {
 /// `2π²`: the Jacobian from the unit square to the sphere is `2π² sin θ`.
 const TWO_PI_SQUARED: f32 = (2.0 * std::f64::consts::PI * std::f64::consts::PI) as f32;
 
-/// Importance sampling of an [`Environment`] by the [`Distribution2D`] of its map's cells.
+/// Importance sampling of an [`Environment`] by the [`Distribution2D`] of its map's cells,
+/// built by [`Environment::sampler`] for that environment (its rotation taken then, once).
 #[derive(Debug, Clone, PartialEq)]
 pub struct EnvironmentSampler {
     distribution: Distribution2D,
+    rotation: YRotation,
 }
 
 impl EnvironmentSampler {
@@ -473,15 +513,15 @@ impl EnvironmentSampler {
             return None;
         }
         Some(EnvironmentSample {
-            direction: env.to_world(m),
+            direction: self.rotation.to_world(m),
             pdf: pdf_uv / (TWO_PI_SQUARED * sin_theta),
             radiance: env.intensity * env.map.lookup_uv(uv),
         })
     }
 
     /// The solid-angle pdf with which [`EnvironmentSampler::sample`] chooses world direction `d`.
-    pub fn pdf(&self, env: &Environment, d: Vec3) -> f32 {
-        let m = env.to_map(d);
+    pub fn pdf(&self, d: Vec3) -> f32 {
+        let m = self.rotation.to_map(d);
         let sin_theta = (m.x * m.x + m.z * m.z).sqrt();
         if !(sin_theta > 0.0) {
             return 0.0;

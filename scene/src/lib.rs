@@ -59,7 +59,7 @@ pub use camera::{Camera, DEFAULT_YFOV, Projection, Ray};
 pub use emitter::{Emitters, luminance, triangle_area};
 pub use environment::{
     Environment, EnvironmentError, EnvironmentMap, EnvironmentSample, EnvironmentSampler,
-    MAX_ENVIRONMENT_TEXELS, direction_to_uv, uv_to_direction,
+    MAX_ENVIRONMENT_TEXELS, YRotation, direction_to_uv, uv_to_direction,
 };
 pub use error::{SceneError, Warning};
 pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, oct_decode, oct_encode};

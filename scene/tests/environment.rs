@@ -59,13 +59,13 @@ fn sampling_follows_the_pdf() {
             let result = test.run(
                 |u, _| {
                     let s = sampler.sample(&env, u)?;
-                    if sampler.pdf(&env, s.direction) == 0.0 {
+                    if sampler.pdf(s.direction) == 0.0 {
                         on_edge += 1;
                         return None;
                     }
                     Some(to_harness(s.direction))
                 },
-                |w| sampler.pdf(&env, from_harness(w)),
+                |w| sampler.pdf(from_harness(w)),
             );
             assert!(on_edge <= 10, "{name}: {on_edge} samples where the pdf is 0");
             let label = format!("environment {name}{}", if compensated { " compensated" } else { "" });
@@ -84,7 +84,7 @@ fn samples_agree_with_pdf_and_lookup() {
         for _ in 0..10_000 {
             let u = glam::Vec2::new(rng.f32(), rng.f32());
             let Some(s) = sampler.sample(&env, u) else { continue };
-            let p = sampler.pdf(&env, s.direction);
+            let p = sampler.pdf(s.direction);
             // The direction's round trip through (u, v) may land on the neighbouring cell only
             // within rounding of an edge: 1 in 10⁴ here would be far more than that.
             assert!((p - s.pdf).abs() <= 1e-3 * s.pdf, "{name}: sampled pdf {} vs pdf {p}", s.pdf);

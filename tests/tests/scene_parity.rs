@@ -1168,7 +1168,7 @@ fn environment_matches_the_cpu() {
             }
             // The GPU's pdf of `d` is that of its cell or, where `d` lies within rounding of a
             // cell edge, of a neighbour.
-            if rel(sampler.pdf(env, d), f(o + 10)) > 1e-4 {
+            if rel(sampler.pdf(d), f(o + 10)) > 1e-4 {
                 pdf_differ += 1;
                 let m = env.to_map(d);
                 let jacobian =

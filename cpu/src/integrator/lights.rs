@@ -190,13 +190,13 @@ impl CpuRenderer {
     pub(super) fn environment_seen(&self, env: &Environment, direction: Vec3, bsdf_pdf: Option<f32>) -> Vec3 {
         let w = match (bsdf_pdf, &self.env_sampler) {
             (None, _) if !env.visible => return Vec3::ZERO,
-            (Some(p), Some(sampler)) => self.env_weights.bsdf_weight(p, sampler.pdf(env, direction)),
+            (Some(p), Some(sampler)) => self.env_weights.bsdf_weight(p, sampler.pdf(direction)),
             _ => 1.0,
         };
         if w == 0.0 {
             return Vec3::ZERO;
         }
-        env.radiance(direction) * w
+        env.radiance_with(self.env_rotation, direction) * w
     }
 
     /// The sun discs' radiance along an escaping ray (`direction`), each weighted against its
