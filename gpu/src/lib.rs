@@ -27,6 +27,7 @@
 //! | `traversal_parity.rs` | same triangle and t as furnace-accel on ≥ 10⁵ rays per scene; stack overflow |
 //! | `scene_parity.rs` | attributes, materials, textures and alpha tests as furnace-scene / furnace-cpu |
 //! | `integrator.rs` | images against furnace-cpu: same samples → same image; independent → z-test |
+//! | `display_parity.rs` | [`display`]'s tone maps and sRGB encoding as furnace-post's, to float rounding; 8-bit codes |
 //!
 //! This crate's own tests (`film.rs`: 10⁶ frames without drift in both precisions;
 //! `errors.rs`: device loss, oversized buffers) and the parity tests need an adapter: in CI
@@ -36,6 +37,7 @@
 
 pub mod brdf;
 pub mod context;
+pub mod display;
 pub mod film;
 pub mod integrator;
 pub mod sampling;
