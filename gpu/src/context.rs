@@ -105,10 +105,11 @@ pub struct GpuContext {
 /// driver is installed (200× slower than lavapipe, chosen silently), and probing GL on a
 /// headless machine prints driver noise on stderr.
 ///
-/// One instance per process, shared by every context: NVIDIA's Vulkan driver finds no adapter
+/// One instance per process, shared by every context (and by a viewer's window surface, which
+/// must come from the instance of the device that draws into it): NVIDIA's Vulkan driver finds no adapter
 /// once about 30 instances have been created and dropped in a process, and a `furnace chart`
 /// study makes a renderer per configuration and checkpoint (a test opens forty).
-fn instance() -> &'static wgpu::Instance {
+pub fn instance() -> &'static wgpu::Instance {
     static INSTANCE: std::sync::OnceLock<wgpu::Instance> = std::sync::OnceLock::new();
     INSTANCE.get_or_init(|| {
         let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();

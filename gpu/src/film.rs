@@ -84,6 +84,34 @@ pub struct GpuFilm {
     pub count: wgpu::Buffer,
     /// [`FilmPrecision::F32Pass`]: the `f64` sums of the passes folded so far.
     host: Option<Film>,
+    /// [`FilmPrecision::F32Pass`] with [`GpuFilm::enable_display`]: per pixel
+    /// `vec4<f32>(mean rgb, count)` of the folded passes, for a display on the GPU.
+    display: Option<wgpu::Buffer>,
+    /// Whether the `f64` sums' `w` holds the sum of squared luminances of every sample counted
+    /// (false after [`GpuFilm::write`] loaded a film with samples: a saved film has no squares).
+    squares_valid: bool,
+}
+
+/// Rec. 709 luminance weights: the `f64` film sums each sample's squared luminance with them
+/// (`film_f64.wgsl`'s `FILM_LUMINANCE`), for the viewer's noise estimate.
+pub const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
+/// The buffers a display reads a film from ([`GpuFilm::display_source`]).
+#[derive(Debug, Clone, Copy)]
+pub enum DisplaySource<'a> {
+    /// The `f64` sums (`vec4<f64>`: rgb and the squared luminances) and counts
+    /// (`vec2<u32>`) the integrator accumulates into.
+    F64 {
+        /// `film_sum`.
+        sum: &'a wgpu::Buffer,
+        /// `film_count`.
+        count: &'a wgpu::Buffer,
+    },
+    /// Per pixel `vec4<f32>(mean rgb, count)`, updated after every fold.
+    F32 {
+        /// The means.
+        means: &'a wgpu::Buffer,
+    },
 }
 
 impl GpuFilm {
@@ -122,6 +150,8 @@ impl GpuFilm {
             sum: make("film sum", sum_bytes),
             count: make("film count", pixels * 8),
             host,
+            display: None,
+            squares_valid: true,
         })
     }
 
@@ -138,6 +168,57 @@ impl GpuFilm {
     /// How it sums.
     pub fn precision(&self) -> FilmPrecision {
         self.precision
+    }
+
+    /// Makes the film readable by a display on the GPU ([`GpuFilm::display_source`]): nothing
+    /// for `F64` (the display reads the sums); for `F32Pass` a buffer of the folded means
+    /// (16 bytes per pixel), written after every fold (on such adapters a display costs a
+    /// read-back and an upload per pass: the `f64` sums live on the host).
+    ///
+    /// # Errors
+    /// A device error while uploading the means.
+    pub fn enable_display(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
+        if self.host.is_none() || self.display.is_some() {
+            return Ok(());
+        }
+        self.display = Some(ctx.device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("film display means"),
+            size: (self.pixels() as u64 * 16).max(32),
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        }));
+        self.upload_display(ctx)
+    }
+
+    /// What a display reads (call [`GpuFilm::enable_display`] first); `None` for an `F32Pass`
+    /// film without a display buffer.
+    pub fn display_source(&self) -> Option<DisplaySource<'_>> {
+        match self.precision {
+            FilmPrecision::F64 => Some(DisplaySource::F64 { sum: &self.sum, count: &self.count }),
+            FilmPrecision::F32Pass => self.display.as_ref().map(|means| DisplaySource::F32 { means }),
+        }
+    }
+
+    /// Whether the sums' `w` holds every counted sample's squared luminance (an `F64` film not
+    /// loaded from a saved one since it was last cleared): the noise estimate needs it.
+    pub fn has_squares(&self) -> bool {
+        self.precision == FilmPrecision::F64 && self.squares_valid
+    }
+
+    /// `F32Pass` with a display: uploads the folded means (the GPU's pass sums are zero then).
+    fn upload_display(&self, ctx: &GpuContext) -> Result<(), GpuError> {
+        let (Some(buffer), Some(host)) = (&self.display, &self.host) else {
+            return Ok(());
+        };
+        let means: Vec<f32> = (0..self.pixels())
+            .flat_map(|i| {
+                let m = host.mean(i).as_vec3();
+                [m.x, m.y, m.z, host.counts()[i] as f32]
+            })
+            .collect();
+        ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&means));
+        ctx.queue.submit([]);
+        ctx.check()
     }
 
     fn pixels(&self) -> usize {
@@ -164,7 +245,9 @@ impl GpuFilm {
         if let Some(h) = &mut self.host {
             *h = Film::new(self.width, self.height);
         }
-        self.clear_device(ctx)
+        self.squares_valid = true;
+        self.clear_device(ctx)?;
+        self.upload_display(ctx)
     }
 
     fn clear_device(&self, ctx: &GpuContext) -> Result<(), GpuError> {
@@ -186,7 +269,8 @@ impl GpuFilm {
         if let Some(h) = &mut self.host {
             h.add_film(&pass).map_err(|e| GpuError::Wgpu(e.to_string()))?;
         }
-        self.clear_device(ctx)
+        self.clear_device(ctx)?;
+        self.upload_display(ctx)
     }
 
     /// The film: sums in `f64`, counts, and the total of rejected samples (for `F32Pass`, the
@@ -236,9 +320,11 @@ impl GpuFilm {
                 height: self.height,
             });
         }
+        self.squares_valid = data.counts().iter().all(|&c| c == 0);
         if let Some(h) = &mut self.host {
             *h = data.clone();
-            return self.clear_device(ctx);
+            self.clear_device(ctx)?;
+            return self.upload_display(ctx);
         }
         let too_many = |c: u64| {
             u32::try_from(c).map_err(|_| {

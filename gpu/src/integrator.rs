@@ -351,6 +351,10 @@ pub struct GpuRenderer {
     max_samples_per_invocation: u32,
     group_samples: Option<u32>,
     timer: Option<Timer>,
+    /// Triangles uploaded (what [`GpuRenderer::reconfigure`] checks a scene against).
+    triangles: usize,
+    /// Whether the film is kept drawable ([`GpuRenderer::enable_display`]).
+    display: bool,
 }
 
 /// GPU timestamps around each pass's compute pass (adapters with `TIMESTAMP_QUERY`).
@@ -507,6 +511,88 @@ fn storage_buffer(ctx: &GpuContext, label: &str, words: &[u32]) -> Result<wgpu::
     ctx.buffer_init(label, bytemuck::cast_slice(&v), wgpu::BufferUsages::STORAGE)
 }
 
+/// The emitters' buffer (records, or light BVH nodes with `features.light_bvh`); `None` (and no
+/// binding) for a scene without emitters.
+fn emitter_buffer(
+    ctx: &GpuContext,
+    scene: &Scene,
+    emitters: Option<&Emitters>,
+    features: SceneFeatures,
+) -> Result<Option<wgpu::Buffer>, GpuError> {
+    emitters
+        .map(|e| {
+            let words = if features.light_bvh { light_bvh_words(e, &e.light_bvh(scene)) } else { emitter_words(e) };
+            storage_buffer(ctx, "emitters", &words)
+        })
+        .transpose()
+}
+
+/// The environment's texels, and its CDFs when it is light-sampled; none (and no binding)
+/// without one.
+fn environment_buffers(
+    ctx: &GpuContext,
+    scene: &Scene,
+    settings: &RenderSettings,
+    limit: u64,
+) -> Result<Vec<wgpu::Buffer>, GpuError> {
+    let mut environment = Vec::new();
+    if let Some(env) = scene.environment() {
+        let sampler = settings
+            .env_sampling
+            .light_samples(settings.light_sampling)
+            .and_then(|compensated| env.sampler(compensated));
+        let words = environment_words(env, sampler.as_ref());
+        for (what, w) in [("environment map", &words[0]), ("environment map's CDFs", &words[1])] {
+            let bytes = 4 * w.len() as u64;
+            if bytes > limit {
+                return Err(GpuError::TooLarge { what: what.into(), bytes, limit });
+            }
+        }
+        environment.push(storage_buffer(ctx, "environment", &words[0])?);
+        if sampler.is_some() {
+            environment.push(storage_buffer(ctx, "environment cdf", &words[1])?);
+        }
+    }
+    Ok(environment)
+}
+
+/// The integrator's bind group layout and compute pipeline for a film precision and the scene
+/// features.
+fn integrator_pipeline(
+    ctx: &GpuContext,
+    precision: FilmPrecision,
+    features: SceneFeatures,
+) -> Result<(wgpu::BindGroupLayout, wgpu::ComputePipeline), GpuError> {
+    let entries = binding_table(precision, features).layout_entries();
+    let device = &ctx.device;
+    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("integrator"),
+        entries: &entries,
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("integrator"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+        label: Some("integrator"),
+        source: wgpu::ShaderSource::Wgsl(shader_source(precision, features).into()),
+    });
+    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+        label: Some("integrator"),
+        layout: Some(&pipeline_layout),
+        module: &module,
+        entry_point: Some("main"),
+        compilation_options: Default::default(),
+        cache: None,
+    });
+    if let Some(e) = pollster::block_on(scope.pop()) {
+        return Err(GpuError::Wgpu(e.to_string()));
+    }
+    Ok((layout, pipeline))
+}
+
 impl GpuRenderer {
     /// Uploads `scene` (seen through `camera`) and builds the pipeline for `settings`.
     ///
@@ -547,69 +633,12 @@ impl GpuRenderer {
             storage_buffer(&ctx, "point lights", bytemuck::cast_slice(&point_light_records(scene)))?;
         let scene_emitters = Emitters::new(scene);
         let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
-        // No buffer (and no binding) for a scene without emitters.
-        let emitters = scene_emitters
-            .as_ref()
-            .map(|e| {
-                let words = if features.light_bvh {
-                    light_bvh_words(e, &e.light_bvh(scene))
-                } else {
-                    emitter_words(e)
-                };
-                storage_buffer(&ctx, "emitters", &words)
-            })
-            .transpose()?;
-        // The environment's texels, and its CDFs when it is light-sampled; no buffer (and no
-        // binding) without one.
-        let mut environment = Vec::new();
-        if let Some(env) = scene.environment() {
-            let sampler = settings
-                .env_sampling
-                .light_samples(settings.light_sampling)
-                .and_then(|compensated| env.sampler(compensated));
-            let words = environment_words(env, sampler.as_ref());
-            for (what, w) in [("environment map", &words[0]), ("environment map's CDFs", &words[1])] {
-                let bytes = 4 * w.len() as u64;
-                if bytes > limit {
-                    return Err(GpuError::TooLarge { what: what.into(), bytes, limit });
-                }
-            }
-            environment.push(storage_buffer(&ctx, "environment", &words[0])?);
-            if sampler.is_some() {
-                environment.push(storage_buffer(&ctx, "environment cdf", &words[1])?);
-            }
-        }
+        let emitters = emitter_buffer(&ctx, scene, scene_emitters.as_ref(), features)?;
+        let environment = environment_buffers(&ctx, scene, &settings, limit)?;
         let precision = FilmPrecision::for_context(&ctx);
         let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
-
-        let entries = binding_table(precision, features).layout_entries();
-        let device = &ctx.device;
-        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("integrator"),
-            entries: &entries,
-        });
-        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-            label: Some("integrator"),
-            bind_group_layouts: &[Some(&layout)],
-            immediate_size: 0,
-        });
-        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
-            label: Some("integrator"),
-            source: wgpu::ShaderSource::Wgsl(shader_source(precision, features).into()),
-        });
-        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some("integrator"),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some("main"),
-            compilation_options: Default::default(),
-            cache: None,
-        });
-        if let Some(e) = pollster::block_on(scope.pop()) {
-            return Err(GpuError::Wgpu(e.to_string()));
-        }
+        let (layout, pipeline) = integrator_pipeline(&ctx, precision, features)?;
         // Software adapters (lavapipe) run ~1 Msample/s and end any shader loop after 65535
         // iterations per invocation (all loops together): one sample per invocation there.
         let software = !crate::context::is_hardware(&ctx.info);
@@ -640,12 +669,94 @@ impl GpuRenderer {
             max_samples_per_invocation,
             group_samples: None,
             timer: None,
+            triangles: scene.geometry.triangles.len(),
+            display: false,
         })
     }
 
     /// The device.
     pub fn context(&self) -> &GpuContext {
         &self.ctx
+    }
+
+    /// The film on the device (for a display: [`crate::present::FilmPresenter`]).
+    pub fn gpu_film(&self) -> &GpuFilm {
+        &self.film
+    }
+
+    /// Makes the film drawable by [`crate::present::FilmPresenter`] (see
+    /// [`GpuFilm::enable_display`]); it stays so across [`GpuRenderer::reconfigure`].
+    ///
+    /// # Errors
+    /// A device error.
+    pub fn enable_display(&mut self) -> Result<(), GpuError> {
+        self.display = true;
+        self.film.enable_display(&self.ctx)
+    }
+
+    /// Looks through `camera` from the next pass on. The film is not cleared: call
+    /// [`GpuRenderer::clear_film`] when the samples so far were of another view.
+    pub fn set_camera(&mut self, camera: &Camera) {
+        set_camera_params(&mut self.base, camera);
+    }
+
+    /// Zeroes the film (a new accumulation, from sample index 0).
+    ///
+    /// # Errors
+    /// A device error.
+    pub fn clear_film(&mut self) -> Result<(), GpuError> {
+        self.film.clear(&self.ctx)
+    }
+
+    /// Renders `scene` (the one it was made with, or the same geometry with other lights'
+    /// intensities, as a viewer's environment slider makes) with new `settings` through `camera`,
+    /// keeping the uploaded geometry, materials and BVH: the sampler, the uniform block, the
+    /// emitters' and environment's buffers and the pipeline are rebuilt as the settings need, the
+    /// film is cleared (remade at a new size). A viewer calls it for each change of settings.
+    ///
+    /// # Errors
+    /// As [`GpuRenderer::new`], and [`GpuError::Unsupported`] for a scene whose triangle count
+    /// differs from the uploaded one.
+    pub fn reconfigure(&mut self, scene: &Scene, camera: &Camera, settings: RenderSettings) -> Result<(), GpuError> {
+        if scene.geometry.triangles.len() != self.triangles {
+            return Err(GpuError::Unsupported(format!(
+                "reconfigure with a scene of {} triangles, the renderer holds {}: make a new renderer",
+                scene.geometry.triangles.len(),
+                self.triangles
+            )));
+        }
+        let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
+        let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
+        let scene_emitters = Emitters::new(scene);
+        let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
+        let old = &self.settings;
+        if features.light_bvh != self.features.light_bvh || features.emitters != self.features.emitters {
+            self.emitters = emitter_buffer(&self.ctx, scene, scene_emitters.as_ref(), features)?;
+        }
+        let env_samples = |s: &RenderSettings| s.env_sampling.light_samples(s.light_sampling);
+        if env_samples(old) != env_samples(&settings) || features.environment != self.features.environment {
+            let limit = self.ctx.max_storage_binding().min(self.ctx.device.limits().max_buffer_size);
+            self.environment = environment_buffers(&self.ctx, scene, &settings, limit)?;
+        }
+        let precision = self.film.precision();
+        if features != self.features {
+            (self.layout, self.pipeline) = integrator_pipeline(&self.ctx, precision, features)?;
+        }
+        if (settings.width, settings.height) != (old.width, old.height) {
+            self.film = GpuFilm::new(&self.ctx, settings.width, settings.height, precision)?;
+            if self.display {
+                self.film.enable_display(&self.ctx)?;
+            }
+        } else {
+            self.film.clear(&self.ctx)?;
+        }
+        let counting = self.base.flags & FRAME_COUNT_RAYS;
+        self.base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
+        self.base.flags |= counting;
+        self.sampler = sampler;
+        self.features = features;
+        self.settings = settings;
+        Ok(())
     }
 
     /// The settings it renders with.
@@ -955,15 +1066,8 @@ fn frame_params_with(
     sampler: SamplerParams,
     emitters: Option<&Emitters>,
 ) -> FrameParams {
-    let m = camera.world_from_camera;
-    let v4 = |v: glam::Vec3A| [v.x, v.y, v.z, 0.0];
-    let (w, h) = (s.width.max(1) as f32, s.height.max(1) as f32);
-    let (fov_scale, ortho) = match camera.projection {
-        Projection::Perspective { yfov, .. } => ((yfov * 0.5).tan(), 0),
-        Projection::Orthographic { ymag, .. } => (ymag, FRAME_ORTHOGRAPHIC),
-    };
     let any_masked = scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }));
-    let mut flags = ortho;
+    let mut flags = 0;
     if s.russian_roulette {
         flags |= FRAME_RUSSIAN_ROULETTE;
     }
@@ -988,11 +1092,11 @@ fn frame_params_with(
     };
     let env = scene.environment();
     let rotation = env.map_or(furnace_scene::YRotation::IDENTITY, |e| e.y_rotation());
-    FrameParams {
-        cam_x: v4(m.matrix3.x_axis),
-        cam_y: v4(m.matrix3.y_axis),
-        cam_z: v4(m.matrix3.z_axis),
-        cam_t: v4(m.translation),
+    let mut p = FrameParams {
+        cam_x: [0.0; 4],
+        cam_y: [0.0; 4],
+        cam_z: [0.0; 4],
+        cam_t: [0.0; 4],
         sun_direction,
         sun_irradiance,
         sky: scene.sky().extend(0.0).to_array(),
@@ -1005,8 +1109,8 @@ fn frame_params_with(
         flags,
         bsdf_flags: brdf::options_flags(s.specular),
         row_offset: 0,
-        fov_scale,
-        aspect: w / h,
+        fov_scale: 1.0,
+        aspect: 1.0,
         group_samples: 1,
         tile_width: 8,
         offset_scale: {
@@ -1023,5 +1127,24 @@ fn frame_params_with(
         env_sin: rotation.sin,
         env_flags: if env.is_some_and(|e| e.visible) { ENV_VISIBLE } else { 0 },
         env_pad: [0; 2],
-    }
+    };
+    set_camera_params(&mut p, camera);
+    p
+}
+
+/// Writes `camera` (pose, projection) into the uniform block of an image of `p.width × p.height`.
+fn set_camera_params(p: &mut FrameParams, camera: &Camera) {
+    let m = camera.world_from_camera;
+    let v4 = |v: glam::Vec3A| [v.x, v.y, v.z, 0.0];
+    let (fov_scale, ortho) = match camera.projection {
+        Projection::Perspective { yfov, .. } => ((yfov * 0.5).tan(), 0),
+        Projection::Orthographic { ymag, .. } => (ymag, FRAME_ORTHOGRAPHIC),
+    };
+    p.cam_x = v4(m.matrix3.x_axis);
+    p.cam_y = v4(m.matrix3.y_axis);
+    p.cam_z = v4(m.matrix3.z_axis);
+    p.cam_t = v4(m.translation);
+    p.fov_scale = fov_scale;
+    p.aspect = p.width.max(1) as f32 / p.height.max(1) as f32;
+    p.flags = (p.flags & !FRAME_ORTHOGRAPHIC) | ortho;
 }

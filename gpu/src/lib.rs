@@ -40,6 +40,7 @@ pub mod context;
 pub mod display;
 pub mod film;
 pub mod integrator;
+pub mod present;
 pub mod sampling;
 pub mod scene;
 pub mod shared;
