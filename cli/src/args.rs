@@ -5,8 +5,11 @@ use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
 use furnace_render::{EnvSampling, LightSampling, LightSelection, TriangleSampling};
 use furnace_sampling::SamplerKind;
+use furnace_scene::Camera;
+use glam::Vec3;
 use std::collections::BTreeSet;
 use std::path::PathBuf;
+use std::str::FromStr;
 
 /// furnace: a progressive path tracer.
 #[derive(Debug, Parser)]
@@ -87,6 +90,20 @@ pub struct RenderArgs {
     /// first; a scene without one is framed around its geometry].
     #[arg(long, value_name = "INDEX")]
     pub camera: Option<u32>,
+    /// A free camera instead of the scene's: at the eye (EX,EY,EZ), looking at the target
+    /// (TX,TY,TZ), with up (UX,UY,UZ) [default up: 0,1,0]; world coordinates of the scene. The
+    /// image is square unless --width and --height say otherwise.
+    #[arg(
+        long,
+        value_name = "EX,EY,EZ,TX,TY,TZ[,UX,UY,UZ]",
+        allow_hyphen_values = true,
+        conflicts_with = "camera"
+    )]
+    pub look_at: Option<LookAt>,
+    /// Vertical field of view of the --look-at camera in degrees, between 0 and 180 [default:
+    /// the scene's first perspective camera's, else 45].
+    #[arg(long, value_name = "DEG", requires = "look_at", value_parser = parse_yfov)]
+    pub yfov: Option<f32>,
     /// Russian roulette from the third scattering event on (unbiased; faster, noisier).
     #[arg(long, value_enum, default_value_t = Switch::Off)]
     pub russian_roulette: Switch,
@@ -145,6 +162,88 @@ impl RenderArgs {
     /// Whether argument `id` (the field name) was given on the command line.
     pub fn given(&self, id: &str) -> bool {
         self.given.contains(id)
+    }
+}
+
+/// `--look-at`: a perspective camera's pose, from an eye, a target and an up direction.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LookAt {
+    /// Where the camera is.
+    pub eye: Vec3,
+    /// The point it looks at (not the eye).
+    pub target: Vec3,
+    /// Which way is up (not parallel to `target - eye`; the camera's up is its part orthogonal
+    /// to the view direction).
+    pub up: Vec3,
+}
+
+impl LookAt {
+    /// The perspective camera of this pose with a vertical field of view of `yfov_deg` degrees.
+    pub fn camera(&self, yfov_deg: f32) -> Camera {
+        Camera::look_at(self.eye, self.target, self.up, yfov_deg.to_radians())
+    }
+}
+
+impl FromStr for LookAt {
+    type Err = String;
+
+    /// `EX,EY,EZ,TX,TY,TZ` or `EX,EY,EZ,TX,TY,TZ,UX,UY,UZ` (up defaults to +Y): finite numbers,
+    /// the eye not at the target, the up direction not parallel to the view direction.
+    fn from_str(s: &str) -> Result<Self, String> {
+        let x = s
+            .split(',')
+            .map(|t| match t.trim().parse::<f32>() {
+                Ok(x) if x.is_finite() => Ok(x),
+                Ok(_) => Err(format!("'{}' is not a finite number", t.trim())),
+                Err(_) => Err(format!("'{}' is not a number", t.trim())),
+            })
+            .collect::<Result<Vec<f32>, String>>()?;
+        let up = match x.len() {
+            6 => Vec3::Y,
+            9 => Vec3::from_slice(&x[6..]),
+            n => {
+                return Err(format!(
+                    "expected 6 or 9 comma-separated numbers (eye x,y,z, target x,y,z[, up x,y,z]), \
+                     got {n}"
+                ));
+            }
+        };
+        let look = LookAt { eye: Vec3::from_slice(&x[0..3]), target: Vec3::from_slice(&x[3..6]), up };
+        // What `Camera::look_at` needs for a direction: a view vector and an up vector whose
+        // squared lengths neither overflow nor underflow in f32.
+        let view = look.target - look.eye;
+        if view == Vec3::ZERO {
+            return Err("the eye and the target are the same point".into());
+        }
+        let forward = view.normalize_or_zero();
+        if forward == Vec3::ZERO {
+            return Err("the eye and the target are too far apart or too close together".into());
+        }
+        if look.up == Vec3::ZERO {
+            return Err("the up direction is zero".into());
+        }
+        let length = look.up.length();
+        if !(1e-10..=1e10).contains(&length) {
+            return Err(format!("the up direction's length {length:e} is out of range (1e-10 to 1e10)"));
+        }
+        // Nearly parallel would leave the camera's roll to rounding.
+        if forward.cross(look.up / length).length() < 1e-4 {
+            return Err(
+                "the up direction is parallel to the view direction (from the eye to the target)".into()
+            );
+        }
+        Ok(look)
+    }
+}
+
+impl std::fmt::Display for LookAt {
+    /// The nine numbers, comma-separated, each as Rust's shortest form that parses back to the
+    /// same `f32` (what the EXR records, so that a resumed render rebuilds the same camera).
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let [a, b, c] = self.eye.to_array();
+        let [d, e, g] = self.target.to_array();
+        let [h, i, j] = self.up.to_array();
+        write!(f, "{a},{b},{c},{d},{e},{g},{h},{i},{j}")
     }
 }
 
@@ -654,6 +753,16 @@ pub enum Switch {
     Off,
 }
 
+/// A vertical field of view in degrees: a number strictly between 0 and 180.
+pub(crate) fn parse_yfov(s: &str) -> Result<f32, String> {
+    let d: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of degrees"))?;
+    if d > 0.0 && d < 180.0 {
+        Ok(d)
+    } else {
+        Err(format!("the vertical field of view must be between 0 and 180 degrees, both excluded (got {s})"))
+    }
+}
+
 fn parse_sun_angle(s: &str) -> Result<f32, String> {
     let d: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of degrees"))?;
     if (0.0..=180.0).contains(&d) {
@@ -712,5 +821,59 @@ mod tests {
         assert!(Cli::try_parse_from(["furnace", "render", "--exposure", "nan"]).is_err());
         assert!(Cli::try_parse_from(["furnace", "render", "--time-limit", "0"]).is_err());
         assert!(Cli::try_parse_from(["furnace", "render", "--spp", "0"]).is_err());
+    }
+
+    #[test]
+    fn look_at_parses_displays_and_round_trips() {
+        let l: LookAt = "-1, 2.5,3e-3,0,0,0".parse().unwrap();
+        assert_eq!((l.eye, l.target, l.up), (Vec3::new(-1.0, 2.5, 3e-3), Vec3::ZERO, Vec3::Y));
+        assert_eq!(l.to_string(), "-1,2.5,0.003,0,0,0,0,1,0");
+        // Numbers that are not short decimals come back bit for bit.
+        let odd = LookAt {
+            eye: Vec3::new(0.1 + 0.2, -1.0 / 3.0, 1e-30),
+            target: Vec3::new(1.2345678e18, 7.0e-8, -0.0),
+            up: Vec3::new(0.0, 0.6, 0.80000013),
+        };
+        let back: LookAt = odd.to_string().parse().unwrap();
+        let bits = |l: &LookAt| [l.eye, l.target, l.up].map(|v| v.to_array().map(f32::to_bits));
+        assert_eq!(bits(&back), bits(&odd));
+        // The camera is at the eye, looking at the target.
+        let c = "0,0,4,0,0,0".parse::<LookAt>().unwrap().camera(45.0);
+        assert_eq!(Vec3::from(c.world_from_camera.translation), Vec3::new(0.0, 0.0, 4.0));
+        assert!((c.world_from_camera.transform_vector3(Vec3::NEG_Z) - Vec3::NEG_Z).length() < 1e-6);
+    }
+
+    #[test]
+    fn bad_look_at_values_say_what_is_wrong() {
+        for (s, needle) in [
+            ("1,2", "expected 6 or 9 comma-separated numbers"),
+            ("1,2,3,4,5,6,7", "got 7"),
+            ("1,2,x,4,5,6", "'x' is not a number"),
+            ("1,2,inf,4,5,6", "'inf' is not a finite number"),
+            ("1,2,3,1,2,3", "the same point"),
+            ("0,0,0,0,5,0", "parallel"),
+            ("0,0,0,1,0,0,0,0,0", "the up direction is zero"),
+            ("-3e38,0,0,3e38,0,0", "too far apart or too close together"),
+            ("0,0,0,1e-30,0,0", "too far apart or too close together"),
+            ("0,0,0,1,0,0,0,1e-20,0", "is out of range (1e-10 to 1e10)"),
+        ] {
+            let e = s.parse::<LookAt>().unwrap_err();
+            assert!(e.contains(needle), "{s}: {e}");
+        }
+    }
+
+    #[test]
+    fn yfov_needs_look_at_and_look_at_excludes_camera() {
+        let parse = |args: &[&str]| Cli::try_parse_from([&["furnace", "render"], args].concat());
+        let Command::Render(a) = parse(&["--look-at", "-1,0,0,0,0,0", "--yfov", "30"]).unwrap().command
+        else {
+            panic!("not render")
+        };
+        assert_eq!((a.look_at.map(|l| l.eye), a.yfov), (Some(Vec3::NEG_X), Some(30.0)));
+        assert!(parse(&["--yfov", "30"]).is_err());
+        assert!(parse(&["--look-at", "1,0,0,0,0,0", "--camera", "0"]).is_err());
+        for bad in ["0", "180", "-5", "nan"] {
+            assert!(parse(&["--look-at", "1,0,0,0,0,0", "--yfov", bad]).is_err(), "{bad}");
+        }
     }
 }

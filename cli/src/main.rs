@@ -93,10 +93,24 @@ fn fail(message: &str) -> ExitCode {
     ExitCode::FAILURE
 }
 
-/// clap's message as one line, without its `error: ` prefix, usage block and `--help` hint.
+/// clap's message as one line, without its `error: ` prefix, usage block and `--help` hint; a
+/// first line ending in `:` (the arguments that are missing) takes the indented lines under it.
 fn clap_one_line(e: &clap::Error) -> String {
     let text = e.to_string();
-    let first = text.lines().find(|l| !l.trim().is_empty()).unwrap_or("invalid arguments");
+    let mut lines = text.lines().skip_while(|l| l.trim().is_empty());
+    let first = lines.next().unwrap_or("invalid arguments");
     let first = first.strip_prefix("error: ").unwrap_or(first).trim();
-    format!("{first} (see 'furnace --help')")
+    let listed: Vec<&str> = if first.ends_with(':') {
+        lines
+            .take_while(|l| l.starts_with(char::is_whitespace) && !l.trim().is_empty())
+            .map(str::trim)
+            .collect()
+    } else {
+        Vec::new()
+    };
+    if listed.is_empty() {
+        format!("{first} (see 'furnace --help')")
+    } else {
+        format!("{first} {} (see 'furnace --help')", listed.join(", "))
+    }
 }

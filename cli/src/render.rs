@@ -8,7 +8,7 @@ use furnace_brdf::SpecularOptions;
 use furnace_cli::backend;
 use furnace_post::{ExrWithState, Metadata, read_exr_with_state, to_srgb8, write_exr_with_state, write_png};
 use furnace_render::{Budget, Film, Integrator, RenderSettings, SAMPLER_LAYOUT_VERSION, Session, Stop};
-use furnace_scene::{Camera, Scene, builtin};
+use furnace_scene::{Camera, Projection, Scene, builtin};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use std::ffi::OsString;
@@ -20,8 +20,8 @@ use std::time::Instant;
 struct Job {
     args: RenderArgs,
     settings: RenderSettings,
-    /// The camera's index, or `None` for a scene without cameras (framed around the geometry).
-    camera: Option<u32>,
+    /// The camera's [`resume::CAMERA`] record (from [`select_camera`]).
+    camera: String,
     scene_name: String,
     scene_hash: String,
 }
@@ -31,7 +31,6 @@ impl Job {
     fn metadata(&self, spp: u32, render_time_s: f64, rejected: u64) -> Metadata {
         let a = &self.args;
         let s = &self.settings;
-        let camera = self.camera.map_or_else(|| resume::FRAMED.to_string(), |c| c.to_string());
         Metadata {
             spp: Some(spp),
             sampler: Some(s.sampler.to_string()),
@@ -46,7 +45,7 @@ impl Job {
                 (resume::MASKING, resume::cli_name(&a.masking)),
                 (resume::COMPENSATION, resume::cli_name(&a.compensation)),
                 (resume::SPECULAR_SAMPLING, resume::cli_name(&a.specular_sampling)),
-                (resume::CAMERA, camera),
+                (resume::CAMERA, self.camera.clone()),
                 (resume::RUSSIAN_ROULETTE, resume::cli_name(&a.russian_roulette)),
                 (resume::LIGHT_SAMPLING, resume::cli_name(&a.light_sampling)),
                 (resume::TRIANGLE_SAMPLING, resume::cli_name(&a.triangle_sampling)),
@@ -116,7 +115,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     crate::env::apply(&mut scene, &args.environment)?;
     let samples_lights = scene.samples_lights();
     let scene_hash = scene.content_hash();
-    let (camera, view) = select_camera(&scene, args.camera)?;
+    let (camera, view) = select_camera(&scene, &args)?;
     let (width, height) = image_size(&view, args.width, args.height)?;
     let settings = RenderSettings {
         width,
@@ -327,12 +326,20 @@ fn restore(path: &Path, file: ExrWithState) -> Result<Saved, String> {
     })
 }
 
-/// Camera `index` of the scene (the first without one) and the index used, `None` for a scene
-/// without cameras (framed around its geometry).
-fn select_camera(scene: &Scene, index: Option<u32>) -> Result<(Option<u32>, Camera), String> {
+/// The camera that `args` ask for and its [`resume::CAMERA`] record: with `--look-at`, that pose
+/// with `--yfov` (default: the scene's first perspective camera's, else 45°), recorded by
+/// [`resume::look_at_record`]; else camera `--camera` of the scene (the first without it),
+/// recorded by its index, or for a scene without cameras the view framed around its geometry,
+/// recorded as [`resume::FRAMED`].
+pub(crate) fn select_camera(scene: &Scene, args: &RenderArgs) -> Result<(String, Camera), String> {
+    if let Some(look) = &args.look_at {
+        let yfov = args.yfov.unwrap_or_else(|| default_yfov(scene));
+        return Ok((resume::look_at_record(look, yfov), look.camera(yfov)));
+    }
     let n = scene.cameras.len();
-    match index {
-        None => Ok(((n > 0).then_some(0), scene.default_camera())),
+    match args.camera {
+        None if n == 0 => Ok((resume::FRAMED.to_string(), scene.default_camera())),
+        None => Ok(("0".to_string(), scene.default_camera())),
         Some(_) if n == 0 => Err(format!(
             "{} has no cameras (without --camera the view is framed around its geometry)",
             scene.name
@@ -343,8 +350,22 @@ fn select_camera(scene: &Scene, index: Option<u32>) -> Result<(Option<u32>, Came
             if n == 1 { "" } else { "s" },
             n - 1
         )),
-        Some(i) => Ok((Some(i), scene.cameras[i as usize])),
+        Some(i) => Ok((i.to_string(), scene.cameras[i as usize])),
     }
+}
+
+/// The `--yfov` of a `--look-at` camera not given one, in degrees: that of the scene's first
+/// perspective camera, else 45.
+fn default_yfov(scene: &Scene) -> f32 {
+    scene
+        .cameras
+        .iter()
+        .find_map(|c| match c.projection {
+            Projection::Perspective { yfov, .. } => Some(yfov.to_degrees()),
+            Projection::Orthographic { .. } => None,
+        })
+        .filter(|d| *d > 0.0 && *d < 180.0)
+        .unwrap_or(45.0)
 }
 
 /// `s` quoted for a POSIX shell when it needs it.

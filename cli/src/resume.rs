@@ -24,8 +24,8 @@
 //! record keeps every backend that added samples, and `--resume` says when it changes.
 
 use crate::args::{
-    EnvArgs, EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, RenderArgs, SamplingArg,
-    Switch, TriangleSamplingArg,
+    EnvArgs, EnvSamplingArg, LightSamplingArg, LightSelectionArg, LookAt, MaskingArg, RenderArgs,
+    SamplingArg, Switch, TriangleSamplingArg,
 };
 use clap::ValueEnum;
 use furnace_post::Metadata;
@@ -50,7 +50,8 @@ pub const MASKING: &str = "furnace.masking";
 pub const COMPENSATION: &str = "furnace.compensation";
 /// `--specular-sampling`.
 pub const SPECULAR_SAMPLING: &str = "furnace.specular_sampling";
-/// `--camera`: the index, or `framed` for a scene without cameras.
+/// The camera: `--camera`'s index (`0` by default), [`FRAMED`] for a scene without cameras, or
+/// for `--look-at` its [`look_at_record`].
 pub const CAMERA: &str = "furnace.camera";
 /// `--russian-roulette`.
 pub const RUSSIAN_ROULETTE: &str = "furnace.russian_roulette";
@@ -95,6 +96,33 @@ pub const BACKEND: &str = "furnace.backend";
 
 /// The `--camera` value recorded for a scene without cameras.
 pub const FRAMED: &str = "framed";
+
+/// How a [`look_at_record`] starts.
+pub const LOOK_AT: &str = "look-at:";
+
+/// The [`CAMERA`] record of a `--look-at` camera with a vertical field of view of `yfov_deg`
+/// degrees: `look-at:EX,EY,EZ,TX,TY,TZ,UX,UY,UZ;yfov:DEG`, every number in the shortest form
+/// that parses back to the same `f32`, so that a resumed render rebuilds the same camera bit for
+/// bit (and the identity check, which compares records, accepts it).
+pub fn look_at_record(look: &LookAt, yfov_deg: f32) -> String {
+    format!("{LOOK_AT}{look};yfov:{yfov_deg}")
+}
+
+/// The pose and the field of view (degrees) of a [`look_at_record`]; `None` if `record` is not
+/// one, or not a valid one.
+pub fn parse_look_at_record(record: &str) -> Option<(LookAt, f32)> {
+    let (look, yfov) = record.strip_prefix(LOOK_AT)?.split_once(";yfov:")?;
+    Some((look.parse().ok()?, crate::args::parse_yfov(yfov).ok()?))
+}
+
+/// The options that give the camera of a [`CAMERA`] record: `--look-at … --yfov …`, or
+/// `--camera INDEX` (for messages).
+pub fn camera_options(record: &str) -> String {
+    match parse_look_at_record(record) {
+        Some((look, yfov)) => format!("--look-at {look} --yfov {yfov}"),
+        None => format!("--camera {record}"),
+    }
+}
 
 /// A clap value's command-line spelling (`height-correlated`).
 pub fn cli_name(v: &impl ValueEnum) -> String {
@@ -220,12 +248,22 @@ pub fn apply_recorded(
         let v = extra(SPECULAR_SAMPLING)?;
         a.specular_sampling = enum_value::<SamplingArg>(v).ok_or_else(|| invalid(SPECULAR_SAMPLING, v))?;
     }
-    if !a.given("camera") {
+    if !a.given("camera") && !a.given("look_at") {
         let v = extra(CAMERA)?;
-        a.camera = match v {
-            FRAMED => None,
-            _ => Some(v.parse().map_err(|_| invalid(CAMERA, v))?),
+        (a.camera, a.look_at, a.yfov) = match v {
+            FRAMED => (None, None, None),
+            _ if v.starts_with(LOOK_AT) => {
+                let (look, yfov) = parse_look_at_record(v).ok_or_else(|| invalid(CAMERA, v))?;
+                (None, Some(look), Some(yfov))
+            }
+            _ => (Some(v.parse().map_err(|_| invalid(CAMERA, v))?), None, None),
         };
+    } else if a.given("look_at")
+        && !a.given("yfov")
+        && let Some((_, yfov)) = meta.extra.get(CAMERA).and_then(|v| parse_look_at_record(v))
+    {
+        // The same pose given again: the field of view is the file's unless given.
+        a.yfov = Some(yfov);
     }
     if !a.given("russian_roulette") {
         let v = extra(RUSSIAN_ROULETTE)?;
@@ -327,6 +365,20 @@ mod tests {
             "dir/r.exr: cannot resume with different settings: height is 8 in the file but 6 now; \
              bounces is 4 in the file but 2 now; camera is 0 in the file but 1 now"
         );
+    }
+
+    #[test]
+    fn look_at_records_round_trip() {
+        let look: LookAt = "0.1,-2,3e-7,4,5,6,0,0,1".parse().unwrap();
+        let record = look_at_record(&look, 37.5);
+        assert_eq!(record, "look-at:0.1,-2,0.0000003,4,5,6,0,0,1;yfov:37.5");
+        assert_eq!(parse_look_at_record(&record), Some((look, 37.5)));
+        assert_eq!(camera_options(&record), "--look-at 0.1,-2,0.0000003,4,5,6,0,0,1 --yfov 37.5");
+        assert_eq!(camera_options("1"), "--camera 1");
+        for bad in ["look-at:1,2,3;yfov:40", "look-at:0,0,1,0,0,0,0,1,0;yfov:180", "look-at:0,0,1,0,0,0", "0"]
+        {
+            assert_eq!(parse_look_at_record(bad), None, "{bad}");
+        }
     }
 
     #[test]

@@ -584,6 +584,115 @@ fn camera_flag_selects_among_the_scene_cameras() {
 }
 
 #[test]
+fn look_at_renders_a_free_camera_and_records_it() {
+    let dir = temp_dir("look_at");
+    let read = |p: &Path| furnace_post::read_exr(p).unwrap();
+    let record = |p: &Path| read(p).3.extra.get("furnace.camera").cloned().unwrap_or_default();
+    // Mean |a − b| over pixels and channels, relative to b's mean.
+    let diff = |a: &Path, b: &Path| {
+        let (pa, pb) = (read(a).2, read(b).2);
+        let d: f32 = pa.iter().zip(&pb).map(|(x, y)| (*x - *y).abs().element_sum()).sum();
+        d / pb.iter().map(|y| y.element_sum()).sum::<f32>()
+    };
+    let default = render_ok(&dir, "default", 12, &["--spp", "1"]);
+    // The built-in box's camera: at (0, 1, 3.8) looking down −Z, 45° (the default --yfov, the
+    // scene camera's).
+    let same = render_ok(&dir, "same", 12, &["--spp", "1", "--look-at", "0,1,3.8,0,1,0"]);
+    assert_eq!(record(&same), "look-at:0,1,3.8,0,1,0,0,1,0;yfov:45");
+    assert_eq!(record(&default), "0");
+    let moved =
+        render_ok(&dir, "moved", 12, &["--spp", "1", "--look-at=-0.5,1.3,3,0,1,0,0.1,1,0", "--yfov", "50"]);
+    assert_eq!(record(&moved), "look-at:-0.5,1.3,3,0,1,0,0.1,1,0;yfov:50");
+    let (d_same, d_moved) = (diff(&same, &default), diff(&moved, &default));
+    assert!(d_same < 1e-3 && d_moved > 0.05, "{d_same} {d_moved}");
+    // The same pose with another field of view sees another image.
+    let narrow = render_ok(&dir, "narrow", 12, &["--spp", "1", "--look-at", "0,1,3.8,0,1,0", "--yfov", "30"]);
+    assert!(diff(&narrow, &default) > 0.05);
+    assert_eq!(record(&narrow), "look-at:0,1,3.8,0,1,0,0,1,0;yfov:30");
+    // The default --yfov is the scene's first perspective camera's (0.7 rad in the Cameras
+    // sample).
+    let cameras = data("Cameras/glTF-Embedded/Cameras.gltf");
+    let sample = render_ok(&dir, "sample", 4, &[&cameras, "--spp", "1", "--look-at", "0.5,0.5,3,0.5,0.5,0"]);
+    assert_eq!(record(&sample), format!("look-at:0.5,0.5,3,0.5,0.5,0,0,1,0;yfov:{}", 0.7f32.to_degrees()));
+}
+
+#[test]
+fn look_at_resumes_exactly_and_only_to_the_same_camera() {
+    let dir = temp_dir("look_at_resume");
+    let pose = "--look-at=-0.37,1.21,3.3,0.05,0.9,-0.1,0.02,1,0.01";
+    resume_matches_one_render(&dir, "look_at", &[pose, "--yfov", "38.5"]);
+    let two = dir.join("look_at_2.exr");
+    let file = two.to_str().unwrap();
+    let refused = |args: &[&str], needle: &str| {
+        let mut all = vec!["render", "--quiet", "--resume", file, "--spp", "3", "--out", "unused"];
+        all.extend_from_slice(args);
+        let o = furnace(&all);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {}", stderr(&o));
+        let err = stderr(&o);
+        assert!(err.contains("look_at_2.exr") && err.contains(needle), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    };
+    let recorded = "look-at:-0.37,1.21,3.3,0.05,0.9,-0.1,0.02,1,0.01;yfov:38.5";
+    refused(
+        &["--look-at", "-0.37,1.21,3.3,0.05,0.9,-0.1"],
+        &format!(
+            "camera is {recorded} in the file but look-at:-0.37,1.21,3.3,0.05,0.9,-0.1,0,1,0;yfov:38.5 now"
+        ),
+    );
+    refused(
+        &[pose, "--yfov", "40"],
+        &format!("camera is {recorded} in the file but {}", recorded.replace("38.5", "40")),
+    );
+    refused(&["--camera", "0"], &format!("camera is {recorded} in the file but 0 now"));
+    // The same pose given again takes the file's field of view.
+    let o = furnace(&["render", "--quiet", "--resume", file, "--spp", "3", pose]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        furnace_post::read_exr(&two).unwrap().3.extra.get("furnace.camera").map(String::as_str),
+        Some(recorded)
+    );
+
+    // A render by camera 0 is not continued by --look-at, even at that camera's pose: the records
+    // differ (camera 0 is the glTF node's transform, not this look-at).
+    let plain = render_ok(&dir, "plain", 12, &["--spp", "1"]);
+    let o = furnace(&[
+        "render",
+        "--quiet",
+        "--resume",
+        plain.to_str().unwrap(),
+        "--spp",
+        "2",
+        "--look-at",
+        "0,1,3.8,0,1,0",
+    ]);
+    assert_eq!(o.status.code(), Some(1));
+    assert!(
+        stderr(&o).contains("camera is 0 in the file but look-at:0,1,3.8,0,1,0,0,1,0;yfov:45 now"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn bad_look_at_values_fail_clearly() {
+    for (args, needle) in [
+        (&["render", "--look-at", "1,2"][..], "expected 6 or 9 comma-separated numbers"),
+        (&["render", "--look-at", "1,2,3,1,2,3"][..], "the eye and the target are the same point"),
+        (&["render", "--look-at", "0,0,0,0,0,1,0,0,-2"][..], "parallel to the view direction"),
+        (&["render", "--look-at", "0,0,nan,0,0,1"][..], "'nan' is not a finite number"),
+        (&["render", "--look-at", "0,0,5,0,0,0", "--yfov", "180"][..], "between 0 and 180 degrees"),
+        (&["render", "--yfov", "30"][..], "required arguments were not provided: --look-at"),
+        (&["render", "--look-at", "0,0,5,0,0,0", "--camera", "0"][..], "cannot be used with '--camera"),
+    ] {
+        let o = furnace(args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        let err = stderr(&o);
+        assert!(err.starts_with("error: ") && err.contains(needle), "{args:?}: {err}");
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+    }
+}
+
+#[test]
 fn info_lists_the_cameras() {
     let o = furnace(&["info", &data("Cameras/glTF/Cameras.gltf")]);
     assert!(o.status.success(), "{}", stderr(&o));

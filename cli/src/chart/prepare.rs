@@ -185,7 +185,8 @@ fn check_recorded(
         }
         if let Some(c) = extra(resume::CAMERA).filter(|&c| c != "0" && c != resume::FRAMED) {
             return Err(format!(
-                "{p} was rendered with --camera {c}; furnace chart renders the scene's first camera"
+                "{p} was rendered with {}; furnace chart renders the scene's first camera",
+                resume::camera_options(c)
             ));
         }
         if let Some(b) = r.metadata.bounces {
