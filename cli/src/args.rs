@@ -26,6 +26,11 @@ pub enum Command {
     /// Render a glTF/GLB scene (the built-in reference Cornell box without one) to PATH.exr
     /// (linear, with metadata) and PATH.png (tone-mapped sRGB).
     Render(RenderArgs),
+    /// Watch a scene render live in a window: the GPU integrator's film converging, tone-mapped
+    /// on the GPU; move the camera (orbit, pan, dolly, fly), change settings, save EXR + PNG
+    /// (Ctrl+S: what `render` writes, resumable with `render --resume`). Takes render's options;
+    /// without --spp it accumulates until closed. Press ? in the window for the controls.
+    View(ViewArgs),
     /// Print a scene's triangles, materials, textures, lights, camera and loader warnings.
     Info(InfoArgs),
     /// Score a candidate EXR against a reference EXR (furnace_post::metrics): RMSE,
@@ -245,6 +250,27 @@ impl std::fmt::Display for LookAt {
         let [h, i, j] = self.up.to_array();
         write!(f, "{a},{b},{c},{d},{e},{g},{h},{i},{j}")
     }
+}
+
+/// `furnace view`.
+#[derive(Debug, Clone, Args)]
+#[command(
+    mut_arg("spp", |a| a.help("Stop accumulating at this many samples per pixel (also N of the fixed-N samplers hammersley and cmj) [default: never; 64 for hammersley and cmj]").hide_default_value(true)),
+    mut_arg("out", |a| a.help("Where Ctrl+S saves: PATH.png and PATH.exr (a .png or .exr extension is replaced)")),
+    mut_arg("time_limit", |a| a.help("Stop accumulating after this many seconds of rendering")),
+    mut_arg("quiet", |a| a.help("No messages on stderr (warnings and errors are still printed)")),
+    mut_arg("backend", |a| a.help("gpu or auto (both: the GPU integrator, software adapters such as lavapipe included); cpu is refused: the window shows the GPU's film"))
+)]
+pub struct ViewArgs {
+    /// The render's options.
+    #[command(flatten)]
+    pub render: RenderArgs,
+    /// Drive the viewer by the commands of FILE (`-`: standard input, read as it comes), one per
+    /// line, each acknowledged on stdout: wait-spp N, wait-frames N, wait-seconds S, drag
+    /// left|middle|right DX DY, scroll STEPS, key NAME, hold KEY SECONDS, set NAME VALUE, save
+    /// [PATH], resize W H, print, quit.
+    #[arg(long, value_name = "FILE|-")]
+    pub script: Option<PathBuf>,
 }
 
 /// `furnace info`.

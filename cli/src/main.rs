@@ -11,6 +11,9 @@
 //!   exact sums and counts, `resume.rs`); Ctrl-C finishes the current pass, saves, and exits
 //!   with code 130 (`interrupt.rs`). The loop drives a `furnace_render::Session` over the
 //!   integrator that `furnace_cli::backend::open` chooses (CPU or GPU).
+//! * `furnace view [SCENE]` takes render's options and shows the GPU integrator's film as it
+//!   converges, in a window (`furnace_view`): camera controls, a settings panel, a HUD; Ctrl+S
+//!   saves what `render` writes (`view.rs`).
 //! * `furnace info SCENE` prints a scene's sizes, lights, cameras (with their `--camera` index)
 //!   and loader warnings.
 //! * `furnace compare CANDIDATE.exr REFERENCE.exr [--stderr …]` scores a render against a
@@ -35,6 +38,7 @@ mod interrupt;
 mod render;
 mod resume;
 mod shared;
+mod view;
 
 use clap::error::ErrorKind;
 use clap::parser::ValueSource;
@@ -59,6 +63,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         args::Command::Render(a) => render::run(&a, &interrupt::Interrupt::install()),
+        args::Command::View(a) => view::run(&a, &interrupt::Interrupt::install()),
         args::Command::Info(a) => info::run(&a).map(|()| shared::Outcome::Done),
         args::Command::Compare(a) => compare::run(&a).map(|()| shared::Outcome::Done),
         args::Command::Bench(a) => bench::run(&a).map(|()| shared::Outcome::Done),
@@ -76,7 +81,12 @@ fn main() -> ExitCode {
 fn parse() -> Result<args::Cli, clap::Error> {
     let matches = args::Cli::command().try_get_matches()?;
     let mut cli = args::Cli::from_arg_matches(&matches)?;
-    if let (args::Command::Render(a), Some(m)) = (&mut cli.command, matches.subcommand_matches("render")) {
+    let (render, name) = match &mut cli.command {
+        args::Command::Render(a) => (Some(a), "render"),
+        args::Command::View(v) => (Some(&mut v.render), "view"),
+        _ => (None, ""),
+    };
+    if let (Some(a), Some(m)) = (render, matches.subcommand_matches(name)) {
         a.given = m
             .ids()
             .map(|id| id.as_str())

@@ -17,18 +17,18 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// A render's settings, resolved from the arguments, the scene and (when resuming) the file.
-struct Job {
-    args: RenderArgs,
-    settings: RenderSettings,
+pub(crate) struct Job {
+    pub args: RenderArgs,
+    pub settings: RenderSettings,
     /// The camera's [`resume::CAMERA`] record (from [`select_camera`]).
-    camera: String,
-    scene_name: String,
-    scene_hash: String,
+    pub camera: String,
+    pub scene_name: String,
+    pub scene_hash: String,
 }
 
 impl Job {
     /// The EXR metadata of a render of this job with `spp` samples per pixel done.
-    fn metadata(&self, spp: u32, render_time_s: f64, rejected: u64) -> Metadata {
+    pub(crate) fn metadata(&self, spp: u32, render_time_s: f64, rejected: u64) -> Metadata {
         let a = &self.args;
         let s = &self.settings;
         Metadata {
@@ -65,15 +65,27 @@ impl Job {
 }
 
 /// A saved render to continue: its film and how far it got.
-struct Saved {
-    film: Film,
-    spp: u32,
-    render_time_s: f64,
+pub(crate) struct Saved {
+    pub film: Film,
+    pub spp: u32,
+    pub render_time_s: f64,
     /// Its [`resume::BACKEND`] record (`None` in files from before the record).
-    backend: Option<String>,
+    pub backend: Option<String>,
 }
 
-pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
+/// A render prepared from its arguments (and, with `--resume`, its file): the job, the scene
+/// with the options applied, the camera, and the saved film to continue.
+pub(crate) struct Prepared {
+    pub job: Job,
+    pub scene: Scene,
+    pub view: Camera,
+    pub saved: Option<Saved>,
+}
+
+/// Reads the file to resume (filling the settings not given), loads the scene, applies
+/// `--sun-angle` and the environment options, chooses the camera and the size, and checks that
+/// a resumed file matches. `command` names the subcommand in messages.
+pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String> {
     let mut args = a.clone();
     // With --resume: the file's record fills the settings not given.
     let resumed = match &a.resume {
@@ -100,7 +112,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     let mut scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
         // The scene came from the file's record: say so, and how to point at it.
         (Some(file), None) => {
-            format!("{e} (the scene {} was rendered from; give its path after `render`)", file.display())
+            format!("{e} (the scene {} was rendered from; give its path after `{command}`)", file.display())
         }
         _ => e,
     })?;
@@ -145,20 +157,30 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             let now = resume::identity(&job.metadata(0, 0.0, 0), width, height);
             resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights)?;
             let saved = restore(&path, file)?;
-            if saved.spp >= a.spp {
-                eprintln!(
-                    "{} already has {} samples per pixel (target {}): nothing to render; give a \
-                     larger --spp to continue",
-                    path.display(),
-                    saved.spp,
-                    a.spp
-                );
-                return Ok(Outcome::Done);
-            }
             Some(saved)
         }
         None => None,
     };
+    Ok(Prepared { job, scene, view, saved })
+}
+
+pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
+    let Prepared { job, scene, view, saved } = prepare(a, "render")?;
+    let a = &job.args;
+    let (width, height) = (job.settings.width, job.settings.height);
+    let settings = job.settings;
+    if let Some(s) = &saved
+        && s.spp >= a.spp
+    {
+        eprintln!(
+            "{} already has {} samples per pixel (target {}): nothing to render; give a \
+             larger --spp to continue",
+            a.resume.clone().unwrap_or_default().display(),
+            s.spp,
+            a.spp
+        );
+        return Ok(Outcome::Done);
+    }
 
     if a.sampler.needs_sample_count() && a.time_limit.is_some() {
         eprintln!(
@@ -281,7 +303,7 @@ fn render_passes(
 }
 
 /// Writes the EXR (RGB, metadata and the resume state) and the tone-mapped PNG, each atomically.
-fn write_outputs(
+pub(crate) fn write_outputs(
     film: &Film,
     metadata: &Metadata,
     a: &RenderArgs,

@@ -521,7 +521,8 @@ fn emitter_buffer(
 ) -> Result<Option<wgpu::Buffer>, GpuError> {
     emitters
         .map(|e| {
-            let words = if features.light_bvh { light_bvh_words(e, &e.light_bvh(scene)) } else { emitter_words(e) };
+            let words =
+                if features.light_bvh { light_bvh_words(e, &e.light_bvh(scene)) } else { emitter_words(e) };
             storage_buffer(ctx, "emitters", &words)
         })
         .transpose()
@@ -717,7 +718,12 @@ impl GpuRenderer {
     /// # Errors
     /// As [`GpuRenderer::new`], and [`GpuError::Unsupported`] for a scene whose triangle count
     /// differs from the uploaded one.
-    pub fn reconfigure(&mut self, scene: &Scene, camera: &Camera, settings: RenderSettings) -> Result<(), GpuError> {
+    pub fn reconfigure(
+        &mut self,
+        scene: &Scene,
+        camera: &Camera,
+        settings: RenderSettings,
+    ) -> Result<(), GpuError> {
         if scene.geometry.triangles.len() != self.triangles {
             return Err(GpuError::Unsupported(format!(
                 "reconfigure with a scene of {} triangles, the renderer holds {}: make a new renderer",

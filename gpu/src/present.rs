@@ -150,7 +150,11 @@ impl FilmPresenter {
     ///
     /// # Errors
     /// A shader or pipeline error.
-    pub fn new(ctx: &GpuContext, precision: FilmPrecision, format: wgpu::TextureFormat) -> Result<Self, GpuError> {
+    pub fn new(
+        ctx: &GpuContext,
+        precision: FilmPrecision,
+        format: wgpu::TextureFormat,
+    ) -> Result<Self, GpuError> {
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let entries: Vec<_> = binding_table(precision)
@@ -293,7 +297,11 @@ impl FilmPresenter {
         let bgra = match self.format {
             F::Rgba8Unorm | F::Rgba8UnormSrgb => false,
             F::Bgra8Unorm | F::Bgra8UnormSrgb => true,
-            f => return Err(GpuError::Unsupported(format!("render_to_rgba8 reads 8-bit RGBA/BGRA, not {f:?}"))),
+            f => {
+                return Err(GpuError::Unsupported(format!(
+                    "render_to_rgba8 reads 8-bit RGBA/BGRA, not {f:?}"
+                )));
+            }
         };
         let (w, h) = (size.0.max(1), size.1.max(1));
         let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
@@ -307,7 +315,8 @@ impl FilmPresenter {
             view_formats: &[],
         });
         let view = texture.create_view(&Default::default());
-        let row_bytes = (4 * w).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
+        let row_bytes =
+            (4 * w).div_ceil(wgpu::COPY_BYTES_PER_ROW_ALIGNMENT) * wgpu::COPY_BYTES_PER_ROW_ALIGNMENT;
         let readback = ctx.device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("present readback"),
             size: u64::from(row_bytes) * u64::from(h),
@@ -322,7 +331,10 @@ impl FilmPresenter {
                     view: &view,
                     depth_slice: None,
                     resolve_target: None,
-                    ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                    ops: wgpu::Operations {
+                        load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                        store: wgpu::StoreOp::Store,
+                    },
                 })],
                 ..Default::default()
             });
@@ -332,7 +344,11 @@ impl FilmPresenter {
             texture.as_image_copy(),
             wgpu::TexelCopyBufferInfo {
                 buffer: &readback,
-                layout: wgpu::TexelCopyBufferLayout { offset: 0, bytes_per_row: Some(row_bytes), rows_per_image: None },
+                layout: wgpu::TexelCopyBufferLayout {
+                    offset: 0,
+                    bytes_per_row: Some(row_bytes),
+                    rows_per_image: None,
+                },
             },
             wgpu::Extent3d { width: w, height: h, depth_or_array_layers: 1 },
         );
@@ -343,7 +359,10 @@ impl FilmPresenter {
         let mut out = Vec::with_capacity((w * h) as usize);
         for y in 0..h as usize {
             let row = &bytes[y * row_bytes as usize..][..4 * w as usize];
-            out.extend(row.chunks_exact(4).map(|p| if bgra { [p[2], p[1], p[0], p[3]] } else { [p[0], p[1], p[2], p[3]] }));
+            out.extend(
+                row.chunks_exact(4)
+                    .map(|p| if bgra { [p[2], p[1], p[0], p[3]] } else { [p[0], p[1], p[2], p[3]] }),
+            );
         }
         Ok(out)
     }
@@ -432,8 +451,8 @@ impl NoiseEstimator {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let source = [&wgsl_struct::<NoiseParams>(true), &table.wgsl(), include_str!("wgsl/noise.wgsl")]
-            .concat();
+        let source =
+            [&wgsl_struct::<NoiseParams>(true), &table.wgsl(), include_str!("wgsl/noise.wgsl")].concat();
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("noise"),
             source: wgpu::ShaderSource::Wgsl(source.into()),

@@ -24,7 +24,13 @@ use furnace_tests::gpu::test_context;
 use glam::Vec3;
 
 fn settings(size: u32, seed: u32) -> RenderSettings {
-    RenderSettings { width: size, height: size, sampler: SamplerKind::Random, seed, ..RenderSettings::default() }
+    RenderSettings {
+        width: size,
+        height: size,
+        sampler: SamplerKind::Random,
+        seed,
+        ..RenderSettings::default()
+    }
 }
 
 /// Compares drawn codes with post's codes of the film; returns the channels one code apart.
@@ -35,7 +41,13 @@ fn compare_codes(drawn: &[[u8; 4]], film: &Film, ev: f32, tonemap: Tonemap, what
     for (i, (d, e)) in drawn.iter().zip(&expected).enumerate() {
         for c in 0..3 {
             let diff = (i32::from(d[c]) - i32::from(e[c])).abs();
-            assert!(diff <= 1, "{what}: pixel {i} channel {c}: drawn {} but post gives {} (film {:?})", d[c], e[c], radiance[i]);
+            assert!(
+                diff <= 1,
+                "{what}: pixel {i} channel {c}: drawn {} but post gives {} (film {:?})",
+                d[c],
+                e[c],
+                radiance[i]
+            );
             off_by_one += diff as usize;
         }
     }
@@ -61,7 +73,8 @@ fn the_presenter_draws_posts_codes_of_the_film() {
     for format in [wgpu::TextureFormat::Bgra8Unorm, wgpu::TextureFormat::Rgba8Unorm] {
         let p = FilmPresenter::new(gpu.context(), gpu.film_precision(), format).unwrap();
         for (ev, tonemap) in [(0.0, Tonemap::Aces), (1.5, Tonemap::PbrNeutral), (-1.0, Tonemap::Clamp)] {
-            let drawn = p.render_to_rgba8(gpu.context(), gpu.gpu_film(), &place, ev, tonemap, (size, size)).unwrap();
+            let drawn =
+                p.render_to_rgba8(gpu.context(), gpu.gpu_film(), &place, ev, tonemap, (size, size)).unwrap();
             let off = compare_codes(&drawn, &film, ev, tonemap, &format!("{format:?} {tonemap} {ev} EV"));
             eprintln!("{format:?} {tonemap} {ev:+} EV: {off} channels one code off of {}", 3 * size * size);
         }
@@ -72,11 +85,14 @@ fn the_presenter_draws_posts_codes_of_the_film() {
     let (tw, th) = (size + 20, size + 7);
     let place = Placement::fit((size, size), (tw, th));
     assert_eq!(place.origin, [10.0, 3.0]);
-    let drawn = p.render_to_rgba8(gpu.context(), gpu.gpu_film(), &place, 0.0, Tonemap::Aces, (tw, th)).unwrap();
+    let drawn =
+        p.render_to_rgba8(gpu.context(), gpu.gpu_film(), &place, 0.0, Tonemap::Aces, (tw, th)).unwrap();
     let bg = BACKGROUND.map(|v| (v * 255.0).round() as u8);
     assert_eq!(drawn[0][..3], bg[..3], "the corner is background");
-    let inner: Vec<[u8; 4]> =
-        (0..size).flat_map(|y| (0..size).map(move |x| ((y + 3) * tw + x + 10) as usize)).map(|i| drawn[i]).collect();
+    let inner: Vec<[u8; 4]> = (0..size)
+        .flat_map(|y| (0..size).map(move |x| ((y + 3) * tw + x + 10) as usize))
+        .map(|i| drawn[i])
+        .collect();
     compare_codes(&inner, &film, 0.0, Tonemap::Aces, "centred");
 
     // A film shown at half size samples every other pixel.
@@ -104,12 +120,17 @@ fn the_presenter_draws_f32_films_from_their_folded_means() {
     gpu_film.enable_display(&ctx).unwrap();
     assert!(!gpu_film.has_squares());
     let p = FilmPresenter::new(&ctx, FilmPrecision::F32Pass, wgpu::TextureFormat::Rgba8Unorm).unwrap();
-    let drawn = p.render_to_rgba8(&ctx, &gpu_film, &Placement::fit((w, h), (w, h)), 0.5, Tonemap::Aces, (w, h)).unwrap();
+    let drawn = p
+        .render_to_rgba8(&ctx, &gpu_film, &Placement::fit((w, h), (w, h)), 0.5, Tonemap::Aces, (w, h))
+        .unwrap();
     compare_codes(&drawn, &film, 0.5, Tonemap::Aces, "f32 film");
     // A presenter of the other precision refuses it.
     if ctx.shader_f64 {
         let p64 = FilmPresenter::new(&ctx, FilmPrecision::F64, wgpu::TextureFormat::Rgba8Unorm).unwrap();
-        assert!(p64.render_to_rgba8(&ctx, &gpu_film, &Placement::fit((w, h), (w, h)), 0.0, Tonemap::Aces, (w, h)).is_err());
+        assert!(
+            p64.render_to_rgba8(&ctx, &gpu_film, &Placement::fit((w, h), (w, h)), 0.0, Tonemap::Aces, (w, h))
+                .is_err()
+        );
     }
 }
 
@@ -137,7 +158,8 @@ fn the_noise_estimate_matches_the_spread_of_independent_renders() {
         b.render_pass(0, spp).unwrap();
         let est = estimator.estimate(a.context(), a.gpu_film()).unwrap().expect("pixels with samples");
         let (la, lb) = (luminances(&a.film().unwrap()), luminances(&b.film().unwrap()));
-        let spread = (la.iter().zip(&lb).map(|(x, y)| (x - y) * (x - y)).sum::<f64>() / la.len() as f64 / 2.0).sqrt();
+        let spread =
+            (la.iter().zip(&lb).map(|(x, y)| (x - y) * (x - y)).sum::<f64>() / la.len() as f64 / 2.0).sqrt();
         eprintln!(
             "{spp} spp: estimated RMS standard error {:.5}, measured from two renders {spread:.5}; relative {:.4}",
             est.rms_standard_error,
@@ -168,7 +190,11 @@ fn the_noise_estimate_matches_the_spread_of_independent_renders() {
 
 fn same_film(a: &Film, b: &Film, what: &str) {
     assert_eq!(a.counts(), b.counts(), "{what}: counts");
-    let same = a.sums().iter().zip(b.sums()).all(|(x, y)| x.to_array().map(f64::to_bits) == y.to_array().map(f64::to_bits));
+    let same = a
+        .sums()
+        .iter()
+        .zip(b.sums())
+        .all(|(x, y)| x.to_array().map(f64::to_bits) == y.to_array().map(f64::to_bits));
     assert!(same, "{what}: the sums differ");
 }
 

@@ -43,8 +43,14 @@ enum UserEvent {
 /// [`ViewError::NoDisplay`] without a window system, [`ViewError::Surface`] when the adapter
 /// cannot draw into the window, device errors, and script errors (a bad line, a failed
 /// command).
-pub fn run(renderer: GpuRenderer, scene: Scene, config: ViewConfig, host: &mut dyn ViewHost) -> Result<Outcome, ViewError> {
-    let event_loop = EventLoop::<UserEvent>::with_user_event().build().map_err(|e| ViewError::NoDisplay(e.to_string()))?;
+pub fn run(
+    renderer: GpuRenderer,
+    scene: Scene,
+    config: ViewConfig,
+    host: &mut dyn ViewHost,
+) -> Result<Outcome, ViewError> {
+    let event_loop =
+        EventLoop::<UserEvent>::with_user_event().build().map_err(|e| ViewError::NoDisplay(e.to_string()))?;
     let proxy = event_loop.create_proxy();
     let mut app = App::new(renderer, scene, config, host, proxy)?;
     event_loop.run_app(&mut app).map_err(|e| ViewError::NoDisplay(e.to_string()))?;
@@ -211,7 +217,7 @@ impl<'h> App<'h> {
         let s = &self.controls.settings;
         let attributes = Window::default_attributes()
             .with_title(self.title.clone())
-            .with_inner_size(PhysicalSize::new(s.width.max(64), s.height.max(64)));
+            .with_inner_size(PhysicalSize::new(s.width.max(1), s.height.max(1)));
         let window = Arc::new(el.create_window(attributes).map_err(|e| ViewError::NoDisplay(e.to_string()))?);
         let ctx = self.renderer.context();
         let surface = furnace_gpu::context::instance()
@@ -253,7 +259,8 @@ impl<'h> App<'h> {
             None,
             Some(ctx.device.limits().max_texture_dimension_2d as usize),
         );
-        let egui_renderer = egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
+        let egui_renderer =
+            egui_wgpu::Renderer::new(&ctx.device, format, egui_wgpu::RendererOptions::default());
         self.win = Some(Window_ { window, surface, config, presenter, egui, egui_state, egui_renderer });
         if self.script_stdin {
             spawn_stdin_reader(self.proxy.clone());
@@ -269,9 +276,11 @@ impl<'h> App<'h> {
 
     /// Whether more frames are wanted now (else the loop sleeps until an event).
     fn busy(&self) -> bool {
+        // A timed wait wakes the loop at its end (`about_to_wait`), not every frame.
+        let waiting = self.waiting.as_ref().is_some_and(|(_, w)| !matches!(w, Wait::Until(_)));
         self.accumulating()
             || !self.held.is_empty()
-            || self.waiting.is_some()
+            || waiting
             || !self.script.is_empty()
             || self.hud.message_until.is_some_and(|t| t > Instant::now())
     }
@@ -312,7 +321,9 @@ impl<'h> App<'h> {
                 self.scene.set_environment(Some(furnace_scene::Environment { intensity: i, ..env }));
             }
             self.renderer.reconfigure(&self.scene, &camera, settings)?;
-            if (settings.width, settings.height) != (self.applied.width, self.applied.height) || settings.bounces != self.applied.bounces {
+            if (settings.width, settings.height) != (self.applied.width, self.applied.height)
+                || settings.bounces != self.applied.bounces
+            {
                 self.budget.forget();
             }
             self.applied = settings;
@@ -351,10 +362,16 @@ impl<'h> App<'h> {
         }
         let interactive = self.last_input.elapsed() < INTERACTIVE_FOR || !self.held.is_empty();
         let budget = if interactive { INTERACTIVE_SECONDS } else { STILL_SECONDS };
-        let left = self.controls.target_spp.map_or(u32::MAX, |t| t - self.spp);
+        // A script waiting for N samples gets exactly N (its next command sees that film).
+        let stop = match self.waiting {
+            Some((_, Wait::Spp(n))) if n > self.spp => self.controls.target_spp.map_or(n, |t| t.min(n)),
+            _ => self.controls.target_spp.unwrap_or(u32::MAX),
+        };
+        let left = stop.saturating_sub(self.spp).max(1);
         let n = self.budget.samples(budget, left);
         let start = Instant::now();
-        Integrator::render_pass(&mut self.renderer, self.spp, n).map_err(|e| ViewError::Script(format!("render pass: {e}")))?;
+        Integrator::render_pass(&mut self.renderer, self.spp, n)
+            .map_err(|e| ViewError::Script(format!("render pass: {e}")))?;
         let seconds = start.elapsed().as_secs_f64();
         self.budget.record(n, seconds);
         self.spp += n;
@@ -374,7 +391,8 @@ impl<'h> App<'h> {
             return Ok(());
         }
         self.last_noise = Some(Instant::now());
-        self.hud.noise = est.estimate(self.renderer.context(), self.renderer.gpu_film())?.and_then(|e| e.relative());
+        self.hud.noise =
+            est.estimate(self.renderer.context(), self.renderer.gpu_film())?.and_then(|e| e.relative());
         Ok(())
     }
 
@@ -406,12 +424,16 @@ impl<'h> App<'h> {
     /// The camera as `furnace render` options.
     fn camera_line(&self) -> String {
         match self.pose() {
-            CameraPose::Start => "camera: the scene's (unmoved; `furnace render` renders it with the same --camera)".into(),
+            CameraPose::Start => {
+                "camera: the scene's (unmoved; `furnace render` renders it with the same --camera)".into()
+            }
             CameraPose::LookAt { eye, target, up, yfov_degrees } => format!(
                 "camera: --look-at {},{},{},{},{},{},{},{},{} --yfov {yfov_degrees}",
                 eye.x, eye.y, eye.z, target.x, target.y, target.z, up.x, up.y, up.z
             ),
-            CameraPose::MovedOrthographic => "camera: a moved orthographic camera has no command-line form".into(),
+            CameraPose::MovedOrthographic => {
+                "camera: a moved orthographic camera has no command-line form".into()
+            }
         }
     }
 
@@ -435,7 +457,8 @@ impl<'h> App<'h> {
         if self.spp == 0 {
             return Ok("nothing to save yet: no samples".into());
         }
-        let film = Integrator::film(&mut self.renderer).map_err(|e| ViewError::Script(format!("reading the film: {e}")))?;
+        let film = Integrator::film(&mut self.renderer)
+            .map_err(|e| ViewError::Script(format!("reading the film: {e}")))?;
         let request = SaveRequest {
             film,
             spp: self.spp,
@@ -504,7 +527,8 @@ impl<'h> App<'h> {
     /// Moves the camera by the fly keys held, for `seconds`.
     fn fly(&mut self, seconds: f32) {
         let now = Instant::now();
-        let released: Vec<char> = self.held_until.iter().filter(|(_, t)| *t <= now).map(|(c, _)| *c).collect();
+        let released: Vec<char> =
+            self.held_until.iter().filter(|(_, t)| *t <= now).map(|(c, _)| *c).collect();
         self.held_until.retain(|(_, t)| *t > now);
         for c in released {
             self.held.remove(&c);
@@ -512,7 +536,9 @@ impl<'h> App<'h> {
         if self.held.is_empty() {
             return;
         }
-        let axis = |plus: char, minus: char| f32::from(u8::from(self.held.contains(&plus))) - f32::from(u8::from(self.held.contains(&minus)));
+        let axis = |plus: char, minus: char| {
+            f32::from(u8::from(self.held.contains(&plus))) - f32::from(u8::from(self.held.contains(&minus)))
+        };
         let (f, r, u) = (axis('w', 's'), axis('d', 'a'), axis('e', 'q'));
         self.rig.fly(f, r, u, seconds.min(0.1), self.shift);
         self.last_input = now;
@@ -560,7 +586,10 @@ impl<'h> App<'h> {
                 }
                 Command::Hold { key, seconds } => {
                     let c = fly_key(key).ok_or_else(|| {
-                        ViewError::Script(format!("line {}: 'hold' takes a fly key (w a s d q e), not '{key}'", line.number))
+                        ViewError::Script(format!(
+                            "line {}: 'hold' takes a fly key (w a s d q e), not '{key}'",
+                            line.number
+                        ))
                     })?;
                     self.held.insert(c);
                     let until = Instant::now() + Duration::from_secs_f64(*seconds);
@@ -600,6 +629,9 @@ impl<'h> App<'h> {
                     return Ok(());
                 }
             };
+            // The command's change (a camera move, a setting) takes effect now, so that a wait
+            // after it counts the samples of the new film.
+            self.apply_changes()?;
             match wait {
                 Some(w) => self.waiting = Some((line, w)),
                 None => self.ack(&line),
@@ -685,18 +717,24 @@ impl<'h> App<'h> {
         };
         let raw = win.egui_state.take_egui_input(&win.window);
         let mut actions = Vec::new();
-        let output = win.egui.run_pass(raw, |c| {
+        let mut output = win.egui.run_pass(raw, |c| {
             ui::draw(c, &mut self.controls, &self.hud, &hud, &mut actions);
         });
         win.egui_state.handle_platform_output(&win.window, output.platform_output);
         let ppp = output.pixels_per_point;
         let prims = win.egui.tessellate(output.shapes, ppp);
-        for (id, deltas) in &output.textures_delta.set {
-            for delta in deltas {
-                win.egui_renderer.update_texture(&ctx.device, &ctx.queue, *id, delta);
+        // egui's texture changes: applied before painting, frees after (taken out of the
+        // output at once, which must not be dropped with changes left in it).
+        for (id, deltas) in output.textures_delta.set.drain() {
+            for delta in &deltas {
+                win.egui_renderer.update_texture(&ctx.device, &ctx.queue, id, delta);
             }
         }
-        let screen = egui_wgpu::ScreenDescriptor { size_in_pixels: [win.config.width, win.config.height], pixels_per_point: ppp };
+        let freed: Vec<egui::TextureId> = output.textures_delta.free.drain().collect();
+        let screen = egui_wgpu::ScreenDescriptor {
+            size_in_pixels: [win.config.width, win.config.height],
+            pixels_per_point: ppp,
+        };
         let mut encoder = ctx.device.create_command_encoder(&Default::default());
         let extra = win.egui_renderer.update_buffers(&ctx.device, &ctx.queue, &mut encoder, &prims, &screen);
         let film = self.renderer.gpu_film();
@@ -709,12 +747,22 @@ impl<'h> App<'h> {
                         view: &view,
                         depth_slice: None,
                         resolve_target: None,
-                        ops: wgpu::Operations { load: wgpu::LoadOp::Clear(wgpu::Color::BLACK), store: wgpu::StoreOp::Store },
+                        ops: wgpu::Operations {
+                            load: wgpu::LoadOp::Clear(wgpu::Color::BLACK),
+                            store: wgpu::StoreOp::Store,
+                        },
                     })],
                     ..Default::default()
                 })
                 .forget_lifetime();
-            win.presenter.draw(ctx, &mut pass, film, &placement, self.controls.exposure, self.controls.tonemap)?;
+            win.presenter.draw(
+                ctx,
+                &mut pass,
+                film,
+                &placement,
+                self.controls.exposure,
+                self.controls.tonemap,
+            )?;
             if self.controls.show_ui || self.controls.show_help {
                 win.egui_renderer.render(&mut pass, &prims, &screen);
             }
@@ -722,7 +770,7 @@ impl<'h> App<'h> {
         ctx.queue.submit(extra.into_iter().chain([encoder.finish()]));
         win.window.pre_present_notify();
         ctx.queue.present(frame);
-        for id in &output.textures_delta.free {
+        for id in &freed {
             win.egui_renderer.free_texture(id);
         }
         if win.egui.has_requested_repaint() {
@@ -773,7 +821,9 @@ fn spawn_stdin_reader(proxy: EventLoopProxy<UserEvent>) {
             let Ok(text) = line else { break };
             let event = match script::parse_line(&text) {
                 Ok(None) => continue,
-                Ok(Some(command)) => Ok(script::Line { number: i + 1, text: text.trim().to_string(), command }),
+                Ok(Some(command)) => {
+                    Ok(script::Line { number: i + 1, text: text.trim().to_string(), command })
+                }
                 Err(e) => Err(format!("<stdin>:{}: {e}", i + 1)),
             };
             if proxy.send_event(UserEvent::ScriptLine(event)).is_err() {
@@ -835,7 +885,9 @@ impl ApplicationHandler<UserEvent> for App<'_> {
                 self.ctrl = m.state().control_key();
                 Ok(())
             }
-            WindowEvent::KeyboardInput { event, .. } if !egui_keys || event.state == ElementState::Released => {
+            WindowEvent::KeyboardInput { event, .. }
+                if !egui_keys || event.state == ElementState::Released =>
+            {
                 match key_name(&event.logical_key, self.ctrl) {
                     Some(name) if !event.repeat || fly_key(&name).is_some() => {
                         self.key(el, &name, event.state == ElementState::Pressed)
@@ -902,7 +954,16 @@ impl ApplicationHandler<UserEvent> for App<'_> {
             self.outcome = Outcome::Interrupted;
             el.exit();
         }
-        // Wake now and then even when idle: Ctrl-C in the terminal is noticed within 100 ms.
-        el.set_control_flow(ControlFlow::WaitUntil(Instant::now() + Duration::from_millis(100)));
+        // Wake now and then even when idle: Ctrl-C in the terminal is noticed within 100 ms; a
+        // timed script wait or a held key's release at its time.
+        let now = Instant::now();
+        let mut wake = now + Duration::from_millis(100);
+        if let Some((_, Wait::Until(t))) = &self.waiting {
+            if *t <= now {
+                self.request_redraw();
+            }
+            wake = wake.min(*t);
+        }
+        el.set_control_flow(ControlFlow::WaitUntil(wake));
     }
 }

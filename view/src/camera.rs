@@ -237,7 +237,11 @@ mod tests {
         r.orbit(0.0, 10_000.0);
         let off = (r.eye - r.target).normalize();
         let from_up = off.dot(Vec3::Y).acos().to_degrees();
-        assert!((from_up - POLE_MARGIN_DEGREES).abs() < 0.01 || (180.0 - from_up - POLE_MARGIN_DEGREES).abs() < 0.01, "{from_up}");
+        assert!(
+            (from_up - POLE_MARGIN_DEGREES).abs() < 0.01
+                || (180.0 - from_up - POLE_MARGIN_DEGREES).abs() < 0.01,
+            "{from_up}"
+        );
         assert!(r.camera().world_from_camera.is_finite());
     }
 
@@ -275,7 +279,10 @@ mod tests {
         assert!(((e - r.eye).length() - size * FLY_SCENE_PER_SECOND).abs() < 1e-4);
         assert!(r.eye.z < e.z, "forward is −Z here");
         r.look(100.0, 0.0);
-        assert!((r.eye - (e + Vec3::NEG_Z * size * FLY_SCENE_PER_SECOND)).length() < 1e-4, "look keeps the eye");
+        assert!(
+            (r.eye - (e + Vec3::NEG_Z * size * FLY_SCENE_PER_SECOND)).length() < 1e-4,
+            "look keeps the eye"
+        );
     }
 
     #[test]

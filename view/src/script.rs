@@ -106,7 +106,10 @@ pub fn parse_line(text: &str) -> Result<Option<Command>, String> {
         if args.len() == n { Ok(()) } else { Err(format!("'{name}' takes {n} argument(s): {usage}")) }
     };
     let num = |s: &str| -> Result<f64, String> {
-        s.parse::<f64>().ok().filter(|v| v.is_finite()).ok_or_else(|| format!("'{name}': '{s}' is not a finite number"))
+        s.parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| format!("'{name}': '{s}' is not a finite number"))
     };
     let count = |s: &str| -> Result<u32, String> {
         s.parse::<u32>().map_err(|_| format!("'{name}': '{s}' is not a whole number"))

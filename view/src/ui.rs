@@ -109,12 +109,19 @@ pub(crate) fn set(c: &mut Controls, name: &str, value: &str) -> Result<(), Strin
         "off" | "false" | "0" => Ok(false),
         _ => Err(format!("{name}: '{v}' is not on or off")),
     };
-    let number = |v: &str| v.parse::<f32>().ok().filter(|x| x.is_finite()).ok_or_else(|| format!("{name}: '{v}' is not a number"));
+    let number = |v: &str| {
+        v.parse::<f32>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("{name}: '{v}' is not a number"))
+    };
     let s = &mut c.settings;
     match name {
         "exposure" => c.exposure = number(value)?.clamp(-20.0, 20.0),
         "tonemap" => c.tonemap = value.parse().map_err(|e: furnace_post::PostError| e.to_string())?,
-        "bounces" => s.bounces = value.parse().map_err(|_| format!("bounces: '{value}' is not a whole number"))?,
+        "bounces" => {
+            s.bounces = value.parse().map_err(|_| format!("bounces: '{value}' is not a whole number"))?
+        }
         "seed" => s.seed = value.parse().map_err(|_| format!("seed: '{value}' is not a whole number"))?,
         "sampler" => {
             let k: SamplerKind = value.parse().map_err(|e: furnace_sampling::SamplerError| e.to_string())?;
@@ -153,7 +160,12 @@ pub(crate) fn set(c: &mut Controls, name: &str, value: &str) -> Result<(), Strin
         "spp" => {
             c.target_spp = match value {
                 "none" | "inf" => None,
-                v => Some(v.parse::<u32>().ok().filter(|n| *n > 0).ok_or_else(|| format!("spp: '{v}' (a positive whole number or none)"))?),
+                v => Some(
+                    v.parse::<u32>()
+                        .ok()
+                        .filter(|n| *n > 0)
+                        .ok_or_else(|| format!("spp: '{v}' (a positive whole number or none)"))?,
+                ),
             };
             if s.sampler.needs_sample_count() {
                 s.sample_count = c.target_spp;
@@ -213,17 +225,26 @@ fn fmt_seconds(s: f64) -> String {
 }
 
 /// Draws the panels; buttons push actions.
-pub(crate) fn draw(ctx: &egui::Context, c: &mut Controls, hud: &Hud, state: &HudState, actions: &mut Vec<Action>) {
+pub(crate) fn draw(
+    ctx: &egui::Context,
+    c: &mut Controls,
+    hud: &Hud,
+    state: &HudState,
+    actions: &mut Vec<Action>,
+) {
     if c.show_help {
-        egui::Window::new("Help").collapsible(false).anchor(egui::Align2::CENTER_CENTER, [0.0, 0.0]).show(ctx, |ui| {
-            egui::Grid::new("help").striped(true).show(ui, |ui| {
-                for (k, what) in HELP {
-                    ui.monospace(*k);
-                    ui.label(*what);
-                    ui.end_row();
-                }
-            });
-        });
+        egui::Window::new("Help").collapsible(false).anchor(egui::Align2::CENTER_CENTER, [0.0, 0.0]).show(
+            ctx,
+            |ui| {
+                egui::Grid::new("help").striped(true).show(ui, |ui| {
+                    for (k, what) in HELP {
+                        ui.monospace(*k);
+                        ui.label(*what);
+                        ui.end_row();
+                    }
+                });
+            },
+        );
     }
     if !c.show_ui {
         return;
@@ -256,95 +277,115 @@ pub(crate) fn draw(ctx: &egui::Context, c: &mut Controls, hud: &Hud, state: &Hud
                 ui.label(&hud.message);
             }
         });
-    egui::Window::new("settings").anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0]).default_open(false).show(ctx, |ui| {
-        ui.heading("display");
-        ui.add(egui::Slider::new(&mut c.exposure, -10.0..=10.0).text("exposure (EV)"));
-        egui::ComboBox::from_label("tone map").selected_text(c.tonemap.name()).show_ui(ui, |ui| {
-            for t in Tonemap::ALL {
-                ui.selectable_value(&mut c.tonemap, t, t.name());
-            }
-        });
-        ui.separator();
-        ui.heading("render (restarts)");
-        let s = &mut c.settings;
-        ui.add(egui::Slider::new(&mut s.bounces, 0..=32).text("bounces"));
-        let mut sampler = s.sampler;
-        egui::ComboBox::from_label("sampler").selected_text(sampler.to_string()).show_ui(ui, |ui| {
-            for k in SAMPLERS {
-                let enabled = !k.needs_sample_count() || c.target_spp.is_some();
-                ui.add_enabled_ui(enabled, |ui| ui.selectable_value(&mut sampler, k, k.to_string()));
-            }
-        });
-        if sampler != c.settings.sampler {
-            let _ = set_sampler(c, sampler);
-        }
-        let s = &mut c.settings;
-        egui::ComboBox::from_label("masking").selected_text(masking_name(s.specular.masking)).show_ui(ui, |ui| {
-            for (m, n) in MASKINGS {
-                ui.selectable_value(&mut s.specular.masking, m, n);
-            }
-        });
-        egui::ComboBox::from_label("GGX sampling").selected_text(specular_name(s.specular.sampling)).show_ui(ui, |ui| {
-            for (m, n) in SPECULAR_SAMPLINGS {
-                ui.selectable_value(&mut s.specular.sampling, m, n);
-            }
-        });
-        ui.checkbox(&mut s.specular.compensation, "energy compensation");
-        ui.checkbox(&mut s.russian_roulette, "Russian roulette");
-        egui::ComboBox::from_label("light sampling").selected_text(s.light_sampling.to_string()).show_ui(ui, |ui| {
-            for k in LightSampling::ALL {
-                ui.selectable_value(&mut s.light_sampling, k, k.to_string());
-            }
-        });
-        egui::ComboBox::from_label("light selection").selected_text(s.light_selection.to_string()).show_ui(ui, |ui| {
-            for k in LightSelection::ALL {
-                ui.selectable_value(&mut s.light_selection, k, k.to_string());
-            }
-        });
-        egui::ComboBox::from_label("triangle sampling").selected_text(s.triangle_sampling.to_string()).show_ui(ui, |ui| {
-            for k in TriangleSampling::ALL {
-                ui.selectable_value(&mut s.triangle_sampling, k, k.to_string());
-            }
-        });
-        if let Some(i) = &mut c.env_intensity {
-            egui::ComboBox::from_label("env sampling").selected_text(s.env_sampling.to_string()).show_ui(ui, |ui| {
-                for k in EnvSampling::ALL {
-                    ui.selectable_value(&mut s.env_sampling, k, k.to_string());
+    egui::Window::new("settings").anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0]).default_open(false).show(
+        ctx,
+        |ui| {
+            ui.heading("display");
+            ui.add(egui::Slider::new(&mut c.exposure, -10.0..=10.0).text("exposure (EV)"));
+            egui::ComboBox::from_label("tone map").selected_text(c.tonemap.name()).show_ui(ui, |ui| {
+                for t in Tonemap::ALL {
+                    ui.selectable_value(&mut c.tonemap, t, t.name());
                 }
             });
-            ui.add(egui::Slider::new(i, 0.0..=100.0).logarithmic(true).text("env intensity"));
-        }
-        ui.separator();
-        ui.horizontal(|ui| {
-            let mut unlimited = c.target_spp.is_none();
-            if ui.checkbox(&mut unlimited, "no spp target").changed() && !c.settings.sampler.needs_sample_count() {
-                c.target_spp = if unlimited { None } else { Some(state.spp.max(1024)) };
+            ui.separator();
+            ui.heading("render (restarts)");
+            let s = &mut c.settings;
+            ui.add(egui::Slider::new(&mut s.bounces, 0..=32).text("bounces"));
+            let mut sampler = s.sampler;
+            egui::ComboBox::from_label("sampler").selected_text(sampler.to_string()).show_ui(ui, |ui| {
+                for k in SAMPLERS {
+                    let enabled = !k.needs_sample_count() || c.target_spp.is_some();
+                    ui.add_enabled_ui(enabled, |ui| ui.selectable_value(&mut sampler, k, k.to_string()));
+                }
+            });
+            if sampler != c.settings.sampler {
+                let _ = set_sampler(c, sampler);
             }
-            if let Some(t) = &mut c.target_spp
-                && !c.settings.sampler.needs_sample_count()
-            {
-                ui.add(egui::DragValue::new(t).range(1..=1 << 24).suffix(" spp"));
+            let s = &mut c.settings;
+            egui::ComboBox::from_label("masking").selected_text(masking_name(s.specular.masking)).show_ui(
+                ui,
+                |ui| {
+                    for (m, n) in MASKINGS {
+                        ui.selectable_value(&mut s.specular.masking, m, n);
+                    }
+                },
+            );
+            egui::ComboBox::from_label("GGX sampling")
+                .selected_text(specular_name(s.specular.sampling))
+                .show_ui(ui, |ui| {
+                    for (m, n) in SPECULAR_SAMPLINGS {
+                        ui.selectable_value(&mut s.specular.sampling, m, n);
+                    }
+                });
+            ui.checkbox(&mut s.specular.compensation, "energy compensation");
+            ui.checkbox(&mut s.russian_roulette, "Russian roulette");
+            egui::ComboBox::from_label("light sampling").selected_text(s.light_sampling.to_string()).show_ui(
+                ui,
+                |ui| {
+                    for k in LightSampling::ALL {
+                        ui.selectable_value(&mut s.light_sampling, k, k.to_string());
+                    }
+                },
+            );
+            egui::ComboBox::from_label("light selection")
+                .selected_text(s.light_selection.to_string())
+                .show_ui(ui, |ui| {
+                    for k in LightSelection::ALL {
+                        ui.selectable_value(&mut s.light_selection, k, k.to_string());
+                    }
+                });
+            egui::ComboBox::from_label("triangle sampling")
+                .selected_text(s.triangle_sampling.to_string())
+                .show_ui(ui, |ui| {
+                    for k in TriangleSampling::ALL {
+                        ui.selectable_value(&mut s.triangle_sampling, k, k.to_string());
+                    }
+                });
+            if let Some(i) = &mut c.env_intensity {
+                egui::ComboBox::from_label("env sampling").selected_text(s.env_sampling.to_string()).show_ui(
+                    ui,
+                    |ui| {
+                        for k in EnvSampling::ALL {
+                            ui.selectable_value(&mut s.env_sampling, k, k.to_string());
+                        }
+                    },
+                );
+                ui.add(egui::Slider::new(i, 0.0..=100.0).logarithmic(true).text("env intensity"));
             }
-        });
-        ui.checkbox(&mut c.paused, "paused");
-        ui.horizontal(|ui| {
-            if ui.button("save").clicked() {
-                actions.push(Action::Save(None));
-            }
-            if ui.button("restart").clicked() {
-                actions.push(Action::Reset);
-            }
-            if ui.button("scene camera").clicked() {
-                actions.push(Action::ResetCamera);
-            }
-            if ui.button("print camera").clicked() {
-                actions.push(Action::PrintCamera);
-            }
-            if ui.button("help").clicked() {
-                actions.push(Action::ToggleHelp);
-            }
-        });
-    });
+            ui.separator();
+            ui.horizontal(|ui| {
+                let mut unlimited = c.target_spp.is_none();
+                if ui.checkbox(&mut unlimited, "no spp target").changed()
+                    && !c.settings.sampler.needs_sample_count()
+                {
+                    c.target_spp = if unlimited { None } else { Some(state.spp.max(1024)) };
+                }
+                if let Some(t) = &mut c.target_spp
+                    && !c.settings.sampler.needs_sample_count()
+                {
+                    ui.add(egui::DragValue::new(t).range(1..=1 << 24).suffix(" spp"));
+                }
+            });
+            ui.checkbox(&mut c.paused, "paused");
+            ui.horizontal(|ui| {
+                if ui.button("save").clicked() {
+                    actions.push(Action::Save(None));
+                }
+                if ui.button("restart").clicked() {
+                    actions.push(Action::Reset);
+                }
+                if ui.button("scene camera").clicked() {
+                    actions.push(Action::ResetCamera);
+                }
+                if ui.button("print camera").clicked() {
+                    actions.push(Action::PrintCamera);
+                }
+                if ui.button("help").clicked() {
+                    actions.push(Action::ToggleHelp);
+                }
+            });
+        },
+    );
 }
 
 #[cfg(test)]

@@ -1,0 +1,197 @@
+//! `furnace view`: the render's options, a window instead of files (`furnace_view`); Ctrl+S
+//! saves what `furnace render` writes, resumable with `furnace render --resume`.
+
+use crate::args::{
+    EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, SamplingArg, Switch,
+    TriangleSamplingArg, ViewArgs,
+};
+use crate::interrupt::Interrupt;
+use crate::render::{Job, Prepared, output_paths, prepare, write_outputs};
+use crate::resume;
+use crate::shared::Outcome;
+use furnace_brdf::{Masking, SpecularSampling};
+use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
+use furnace_render::{EnvSampling, LightSampling, LightSelection, RenderSettings, TriangleSampling};
+use furnace_scene::Scene;
+use furnace_view::{CameraPose, SaveRequest, ScriptSource, ViewConfig, ViewHost};
+
+pub fn run(v: &ViewArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
+    let a = &v.render;
+    if a.backend == crate::args::BackendArg::Cpu {
+        return Err(
+            "furnace view draws the GPU integrator's film as it accumulates: it needs a GPU adapter \
+             (Mesa's lavapipe counts); use `furnace render --backend cpu` for the CPU integrator"
+                .into(),
+        );
+    }
+    // Read the script before anything slow: a bad line is reported at once.
+    let script = match &v.script {
+        None => None,
+        Some(p) if p.as_os_str() == "-" => Some(ScriptSource::Stdin),
+        Some(p) => {
+            let text = std::fs::read_to_string(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            Some(ScriptSource::File(p.clone(), furnace_view::script::parse(&p.display().to_string(), &text)?))
+        }
+    };
+    let Prepared { job, scene, view, saved } = prepare(a, "view")?;
+    let a = &job.args;
+    // Without --spp the viewer accumulates until closed; the fixed-N samplers need N.
+    let target_spp =
+        (a.given("spp") || a.sampler.needs_sample_count() || a.resume.is_some()).then_some(a.spp);
+    if a.sampler.needs_sample_count() && !a.given("spp") && a.resume.is_none() {
+        eprintln!(
+            "note: the {} sampler builds one pattern of N samples per pixel: N = --spp = {}",
+            a.sampler, a.spp
+        );
+    }
+    let choice = match &a.adapter {
+        Some(name) => AdapterChoice::Named(name.clone()),
+        None => AdapterChoice::Best,
+    };
+    let ctx = GpuContext::new(&choice).map_err(|e| {
+        format!("{e}; furnace view needs a GPU adapter to draw into its window (`furnace render --backend cpu` needs none)")
+    })?;
+    if !a.quiet {
+        eprintln!("viewing on {}", ctx.describe());
+        if !furnace_gpu::context::is_hardware(&ctx.info) {
+            eprintln!("note: a software adapter: expect about a million samples per second");
+        }
+    }
+    let start = std::time::Instant::now();
+    let renderer = GpuRenderer::new(ctx, &scene, &view, job.settings).map_err(|e| e.to_string())?;
+    if !a.quiet {
+        eprintln!(
+            "{}: {} triangles uploaded, BVH built in {:.2} s",
+            scene.name,
+            scene.geometry.triangles.len(),
+            start.elapsed().as_secs_f64()
+        );
+    }
+    let (resume, previous_seconds, previous_backend) = match saved {
+        Some(s) => (Some((s.film, s.spp)), s.render_time_s, s.backend),
+        None => (None, 0.0, None),
+    };
+    let config = ViewConfig {
+        title: format!("furnace — {}", scene.name),
+        settings: job.settings,
+        camera: view,
+        fixed_size: a.given("width") || a.given("height") || a.resume.is_some(),
+        target_spp,
+        time_limit: a.time_limit,
+        exposure: a.exposure,
+        tonemap: a.tonemap,
+        resume,
+        script,
+    };
+    let mut host = CliHost { job, interrupt, previous_seconds, previous_backend };
+    match furnace_view::run(renderer, scene, config, &mut host).map_err(|e| e.to_string())? {
+        furnace_view::Outcome::Closed => Ok(Outcome::Done),
+        furnace_view::Outcome::Interrupted => Ok(Outcome::Interrupted),
+    }
+}
+
+/// Saves as `furnace render` does, with the viewer's settings written back into the job.
+struct CliHost<'a> {
+    job: Job,
+    interrupt: &'a Interrupt,
+    /// Seconds and backends of the file the view resumed (added to what it records).
+    previous_seconds: f64,
+    previous_backend: Option<String>,
+}
+
+impl ViewHost for CliHost<'_> {
+    fn save(&mut self, scene: &Scene, r: SaveRequest) -> Result<String, String> {
+        let mut job = Job {
+            args: self.job.args.clone(),
+            settings: r.settings,
+            camera: self.job.camera.clone(),
+            scene_name: self.job.scene_name.clone(),
+            scene_hash: scene.content_hash(),
+        };
+        apply_settings(&mut job, &r)?;
+        if let Some(path) = &r.path {
+            job.args.out = path.clone();
+        }
+        let (png, exr) = output_paths(&job.args.out);
+        let mut meta = job.metadata(r.spp, self.previous_seconds + r.seconds, r.film.rejected());
+        let (record, _) =
+            furnace_render::resume::backend_record(self.previous_backend.as_deref(), &r.backend);
+        meta.extra.insert(resume::BACKEND.to_string(), record);
+        write_outputs(&r.film, &meta, &job.args, &exr, &png)?;
+        let mut message = format!("saved {} and {} ({} spp)", exr.display(), png.display(), r.spp);
+        if matches!(r.camera, CameraPose::MovedOrthographic) {
+            message.push_str(
+                "; note: a moved orthographic camera has no command-line form, so this file cannot be resumed",
+            );
+        }
+        Ok(message)
+    }
+
+    fn interrupted(&self) -> bool {
+        self.interrupt.requested()
+    }
+}
+
+/// Writes the viewer's settings, display, environment and camera into the job's arguments, so
+/// that its metadata is what `furnace render` with those options records.
+fn apply_settings(job: &mut Job, r: &SaveRequest) -> Result<(), String> {
+    let s: &RenderSettings = &r.settings;
+    let a = &mut job.args;
+    a.bounces = s.bounces;
+    a.sampler = s.sampler;
+    a.seed = s.seed;
+    a.width = Some(s.width);
+    a.height = Some(s.height);
+    if let Some(n) = s.sample_count {
+        a.spp = n;
+    } else {
+        a.spp = r.spp;
+    }
+    a.masking = match s.specular.masking {
+        Masking::Separable => MaskingArg::Separable,
+        Masking::HeightCorrelated => MaskingArg::HeightCorrelated,
+    };
+    a.specular_sampling = match s.specular.sampling {
+        SpecularSampling::Ndf => SamplingArg::Ndf,
+        SpecularSampling::Vndf => SamplingArg::Vndf,
+        SpecularSampling::SphericalCaps => SamplingArg::Caps,
+    };
+    let switch = |on: bool| if on { Switch::On } else { Switch::Off };
+    a.compensation = switch(s.specular.compensation);
+    a.russian_roulette = switch(s.russian_roulette);
+    a.light_sampling = match s.light_sampling {
+        LightSampling::Bsdf => LightSamplingArg::Bsdf,
+        LightSampling::Nee => LightSamplingArg::Nee,
+        LightSampling::Mis => LightSamplingArg::Mis,
+    };
+    a.triangle_sampling = match s.triangle_sampling {
+        TriangleSampling::Area => TriangleSamplingArg::Area,
+        TriangleSampling::SolidAngle => TriangleSamplingArg::SolidAngle,
+    };
+    a.light_selection = match s.light_selection {
+        LightSelection::Power => LightSelectionArg::Power,
+        LightSelection::Bvh => LightSelectionArg::Bvh,
+    };
+    a.env_sampling = match s.env_sampling {
+        EnvSampling::Off => EnvSamplingArg::Off,
+        EnvSampling::Importance => EnvSamplingArg::Importance,
+        EnvSampling::Compensated => EnvSamplingArg::Compensated,
+    };
+    a.exposure = r.exposure;
+    a.tonemap = r.tonemap;
+    if let Some(i) = r.env_intensity {
+        a.environment.env_intensity = Some(i);
+    }
+    match r.camera {
+        CameraPose::Start => {}
+        CameraPose::LookAt { eye, target, up, yfov_degrees } => {
+            let look = crate::args::LookAt { eye, target, up };
+            job.camera = resume::look_at_record(&look, yfov_degrees);
+            a.look_at = Some(look);
+            a.yfov = Some(yfov_degrees);
+            a.camera = None;
+        }
+        CameraPose::MovedOrthographic => job.camera = "moved-orthographic".into(),
+    }
+    Ok(())
+}
