@@ -48,8 +48,9 @@ pub enum Command {
 /// `furnace render`.
 #[derive(Debug, Clone, Args)]
 pub struct RenderArgs {
-    /// The .gltf or .glb scene; without it, the built-in reference Cornell box (with --resume:
-    /// the scene the file was rendered from).
+    /// The .gltf or .glb scene, or interior:N (the procedural sunlit interior of about N
+    /// triangles, e.g. interior:1e7, for stress tests); without it, the built-in reference
+    /// Cornell box (with --resume: the scene the file was rendered from).
     pub scene: Option<PathBuf>,
     /// Samples per pixel (the total, also when resuming; also N of the fixed-N samplers
     /// hammersley and cmj).

@@ -401,6 +401,13 @@ fn shell_quote(s: &str) -> String {
 
 fn load_scene(path: Option<&Path>) -> Result<Scene, String> {
     match path {
+        // The procedural stress scene of `furnace bench --scene interior:N`.
+        Some(p) if p.to_str().is_some_and(|s| s.starts_with("interior:")) => {
+            match crate::args::parse_scene(p.to_str().unwrap_or_default())? {
+                crate::args::SceneArg::Interior(n) => Ok(builtin::sunlit_interior(n)),
+                _ => Err(format!("'{}': not a scene", p.display())),
+            }
+        }
         Some(p) => Scene::load(p).map_err(|e| e.to_string()),
         None => builtin::cornell_box().map_err(|e| e.to_string()),
     }

@@ -61,7 +61,7 @@ pub fn run(v: &ViewArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     let renderer = GpuRenderer::new(ctx, &scene, &view, job.settings).map_err(|e| e.to_string())?;
     if !a.quiet {
         eprintln!(
-            "{}: {} triangles uploaded, BVH built in {:.2} s",
+            "{}: {} triangles; scene uploaded, BVH built and pipeline compiled in {:.2} s",
             scene.name,
             scene.geometry.triangles.len(),
             start.elapsed().as_secs_f64()

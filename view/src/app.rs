@@ -148,12 +148,11 @@ impl<'h> App<'h> {
         renderer.enable_display()?;
         let noise = NoiseEstimator::new(renderer.context())?;
         let mut spp = 0;
-        let mut render_seconds = 0.0;
+        let render_seconds = 0.0;
         if let Some((film, done)) = &config.resume {
             Integrator::set_film(&mut renderer, film).map_err(|e| ViewError::Script(e.to_string()))?;
             spp = *done;
         }
-        let _ = &mut render_seconds;
         let (lo, hi) = scene.geometry.bounds();
         let rig = CameraRig::new(config.camera, (lo, hi));
         let env_intensity = scene.environment().map(|e| e.intensity);
@@ -178,7 +177,7 @@ impl<'h> App<'h> {
             applied: config.settings,
             applied_camera: config.camera,
             applied_env: env_intensity,
-            hud: Hud::new(renderer.context().describe()),
+            hud: Hud { initial_env: env_intensity, ..Hud::new(renderer.context().describe()) },
             renderer,
             scene,
             controls,
@@ -642,7 +641,8 @@ impl<'h> App<'h> {
     fn state_line(&self) -> String {
         let s = &self.applied;
         format!(
-            "state: spp={} resets={} frame={} size={}x{} bounces={} sampler={} exposure={} tonemap={} paused={} noise={}",
+            "state: spp={} resets={} frame={} size={}x{} bounces={} sampler={} exposure={} tonemap={} paused={} noise={} \
+             frame_ms={:.2} max_frame_ms={:.2} spp_per_frame={} msamples_per_s={}",
             self.spp,
             self.resets,
             self.frame,
@@ -654,6 +654,10 @@ impl<'h> App<'h> {
             self.controls.tonemap,
             self.controls.paused,
             self.hud.noise.map_or_else(|| "-".to_string(), |n| format!("{n:.6}")),
+            self.hud.frame_ms,
+            self.hud.max_frame_ms,
+            self.hud.samples_per_frame,
+            self.hud.rate.map_or_else(|| "-".to_string(), |r| format!("{r:.1}")),
         )
     }
 
@@ -673,6 +677,7 @@ impl<'h> App<'h> {
         let now = Instant::now();
         let dt = now.duration_since(self.last_frame).as_secs_f32();
         self.last_frame = now;
+        let restarts = self.resets;
         self.fly(dt);
         self.step_script(el)?;
         self.apply_changes()?;
@@ -680,6 +685,10 @@ impl<'h> App<'h> {
         self.update_noise()?;
         self.draw(el)?;
         self.frame += 1;
+        // The frame's wall time (input to present): what the window's responsiveness is.
+        let ms = now.elapsed().as_secs_f64() * 1e3;
+        self.hud.frame_ms = ms;
+        self.hud.max_frame_ms = if self.resets != restarts { ms } else { self.hud.max_frame_ms.max(ms) };
         // A script waiting for this frame count, or the end of accumulation, moves on now.
         self.step_script(el)?;
         if self.busy() {
@@ -871,10 +880,11 @@ impl ApplicationHandler<UserEvent> for App<'_> {
                 el.exit();
                 Ok(())
             }
-            WindowEvent::Resized(size) => {
+            // A minimised window (0 × 0) keeps its film and surface: nothing to draw into.
+            WindowEvent::Resized(size) if size.width > 0 && size.height > 0 => {
                 let ctx = self.renderer.context();
-                win.config.width = size.width.max(1);
-                win.config.height = size.height.max(1);
+                win.config.width = size.width;
+                win.config.height = size.height;
                 win.surface.configure(&ctx.device, &win.config);
                 self.interacted();
                 Ok(())

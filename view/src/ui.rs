@@ -57,6 +57,9 @@ pub(crate) struct Hud {
     pub noise: Option<f64>,
     /// The scene's environment intensity as loaded.
     pub initial_env: Option<f32>,
+    /// The last frame's wall time, and the longest since the accumulation restarted (ms).
+    pub frame_ms: f64,
+    pub max_frame_ms: f64,
     /// A message and until when it shows.
     pub message: String,
     pub message_until: Option<Instant>,
@@ -70,6 +73,8 @@ impl Hud {
             samples_per_frame: 0,
             noise: None,
             initial_env: None,
+            frame_ms: 0.0,
+            max_frame_ms: 0.0,
             message: String::new(),
             message_until: None,
         }
@@ -266,6 +271,7 @@ pub(crate) fn draw(
             if let Some(r) = hud.rate {
                 ui.label(format!("{r:.1} Msamples/s · {} spp/frame", hud.samples_per_frame));
             }
+            ui.label(format!("frame {:.1} ms", hud.frame_ms));
             ui.label(format!("time {}", fmt_seconds(state.seconds)));
             ui.label(match hud.noise {
                 Some(n) => format!("noise ≈ {:.2} % (rel. std. error)", 100.0 * n),
