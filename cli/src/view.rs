@@ -54,7 +54,10 @@ pub fn run(v: &ViewArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     if !a.quiet {
         eprintln!("viewing on {}", ctx.describe());
         if !furnace_gpu::context::is_hardware(&ctx.info) {
-            eprintln!("note: a software adapter: expect about a million samples per second");
+            eprintln!(
+                "note: a software adapter: expect about 0.1 million samples per second, and a first frame \
+                 of up to a minute or two while it compiles the shader"
+            );
         }
     }
     let start = std::time::Instant::now();
