@@ -150,7 +150,7 @@ impl<'h> App<'h> {
         let mut spp = 0;
         let render_seconds = 0.0;
         if let Some((film, done)) = &config.resume {
-            Integrator::set_film(&mut renderer, film).map_err(|e| ViewError::Script(e.to_string()))?;
+            Integrator::set_film(&mut renderer, film)?;
             spp = *done;
         }
         let (lo, hi) = scene.geometry.bounds();
@@ -288,7 +288,7 @@ impl<'h> App<'h> {
         !self.controls.paused
             && self.controls.target_spp.is_none_or(|t| self.spp < t)
             && self.time_limit.is_none_or(|t| self.render_seconds < t)
-            && self.spp < u32::MAX - furnace_view_max_pass()
+            && self.spp < u32::MAX - crate::budget::MAX_SAMPLES
     }
 
     fn interacted(&mut self) {
@@ -369,8 +369,7 @@ impl<'h> App<'h> {
         let left = stop.saturating_sub(self.spp).max(1);
         let n = self.budget.samples(budget, left);
         let start = Instant::now();
-        Integrator::render_pass(&mut self.renderer, self.spp, n)
-            .map_err(|e| ViewError::Script(format!("render pass: {e}")))?;
+        Integrator::render_pass(&mut self.renderer, self.spp, n)?;
         let seconds = start.elapsed().as_secs_f64();
         self.budget.record(n, seconds);
         self.spp += n;
@@ -456,8 +455,7 @@ impl<'h> App<'h> {
         if self.spp == 0 {
             return Ok("nothing to save yet: no samples".into());
         }
-        let film = Integrator::film(&mut self.renderer)
-            .map_err(|e| ViewError::Script(format!("reading the film: {e}")))?;
+        let film = Integrator::film(&mut self.renderer)?;
         let request = SaveRequest {
             film,
             spp: self.spp,
@@ -806,11 +804,6 @@ pub(crate) struct HudState {
     pub seconds: f64,
     pub accumulating: bool,
     pub film: (u32, u32),
-}
-
-/// The most samples one frame adds (the sample index must not overflow).
-fn furnace_view_max_pass() -> u32 {
-    crate::budget::MAX_SAMPLES
 }
 
 /// The fly keys: forward, left, back, right, down, up.

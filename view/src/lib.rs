@@ -166,6 +166,9 @@ pub enum ViewError {
     /// A device error.
     #[error(transparent)]
     Gpu(#[from] furnace_gpu::GpuError),
+    /// The integrator failed (a pass, reading the film, loading a saved one).
+    #[error(transparent)]
+    Render(#[from] furnace_render::RenderError),
     /// A script command failed.
     #[error("script: {0}")]
     Script(String),
