@@ -126,6 +126,10 @@ pub struct RenderArgs {
     /// Kulla 2018), power picks in proportion to power by an alias table.
     #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
     pub light_selection: LightSelectionArg,
+    /// Clamp each sample so that its largest channel is at most X (firefly suppression; off by
+    /// default because it is biased: it darkens caustics and small bright lights).
+    #[arg(long, value_name = "X", value_parser = parse_clamp)]
+    pub clamp: Option<f32>,
     /// The sun's angular diameter in degrees (0: a delta sun, hard shadows; the real sun is
     /// about 0.53), replacing the scene's `extras.angular_diameter_deg`.
     #[arg(long, value_name = "DEG", value_parser = parse_sun_angle)]
@@ -797,6 +801,15 @@ fn parse_sun_angle(s: &str) -> Result<f32, String> {
     } else {
         Err(format!("the sun's angular diameter must be between 0 and 180 degrees (got {s})"))
     }
+}
+
+/// `--clamp X`: a finite X > 0.
+fn parse_clamp(s: &str) -> Result<f32, String> {
+    s.trim()
+        .parse::<f32>()
+        .ok()
+        .filter(|x| x.is_finite() && *x > 0.0)
+        .ok_or_else(|| format!("'{s}': the clamp must be a finite number above 0"))
 }
 
 fn parse_exposure(s: &str) -> Result<f32, String> {

@@ -57,6 +57,7 @@ impl Job {
             ]
             .into_iter()
             .chain(a.sun_angle.map(|d| (resume::SUN_ANGLE, d.to_string())))
+            .chain(a.clamp.map(|x| (resume::CLAMP, x.to_string())))
             .chain(resume::env_records(&a.environment))
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
@@ -146,6 +147,7 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         triangle_sampling: args.triangle_sampling.into(),
         light_selection: args.light_selection.into(),
         env_sampling: args.env_sampling.into(),
+        clamp: args.clamp,
     };
     let job = Job { scene_name: scene.name.clone(), scene_hash, camera, settings, args };
     let a = &job.args;

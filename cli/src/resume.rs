@@ -66,6 +66,8 @@ pub const LIGHT_SELECTION: &str = "furnace.light_selection";
 /// The light selection of files that do not record one (made before the light BVH existed,
 /// when every light sample chose its triangle in proportion to power).
 pub const OLD_LIGHT_SELECTION: &str = "power";
+/// The `--clamp` given (absent: no sample clamp).
+pub const CLAMP: &str = "furnace.clamp";
 /// The `--sun-angle` given (absent: the scene's own).
 pub const SUN_ANGLE: &str = "furnace.sun_angle_deg";
 /// `--env-sampling`.
@@ -157,6 +159,7 @@ pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, 
         ("triangle sampling", extra(TRIANGLE_SAMPLING).or_else(|| Some(OLD_TRIANGLE_SAMPLING.into()))),
         ("light selection", extra(LIGHT_SELECTION).or_else(|| Some(OLD_LIGHT_SELECTION.into()))),
         ("sun angle", extra(SUN_ANGLE)),
+        ("sample clamp", extra(CLAMP)),
         ("environment", extra(ENV)),
         ("environment intensity", extra(ENV_INTENSITY)),
         ("environment rotation (degrees)", extra(ENV_ROTATION)),
@@ -282,6 +285,13 @@ pub fn apply_recorded(
     if !a.given("light_selection") {
         let v = meta.extra.get(LIGHT_SELECTION).map_or(OLD_LIGHT_SELECTION, String::as_str);
         a.light_selection = enum_value::<LightSelectionArg>(v).ok_or_else(|| invalid(LIGHT_SELECTION, v))?;
+    }
+    if !a.given("clamp")
+        && let Some(v) = meta.extra.get(CLAMP)
+    {
+        a.clamp = Some(
+            v.parse().ok().filter(|x: &f32| x.is_finite() && *x > 0.0).ok_or_else(|| invalid(CLAMP, v))?,
+        );
     }
     if !a.given("sun_angle")
         && let Some(v) = meta.extra.get(SUN_ANGLE)

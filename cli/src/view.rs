@@ -180,6 +180,7 @@ fn apply_settings(job: &mut Job, r: &SaveRequest) -> Result<(), String> {
         EnvSampling::Importance => EnvSamplingArg::Importance,
         EnvSampling::Compensated => EnvSamplingArg::Compensated,
     };
+    a.clamp = s.clamp;
     a.exposure = r.exposure;
     a.tonemap = r.tonemap;
     if let Some(i) = r.env_intensity {

@@ -1031,3 +1031,36 @@ fn resume_keeps_the_environment_and_refuses_another_rotation() {
     // The cube has no light of its own: the default studio, rebuilt on resume.
     resume_matches_one_render(&dir, "studio", &[cube.as_str(), "--env-intensity", "0.5"]);
 }
+
+#[test]
+fn clamp_is_recorded_resumed_and_checked() {
+    let dir = temp_dir("clamp");
+    let out = dir.join("c");
+    let o = furnace(&[
+        "render",
+        "--quiet",
+        "--width",
+        "12",
+        "--height",
+        "12",
+        "--spp",
+        "2",
+        "--clamp",
+        "0.25",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let (_, _, px, meta) = furnace_post::read_exr(dir.join("c.exr")).unwrap();
+    assert_eq!(meta.extra.get("furnace.clamp").map(String::as_str), Some("0.25"));
+    assert!(px.iter().all(|p| p.max_element() <= 0.25 + 1e-6), "every pixel within the clamp");
+    let exr = dir.join("c.exr");
+    // Resuming keeps the clamp; another one is refused.
+    let o = furnace(&["render", "--quiet", "--resume", exr.to_str().unwrap(), "--spp", "3"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let o = furnace(&["render", "--quiet", "--resume", exr.to_str().unwrap(), "--spp", "4", "--clamp", "1"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("sample clamp is 0.25 in the file but 1 now"), "{}", stderr(&o));
+    let o = furnace(&["render", "--quiet", "--clamp", "0", "--out", out.to_str().unwrap()]);
+    assert!(stderr(&o).contains("the clamp must be a finite number above 0"), "{}", stderr(&o));
+}

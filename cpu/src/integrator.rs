@@ -223,7 +223,10 @@ impl CpuRenderer {
                 let mut rejected = 0;
                 for x in 0..w {
                     for index in first_sample..end {
-                        let value = self.sample(x, y as u32, index);
+                        let mut value = self.sample(x, y as u32, index);
+                        if let Some(max) = self.settings.clamp {
+                            value = furnace_render::clamp_sample(value, max);
+                        }
                         rejected += u64::from(!row.add_sample(x as usize, value));
                     }
                 }

@@ -132,8 +132,10 @@ crate::gpu_struct! {
         pub env_sin: f32 => WgslType::F32,
         /// [`ENV_VISIBLE`].
         pub env_flags: u32 => WgslType::U32,
+        /// The sample clamp (`RenderSettings::clamp`; 0: off).
+        pub sample_clamp: f32 => WgslType::F32,
         /// Rust-only padding to a multiple of 16 bytes.
-        pub env_pad: [u32; 2] => WgslType::PAD,
+        pub env_pad: u32 => WgslType::PAD,
     }
 }
 
@@ -1132,7 +1134,8 @@ fn frame_params_with(
         env_cos: rotation.cos,
         env_sin: rotation.sin,
         env_flags: if env.is_some_and(|e| e.visible) { ENV_VISIBLE } else { 0 },
-        env_pad: [0; 2],
+        sample_clamp: s.clamp.unwrap_or(0.0),
+        env_pad: 0,
     };
     set_camera_params(&mut p, camera);
     p

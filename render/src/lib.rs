@@ -83,3 +83,26 @@ pub const SHADOW_EPSILON: f32 = 1e-4;
 pub fn russian_roulette_survival(throughput: glam::Vec3) -> f32 {
     throughput.max_element().min(1.0)
 }
+
+/// A sample scaled so that its largest channel is at most `max` (the sample clamp of
+/// [`RenderSettings::clamp`]; hue kept). Non-finite samples are returned unchanged, so that the
+/// film still rejects and counts them. Both integrators call it (the GPU's WGSL twin is
+/// `clamp_sample` in `integrator.wgsl`).
+pub fn clamp_sample(v: glam::Vec3, max: f32) -> glam::Vec3 {
+    let m = v.max_element();
+    if v.is_finite() && m > max { v * (max / m) } else { v }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Vec3;
+
+    #[test]
+    fn clamp_sample_scales_to_the_largest_channel_and_keeps_non_finite_samples() {
+        assert_eq!(clamp_sample(Vec3::new(4.0, 2.0, 1.0), 2.0), Vec3::new(2.0, 1.0, 0.5));
+        assert_eq!(clamp_sample(Vec3::new(0.5, 2.0, 1.0), 2.0), Vec3::new(0.5, 2.0, 1.0));
+        assert!(clamp_sample(Vec3::new(f32::NAN, 5.0, 1.0), 1.0).x.is_nan());
+        assert_eq!(clamp_sample(Vec3::new(f32::INFINITY, 5.0, 1.0), 1.0).x, f32::INFINITY);
+    }
+}

@@ -42,7 +42,7 @@ macro_rules! named_choice {
 /// samplers, within 1% of PMJ02 at equal samples (a difference within the seeds' spread) and
 /// 2–3× below random over 16–256 spp; Hammersley's ~9% lower error needs N in advance, which
 /// progressive rendering (and these settings, without `sample_count`) cannot give.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RenderSettings {
     /// Image width in pixels.
     pub width: u32,
@@ -71,6 +71,10 @@ pub struct RenderSettings {
     pub light_selection: LightSelection,
     /// How an environment map is gathered ([`EnvSampling`]).
     pub env_sampling: EnvSampling,
+    /// Sample clamp (firefly suppression): each sample's RGB is scaled so that its largest
+    /// channel is at most this ([`crate::clamp_sample`]); `None` (the default): off. Biased: it
+    /// removes energy from rare bright paths (caustics, small bright lights).
+    pub clamp: Option<f32>,
 }
 
 /// The strategies that find light of emitters and sun discs: BSDF-sampled rays that hit them,
@@ -310,6 +314,7 @@ impl Default for RenderSettings {
             triangle_sampling: TriangleSampling::SolidAngle,
             light_selection: LightSelection::Bvh,
             env_sampling: EnvSampling::Compensated,
+            clamp: None,
         }
     }
 }

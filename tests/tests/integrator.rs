@@ -276,6 +276,28 @@ fn same_samples_give_the_same_image_with_an_environment_map() {
     same_samples_with(&scene, settings(SamplerKind::Sobol, 3));
 }
 
+#[test]
+fn same_samples_give_the_same_image_with_a_sample_clamp() {
+    let scene = builtin::cornell_box().unwrap();
+    let clamped = RenderSettings { clamp: Some(0.5), ..settings(SamplerKind::Sobol, 3) };
+    // The clamp bounds every sample's largest channel, so every pixel's mean too, and it
+    // darkens the image (the sun-lit floor and the sky exceed 0.5).
+    let render = |s: RenderSettings| {
+        let cpu = CpuRenderer::with_default_camera(scene.clone(), s).unwrap();
+        let mut film = cpu.new_film();
+        cpu.render_into(&mut film, 0, 4).unwrap();
+        film
+    };
+    let (c, u) = (render(clamped), render(settings(SamplerKind::Sobol, 3)));
+    let n = (SIZE * SIZE) as usize;
+    for i in 0..n {
+        assert!(c.mean(i).max_element() <= 0.5 + 1e-6, "pixel {i}: {:?}", c.mean(i));
+    }
+    let total = |f: &furnace_render::Film| (0..n).map(|i| f.mean(i).element_sum()).sum::<f64>();
+    assert!(total(&c) < 0.99 * total(&u), "the clamp darkens: {} vs {}", total(&c), total(&u));
+    same_samples_with(&scene, clamped);
+}
+
 fn same_samples(scene: &furnace_scene::Scene) {
     same_samples_with(scene, settings(SamplerKind::Sobol, 3));
 }

@@ -543,6 +543,17 @@ const GROUP_SIZE: u32 = 256u;
 // One sample per invocation when a workgroup shares its pixels' samples (group_samples > 1).
 var<workgroup> group_values: array<vec4<f32>, GROUP_SIZE>;
 
+// Twin of furnace_render::clamp_sample: the sample scaled so that its largest channel is at most
+// `params.sample_clamp` (0: off); non-finite samples unchanged (the film rejects them).
+fn clamp_sample(v: vec3<f32>) -> vec3<f32> {
+    let max_value = params.sample_clamp;
+    let m = max(v.x, max(v.y, v.z));
+    if max_value > 0.0 && film_is_finite(v) && m > max_value {
+        return v * (max_value / m);
+    }
+    return v;
+}
+
 // A workgroup covers a tile of (GROUP_SIZE / group_samples) pixels, tile_width wide; each pixel's
 // group_samples invocations are consecutive. With group_samples = 1 an invocation owns its pixel
 // and adds `samples` samples in index order; with more, invocation `sub` computes sample
@@ -564,7 +575,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
     if sg == 1u {
         if inside {
             for (var k = 0u; k < params.samples; k++) {
-                film_add(pixel, pixel_sample(x, y, pixel, params.first_sample + k));
+                film_add(pixel, clamp_sample(pixel_sample(x, y, pixel, params.first_sample + k)));
             }
         }
     } else {
@@ -576,7 +587,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
         workgroupBarrier();
         if inside && sub == 0u {
             for (var k = 0u; k < params.samples; k++) {
-                film_add(pixel, group_values[l + k].xyz);
+                film_add(pixel, clamp_sample(group_values[l + k].xyz));
             }
         }
     }
