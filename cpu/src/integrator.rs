@@ -5,7 +5,9 @@ use furnace_brdf::{Bsdf, Frame, MetallicRoughness, MetallicRoughnessParams, Spec
 use furnace_render::layout::{
     self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
 };
-use furnace_render::{Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings};
+use furnace_render::{
+    AovSample, Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings,
+};
 use furnace_sampling::{AnySampler, Sampler};
 use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, MaterialSample, Scene, oct_decode};
 use furnace_scene::{Environment, EnvironmentSampler};
@@ -70,6 +72,8 @@ pub struct CpuRenderer {
 struct ConstantMaterial {
     emission: Vec3,
     bsdf: MetallicRoughness,
+    /// The base colour: the albedo AOV.
+    base_color: Vec3,
 }
 
 /// The material at a hit: built once, or evaluated there.
@@ -111,7 +115,11 @@ impl CpuRenderer {
             .map(|m| {
                 (!m.uses_textures()).then(|| {
                     let params = m.evaluate(Vec2::ZERO, &scene.textures, &scene.images);
-                    ConstantMaterial { emission: params.emission, bsdf: bsdf(&params, settings.specular) }
+                    ConstantMaterial {
+                        emission: params.emission,
+                        bsdf: bsdf(&params, settings.specular),
+                        base_color: params.base_color,
+                    }
                 })
             })
             .collect();
@@ -141,7 +149,7 @@ impl CpuRenderer {
             light_bvh,
             point_lights: scene.point_lights().copied().collect(),
             sky: scene.sky(),
-            film: Film::new(settings.width, settings.height),
+            film: empty_film(&settings),
             scene,
             settings,
             bvh,
@@ -179,9 +187,9 @@ impl CpuRenderer {
         &self.camera
     }
 
-    /// An empty film of the settings' size.
+    /// An empty film of the settings' size (with AOVs if [`RenderSettings::aovs`]).
     pub fn new_film(&self) -> Film {
-        Film::new(self.settings.width, self.settings.height)
+        empty_film(&self.settings)
     }
 
     /// The film of [`Integrator::render_pass`].
@@ -221,13 +229,15 @@ impl CpuRenderer {
             .enumerate()
             .map(|(y, mut row)| {
                 let mut rejected = 0;
+                let aovs = row.has_aovs();
                 for x in 0..w {
                     for index in first_sample..end {
-                        let mut value = self.sample(x, y as u32, index);
+                        let mut aov = AovSample::MISS;
+                        let mut value = self.sample_into(x, y as u32, index, aovs.then_some(&mut aov));
                         if let Some(max) = self.settings.clamp {
                             value = furnace_render::clamp_sample(value, max);
                         }
-                        rejected += u64::from(!row.add_sample(x as usize, value));
+                        rejected += u64::from(!row.add_sample_with_aovs(x as usize, value, &aov));
                     }
                 }
                 rejected
@@ -240,15 +250,34 @@ impl CpuRenderer {
     /// One path sample of pixel `(x, y)`, sample number `index`: the radiance carried by the
     /// camera ray through the sampler-chosen point of the pixel.
     pub fn sample(&self, x: u32, y: u32, index: u32) -> Vec3 {
+        self.sample_into(x, y, index, None)
+    }
+
+    /// [`CpuRenderer::sample`] and what its camera ray hit first ([`AovSample`]).
+    pub fn sample_with_aovs(&self, x: u32, y: u32, index: u32) -> (Vec3, AovSample) {
+        let mut aov = AovSample::MISS;
+        let value = self.sample_into(x, y, index, Some(&mut aov));
+        (value, aov)
+    }
+
+    fn sample_into(&self, x: u32, y: u32, index: u32, aov: Option<&mut AovSample>) -> Vec3 {
         let pixel = y.wrapping_mul(self.settings.width).wrapping_add(x);
         let [ux, uy] = self.sampler.value_2d(pixel, index, DIM_PIXEL);
         let film_point = Vec2::new(x as f32 + ux, y as f32 + uy);
         let ray = self.camera.generate_ray(film_point, self.settings.width, self.settings.height);
-        self.trace(pixel, index, ray.origin, ray.direction)
+        self.trace(pixel, index, ray.origin, ray.direction, aov)
     }
 
-    /// The path tracing loop: radiance arriving at `origin` from direction `-direction`.
-    fn trace(&self, pixel: u32, index: u32, mut origin: Vec3, mut direction: Vec3) -> Vec3 {
+    /// The path tracing loop: radiance arriving at `origin` from direction `-direction`. With
+    /// `aov`, what the first ray hits is written there (it is left as it is for a miss).
+    fn trace(
+        &self,
+        pixel: u32,
+        index: u32,
+        mut origin: Vec3,
+        mut direction: Vec3,
+        mut aov: Option<&mut AovSample>,
+    ) -> Vec3 {
         let scene = &self.scene;
         let mut radiance = Vec3::ZERO;
         let mut throughput = Vec3::ONE;
@@ -285,8 +314,19 @@ impl CpuRenderer {
             let t = hit.triangle as usize;
             let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
             let interpolated = self.shading_normal(t, b1, b2);
-            let Some(surface) = scene.surface_point(t, (b1, b2), material, uv, direction, interpolated)
-            else {
+            let surface = scene.surface_point(t, (b1, b2), material, uv, direction, interpolated);
+            if let Some(aov) = aov.take() {
+                *aov = AovSample {
+                    albedo: match &shading {
+                        Shading::Constant(c) => c.base_color,
+                        Shading::Evaluated(params) => params.base_color,
+                    },
+                    // The back of a single-sided surface (black) has no shading normal.
+                    normal: surface.as_ref().map_or(Vec3::ZERO, |s| s.shading),
+                    depth: Some(hit.t),
+                };
+            }
+            let Some(surface) = surface else {
                 // The back of a single-sided surface: black, like a one-sided BSDF.
                 break;
             };
@@ -493,6 +533,15 @@ impl Integrator for CpuRenderer {
     fn pass_samples(&self) -> u32 {
         let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
         (262_144 / pixels.max(1)).clamp(1, 4) as u32
+    }
+}
+
+/// An empty film for `settings`: with AOVs if it asks for them.
+fn empty_film(settings: &RenderSettings) -> Film {
+    if settings.aovs {
+        Film::with_aovs(settings.width, settings.height)
+    } else {
+        Film::new(settings.width, settings.height)
     }
 }
 

@@ -51,6 +51,13 @@ pub enum GpuError {
         /// The render's height.
         height: u32,
     },
+    /// A film with AOVs for a render without them, or the other way round
+    /// ([`furnace_render::RenderError::FilmAovs`]).
+    #[error("{}", furnace_render::RenderError::FilmAovs { film_has_aovs: *film_has_aovs })]
+    FilmAovs {
+        /// Whether the film has AOVs.
+        film_has_aovs: bool,
+    },
 }
 
 impl From<GpuError> for furnace_render::RenderError {
@@ -60,6 +67,7 @@ impl From<GpuError> for furnace_render::RenderError {
             GpuError::FilmSize { film_width, film_height, width, height } => {
                 Self::FilmSize { film_width, film_height, width, height }
             }
+            GpuError::FilmAovs { film_has_aovs } => Self::FilmAovs { film_has_aovs },
             e => Self::Device(Box::new(e)),
         }
     }

@@ -21,7 +21,7 @@
 
 use crate::shared::{Binding, BindingTable};
 use crate::{GpuContext, GpuError};
-use furnace_render::Film;
+use furnace_render::{AovSum, Film};
 use glam::DVec3;
 use wgpu::util::DeviceExt;
 
@@ -70,6 +70,20 @@ impl FilmPrecision {
             Self::F32Pass => 16,
         }
     }
+
+    /// The AOV sums' binding, `film_aov` (`read_write` storage, two `vec4` per pixel: albedo and
+    /// depth, normal and hits; [`furnace_render::AovSum`]'s layout).
+    pub fn aov_binding(self) -> Binding {
+        Binding::read_write("film_aov", &format!("array<{}>", self.aov_sum_type()))
+    }
+
+    /// The WGSL type of one AOV sum vector: `vec4<f64>` or `vec4<f32>`.
+    pub fn aov_sum_type(self) -> &'static str {
+        match self {
+            Self::F64 => "vec4<f64>",
+            Self::F32Pass => "vec4<f32>",
+        }
+    }
 }
 
 /// The film's two storage buffers on the device.
@@ -82,6 +96,8 @@ pub struct GpuFilm {
     pub sum: wgpu::Buffer,
     /// `(accepted, rejected)` as `vec2<u32>` per pixel.
     pub count: wgpu::Buffer,
+    /// With AOVs: their sums, two `vec4<f64>` (or `vec4<f32>` for this pass) per pixel.
+    pub aov: Option<wgpu::Buffer>,
     /// [`FilmPrecision::F32Pass`]: the `f64` sums of the passes folded so far.
     host: Option<Film>,
     /// [`FilmPrecision::F32Pass`] with [`GpuFilm::enable_display`]: per pixel
@@ -123,6 +139,21 @@ impl GpuFilm {
         height: u32,
         precision: FilmPrecision,
     ) -> Result<Self, GpuError> {
+        Self::with_aovs(ctx, width, height, precision, false)
+    }
+
+    /// [`GpuFilm::new`], also summing the first-hit AOVs when `aovs` (a third buffer of 64 bytes
+    /// per pixel for `F64`, 32 for `F32Pass`).
+    ///
+    /// # Errors
+    /// [`GpuError::TooLarge`] if a buffer would exceed the adapter's storage binding limit.
+    pub fn with_aovs(
+        ctx: &GpuContext,
+        width: u32,
+        height: u32,
+        precision: FilmPrecision,
+        aovs: bool,
+    ) -> Result<Self, GpuError> {
         let pixels = u64::from(width) * u64::from(height);
         let sum_bytes = pixels * precision.sum_bytes_per_pixel();
         let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
@@ -130,6 +161,14 @@ impl GpuFilm {
             return Err(GpuError::TooLarge {
                 what: format!("a {width}×{height} film"),
                 bytes: sum_bytes,
+                limit,
+            });
+        }
+        let aov_bytes = 2 * sum_bytes;
+        if aovs && aov_bytes > limit {
+            return Err(GpuError::TooLarge {
+                what: format!("the AOVs of a {width}×{height} film"),
+                bytes: aov_bytes,
                 limit,
             });
         }
@@ -142,13 +181,15 @@ impl GpuFilm {
                 mapped_at_creation: false,
             })
         };
-        let host = (precision == FilmPrecision::F32Pass).then(|| Film::new(width, height));
+        let empty = || if aovs { Film::with_aovs(width, height) } else { Film::new(width, height) };
+        let host = (precision == FilmPrecision::F32Pass).then(empty);
         Ok(Self {
             width,
             height,
             precision,
             sum: make("film sum", sum_bytes),
             count: make("film count", pixels * 8),
+            aov: aovs.then(|| make("film aov", aov_bytes)),
             host,
             display: None,
             squares_valid: true,
@@ -168,6 +209,11 @@ impl GpuFilm {
     /// How it sums.
     pub fn precision(&self) -> FilmPrecision {
         self.precision
+    }
+
+    /// Whether it sums AOVs ([`GpuFilm::with_aovs`]).
+    pub fn has_aovs(&self) -> bool {
+        self.aov.is_some()
     }
 
     /// Makes the film readable by a display on the GPU ([`GpuFilm::display_source`]): nothing
@@ -243,7 +289,7 @@ impl GpuFilm {
     /// Zeroes every pixel.
     pub fn clear(&mut self, ctx: &GpuContext) -> Result<(), GpuError> {
         if let Some(h) = &mut self.host {
-            *h = Film::new(self.width, self.height);
+            h.clear();
         }
         self.squares_valid = true;
         self.clear_device(ctx)?;
@@ -254,6 +300,9 @@ impl GpuFilm {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.sum, 0, None);
         enc.clear_buffer(&self.count, 0, None);
+        if let Some(aov) = &self.aov {
+            enc.clear_buffer(aov, 0, None);
+        }
         ctx.queue.submit([enc.finish()]);
         ctx.wait()
     }
@@ -303,8 +352,23 @@ impl GpuFilm {
         };
         let count = count_words[..2 * n].chunks_exact(2).map(|c| u64::from(c[0])).collect();
         let rejected = count_words[..2 * n].chunks_exact(2).map(|c| u64::from(c[1])).sum();
-        Film::from_parts(self.width, self.height, sum, count, rejected)
-            .map_err(|e| GpuError::Wgpu(e.to_string()))
+        let film = Film::from_parts(self.width, self.height, sum, count, rejected)
+            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        let Some(aov) = &self.aov else {
+            return Ok(film);
+        };
+        let words: Vec<u32> = read_buffer(ctx, aov)?;
+        let sums: Vec<AovSum> = match self.precision {
+            FilmPrecision::F64 => bytemuck::cast_slice::<u32, f64>(&words[..n * 16])
+                .chunks_exact(8)
+                .map(|c| AovSum::from_array(c.try_into().expect("8 sums")))
+                .collect(),
+            FilmPrecision::F32Pass => bytemuck::cast_slice::<u32, f32>(&words[..n * 8])
+                .chunks_exact(8)
+                .map(|c| AovSum::from_array(std::array::from_fn(|k| f64::from(c[k]))))
+                .collect(),
+        };
+        film.with_aov_sums(sums).map_err(|e| GpuError::Wgpu(e.to_string()))
     }
 
     /// Loads a film (to resume a render). `F64`: uploaded as is (rejected samples are
@@ -319,6 +383,9 @@ impl GpuFilm {
                 width: self.width,
                 height: self.height,
             });
+        }
+        if data.has_aovs() != self.has_aovs() {
+            return Err(GpuError::FilmAovs { film_has_aovs: data.has_aovs() });
         }
         self.squares_valid = data.counts().iter().all(|&c| c == 0);
         if let Some(h) = &mut self.host {
@@ -339,6 +406,10 @@ impl GpuFilm {
         let v: Vec<f64> = data.sums().iter().flat_map(|s| [s.x, s.y, s.z, 0.0]).collect();
         ctx.queue.write_buffer(&self.sum, 0, bytemuck::cast_slice(&v));
         ctx.queue.write_buffer(&self.count, 0, bytemuck::cast_slice(&counts));
+        if let (Some(buffer), Some(sums)) = (&self.aov, data.aov_sums()) {
+            let v: Vec<f64> = sums.iter().flat_map(AovSum::to_array).collect();
+            ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&v));
+        }
         ctx.queue.submit([]);
         ctx.wait()
     }

@@ -395,6 +395,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
         }
     }
     bindings.push(Binding::read_write("ray_counter", &format!("array<atomic<u32>, {COUNTER_WORDS}>")));
+    if features.aovs {
+        bindings.push(precision.aov_binding());
+    }
     BindingTable::new(0, 0, bindings)
 }
 
@@ -414,6 +417,9 @@ pub struct SceneFeatures {
     pub environment: bool,
     /// The environment map is light-sampled (its CDFs bound, its light samples and MIS weights).
     pub env_sampling: bool,
+    /// The film sums the first-hit AOVs ([`RenderSettings::aovs`]: their binding, the record of
+    /// the camera ray's hit and its sums).
+    pub aovs: bool,
 }
 
 impl SceneFeatures {
@@ -431,6 +437,7 @@ impl SceneFeatures {
             environment: scene.environment().is_some(),
             env_sampling: scene.environment().is_some_and(|e| !e.is_black())
                 && settings.env_sampling.light_samples(settings.light_sampling).is_some(),
+            aovs: settings.aovs,
         }
     }
 
@@ -441,7 +448,7 @@ impl SceneFeatures {
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
     /// `HAS_EMITTERS`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
-    /// `SAMPLES_LIGHTS` (any light sample: the MIS weights) and `LIGHT_BVH`.
+    /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH` and `AOVS`.
     pub fn enabled(self, name: &str) -> bool {
         match name {
             "HAS_EMITTERS" => self.emitters,
@@ -451,6 +458,7 @@ impl SceneFeatures {
             "SAMPLES_ENVIRONMENT" => self.environment && self.env_sampling,
             "SAMPLES_LIGHTS" => self.emitters || self.sun_disc || (self.environment && self.env_sampling),
             "HAS_POINT_LIGHTS" => self.point_lights,
+            "AOVS" => self.aovs,
             _ => panic!("no scene feature {name} (integrator.wgsl's #if)"),
         }
     }
@@ -478,6 +486,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         ),
         features.wgsl(),
         binding_table(precision, features).wgsl(),
+        if features.aovs { format!("alias aov_sum_t = {};\n", precision.aov_sum_type()) } else { String::new() },
     ]
     .concat();
     let light_bvh =
@@ -639,7 +648,7 @@ impl GpuRenderer {
         let emitters = emitter_buffer(&ctx, scene, scene_emitters.as_ref(), features)?;
         let environment = environment_buffers(&ctx, scene, &settings, limit)?;
         let precision = FilmPrecision::for_context(&ctx);
-        let film = GpuFilm::new(&ctx, settings.width, settings.height, precision)?;
+        let film = GpuFilm::with_aovs(&ctx, settings.width, settings.height, precision, settings.aovs)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
         let (layout, pipeline) = integrator_pipeline(&ctx, precision, features)?;
         // Software adapters (lavapipe) run ~1 Msample/s and end any shader loop after 65535
@@ -750,8 +759,9 @@ impl GpuRenderer {
         if features != self.features {
             (self.layout, self.pipeline) = integrator_pipeline(&self.ctx, precision, features)?;
         }
-        if (settings.width, settings.height) != (old.width, old.height) {
-            self.film = GpuFilm::new(&self.ctx, settings.width, settings.height, precision)?;
+        if (settings.width, settings.height, settings.aovs) != (old.width, old.height, old.aovs) {
+            self.film =
+                GpuFilm::with_aovs(&self.ctx, settings.width, settings.height, precision, settings.aovs)?;
             if self.display {
                 self.film.enable_display(&self.ctx)?;
             }
@@ -966,6 +976,9 @@ impl GpuRenderer {
         }
         resources.extend(self.environment.iter().map(wgpu::Buffer::as_entire_binding));
         resources.push(self.ray_counter.as_entire_binding());
+        if let Some(aov) = &self.film.aov {
+            resources.push(aov.as_entire_binding());
+        }
         let entries = binding_table(self.film.precision(), self.features).bind_entries(resources);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("integrator"),

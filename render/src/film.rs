@@ -14,6 +14,10 @@ use glam::{DVec3, Vec3};
 /// [`Film::rejected`].
 ///
 /// Pixels are stored row-major, row 0 at the top, like the camera's film coordinates.
+///
+/// A film made by [`Film::with_aovs`] also sums, for every accepted sample, the first-hit
+/// [`AovSample`] of its camera ray ([`AovSum`] per pixel): the albedo, shading normal and depth
+/// guides a denoiser takes and compositors read, averaged over exactly the samples of the image.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Film {
     width: u32,
@@ -21,13 +25,189 @@ pub struct Film {
     sum: Vec<DVec3>,
     count: Vec<u64>,
     rejected: u64,
+    aov: Option<Vec<AovSum>>,
+}
+
+/// What the camera ray of one sample found first: the guides of a denoiser and the auxiliary
+/// outputs (AOVs) of a render.
+///
+/// * `albedo`: the material's base colour at the hit (the diffuse colour of a dielectric, the
+///   normal-incidence reflectance of a metal, as Open Image Denoise asks); 1 for a ray that
+///   escapes (its colour is all light, like Cycles' denoising albedo of the background);
+/// * `normal`: the world-space shading normal at the hit (facing the ray); 0 for a ray that
+///   escapes (Open Image Denoise's "no surface");
+/// * `depth`: the distance along the (unit) camera ray to the hit; `None` for a ray that escapes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AovSample {
+    /// Base colour at the hit, or 1 for a miss.
+    pub albedo: Vec3,
+    /// World-space shading normal at the hit, or 0 for a miss.
+    pub normal: Vec3,
+    /// Distance to the hit along the camera ray; `None` for a miss.
+    pub depth: Option<f32>,
+}
+
+impl AovSample {
+    /// A camera ray that hit nothing.
+    pub const MISS: AovSample = AovSample { albedo: Vec3::ONE, normal: Vec3::ZERO, depth: None };
+}
+
+/// One pixel's sums of the [`AovSample`]s of its accepted samples, in `f64` like the colour
+/// sums. `#[repr(C)]`, 64 bytes: the layout of the GPU film's AOV buffer (two `vec4<f64>`:
+/// albedo and depth, normal and hits).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[repr(C)]
+pub struct AovSum {
+    /// Sum of the albedos.
+    pub albedo: [f64; 3],
+    /// Sum of the depths of the samples that hit a surface.
+    pub depth: f64,
+    /// Sum of the shading normals.
+    pub normal: [f64; 3],
+    /// How many of the samples hit a surface.
+    pub hits: f64,
+}
+
+/// The means of one pixel's AOVs ([`Film::aov`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AovMean {
+    /// Mean albedo over the pixel's samples.
+    pub albedo: DVec3,
+    /// Mean shading normal over the pixel's samples (not renormalised: shorter at silhouettes
+    /// and where normals disagree, 0 where nothing was hit).
+    pub normal: DVec3,
+    /// Mean depth over the samples that hit a surface; `+∞` if none did (or the pixel has no
+    /// samples).
+    pub depth: f64,
+    /// The fraction of the pixel's samples that hit a surface (0 without samples).
+    pub coverage: f64,
+}
+
+impl AovSum {
+    /// Adds one sample's AOVs.
+    #[inline]
+    pub fn add(&mut self, s: &AovSample) {
+        for c in 0..3 {
+            self.albedo[c] += f64::from(s.albedo[c]);
+            self.normal[c] += f64::from(s.normal[c]);
+        }
+        if let Some(d) = s.depth {
+            self.depth += f64::from(d);
+            self.hits += 1.0;
+        }
+    }
+
+    /// Adds another pixel's sums (disjoint samples).
+    pub fn add_sum(&mut self, o: &AovSum) {
+        for c in 0..3 {
+            self.albedo[c] += o.albedo[c];
+            self.normal[c] += o.normal[c];
+        }
+        self.depth += o.depth;
+        self.hits += o.hits;
+    }
+
+    /// The means over `count` samples.
+    pub fn mean(&self, count: u64) -> AovMean {
+        if count == 0 {
+            return AovMean { albedo: DVec3::ZERO, normal: DVec3::ZERO, depth: f64::INFINITY, coverage: 0.0 };
+        }
+        let n = count as f64;
+        AovMean {
+            albedo: DVec3::from_array(self.albedo) / n,
+            normal: DVec3::from_array(self.normal) / n,
+            depth: if self.hits > 0.0 { self.depth / self.hits } else { f64::INFINITY },
+            coverage: self.hits / n,
+        }
+    }
+
+    /// The eight sums in layout order: albedo RGB, depth, normal XYZ, hits.
+    pub fn to_array(&self) -> [f64; 8] {
+        let [r, g, b] = self.albedo;
+        let [x, y, z] = self.normal;
+        [r, g, b, self.depth, x, y, z, self.hits]
+    }
+
+    /// From [`AovSum::to_array`]'s order.
+    pub fn from_array(a: [f64; 8]) -> Self {
+        AovSum { albedo: [a[0], a[1], a[2]], depth: a[3], normal: [a[4], a[5], a[6]], hits: a[7] }
+    }
 }
 
 impl Film {
     /// An empty (all-zero) film of `width × height` pixels.
     pub fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
-        Self { width, height, sum: vec![DVec3::ZERO; n], count: vec![0; n], rejected: 0 }
+        Self { width, height, sum: vec![DVec3::ZERO; n], count: vec![0; n], rejected: 0, aov: None }
+    }
+
+    /// An empty film that also sums each sample's [`AovSample`] (64 more bytes per pixel).
+    pub fn with_aovs(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self { aov: Some(vec![AovSum::default(); n]), ..Self::new(width, height) }
+    }
+
+    /// An empty film of this one's size, with AOVs if it has them.
+    pub fn empty_like(&self) -> Self {
+        if self.has_aovs() {
+            Self::with_aovs(self.width, self.height)
+        } else {
+            Self::new(self.width, self.height)
+        }
+    }
+
+    /// Whether the film sums AOVs.
+    pub fn has_aovs(&self) -> bool {
+        self.aov.is_some()
+    }
+
+    /// Every pixel's AOV sums, row-major; `None` for a film without AOVs.
+    pub fn aov_sums(&self) -> Option<&[AovSum]> {
+        self.aov.as_deref()
+    }
+
+    /// The film with these AOV sums (restoring a saved film: taken bit for bit).
+    ///
+    /// # Errors
+    /// [`FilmSizeError`] if `sums` does not hold `width × height` pixels.
+    pub fn with_aov_sums(mut self, sums: Vec<AovSum>) -> Result<Self, FilmSizeError> {
+        if sums.len() != self.sum.len() {
+            return Err(FilmSizeError {
+                width: self.width,
+                height: self.height,
+                sums: sums.len(),
+                counts: self.count.len(),
+            });
+        }
+        self.aov = Some(sums);
+        Ok(self)
+    }
+
+    /// The means of pixel `i`'s AOVs (row-major index); `None` for a film without AOVs.
+    ///
+    /// # Panics
+    /// If `i` is not below `width × height`.
+    pub fn aov(&self, i: usize) -> Option<AovMean> {
+        self.aov.as_ref().map(|a| a[i].mean(self.count[i]))
+    }
+
+    /// The AOV images as `f32`, row-major (for writers and denoisers): albedo and normal RGB
+    /// triples, depth; `None` for a film without AOVs.
+    pub fn aov_images(&self) -> Option<AovImages> {
+        self.aov.as_ref()?;
+        let n = self.sum.len();
+        let mut out = AovImages {
+            albedo: Vec::with_capacity(n),
+            normal: Vec::with_capacity(n),
+            depth: Vec::with_capacity(n),
+        };
+        for i in 0..n {
+            let m = self.aov(i)?;
+            out.albedo.push(m.albedo.as_vec3());
+            out.normal.push(m.normal.as_vec3());
+            out.depth.push(m.depth as f32);
+        }
+        Some(out)
     }
 
     /// A film from its parts, as [`Film::sums`], [`Film::counts`] and [`Film::rejected`]
@@ -47,7 +227,7 @@ impl Film {
         if sums.len() != pixels || counts.len() != pixels {
             return Err(FilmSizeError { width, height, sums: sums.len(), counts: counts.len() });
         }
-        Ok(Self { width, height, sum: sums, count: counts, rejected })
+        Ok(Self { width, height, sum: sums, count: counts, rejected, aov: None })
     }
 
     /// Every pixel's `f64` sum of accepted samples, row-major, row 0 at the top.
@@ -85,6 +265,19 @@ impl Film {
         let i = y as usize * self.width as usize + x as usize;
         let accepted = accumulate(&mut self.sum[i], &mut self.count[i], value);
         self.rejected += u64::from(!accepted);
+        accepted
+    }
+
+    /// [`Film::add_sample`] with the sample's AOVs, summed (into a film with AOVs) when the
+    /// sample is accepted.
+    ///
+    /// # Panics
+    /// If `(x, y)` is outside the film.
+    pub fn add_sample_with_aovs(&mut self, x: u32, y: u32, value: Vec3, aov: &AovSample) -> bool {
+        let accepted = self.add_sample(x, y, value);
+        if accepted && let Some(a) = &mut self.aov {
+            a[y as usize * self.width as usize + x as usize].add(aov);
+        }
         accepted
     }
 
@@ -127,11 +320,14 @@ impl Film {
             .collect()
     }
 
-    /// Resets every pixel and the rejection count to zero.
+    /// Resets every pixel (and its AOVs) and the rejection count to zero.
     pub fn clear(&mut self) {
         self.sum.fill(DVec3::ZERO);
         self.count.fill(0);
         self.rejected = 0;
+        if let Some(a) = &mut self.aov {
+            a.fill(AovSum::default());
+        }
     }
 
     fn index(&self, x: u32, y: u32) -> usize {
@@ -149,11 +345,14 @@ impl Film {
     /// [`Film::add_rejected`] afterwards.
     pub fn rows_mut(&mut self) -> Vec<FilmRow<'_>> {
         let w = self.width.max(1) as usize;
-        self.sum
-            .chunks_mut(w)
-            .zip(self.count.chunks_mut(w))
-            .map(|(sum, count)| FilmRow { sum, count })
-            .collect()
+        let rows = self.sum.chunks_mut(w).zip(self.count.chunks_mut(w));
+        match &mut self.aov {
+            Some(aov) => rows
+                .zip(aov.chunks_mut(w))
+                .map(|((sum, count), aov)| FilmRow { sum, count, aov: Some(aov) })
+                .collect(),
+            None => rows.map(|(sum, count)| FilmRow { sum, count, aov: None }).collect(),
+        }
     }
 
     /// Adds `n` to the count of rejected samples (samples that [`FilmRow::add_sample`] refused).
@@ -162,7 +361,8 @@ impl Film {
     }
 
     /// Adds `other`'s sums, counts and rejections into this film, pixel by pixel: the film of
-    /// two disjoint sets of samples.
+    /// two disjoint sets of samples. AOV sums are added when both films have them; a film with
+    /// AOVs given one without keeps its AOV sums as they were (call it only with alike films).
     ///
     /// # Errors
     /// [`FilmSizeError`] if `other` is not of this film's size.
@@ -182,6 +382,11 @@ impl Film {
             *a += b;
         }
         self.rejected += other.rejected;
+        if let (Some(a), Some(b)) = (&mut self.aov, &other.aov) {
+            for (a, b) in a.iter_mut().zip(b) {
+                a.add_sum(b);
+            }
+        }
         Ok(())
     }
 }
@@ -217,6 +422,18 @@ impl std::error::Error for FilmSizeError {}
 pub struct FilmRow<'a> {
     sum: &'a mut [DVec3],
     count: &'a mut [u64],
+    aov: Option<&'a mut [AovSum]>,
+}
+
+/// A film's AOVs as `f32` images, row-major from the top ([`Film::aov_images`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AovImages {
+    /// Mean albedo.
+    pub albedo: Vec<Vec3>,
+    /// Mean shading normal (world space, not renormalised).
+    pub normal: Vec<Vec3>,
+    /// Mean depth of the samples that hit; `+∞` where none did.
+    pub depth: Vec<f32>,
 }
 
 impl FilmRow<'_> {
@@ -227,6 +444,25 @@ impl FilmRow<'_> {
     #[inline]
     pub fn add_sample(&mut self, x: usize, value: Vec3) -> bool {
         accumulate(&mut self.sum[x], &mut self.count[x], value)
+    }
+
+    /// [`FilmRow::add_sample`] with the sample's AOVs (summed if the film has AOVs and the
+    /// sample is accepted).
+    ///
+    /// # Panics
+    /// If `x` is outside the row.
+    #[inline]
+    pub fn add_sample_with_aovs(&mut self, x: usize, value: Vec3, aov: &AovSample) -> bool {
+        let accepted = accumulate(&mut self.sum[x], &mut self.count[x], value);
+        if accepted && let Some(a) = &mut self.aov {
+            a[x].add(aov);
+        }
+        accepted
+    }
+
+    /// Whether the row's film sums AOVs.
+    pub fn has_aovs(&self) -> bool {
+        self.aov.is_some()
     }
 }
 
@@ -284,6 +520,40 @@ mod tests {
         assert_eq!(film.pixel(2, 1), DVec3::ONE);
         assert_eq!(film.sample_count(2, 0), 1);
         assert_eq!(film.sample_count(0, 0), 0);
+    }
+
+    #[test]
+    fn aovs_follow_the_accepted_samples() {
+        let mut film = Film::with_aovs(2, 1);
+        let hit = AovSample { albedo: Vec3::new(0.5, 0.25, 1.0), normal: Vec3::Z, depth: Some(2.0) };
+        assert!(film.add_sample_with_aovs(0, 0, Vec3::ONE, &hit));
+        assert!(film.add_sample_with_aovs(0, 0, Vec3::ONE, &AovSample::MISS));
+        // A rejected sample adds no AOVs either.
+        assert!(!film.add_sample_with_aovs(0, 0, Vec3::NAN, &hit));
+        let m = film.aov(0).unwrap();
+        assert_eq!(m.albedo, DVec3::new(0.75, 0.625, 1.0));
+        assert_eq!(m.normal, DVec3::new(0.0, 0.0, 0.5));
+        assert_eq!((m.depth, m.coverage), (2.0, 0.5));
+        // No samples: no surface seen.
+        let empty = film.aov(1).unwrap();
+        assert_eq!((empty.depth, empty.coverage, empty.albedo), (f64::INFINITY, 0.0, DVec3::ZERO));
+        // Rows add the same sums as the film.
+        let mut by_rows = Film::with_aovs(2, 1);
+        for mut row in by_rows.rows_mut() {
+            row.add_sample_with_aovs(0, Vec3::ONE, &hit);
+            row.add_sample_with_aovs(0, Vec3::ONE, &AovSample::MISS);
+        }
+        assert_eq!(by_rows.aov_sums(), film.aov_sums());
+        // Merging films of disjoint samples sums the AOVs; clearing zeroes them.
+        let mut twice = film.clone();
+        twice.add_film(&film).unwrap();
+        assert_eq!(twice.aov_sums().unwrap()[0].hits, 2.0);
+        twice.clear();
+        assert_eq!(twice.aov_sums().unwrap()[0], AovSum::default());
+        // A film without AOVs has none, and ignores them.
+        let mut plain = Film::new(1, 1);
+        assert!(plain.add_sample_with_aovs(0, 0, Vec3::ONE, &hit));
+        assert!(plain.aov(0).is_none() && plain.aov_images().is_none());
     }
 
     #[test]

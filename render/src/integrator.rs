@@ -77,15 +77,29 @@ pub enum RenderError {
         /// The render's height.
         height: u32,
     },
+    /// A film with AOVs for a render without them, or the other way round.
+    #[error("{}", if *film_has_aovs {
+        "the film has AOVs but the render does not take them (render with AOVs on to continue it)"
+    } else {
+        "the film has no AOVs, so a render with AOVs cannot continue it (AOVs must sum the same samples as the image, from the first)"
+    })]
+    FilmAovs {
+        /// Whether the film has AOVs.
+        film_has_aovs: bool,
+    },
     /// The backend's device failed (a GPU's validation error, out of memory, device lost, …).
     #[error(transparent)]
     Device(Box<dyn std::error::Error + Send + Sync>),
 }
 
 impl RenderError {
-    /// [`RenderError::FilmSize`] unless `film` is `settings.width × settings.height`.
+    /// [`RenderError::FilmSize`] unless `film` is `settings.width × settings.height`;
+    /// [`RenderError::FilmAovs`] unless it has AOVs exactly when [`RenderSettings::aovs`] asks.
     pub fn check_film(film: &Film, settings: &RenderSettings) -> Result<(), RenderError> {
         if (film.width(), film.height()) == (settings.width, settings.height) {
+            if film.has_aovs() != settings.aovs {
+                return Err(RenderError::FilmAovs { film_has_aovs: film.has_aovs() });
+            }
             return Ok(());
         }
         Err(RenderError::FilmSize {

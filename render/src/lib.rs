@@ -5,7 +5,8 @@
 //! output (`furnace-post`) and the `furnace` binary share:
 //!
 //! * [`RenderSettings`] — image size, path length, sampler, material-model switches;
-//! * [`Film`] — the one accumulation buffer: per-pixel `f64` sums and counts, rejected samples;
+//! * [`Film`] — the one accumulation buffer: per-pixel `f64` sums and counts, rejected samples,
+//!   and optionally the first-hit AOVs ([`AovSample`]: albedo, normal, depth) of the same samples;
 //! * [`layout`] — which sampler dimension each random decision of a path reads, with its
 //!   version ([`SAMPLER_LAYOUT_VERSION`]), recorded with saved renders;
 //! * [`Integrator`] — what every backend offers (passes of samples into its film), with typed
@@ -63,7 +64,7 @@ pub mod resume;
 mod session;
 mod settings;
 
-pub use film::{Film, FilmRow, FilmSizeError};
+pub use film::{AovImages, AovMean, AovSample, AovSum, Film, FilmRow, FilmSizeError};
 pub use integrator::{Integrator, RenderError};
 pub use layout::SAMPLER_LAYOUT_VERSION;
 pub use session::{Budget, Progress, Session, Stop, Timing, process_cpu_seconds};

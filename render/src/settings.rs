@@ -75,6 +75,10 @@ pub struct RenderSettings {
     /// channel is at most this ([`crate::clamp_sample`]); `None` (the default): off. Biased: it
     /// removes energy from rare bright paths (caustics, small bright lights).
     pub clamp: Option<f32>,
+    /// Whether the film also accumulates the first-hit AOVs (albedo, shading normal, depth;
+    /// [`crate::AovSample`]) of the same samples, for a denoiser and compositing. Off by
+    /// default: a render pays for them (memory, a little time) only when asked.
+    pub aovs: bool,
 }
 
 /// The strategies that find light of emitters and sun discs: BSDF-sampled rays that hit them,
@@ -315,6 +319,7 @@ impl Default for RenderSettings {
             light_selection: LightSelection::Bvh,
             env_sampling: EnvSampling::Compensated,
             clamp: None,
+            aovs: false,
         }
     }
 }

@@ -122,6 +122,7 @@ fn absent_light_features_compose_no_code() {
         "environment",
         "fn env_",
         "ENV_VISIBLE",
+        "aov",
         "#if",
     ] {
         assert!(!bare.contains(absent), "{absent} in the shader of a scene without light samples");
@@ -182,9 +183,15 @@ fn frame_params_layout_matches_wgsl() {
                 light_bvh,
                 environment: true,
                 env_sampling: true,
+                aovs: light_bvh,
             },
         ));
     }
+    // AOVs on an f64 film (the F32Pass one is composed above).
+    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(
+        FilmPrecision::F64,
+        SceneFeatures { aovs: true, ..Default::default() },
+    ));
     furnace_tests::layout::assert_gpu_struct::<GpuPointLight>(&shader_source(
         FilmPrecision::F64,
         SceneFeatures::default(),

@@ -373,8 +373,20 @@ fn sample_environment(pixel: u32, index: u32, event: u32, throughput: vec3<f32>,
 // #endif
 // #endif
 
+// #if AOVS
+// What the current sample's camera ray hit first (furnace_render::AovSample), as the two vectors
+// of its sums (AovSum's layout): albedo and depth, shading normal and hit (1, or 0 for a miss).
+var<private> aov_albedo_depth: vec4<f32>;
+var<private> aov_normal_hit: vec4<f32>;
+// #endif
+
 // Renderer::trace: radiance arriving at `origin` from −`direction`.
 fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f32>) -> vec3<f32> {
+    // #if AOVS
+    // AovSample::MISS: albedo 1, no normal, no depth.
+    aov_albedo_depth = vec4<f32>(1.0, 1.0, 1.0, 0.0);
+    aov_normal_hit = vec4<f32>(0.0);
+    // #endif
     var origin = origin_in;
     var direction = direction_in;
     var radiance = vec3<f32>(0.0);
@@ -422,6 +434,14 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         }
         let ms = scene_material_evaluate(material, uv);
         let surface = scene_surface_point(hit.triangle, hit.u, hit.v, uv, direction);
+        // #if AOVS
+        if event == 0u {
+            // The back of a single-sided surface (black) has no shading normal.
+            let n = select(vec3<f32>(0.0), surface.shading, surface.valid != 0u);
+            aov_albedo_depth = vec4<f32>(ms.base_color, hit.t);
+            aov_normal_hit = vec4<f32>(n, 1.0);
+        }
+        // #endif
         if surface.valid == 0u {
             // The back of a single-sided surface: black.
             break;
@@ -542,6 +562,23 @@ const GROUP_SIZE: u32 = 256u;
 
 // One sample per invocation when a workgroup shares its pixels' samples (group_samples > 1).
 var<workgroup> group_values: array<vec4<f32>, GROUP_SIZE>;
+// #if AOVS
+// And its AOVs.
+var<workgroup> group_aov_albedo_depth: array<vec4<f32>, GROUP_SIZE>;
+var<workgroup> group_aov_normal_hit: array<vec4<f32>, GROUP_SIZE>;
+// #endif
+
+// Film::add_sample_with_aovs: the sample, and, with AOVs, its camera ray's first hit when the
+// sample is accepted (the same test as film_add's).
+fn film_add_sample(pixel: u32, value: vec3<f32>) {
+    // #if AOVS
+    if film_is_finite(value) {
+        film_aov[2u * pixel] = film_aov[2u * pixel] + aov_sum_t(aov_albedo_depth);
+        film_aov[2u * pixel + 1u] = film_aov[2u * pixel + 1u] + aov_sum_t(aov_normal_hit);
+    }
+    // #endif
+    film_add(pixel, value);
+}
 
 // Twin of furnace_render::clamp_sample: the sample scaled so that its largest channel is at most
 // `params.sample_clamp` (0: off); non-finite samples unchanged (the film rejects them).
@@ -575,7 +612,7 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
     if sg == 1u {
         if inside {
             for (var k = 0u; k < params.samples; k++) {
-                film_add(pixel, clamp_sample(pixel_sample(x, y, pixel, params.first_sample + k)));
+                film_add_sample(pixel, clamp_sample(pixel_sample(x, y, pixel, params.first_sample + k)));
             }
         }
     } else {
@@ -584,10 +621,18 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
             value = vec4<f32>(pixel_sample(x, y, pixel, params.first_sample + sub), 0.0);
         }
         group_values[l] = value;
+        // #if AOVS
+        group_aov_albedo_depth[l] = aov_albedo_depth;
+        group_aov_normal_hit[l] = aov_normal_hit;
+        // #endif
         workgroupBarrier();
         if inside && sub == 0u {
             for (var k = 0u; k < params.samples; k++) {
-                film_add(pixel, clamp_sample(group_values[l + k].xyz));
+                // #if AOVS
+                aov_albedo_depth = group_aov_albedo_depth[l + k];
+                aov_normal_hit = group_aov_normal_hit[l + k];
+                // #endif
+                film_add_sample(pixel, clamp_sample(group_values[l + k].xyz));
             }
         }
     }
