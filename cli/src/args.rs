@@ -130,6 +130,12 @@ pub struct RenderArgs {
     /// default because it is biased: it darkens caustics and small bright lights).
     #[arg(long, value_name = "X", value_parser = parse_clamp)]
     pub clamp: Option<f32>,
+    /// Also write the first-hit AOVs, averaged over the same samples as the image, as layers of
+    /// the EXR: albedo.R/G/B (base colour; 1 where the camera sees the sky), normal.X/Y/Z (world
+    /// shading normal; 0 for the sky) and Z (distance along the camera ray; +inf for the sky).
+    /// Costs 64 bytes per pixel while rendering. A resumed render keeps the file's AOVs.
+    #[arg(long)]
+    pub aovs: bool,
     /// The sun's angular diameter in degrees (0: a delta sun, hard shadows; the real sun is
     /// about 0.53), replacing the scene's `extras.angular_diameter_deg`.
     #[arg(long, value_name = "DEG", value_parser = parse_sun_angle)]

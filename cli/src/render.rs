@@ -148,7 +148,20 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         light_selection: args.light_selection.into(),
         env_sampling: args.env_sampling.into(),
         clamp: args.clamp,
+        // The file's AOVs are kept when resuming; they cannot be added to a file without them
+        // (they must sum the same samples as the image, from the first).
+        aovs: args.aovs || resumed.as_ref().and_then(|f| f.state.as_ref()).is_some_and(Film::has_aovs),
     };
+    if let Some(file) = &resumed
+        && args.aovs
+        && !file.state.as_ref().is_some_and(Film::has_aovs)
+    {
+        return Err(format!(
+            "{}: rendered without AOVs, so --aovs cannot be added when resuming (the AOVs must average \
+             the same samples as the image); render again with --aovs",
+            a.resume.clone().unwrap_or_default().display()
+        ));
+    }
     let job = Job { scene_name: scene.name.clone(), scene_hash, camera, settings, args };
     let a = &job.args;
 

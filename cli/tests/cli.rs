@@ -1064,3 +1064,51 @@ fn clamp_is_recorded_resumed_and_checked() {
     let o = furnace(&["render", "--quiet", "--clamp", "0", "--out", out.to_str().unwrap()]);
     assert!(stderr(&o).contains("the clamp must be a finite number above 0"), "{}", stderr(&o));
 }
+
+/// `--aovs` writes the albedo, normal and depth layers beside the image and their exact state;
+/// a resumed render keeps them (bit-identical to one run), and they cannot be added on resume.
+#[test]
+fn aovs_are_written_as_layers_and_resume_exactly() {
+    let dir = temp_dir("aovs");
+    let two = render_ok(&dir, "a2", 16, &["--aovs", "--spp", "2"]);
+    let four = render_ok(&dir, "a4", 16, &["--aovs", "--spp", "4"]);
+    let file = furnace_post::read_exr_with_state(&two).unwrap();
+    let state = file.state.unwrap();
+    assert!(state.has_aovs());
+    let image = exr::prelude::read_all_flat_layers_from_file(&two).unwrap();
+    let names: Vec<String> =
+        image.layer_data[0].channel_data.list.iter().map(|c| c.name.to_string()).collect();
+    for name in furnace_post::AOV_CHANNELS {
+        assert!(names.iter().any(|n| n == name), "no {name} channel in {names:?}");
+    }
+    // The camera sees the box (depths of 3 to 5 scene units) framed by the sky (+inf).
+    let channel = |name: &str| -> Vec<f32> {
+        let c = image.layer_data[0].channel_data.list.iter().find(|c| c.name.to_string() == name);
+        c.unwrap().sample_data.values_as_f32().collect()
+    };
+    let z = channel("Z");
+    assert!(z[0] == f32::INFINITY && (3.0..5.0).contains(&z[8 * 16 + 8]), "depths {z:?}");
+    assert!(z.iter().all(|&d| d == f32::INFINITY || (2.0..6.0).contains(&d)), "depths {z:?}");
+    // Where no sample hit, the albedo is the sky's 1 and the normal 0.
+    let (albedo, normal) = (channel("albedo.G"), channel("normal.Z"));
+    assert_eq!((albedo[0], normal[0]), (1.0, 0.0));
+    // Resumed without --aovs: the file's AOVs go on, exactly.
+    let resumed = dir.join("a2_2");
+    let o = furnace(&[
+        "render",
+        "--quiet",
+        "--resume",
+        two.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--out",
+        resumed.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_same_render(&dir.join("a2_2.exr"), &four);
+    // A file without AOVs cannot gain them.
+    let plain = render_ok(&dir, "p2", 16, &["--spp", "2"]);
+    let o = furnace(&["render", "--quiet", "--resume", plain.to_str().unwrap(), "--spp", "4", "--aovs"]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("rendered without AOVs"), "{}", stderr(&o));
+}

@@ -7,7 +7,7 @@ use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer, LayerAttributes,
     ReadChannels, ReadLayers, SmallVec, SpecificChannels, Text, Vec2, WritableImage, read,
 };
-use furnace_render::Film;
+use furnace_render::{AovSum, Film};
 use glam::{DVec3, Vec3};
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
@@ -303,6 +303,32 @@ const SUM_CHANNELS: [[&str; 2]; 3] = [
     ["furnace.resume.sumB.hi", "furnace.resume.sumB.lo"],
 ];
 
+/// The channels of a film's AOVs (a film made with [`Film::with_aovs`]), written beside `R`,
+/// `G`, `B` by [`write_exr_with_state`]: the mean first-hit albedo `albedo.R`, `albedo.G`,
+/// `albedo.B`, shading normal `normal.X`, `normal.Y`, `normal.Z` (world space, not
+/// renormalised) and depth `Z` (the OpenEXR standard depth channel: mean distance along the
+/// camera ray of the samples that hit, `+∞` where none did) — the names compositors and Open
+/// Image Denoise's tools take as layers `albedo`, `normal` and the depth channel.
+pub const AOV_CHANNELS: [&str; 7] = ["albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "Z"];
+
+/// The resume state of a film's AOVs: the eight `f64` sums of [`AovSum::to_array`], each as
+/// high and low 32-bit halves (`furnace.resume.aov.<name>.hi` / `.lo`).
+const AOV_STATE_NAMES: [&str; 8] = ["albedoR", "albedoG", "albedoB", "depth", "normalX", "normalY", "normalZ", "hits"];
+
+fn aov_state_channel(k: usize, half: &str) -> String {
+    format!("{RESUME_LAYER}.aov.{}.{half}", AOV_STATE_NAMES[k])
+}
+
+/// A channel of `f32` samples written beside the image by [`write_exr_with_state_and`]
+/// (e.g. `denoised.R`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ExtraChannel {
+    /// The channel's full name (`layer.channel`).
+    pub name: String,
+    /// One value per pixel, row-major from the top.
+    pub values: Vec<f32>,
+}
+
 /// A furnace EXR as read by [`read_exr_with_state`].
 #[derive(Debug, Clone, PartialEq)]
 pub struct ExrWithState {
@@ -331,6 +357,20 @@ pub fn write_exr_with_state(
     film: &Film,
     metadata: &Metadata,
 ) -> Result<(), PostError> {
+    write_exr_with_state_and(path, film, metadata, &[])
+}
+
+/// [`write_exr_with_state`] with `extra` channels beside the image (a denoised image, …).
+///
+/// # Errors
+/// As [`write_exr_with_state`]; [`PostError::FilmState`] if an extra channel does not hold
+/// one value per pixel or takes a name the film's channels use.
+pub fn write_exr_with_state_and(
+    path: impl AsRef<Path>,
+    film: &Film,
+    metadata: &Metadata,
+    extra: &[ExtraChannel],
+) -> Result<(), PostError> {
     let path = path.as_ref();
     let (width, height) = (film.width(), film.height());
     let pixels: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
@@ -354,6 +394,46 @@ pub fn write_exr_with_state(
         list.push(AnyChannel::new(lo, FlatSamples::U32(bits().map(|b| b as u32).collect())));
     }
     list.push(AnyChannel::new(COUNT_CHANNEL, FlatSamples::U32(counts)));
+    if let (Some(sums), Some(images)) = (film.aov_sums(), film.aov_images()) {
+        let planes: [Vec<f32>; 7] = [
+            images.albedo.iter().map(|v| v.x).collect(),
+            images.albedo.iter().map(|v| v.y).collect(),
+            images.albedo.iter().map(|v| v.z).collect(),
+            images.normal.iter().map(|v| v.x).collect(),
+            images.normal.iter().map(|v| v.y).collect(),
+            images.normal.iter().map(|v| v.z).collect(),
+            images.depth,
+        ];
+        for (name, values) in AOV_CHANNELS.into_iter().zip(planes) {
+            list.push(AnyChannel::new(name, FlatSamples::F32(values)));
+        }
+        for k in 0..8 {
+            let bits = || sums.iter().map(|s| s.to_array()[k].to_bits());
+            list.push(AnyChannel::new(
+                aov_state_channel(k, "hi").as_str(),
+                FlatSamples::U32(bits().map(|b| (b >> 32) as u32).collect()),
+            ));
+            list.push(AnyChannel::new(
+                aov_state_channel(k, "lo").as_str(),
+                FlatSamples::U32(bits().map(|b| b as u32).collect()),
+            ));
+        }
+    }
+    for e in extra {
+        if e.values.len() != pixels.len() {
+            return Err(bad(format!(
+                "channel '{}' has {} values for {} pixels",
+                e.name,
+                e.values.len(),
+                pixels.len()
+            )));
+        }
+        let taken = |c: &AnyChannel<FlatSamples>| c.name == Text::from_slice_unchecked(e.name.as_bytes());
+        if list.iter().any(taken) {
+            return Err(bad(format!("channel '{}' is written twice", e.name)));
+        }
+        list.push(AnyChannel::new(e.name.as_str(), FlatSamples::F32(e.values.clone())));
+    }
     let size = (width as usize, height as usize);
     let layer = Layer::new(size, layer_attributes, Encoding::SMALL_LOSSLESS, AnyChannels::sort(list));
     let image = Image::from_layer(layer);
@@ -422,7 +502,26 @@ pub fn read_exr_with_state(path: impl AsRef<Path>) -> Result<ExrWithState, PostE
         // The exr crate limits sizes to i32 range, so these fit.
         let film = Film::from_parts(layer.size.0 as u32, layer.size.1 as u32, sums, counts, rejected)
             .map_err(|e| bad(e.to_string()))?;
-        Some(film)
+        // The AOVs' state: all sixteen channels or none.
+        let aov_names: Vec<String> =
+            (0..8).flat_map(|k| [aov_state_channel(k, "hi"), aov_state_channel(k, "lo")]).collect();
+        let aov: Vec<Option<&Vec<u32>>> = aov_names.iter().map(|name| u32s(name)).collect::<Result<_, _>>()?;
+        if aov.iter().all(Option::is_none) {
+            Some(film)
+        } else {
+            if let Some(k) = aov.iter().position(Option::is_none) {
+                return Err(bad(format!("incomplete AOV state: no '{}' channel", aov_names[k])));
+            }
+            let halves: Vec<&Vec<u32>> = aov.into_iter().flatten().collect();
+            let sums = (0..n)
+                .map(|i| {
+                    AovSum::from_array(std::array::from_fn(|k| {
+                        f64::from_bits(u64::from(halves[2 * k][i]) << 32 | u64::from(halves[2 * k + 1][i]))
+                    }))
+                })
+                .collect();
+            Some(film.with_aov_sums(sums).map_err(|e| bad(e.to_string()))?)
+        }
     };
     Ok(ExrWithState { width: layer.size.0 as u32, height: layer.size.1 as u32, pixels, metadata, state })
 }
@@ -483,6 +582,51 @@ mod tests {
         let (rw, rh, rgb2, m) = read_exr(&path).unwrap();
         assert_eq!((rw, rh, m), (w, h, meta));
         assert_eq!(f32_bits(&rgb2.iter().flat_map(|p| p.to_array()).collect::<Vec<_>>()), f32_bits(&rgb));
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn aovs_and_extra_channels_round_trip() {
+        let dir = scratch("aovs");
+        let path = dir.join("a.exr");
+        let mut film = Film::with_aovs(2, 1);
+        let hit = furnace_render::AovSample {
+            albedo: Vec3::new(0.1, 0.2, 0.3),
+            normal: Vec3::new(0.0, 0.6, 0.8),
+            depth: Some(2.5),
+        };
+        film.add_sample_with_aovs(0, 0, Vec3::ONE, &hit);
+        film.add_sample_with_aovs(0, 0, Vec3::ONE, &furnace_render::AovSample::MISS);
+        film.add_sample_with_aovs(1, 0, Vec3::ONE, &furnace_render::AovSample::MISS);
+        let extra = [ExtraChannel { name: "denoised.R".into(), values: vec![0.5, 0.25] }];
+        write_exr_with_state_and(&path, &film, &Metadata::default(), &extra).unwrap();
+        let back = read_exr_with_state(&path).unwrap();
+        assert_eq!(back.state.as_ref().unwrap().aov_sums(), film.aov_sums(), "AOV sums bit for bit");
+        // The AOV layers hold the means: what compositors and denoisers read.
+        let image = read()
+            .no_deep_data()
+            .largest_resolution_level()
+            .all_channels()
+            .first_valid_layer()
+            .all_attributes()
+            .from_file(&path)
+            .unwrap();
+        let channel = |name: &str| -> Vec<f32> {
+            let c = image.layer_data.channel_data.list.iter().find(|c| c.name == Text::from(name));
+            c.unwrap_or_else(|| panic!("no channel {name}")).sample_data.values_as_f32().collect()
+        };
+        assert_eq!(channel("albedo.R"), [0.55, 1.0]);
+        assert_eq!(channel("normal.Z"), [0.4, 0.0]);
+        assert_eq!(channel("Z"), [2.5, f32::INFINITY]);
+        assert_eq!(channel("denoised.R"), [0.5, 0.25]);
+        // An extra channel of the wrong length, or a name already used, writes nothing.
+        let path2 = dir.join("b.exr");
+        let short = [ExtraChannel { name: "x".into(), values: vec![1.0] }];
+        assert!(write_exr_with_state_and(&path2, &film, &Metadata::default(), &short).is_err());
+        let twice = [ExtraChannel { name: "Z".into(), values: vec![1.0, 2.0] }];
+        let e = write_exr_with_state_and(&path2, &film, &Metadata::default(), &twice).unwrap_err();
+        assert!(e.to_string().contains("'Z' is written twice"), "{e}");
+        assert!(!path2.exists());
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -38,6 +38,10 @@ pub fn assert_same_render(a: &Path, b: &Path) {
     };
     assert!(sum_bits(&sa) == sum_bits(&sb), "film sums differ: {} vs {}", a.display(), b.display());
     assert_eq!(sa.counts(), sb.counts());
+    let aov_bits = |f: &furnace_render::Film| {
+        f.aov_sums().map(|s| s.iter().flat_map(|p| p.to_array().map(f64::to_bits)).collect::<Vec<_>>())
+    };
+    assert!(aov_bits(&sa) == aov_bits(&sb), "AOV sums differ: {} vs {}", a.display(), b.display());
     let (mut ma, mut mb) = (ra.metadata, rb.metadata);
     ma.render_time_s = None;
     mb.render_time_s = None;
