@@ -130,6 +130,16 @@ pub struct RenderArgs {
     /// default because it is biased: it darkens caustics and small bright lights).
     #[arg(long, value_name = "X", value_parser = parse_clamp)]
     pub clamp: Option<f32>,
+    /// Adaptive sampling: a pixel stops taking samples once the relative standard error of its
+    /// luminance is below T (0.01: about 1 %), tested every 8 samples from --min-spp on; the
+    /// render ends when every pixel has (or at --spp / --time-limit). Biased where a pixel's
+    /// first samples all miss its rare bright paths: see docs/accuracy.md.
+    #[arg(long, value_name = "T", value_parser = parse_noise_threshold)]
+    pub noise_threshold: Option<f32>,
+    /// Adaptive sampling: no pixel stops before this many samples.
+    #[arg(long, value_name = "N", default_value_t = furnace_render::AdaptiveSampling::DEFAULT_MIN_SAMPLES,
+          requires = "noise_threshold")]
+    pub min_spp: u32,
     /// Also write the first-hit AOVs, averaged over the same samples as the image, as layers of
     /// the EXR: albedo.R/G/B (base colour; 1 where the camera sees the sky), normal.X/Y/Z (world
     /// shading normal; 0 for the sky) and Z (distance along the camera ray; +inf for the sky).
@@ -807,6 +817,15 @@ fn parse_sun_angle(s: &str) -> Result<f32, String> {
     } else {
         Err(format!("the sun's angular diameter must be between 0 and 180 degrees (got {s})"))
     }
+}
+
+/// `--noise-threshold T`: a finite T > 0.
+fn parse_noise_threshold(s: &str) -> Result<f32, String> {
+    s.trim()
+        .parse::<f32>()
+        .ok()
+        .filter(|t| t.is_finite() && *t > 0.0)
+        .ok_or_else(|| format!("'{s}': the noise threshold must be a finite number above 0 (0.01: 1 %)"))
 }
 
 /// `--clamp X`: a finite X > 0.

@@ -58,6 +58,8 @@ impl Job {
             .into_iter()
             .chain(a.sun_angle.map(|d| (resume::SUN_ANGLE, d.to_string())))
             .chain(a.clamp.map(|x| (resume::CLAMP, x.to_string())))
+            .chain(a.noise_threshold.map(|t| (resume::NOISE_THRESHOLD, t.to_string())))
+            .chain(a.noise_threshold.map(|_| (resume::MIN_SPP, a.min_spp.to_string())))
             .chain(resume::env_records(&a.environment))
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
@@ -151,6 +153,9 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         // The file's AOVs are kept when resuming; they cannot be added to a file without them
         // (they must sum the same samples as the image, from the first).
         aovs: args.aovs || resumed.as_ref().and_then(|f| f.state.as_ref()).is_some_and(Film::has_aovs),
+        adaptive: args
+            .noise_threshold
+            .map(|threshold| furnace_render::AdaptiveSampling { threshold, min_samples: args.min_spp }),
     };
     if let Some(file) = &resumed
         && args.aovs
@@ -249,6 +254,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             Stop::Finished => String::new(),
             Stop::TimeLimit => format!(" (stopped by --time-limit; asked {})", a.spp),
             Stop::Cancelled => format!(" (interrupted; asked {})", a.spp),
+            Stop::Converged => " (every pixel converged)".to_string(),
         };
         eprintln!(
             "{}: {width}×{height}, {} spp{from}{stopped}, {} bounces, {} sampler, {} backend: {:.2} s ({rate:.2} Msamples/s)",
@@ -259,11 +265,20 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             backend.name(),
             pass.seconds,
         );
+        if let Some(converged) = film.converged_count() {
+            let pixels = film.counts().len().max(1) as f64;
+            let mean_spp = film.counts().iter().sum::<u64>() as f64 / pixels;
+            eprintln!(
+                "adaptive sampling: {:.1} % of pixels converged below {}, {mean_spp:.1} spp per pixel on average",
+                100.0 * converged as f64 / pixels,
+                a.noise_threshold.unwrap_or_default()
+            );
+        }
         if film.rejected() > 0 {
             eprintln!("warning: {} non-finite samples rejected", film.rejected());
         }
         eprintln!("wrote {} and {}", exr_path.display(), png_path.display());
-        if pass.done < a.spp {
+        if pass.done < a.spp && pass.stop != Stop::Converged {
             eprintln!(
                 "to continue to {} spp: furnace render --resume {}",
                 a.spp,
@@ -303,10 +318,12 @@ fn render_passes(
     let stop = session
         .run(&budget, &|| interrupt.requested(), &mut |p| {
             bar.set_position(u64::from(p.done));
-            bar.set_message(format!("{:.2} Msamples/s", p.msamples_per_s));
+            let converged =
+                p.converged.map(|c| format!(", {:.1} % converged", 100.0 * c)).unwrap_or_default();
+            bar.set_message(format!("{:.2} Msamples/s{converged}", p.msamples_per_s));
             if log_lines && last_log.is_none_or(|t| t.elapsed().as_secs_f64() >= 10.0) {
                 eprintln!(
-                    "progress: {}/{} spp, {:.1} s, {:.2} Msamples/s",
+                    "progress: {}/{} spp, {:.1} s, {:.2} Msamples/s{converged}",
                     p.done, p.target, p.elapsed, p.msamples_per_s
                 );
                 last_log = Some(Instant::now());

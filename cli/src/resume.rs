@@ -68,6 +68,10 @@ pub const LIGHT_SELECTION: &str = "furnace.light_selection";
 pub const OLD_LIGHT_SELECTION: &str = "power";
 /// The `--clamp` given (absent: no sample clamp).
 pub const CLAMP: &str = "furnace.clamp";
+/// The `--noise-threshold` given (absent: no adaptive sampling).
+pub const NOISE_THRESHOLD: &str = "furnace.noiseThreshold";
+/// The `--min-spp` of an adaptive render.
+pub const MIN_SPP: &str = "furnace.minSpp";
 /// The `--sun-angle` given (absent: the scene's own).
 pub const SUN_ANGLE: &str = "furnace.sun_angle_deg";
 /// `--env-sampling`.
@@ -160,6 +164,8 @@ pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, 
         ("light selection", extra(LIGHT_SELECTION).or_else(|| Some(OLD_LIGHT_SELECTION.into()))),
         ("sun angle", extra(SUN_ANGLE)),
         ("sample clamp", extra(CLAMP)),
+        ("noise threshold", extra(NOISE_THRESHOLD)),
+        ("minimum spp of adaptive sampling", extra(MIN_SPP)),
         ("environment", extra(ENV)),
         ("environment intensity", extra(ENV_INTENSITY)),
         ("environment rotation (degrees)", extra(ENV_ROTATION)),
@@ -292,6 +298,21 @@ pub fn apply_recorded(
         a.clamp = Some(
             v.parse().ok().filter(|x: &f32| x.is_finite() && *x > 0.0).ok_or_else(|| invalid(CLAMP, v))?,
         );
+    }
+    if !a.given("noise_threshold")
+        && let Some(v) = meta.extra.get(NOISE_THRESHOLD)
+    {
+        a.noise_threshold = Some(
+            v.parse()
+                .ok()
+                .filter(|x: &f32| x.is_finite() && *x > 0.0)
+                .ok_or_else(|| invalid(NOISE_THRESHOLD, v))?,
+        );
+    }
+    if !a.given("min_spp")
+        && let Some(v) = meta.extra.get(MIN_SPP)
+    {
+        a.min_spp = v.parse().map_err(|_| invalid(MIN_SPP, v))?;
     }
     if !a.given("sun_angle")
         && let Some(v) = meta.extra.get(SUN_ANGLE)

@@ -58,6 +58,13 @@ pub enum GpuError {
         /// Whether the film has AOVs.
         film_has_aovs: bool,
     },
+    /// A film with adaptive-sampling state for a render without it, or the other way round
+    /// ([`furnace_render::RenderError::FilmAdaptive`]).
+    #[error("{}", furnace_render::RenderError::FilmAdaptive { film_has_state: *film_has_state })]
+    FilmAdaptive {
+        /// Whether the film has adaptive-sampling state.
+        film_has_state: bool,
+    },
 }
 
 impl From<GpuError> for furnace_render::RenderError {
@@ -68,6 +75,7 @@ impl From<GpuError> for furnace_render::RenderError {
                 Self::FilmSize { film_width, film_height, width, height }
             }
             GpuError::FilmAovs { film_has_aovs } => Self::FilmAovs { film_has_aovs },
+            GpuError::FilmAdaptive { film_has_state } => Self::FilmAdaptive { film_has_state },
             e => Self::Device(Box::new(e)),
         }
     }

@@ -98,6 +98,8 @@ pub struct GpuFilm {
     pub count: wgpu::Buffer,
     /// With AOVs: their sums, two `vec4<f64>` (or `vec4<f32>` for this pass) per pixel.
     pub aov: Option<wgpu::Buffer>,
+    /// With adaptive sampling: per pixel a `u32`, 1 once it has converged.
+    pub converged: Option<wgpu::Buffer>,
     /// [`FilmPrecision::F32Pass`]: the `f64` sums of the passes folded so far.
     host: Option<Film>,
     /// [`FilmPrecision::F32Pass`] with [`GpuFilm::enable_display`]: per pixel
@@ -139,20 +141,22 @@ impl GpuFilm {
         height: u32,
         precision: FilmPrecision,
     ) -> Result<Self, GpuError> {
-        Self::with_aovs(ctx, width, height, precision, false)
+        Self::with_parts(ctx, width, height, precision, false, false)
     }
 
     /// [`GpuFilm::new`], also summing the first-hit AOVs when `aovs` (a third buffer of 64 bytes
-    /// per pixel for `F64`, 32 for `F32Pass`).
+    /// per pixel for `F64`, 32 for `F32Pass`), and with adaptive sampling's convergence marks
+    /// when `adaptive` (4 bytes per pixel; the squared luminances are the sums' `w`).
     ///
     /// # Errors
     /// [`GpuError::TooLarge`] if a buffer would exceed the adapter's storage binding limit.
-    pub fn with_aovs(
+    pub fn with_parts(
         ctx: &GpuContext,
         width: u32,
         height: u32,
         precision: FilmPrecision,
         aovs: bool,
+        adaptive: bool,
     ) -> Result<Self, GpuError> {
         let pixels = u64::from(width) * u64::from(height);
         let sum_bytes = pixels * precision.sum_bytes_per_pixel();
@@ -181,7 +185,10 @@ impl GpuFilm {
                 mapped_at_creation: false,
             })
         };
-        let empty = || if aovs { Film::with_aovs(width, height) } else { Film::new(width, height) };
+        let empty = || {
+            let film = if aovs { Film::with_aovs(width, height) } else { Film::new(width, height) };
+            if adaptive { film.with_adaptive() } else { film }
+        };
         let host = (precision == FilmPrecision::F32Pass).then(empty);
         Ok(Self {
             width,
@@ -190,6 +197,7 @@ impl GpuFilm {
             sum: make("film sum", sum_bytes),
             count: make("film count", pixels * 8),
             aov: aovs.then(|| make("film aov", aov_bytes)),
+            converged: adaptive.then(|| make("film converged", pixels * 4)),
             host,
             display: None,
             squares_valid: true,
@@ -293,7 +301,41 @@ impl GpuFilm {
         }
         self.squares_valid = true;
         self.clear_device(ctx)?;
+        self.upload_converged(ctx)?;
         self.upload_display(ctx)
+    }
+
+    /// `F32Pass` with adaptive sampling: uploads the host's convergence marks (the GPU reads
+    /// them to skip converged pixels); nothing otherwise.
+    fn upload_converged(&self, ctx: &GpuContext) -> Result<(), GpuError> {
+        let (Some(buffer), Some(host)) = (&self.converged, &self.host) else { return Ok(()) };
+        let Some(marks) = host.converged() else { return Ok(()) };
+        let words: Vec<u32> = marks.iter().map(|&c| u32::from(c)).collect();
+        ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&words));
+        ctx.queue.submit([]);
+        ctx.check()
+    }
+
+    /// `F32Pass` with adaptive sampling: tests the folded film on the host and uploads the
+    /// marks; returns how many pixels have converged. `None` for other films (an `F64` film is
+    /// tested on the GPU by the integrator's `converge` kernel).
+    pub fn test_convergence_on_host(
+        &mut self,
+        ctx: &GpuContext,
+        rule: &furnace_render::AdaptiveSampling,
+    ) -> Result<Option<u64>, GpuError> {
+        if self.converged.is_none() {
+            return Ok(None);
+        }
+        let Some(h) = &mut self.host else { return Ok(None) };
+        let n = h.test_convergence(rule);
+        self.upload_converged(ctx)?;
+        Ok(Some(n))
+    }
+
+    /// `F32Pass`: how many pixels the host's marks say have converged.
+    pub fn host_converged_count(&self) -> Option<u64> {
+        self.host.as_ref().and_then(Film::converged_count)
     }
 
     fn clear_device(&self, ctx: &GpuContext) -> Result<(), GpuError> {
@@ -302,6 +344,11 @@ impl GpuFilm {
         enc.clear_buffer(&self.count, 0, None);
         if let Some(aov) = &self.aov {
             enc.clear_buffer(aov, 0, None);
+        }
+        if self.host.is_none()
+            && let Some(c) = &self.converged
+        {
+            enc.clear_buffer(c, 0, None);
         }
         ctx.queue.submit([enc.finish()]);
         ctx.wait()
@@ -352,8 +399,28 @@ impl GpuFilm {
         };
         let count = count_words[..2 * n].chunks_exact(2).map(|c| u64::from(c[0])).collect();
         let rejected = count_words[..2 * n].chunks_exact(2).map(|c| u64::from(c[1])).sum();
-        let film = Film::from_parts(self.width, self.height, sum, count, rejected)
+        let mut film = Film::from_parts(self.width, self.height, sum, count, rejected)
             .map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        if let Some(converged) = &self.converged {
+            // The squared luminances are the sums' w; the marks are the GPU's (F64) or the
+            // host's (F32Pass: these are zero, Film::add_film keeps the host's).
+            let lum_sq: Vec<f64> = match self.precision {
+                FilmPrecision::F64 => bytemuck::cast_slice::<u32, f64>(&sum_words[..n * 8])
+                    .chunks_exact(4)
+                    .map(|c| c[3])
+                    .collect(),
+                FilmPrecision::F32Pass => bytemuck::cast_slice::<u32, f32>(&sum_words[..n * 4])
+                    .chunks_exact(4)
+                    .map(|c| f64::from(c[3]))
+                    .collect(),
+            };
+            let marks: Vec<bool> = if self.host.is_none() {
+                read_buffer(ctx, converged)?[..n].iter().map(|&w| w != 0).collect()
+            } else {
+                vec![false; n]
+            };
+            film = film.with_adaptive_state(lum_sq, marks).map_err(|e| GpuError::Wgpu(e.to_string()))?;
+        }
         let Some(aov) = &self.aov else {
             return Ok(film);
         };
@@ -387,10 +454,15 @@ impl GpuFilm {
         if data.has_aovs() != self.has_aovs() {
             return Err(GpuError::FilmAovs { film_has_aovs: data.has_aovs() });
         }
-        self.squares_valid = data.counts().iter().all(|&c| c == 0);
+        if data.has_adaptive() != self.converged.is_some() {
+            return Err(GpuError::FilmAdaptive { film_has_state: data.has_adaptive() });
+        }
+        // A saved film carries its squared luminances only with adaptive state.
+        self.squares_valid = data.counts().iter().all(|&c| c == 0) || data.has_adaptive();
         if let Some(h) = &mut self.host {
             *h = data.clone();
             self.clear_device(ctx)?;
+            self.upload_converged(ctx)?;
             return self.upload_display(ctx);
         }
         let too_many = |c: u64| {
@@ -403,7 +475,17 @@ impl GpuFilm {
             counts.push(too_many(c)?);
             counts.push(if i == 0 { too_many(data.rejected())? } else { 0 });
         }
-        let v: Vec<f64> = data.sums().iter().flat_map(|s| [s.x, s.y, s.z, 0.0]).collect();
+        let squares = data.lum_sq_sums();
+        let v: Vec<f64> = data
+            .sums()
+            .iter()
+            .enumerate()
+            .flat_map(|(i, s)| [s.x, s.y, s.z, squares.map_or(0.0, |q| q[i])])
+            .collect();
+        if let (Some(buffer), Some(marks)) = (&self.converged, data.converged()) {
+            let words: Vec<u32> = marks.iter().map(|&c| u32::from(c)).collect();
+            ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&words));
+        }
         ctx.queue.write_buffer(&self.sum, 0, bytemuck::cast_slice(&v));
         ctx.queue.write_buffer(&self.count, 0, bytemuck::cast_slice(&counts));
         if let (Some(buffer), Some(sums)) = (&self.aov, data.aov_sums()) {

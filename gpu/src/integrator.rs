@@ -36,6 +36,7 @@ use crate::traverse::BvhBuffers;
 use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
 use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
+use furnace_render::ADAPTIVE_STEP;
 use furnace_render::{
     Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings, TriangleSampling,
 };
@@ -134,8 +135,8 @@ crate::gpu_struct! {
         pub env_flags: u32 => WgslType::U32,
         /// The sample clamp (`RenderSettings::clamp`; 0: off).
         pub sample_clamp: f32 => WgslType::F32,
-        /// Rust-only padding to a multiple of 16 bytes.
-        pub env_pad: u32 => WgslType::PAD,
+        /// Adaptive sampling's noise threshold (`RenderSettings::adaptive`; 0: off).
+        pub noise_threshold: f32 => WgslType::F32,
     }
 }
 
@@ -335,6 +336,12 @@ pub struct GpuRenderer {
     sampler: AnySampler,
     base: FrameParams,
     pipeline: wgpu::ComputePipeline,
+    /// Adaptive sampling's test on the GPU (the `converge` entry point; `f64` films only).
+    converge: Option<wgpu::ComputePipeline>,
+    /// Its count of converged pixels (and the number last read from it, or from the host's
+    /// marks for an `F32Pass` film).
+    converged_counter: Option<wgpu::Buffer>,
+    converged: Option<u64>,
     layout: wgpu::BindGroupLayout,
     film: GpuFilm,
     scene: GpuScene,
@@ -398,6 +405,10 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     if features.aovs {
         bindings.push(precision.aov_binding());
     }
+    if features.adaptive {
+        bindings.push(Binding::read_write("film_converged", "array<u32>"));
+        bindings.push(Binding::read_write("converged_counter", "array<atomic<u32>, 4>"));
+    }
     BindingTable::new(0, 0, bindings)
 }
 
@@ -420,6 +431,9 @@ pub struct SceneFeatures {
     /// The film sums the first-hit AOVs ([`RenderSettings::aovs`]: their binding, the record of
     /// the camera ray's hit and its sums).
     pub aovs: bool,
+    /// Adaptive sampling ([`RenderSettings::adaptive`]: converged pixels are skipped; with an
+    /// `f64` film the test runs on the GPU, the `converge` entry point).
+    pub adaptive: bool,
 }
 
 impl SceneFeatures {
@@ -438,6 +452,7 @@ impl SceneFeatures {
             env_sampling: scene.environment().is_some_and(|e| !e.is_black())
                 && settings.env_sampling.light_samples(settings.light_sampling).is_some(),
             aovs: settings.aovs,
+            adaptive: settings.adaptive.is_some(),
         }
     }
 
@@ -448,7 +463,8 @@ impl SceneFeatures {
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
     /// `HAS_EMITTERS`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
-    /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH` and `AOVS`.
+    /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `AOVS` and `ADAPTIVE`
+    /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
         match name {
             "HAS_EMITTERS" => self.emitters,
@@ -459,6 +475,7 @@ impl SceneFeatures {
             "SAMPLES_LIGHTS" => self.emitters || self.sun_disc || (self.environment && self.env_sampling),
             "HAS_POINT_LIGHTS" => self.point_lights,
             "AOVS" => self.aovs,
+            "ADAPTIVE" => self.adaptive,
             _ => panic!("no scene feature {name} (integrator.wgsl's #if)"),
         }
     }
@@ -496,7 +513,10 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
     } else {
         String::new()
     };
-    let integrator = wgsl::select(include_str!("wgsl/integrator.wgsl"), |name| features.enabled(name));
+    let integrator = wgsl::select(include_str!("wgsl/integrator.wgsl"), |name| match name {
+        "ADAPTIVE_ON_GPU" => features.adaptive && precision == FilmPrecision::F64,
+        _ => features.enabled(name),
+    });
     wgsl::compose(&[
         &generated,
         wgsl::SAMPLING,
@@ -574,7 +594,7 @@ fn integrator_pipeline(
     ctx: &GpuContext,
     precision: FilmPrecision,
     features: SceneFeatures,
-) -> Result<(wgpu::BindGroupLayout, wgpu::ComputePipeline), GpuError> {
+) -> Result<(wgpu::BindGroupLayout, wgpu::ComputePipeline, Option<wgpu::ComputePipeline>), GpuError> {
     let entries = binding_table(precision, features).layout_entries();
     let device = &ctx.device;
     let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
@@ -591,18 +611,22 @@ fn integrator_pipeline(
         label: Some("integrator"),
         source: wgpu::ShaderSource::Wgsl(shader_source(precision, features).into()),
     });
-    let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-        label: Some("integrator"),
-        layout: Some(&pipeline_layout),
-        module: &module,
-        entry_point: Some("main"),
-        compilation_options: Default::default(),
-        cache: None,
-    });
+    let entry = |name: &str| {
+        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(name),
+            layout: Some(&pipeline_layout),
+            module: &module,
+            entry_point: Some(name),
+            compilation_options: Default::default(),
+            cache: None,
+        })
+    };
+    let pipeline = entry("main");
+    let converge = (features.adaptive && precision == FilmPrecision::F64).then(|| entry("converge"));
     if let Some(e) = pollster::block_on(scope.pop()) {
         return Err(GpuError::Wgpu(e.to_string()));
     }
-    Ok((layout, pipeline))
+    Ok((layout, pipeline, converge))
 }
 
 impl GpuRenderer {
@@ -648,9 +672,26 @@ impl GpuRenderer {
         let emitters = emitter_buffer(&ctx, scene, scene_emitters.as_ref(), features)?;
         let environment = environment_buffers(&ctx, scene, &settings, limit)?;
         let precision = FilmPrecision::for_context(&ctx);
-        let film = GpuFilm::with_aovs(&ctx, settings.width, settings.height, precision, settings.aovs)?;
+        let film = GpuFilm::with_parts(
+            &ctx,
+            settings.width,
+            settings.height,
+            precision,
+            settings.aovs,
+            settings.adaptive.is_some(),
+        )?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
-        let (layout, pipeline) = integrator_pipeline(&ctx, precision, features)?;
+        let (layout, pipeline, converge) = integrator_pipeline(&ctx, precision, features)?;
+        let converged_counter = settings
+            .adaptive
+            .map(|_| {
+                ctx.buffer_init(
+                    "converged counter",
+                    &[0; 16],
+                    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                )
+            })
+            .transpose()?;
         // Software adapters (lavapipe) run ~1 Msample/s and end any shader loop after 65535
         // iterations per invocation (all loops together): one sample per invocation there.
         let software = !crate::context::is_hardware(&ctx.info);
@@ -668,6 +709,9 @@ impl GpuRenderer {
             sampler,
             base,
             pipeline,
+            converge,
+            converged: settings.adaptive.map(|_| 0),
+            converged_counter,
             layout,
             film,
             scene: gpu_scene,
@@ -757,11 +801,35 @@ impl GpuRenderer {
         }
         let precision = self.film.precision();
         if features != self.features {
-            (self.layout, self.pipeline) = integrator_pipeline(&self.ctx, precision, features)?;
+            (self.layout, self.pipeline, self.converge) =
+                integrator_pipeline(&self.ctx, precision, features)?;
         }
-        if (settings.width, settings.height, settings.aovs) != (old.width, old.height, old.aovs) {
-            self.film =
-                GpuFilm::with_aovs(&self.ctx, settings.width, settings.height, precision, settings.aovs)?;
+        if settings.adaptive.is_some() != old.adaptive.is_some() {
+            self.converged_counter = settings
+                .adaptive
+                .map(|_| {
+                    self.ctx.buffer_init(
+                        "converged counter",
+                        &[0; 16],
+                        wgpu::BufferUsages::STORAGE
+                            | wgpu::BufferUsages::COPY_SRC
+                            | wgpu::BufferUsages::COPY_DST,
+                    )
+                })
+                .transpose()?;
+        }
+        self.converged = settings.adaptive.map(|_| 0);
+        if (settings.width, settings.height, settings.aovs, settings.adaptive.is_some())
+            != (old.width, old.height, old.aovs, old.adaptive.is_some())
+        {
+            self.film = GpuFilm::with_parts(
+                &self.ctx,
+                settings.width,
+                settings.height,
+                precision,
+                settings.aovs,
+                settings.adaptive.is_some(),
+            )?;
             if self.display {
                 self.film.enable_display(&self.ctx)?;
             }
@@ -944,6 +1012,47 @@ impl GpuRenderer {
         }
         self.sampler.check_index(first_sample.saturating_add(samples_per_pixel - 1))?;
         let end = first_sample.saturating_add(samples_per_pixel);
+        let Some(rule) = self.settings.adaptive else {
+            let seconds = self.render_block(first_sample, end, false)?;
+            if let Some(t) = &mut self.timer {
+                t.last = seconds;
+            }
+            return self.film.fold(&self.ctx);
+        };
+        // Adaptive sampling tests pixels at multiples of ADAPTIVE_STEP: blocks that end there,
+        // each followed by the test where it applies (on the GPU for an f64 film, after the
+        // fold on the host for an F32Pass one).
+        let mut total = Some(0.0);
+        let mut block = first_sample;
+        while block < end {
+            let block_end = (block / ADAPTIVE_STEP + 1).saturating_mul(ADAPTIVE_STEP).min(end);
+            let test = rule.tests_at(block_end);
+            let seconds = self.render_block(block, block_end, test && self.converge.is_some())?;
+            total = total.zip(seconds).map(|(a, b)| a + b);
+            self.film.fold(&self.ctx)?;
+            if test {
+                match self.film.test_convergence_on_host(&self.ctx, &rule)? {
+                    Some(n) => self.converged = Some(n),
+                    None => self.converged = Some(self.read_converged_counter()?),
+                }
+            }
+            block = block_end;
+        }
+        if let Some(t) = &mut self.timer {
+            t.last = total;
+        }
+        Ok(())
+    }
+
+    /// The GPU's count of converged pixels, from the last `converge` dispatch.
+    fn read_converged_counter(&self) -> Result<u64, GpuError> {
+        let Some(counter) = &self.converged_counter else { return Ok(0) };
+        Ok(u64::from(crate::film::read_buffer(&self.ctx, counter)?[0]))
+    }
+
+    /// Samples `first..end` of every pixel still taking samples, then (with `converge`) the GPU's
+    /// adaptive-sampling test; returns the device seconds of the samples when timing.
+    fn render_block(&mut self, first_sample: u32, end: u32, converge: bool) -> Result<Option<f64>, GpuError> {
         let group_samples = self.group_samples(end - first_sample);
         let (tile_width, tile_height) = tile(group_samples);
         let dispatches = self.dispatches(first_sample, end - first_sample, group_samples, tile_height);
@@ -979,6 +1088,10 @@ impl GpuRenderer {
         if let Some(aov) = &self.film.aov {
             resources.push(aov.as_entire_binding());
         }
+        if let (Some(marks), Some(counter)) = (&self.film.converged, &self.converged_counter) {
+            resources.push(marks.as_entire_binding());
+            resources.push(counter.as_entire_binding());
+        }
         let entries = binding_table(self.film.precision(), self.features).bind_entries(resources);
         let bind = device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("integrator"),
@@ -1006,6 +1119,20 @@ impl GpuRenderer {
                 );
             }
         }
+        if converge && let (Some(pipeline), Some(counter)) = (&self.converge, &self.converged_counter) {
+            // After the block's samples: every pixel tested once, converged ones counted.
+            encoder.clear_buffer(counter, 0, None);
+            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                label: Some("adaptive sampling test"),
+                timestamp_writes: None,
+            });
+            pass.set_pipeline(pipeline);
+            pass.set_bind_group(0, &bind, &[0]);
+            let groups = (u64::from(self.settings.width) * u64::from(self.settings.height))
+                .div_ceil(u64::from(GROUP_SIZE));
+            let x = groups.min(65_535) as u32;
+            pass.dispatch_workgroups(x, groups.div_ceil(u64::from(x)) as u32, 1);
+        }
         if let Some(t) = &self.timer {
             encoder.resolve_query_set(&t.queries, 0..2, &t.resolve, 0);
         }
@@ -1017,7 +1144,7 @@ impl GpuRenderer {
                 (u64::from(w[0]) | u64::from(w[1]) << 32, u64::from(w[2]) | u64::from(w[3]) << 32);
             t.last = Some(end.wrapping_sub(begin) as f64 * f64::from(t.period_ns) * 1e-9);
         }
-        self.film.fold(&self.ctx)
+        Ok(self.timer.as_ref().and_then(|t| t.last))
     }
 
     /// The film so far (sums in `f64`, counts, rejected samples), read back.
@@ -1027,7 +1154,9 @@ impl GpuRenderer {
 
     /// Replaces the film (to resume a saved render, or with an empty film to start again).
     pub fn load_film(&mut self, data: &Film) -> Result<(), GpuError> {
-        self.film.write(&self.ctx, data)
+        self.film.write(&self.ctx, data)?;
+        self.converged = data.converged_count();
+        Ok(())
     }
 }
 
@@ -1066,6 +1195,10 @@ impl Integrator for GpuRenderer {
 
     fn last_pass_device_seconds(&self) -> Option<f64> {
         self.last_pass_gpu_seconds()
+    }
+
+    fn converged_pixels(&self) -> Option<u64> {
+        self.converged
     }
 }
 
@@ -1148,7 +1281,7 @@ fn frame_params_with(
         env_sin: rotation.sin,
         env_flags: if env.is_some_and(|e| e.visible) { ENV_VISIBLE } else { 0 },
         sample_clamp: s.clamp.unwrap_or(0.0),
-        env_pad: 0,
+        noise_threshold: s.adaptive.map_or(0.0, |a| a.threshold),
     };
     set_camera_params(&mut p, camera);
     p

@@ -309,11 +309,19 @@ const SUM_CHANNELS: [[&str; 2]; 3] = [
 /// renormalised) and depth `Z` (the OpenEXR standard depth channel: mean distance along the
 /// camera ray of the samples that hit, `+∞` where none did) — the names compositors and Open
 /// Image Denoise's tools take as layers `albedo`, `normal` and the depth channel.
-pub const AOV_CHANNELS: [&str; 7] = ["albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "Z"];
+pub const AOV_CHANNELS: [&str; 7] =
+    ["albedo.R", "albedo.G", "albedo.B", "normal.X", "normal.Y", "normal.Z", "Z"];
 
 /// The resume state of a film's AOVs: the eight `f64` sums of [`AovSum::to_array`], each as
 /// high and low 32-bit halves (`furnace.resume.aov.<name>.hi` / `.lo`).
-const AOV_STATE_NAMES: [&str; 8] = ["albedoR", "albedoG", "albedoB", "depth", "normalX", "normalY", "normalZ", "hits"];
+const AOV_STATE_NAMES: [&str; 8] =
+    ["albedoR", "albedoG", "albedoB", "depth", "normalX", "normalY", "normalZ", "hits"];
+
+/// The resume state of adaptive sampling: each pixel's sum of squared luminances (high and low
+/// halves) and its convergence mark (`u32` 0 or 1).
+const LUM_SQ_CHANNELS: [&str; 2] = ["furnace.resume.lumSq.hi", "furnace.resume.lumSq.lo"];
+/// See [`LUM_SQ_CHANNELS`].
+const CONVERGED_CHANNEL: &str = "furnace.resume.converged";
 
 fn aov_state_channel(k: usize, half: &str) -> String {
     format!("{RESUME_LAYER}.aov.{}.{half}", AOV_STATE_NAMES[k])
@@ -419,6 +427,18 @@ pub fn write_exr_with_state_and(
             ));
         }
     }
+    if let (Some(lum_sq), Some(marks)) = (film.lum_sq_sums(), film.converged()) {
+        let bits = || lum_sq.iter().map(|s| s.to_bits());
+        list.push(AnyChannel::new(
+            LUM_SQ_CHANNELS[0],
+            FlatSamples::U32(bits().map(|b| (b >> 32) as u32).collect()),
+        ));
+        list.push(AnyChannel::new(LUM_SQ_CHANNELS[1], FlatSamples::U32(bits().map(|b| b as u32).collect())));
+        list.push(AnyChannel::new(
+            CONVERGED_CHANNEL,
+            FlatSamples::U32(marks.iter().map(|&c| u32::from(c)).collect()),
+        ));
+    }
     for e in extra {
         if e.values.len() != pixels.len() {
             return Err(bad(format!(
@@ -502,10 +522,30 @@ pub fn read_exr_with_state(path: impl AsRef<Path>) -> Result<ExrWithState, PostE
         // The exr crate limits sizes to i32 range, so these fit.
         let film = Film::from_parts(layer.size.0 as u32, layer.size.1 as u32, sums, counts, rejected)
             .map_err(|e| bad(e.to_string()))?;
+        // Adaptive sampling's state: all three channels or none.
+        let adaptive: Vec<Option<&Vec<u32>>> = [LUM_SQ_CHANNELS[0], LUM_SQ_CHANNELS[1], CONVERGED_CHANNEL]
+            .iter()
+            .map(|name| u32s(name))
+            .collect::<Result<_, _>>()?;
+        let film = match adaptive[..] {
+            [None, None, None] => film,
+            [Some(hi), Some(lo), Some(marks)] => {
+                let lum_sq =
+                    hi.iter().zip(lo).map(|(&h, &l)| f64::from_bits(u64::from(h) << 32 | u64::from(l)));
+                film.with_adaptive_state(lum_sq.collect(), marks.iter().map(|&m| m != 0).collect())
+                    .map_err(|e| bad(e.to_string()))?
+            }
+            _ => {
+                return Err(bad(
+                    "incomplete adaptive-sampling state (furnace.resume.lumSq.*, .converged)".into()
+                ));
+            }
+        };
         // The AOVs' state: all sixteen channels or none.
         let aov_names: Vec<String> =
             (0..8).flat_map(|k| [aov_state_channel(k, "hi"), aov_state_channel(k, "lo")]).collect();
-        let aov: Vec<Option<&Vec<u32>>> = aov_names.iter().map(|name| u32s(name)).collect::<Result<_, _>>()?;
+        let aov: Vec<Option<&Vec<u32>>> =
+            aov_names.iter().map(|name| u32s(name)).collect::<Result<_, _>>()?;
         if aov.iter().all(Option::is_none) {
             Some(film)
         } else {
@@ -627,6 +667,24 @@ mod tests {
         let e = write_exr_with_state_and(&path2, &film, &Metadata::default(), &twice).unwrap_err();
         assert!(e.to_string().contains("'Z' is written twice"), "{e}");
         assert!(!path2.exists());
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+
+    #[test]
+    fn adaptive_state_round_trips() {
+        let dir = scratch("adaptive");
+        let path = dir.join("a.exr");
+        let mut film = Film::new(3, 1).with_adaptive();
+        for (x, v) in [(0, 0.5), (0, 1.5), (1, 2.0), (1, 2.0), (2, 0.1)] {
+            film.add_sample(x, 0, Vec3::splat(v));
+        }
+        film.test_convergence(&furnace_render::AdaptiveSampling { threshold: 0.1, min_samples: 2 });
+        assert_eq!(film.converged(), Some(&[false, true, false][..]));
+        write_exr_with_state(&path, &film, &Metadata::default()).unwrap();
+        let back = read_exr_with_state(&path).unwrap().state.unwrap();
+        assert_eq!(back.converged(), film.converged());
+        let bits = |f: &Film| f.lum_sq_sums().unwrap().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&back), bits(&film));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 

@@ -26,6 +26,15 @@ pub struct Film {
     count: Vec<u64>,
     rejected: u64,
     aov: Option<Vec<AovSum>>,
+    adaptive: Option<AdaptiveState>,
+}
+
+/// The part of a film that adaptive sampling needs ([`crate::AdaptiveSampling`]): per pixel the
+/// `f64` sum of its samples' squared luminances, and whether it has converged.
+#[derive(Debug, Clone, PartialEq)]
+struct AdaptiveState {
+    lum_sq: Vec<f64>,
+    converged: Vec<bool>,
 }
 
 /// What the camera ray of one sample found first: the guides of a denoiser and the auxiliary
@@ -138,7 +147,98 @@ impl Film {
     /// An empty (all-zero) film of `width × height` pixels.
     pub fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
-        Self { width, height, sum: vec![DVec3::ZERO; n], count: vec![0; n], rejected: 0, aov: None }
+        Self {
+            width,
+            height,
+            sum: vec![DVec3::ZERO; n],
+            count: vec![0; n],
+            rejected: 0,
+            aov: None,
+            adaptive: None,
+        }
+    }
+
+    /// An empty film of the settings' size with the parts they need: AOV sums
+    /// ([`crate::RenderSettings::aovs`]), squared luminances and convergence marks
+    /// ([`crate::RenderSettings::adaptive`]).
+    pub fn for_settings(settings: &crate::RenderSettings) -> Self {
+        let (w, h) = (settings.width, settings.height);
+        let film = if settings.aovs { Self::with_aovs(w, h) } else { Self::new(w, h) };
+        if settings.adaptive.is_some() { film.with_adaptive() } else { film }
+    }
+
+    /// The film with (zeroed) adaptive-sampling state: squared luminances and convergence marks
+    /// (9 more bytes per pixel). The film must not have samples yet (their squares are unknown).
+    ///
+    /// # Panics
+    /// If the film has samples.
+    pub fn with_adaptive(mut self) -> Self {
+        assert!(self.count.iter().all(|&c| c == 0), "adaptive state for a film with samples");
+        let n = self.sum.len();
+        self.adaptive = Some(AdaptiveState { lum_sq: vec![0.0; n], converged: vec![false; n] });
+        self
+    }
+
+    /// The film with this adaptive-sampling state (restoring a saved film, bit for bit).
+    ///
+    /// # Errors
+    /// [`FilmSizeError`] if either does not hold `width × height` pixels.
+    pub fn with_adaptive_state(
+        mut self,
+        lum_sq: Vec<f64>,
+        converged: Vec<bool>,
+    ) -> Result<Self, FilmSizeError> {
+        if lum_sq.len() != self.sum.len() || converged.len() != self.sum.len() {
+            return Err(FilmSizeError {
+                width: self.width,
+                height: self.height,
+                sums: lum_sq.len(),
+                counts: converged.len(),
+            });
+        }
+        self.adaptive = Some(AdaptiveState { lum_sq, converged });
+        Ok(self)
+    }
+
+    /// Whether the film has adaptive-sampling state.
+    pub fn has_adaptive(&self) -> bool {
+        self.adaptive.is_some()
+    }
+
+    /// Every pixel's sum of squared sample luminances; `None` without adaptive state.
+    pub fn lum_sq_sums(&self) -> Option<&[f64]> {
+        self.adaptive.as_ref().map(|a| a.lum_sq.as_slice())
+    }
+
+    /// Every pixel's convergence mark; `None` without adaptive state.
+    pub fn converged(&self) -> Option<&[bool]> {
+        self.adaptive.as_ref().map(|a| a.converged.as_slice())
+    }
+
+    /// How many pixels have converged; `None` without adaptive state.
+    pub fn converged_count(&self) -> Option<u64> {
+        self.converged().map(|c| c.iter().filter(|&&c| c).count() as u64)
+    }
+
+    /// Whether pixel `i` (row-major) still takes samples: always, without adaptive state.
+    #[inline]
+    pub fn is_active(&self, i: usize) -> bool {
+        self.adaptive.as_ref().is_none_or(|a| !a.converged[i])
+    }
+
+    /// Tests every pixel not yet converged against `rule` (call it when the film holds the
+    /// samples below an index where [`crate::AdaptiveSampling::tests_at`]) and marks those below
+    /// the threshold; returns how many pixels have converged (0 without adaptive state).
+    pub fn test_convergence(&mut self, rule: &crate::AdaptiveSampling) -> u64 {
+        let Some(a) = &mut self.adaptive else { return 0 };
+        let mut n = 0;
+        for i in 0..self.sum.len() {
+            if !a.converged[i] && rule.converged(self.sum[i], a.lum_sq[i], self.count[i]) {
+                a.converged[i] = true;
+            }
+            n += u64::from(a.converged[i]);
+        }
+        n
     }
 
     /// An empty film that also sums each sample's [`AovSample`] (64 more bytes per pixel).
@@ -227,7 +327,7 @@ impl Film {
         if sums.len() != pixels || counts.len() != pixels {
             return Err(FilmSizeError { width, height, sums: sums.len(), counts: counts.len() });
         }
-        Ok(Self { width, height, sum: sums, count: counts, rejected, aov: None })
+        Ok(Self { width, height, sum: sums, count: counts, rejected, aov: None, adaptive: None })
     }
 
     /// Every pixel's `f64` sum of accepted samples, row-major, row 0 at the top.
@@ -265,6 +365,9 @@ impl Film {
         let i = y as usize * self.width as usize + x as usize;
         let accepted = accumulate(&mut self.sum[i], &mut self.count[i], value);
         self.rejected += u64::from(!accepted);
+        if accepted && let Some(a) = &mut self.adaptive {
+            a.lum_sq[i] += lum_sq(value);
+        }
         accepted
     }
 
@@ -328,6 +431,10 @@ impl Film {
         if let Some(a) = &mut self.aov {
             a.fill(AovSum::default());
         }
+        if let Some(a) = &mut self.adaptive {
+            a.lum_sq.fill(0.0);
+            a.converged.fill(false);
+        }
     }
 
     fn index(&self, x: u32, y: u32) -> usize {
@@ -345,14 +452,23 @@ impl Film {
     /// [`Film::add_rejected`] afterwards.
     pub fn rows_mut(&mut self) -> Vec<FilmRow<'_>> {
         let w = self.width.max(1) as usize;
-        let rows = self.sum.chunks_mut(w).zip(self.count.chunks_mut(w));
-        match &mut self.aov {
-            Some(aov) => rows
-                .zip(aov.chunks_mut(w))
-                .map(|((sum, count), aov)| FilmRow { sum, count, aov: Some(aov) })
-                .collect(),
-            None => rows.map(|(sum, count)| FilmRow { sum, count, aov: None }).collect(),
+        let rows = self.sum.len().div_ceil(w);
+        let mut aov = self.aov.as_mut().map(|a| a.chunks_mut(w));
+        let (mut lum_sq, mut converged) = match &mut self.adaptive {
+            Some(a) => (Some(a.lum_sq.chunks_mut(w)), Some(a.converged.chunks(w))),
+            None => (None, None),
+        };
+        let mut out = Vec::with_capacity(rows);
+        for (sum, count) in self.sum.chunks_mut(w).zip(self.count.chunks_mut(w)) {
+            out.push(FilmRow {
+                sum,
+                count,
+                aov: aov.as_mut().and_then(Iterator::next),
+                lum_sq: lum_sq.as_mut().and_then(Iterator::next),
+                converged: converged.as_mut().and_then(Iterator::next),
+            });
         }
+        out
     }
 
     /// Adds `n` to the count of rejected samples (samples that [`FilmRow::add_sample`] refused).
@@ -361,8 +477,9 @@ impl Film {
     }
 
     /// Adds `other`'s sums, counts and rejections into this film, pixel by pixel: the film of
-    /// two disjoint sets of samples. AOV sums are added when both films have them; a film with
-    /// AOVs given one without keeps its AOV sums as they were (call it only with alike films).
+    /// two disjoint sets of samples. AOV sums and squared luminances are added when both films
+    /// have them (a film given one without keeps its own as they were: call it only with alike
+    /// films); convergence marks stay this film's.
     ///
     /// # Errors
     /// [`FilmSizeError`] if `other` is not of this film's size.
@@ -385,6 +502,11 @@ impl Film {
         if let (Some(a), Some(b)) = (&mut self.aov, &other.aov) {
             for (a, b) in a.iter_mut().zip(b) {
                 a.add_sum(b);
+            }
+        }
+        if let (Some(a), Some(b)) = (&mut self.adaptive, &other.adaptive) {
+            for (a, b) in a.lum_sq.iter_mut().zip(&b.lum_sq) {
+                *a += b;
             }
         }
         Ok(())
@@ -423,6 +545,8 @@ pub struct FilmRow<'a> {
     sum: &'a mut [DVec3],
     count: &'a mut [u64],
     aov: Option<&'a mut [AovSum]>,
+    lum_sq: Option<&'a mut [f64]>,
+    converged: Option<&'a [bool]>,
 }
 
 /// A film's AOVs as `f32` images, row-major from the top ([`Film::aov_images`]).
@@ -443,7 +567,17 @@ impl FilmRow<'_> {
     /// If `x` is outside the row.
     #[inline]
     pub fn add_sample(&mut self, x: usize, value: Vec3) -> bool {
-        accumulate(&mut self.sum[x], &mut self.count[x], value)
+        let accepted = accumulate(&mut self.sum[x], &mut self.count[x], value);
+        if accepted && let Some(l) = &mut self.lum_sq {
+            l[x] += lum_sq(value);
+        }
+        accepted
+    }
+
+    /// Whether pixel `x` of the row still takes samples (not converged under adaptive sampling).
+    #[inline]
+    pub fn is_active(&self, x: usize) -> bool {
+        self.converged.is_none_or(|c| !c[x])
     }
 
     /// [`FilmRow::add_sample`] with the sample's AOVs (summed if the film has AOVs and the
@@ -453,7 +587,7 @@ impl FilmRow<'_> {
     /// If `x` is outside the row.
     #[inline]
     pub fn add_sample_with_aovs(&mut self, x: usize, value: Vec3, aov: &AovSample) -> bool {
-        let accepted = accumulate(&mut self.sum[x], &mut self.count[x], value);
+        let accepted = self.add_sample(x, value);
         if accepted && let Some(a) = &mut self.aov {
             a[x].add(aov);
         }
@@ -464,6 +598,13 @@ impl FilmRow<'_> {
     pub fn has_aovs(&self) -> bool {
         self.aov.is_some()
     }
+}
+
+/// A sample's squared luminance in `f64`, as the GPU film sums it (`f32` luminance).
+#[inline]
+fn lum_sq(value: Vec3) -> f64 {
+    let l = f64::from(crate::luminance(value));
+    l * l
 }
 
 #[inline]

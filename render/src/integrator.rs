@@ -29,7 +29,9 @@ pub trait Integrator {
     fn settings(&self) -> &RenderSettings;
 
     /// Adds samples `first_sample .. first_sample + samples_per_pixel` of every pixel to the
-    /// film.
+    /// film (of every pixel still taking samples, under adaptive sampling: the rule of
+    /// [`crate::AdaptiveSampling`], applied at each multiple of [`crate::ADAPTIVE_STEP`] the
+    /// pass reaches, whatever the pass boundaries).
     ///
     /// # Errors
     /// [`RenderError::Sampler`] when a fixed-N sampler would run past N (nothing is added then);
@@ -51,6 +53,12 @@ pub trait Integrator {
     /// Samples per pixel per pass for this image: small enough that progress shows, a time
     /// limit stops promptly and cancellation is answered within about a fifth of a second.
     fn pass_samples(&self) -> u32;
+
+    /// With adaptive sampling ([`RenderSettings::adaptive`]): how many pixels have converged
+    /// (they take no more samples); `None` without it.
+    fn converged_pixels(&self) -> Option<u64> {
+        None
+    }
 
     /// The device time of the last pass, where the backend measures it (GPU timestamps).
     fn last_pass_device_seconds(&self) -> Option<f64> {
@@ -87,6 +95,17 @@ pub enum RenderError {
         /// Whether the film has AOVs.
         film_has_aovs: bool,
     },
+    /// A film with adaptive-sampling state for a render without adaptive sampling, or the other
+    /// way round.
+    #[error("{}", if *film_has_state {
+        "the film was rendered with adaptive sampling; continue it with the same noise threshold"
+    } else {
+        "the film was rendered without adaptive sampling, so an adaptive render cannot continue it (its pixels' squared luminances were not summed)"
+    })]
+    FilmAdaptive {
+        /// Whether the film has adaptive-sampling state.
+        film_has_state: bool,
+    },
     /// The backend's device failed (a GPU's validation error, out of memory, device lost, …).
     #[error(transparent)]
     Device(Box<dyn std::error::Error + Send + Sync>),
@@ -94,11 +113,16 @@ pub enum RenderError {
 
 impl RenderError {
     /// [`RenderError::FilmSize`] unless `film` is `settings.width × settings.height`;
-    /// [`RenderError::FilmAovs`] unless it has AOVs exactly when [`RenderSettings::aovs`] asks.
+    /// [`RenderError::FilmAovs`] unless it has AOVs exactly when [`RenderSettings::aovs`] asks;
+    /// [`RenderError::FilmAdaptive`] unless it has adaptive-sampling state exactly when
+    /// [`RenderSettings::adaptive`] is set.
     pub fn check_film(film: &Film, settings: &RenderSettings) -> Result<(), RenderError> {
         if (film.width(), film.height()) == (settings.width, settings.height) {
             if film.has_aovs() != settings.aovs {
                 return Err(RenderError::FilmAovs { film_has_aovs: film.has_aovs() });
+            }
+            if film.has_adaptive() != settings.adaptive.is_some() {
+                return Err(RenderError::FilmAdaptive { film_has_state: film.has_adaptive() });
             }
             return Ok(());
         }

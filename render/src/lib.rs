@@ -57,6 +57,7 @@
 //! # Ok::<(), RenderError>(())
 //! ```
 
+mod adaptive;
 mod film;
 mod integrator;
 pub mod layout;
@@ -64,6 +65,7 @@ pub mod resume;
 mod session;
 mod settings;
 
+pub use adaptive::{ADAPTIVE_STEP, AdaptiveSampling, LUMINANCE, luminance, relative_noise};
 pub use film::{AovImages, AovMean, AovSample, AovSum, Film, FilmRow, FilmSizeError};
 pub use integrator::{Integrator, RenderError};
 pub use layout::SAMPLER_LAYOUT_VERSION;

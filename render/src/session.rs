@@ -36,6 +36,8 @@ pub enum Stop {
     TimeLimit,
     /// The caller's cancellation (Ctrl-C); the film holds every pass finished before it.
     Cancelled,
+    /// Adaptive sampling: every pixel has converged (before the budget's spp).
+    Converged,
 }
 
 /// Time spent in the passes of a session, all runs together.
@@ -67,8 +69,11 @@ pub struct Progress {
     pub first: u32,
     /// Wall seconds since the current run began.
     pub elapsed: f64,
-    /// Samples (pixels × samples per pixel) per second added by this run so far, in millions.
+    /// Samples (pixels × samples per pixel) per second added by this run so far, in millions
+    /// (counting converged pixels as if they took their samples).
     pub msamples_per_s: f64,
+    /// With adaptive sampling: the fraction of pixels converged.
+    pub converged: Option<f64>,
 }
 
 /// A progressive render of one integrator, from the samples its film already has.
@@ -153,6 +158,9 @@ impl<'a> Session<'a> {
             if cancel() {
                 return Ok(Stop::Cancelled);
             }
+            if self.integrator.converged_pixels().is_some_and(|c| c as f64 >= pixels) {
+                return Ok(Stop::Converged);
+            }
             let elapsed = start.elapsed().as_secs_f64();
             let per_pass = self.integrator.pass_samples().max(1);
             if self.done > run_first {
@@ -181,6 +189,7 @@ impl<'a> Session<'a> {
             self.timing.passes += 1;
             self.done += n;
             let elapsed = start.elapsed().as_secs_f64();
+            let converged = self.integrator.converged_pixels();
             progress(&Progress {
                 done: self.done,
                 target: budget.spp,
@@ -188,7 +197,11 @@ impl<'a> Session<'a> {
                 first: self.first,
                 elapsed,
                 msamples_per_s: pixels * f64::from(self.done - run_first) / elapsed.max(1e-9) / 1e6,
+                converged: converged.map(|c| c as f64 / pixels.max(1.0)),
             });
+            if converged.is_some_and(|c| c as f64 >= pixels) && self.done < budget.spp {
+                return Ok(Stop::Converged);
+            }
         }
         Ok(Stop::Finished)
     }

@@ -79,6 +79,9 @@ pub struct RenderSettings {
     /// [`crate::AovSample`]) of the same samples, for a denoiser and compositing. Off by
     /// default: a render pays for them (memory, a little time) only when asked.
     pub aovs: bool,
+    /// Adaptive sampling: pixels stop taking samples once their noise is below a threshold
+    /// ([`crate::AdaptiveSampling`]); `None` (the default): every pixel takes every sample.
+    pub adaptive: Option<crate::AdaptiveSampling>,
 }
 
 /// The strategies that find light of emitters and sun discs: BSDF-sampled rays that hit them,
@@ -320,6 +323,7 @@ impl Default for RenderSettings {
             env_sampling: EnvSampling::Compensated,
             clamp: None,
             aovs: false,
+            adaptive: None,
         }
     }
 }

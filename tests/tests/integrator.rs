@@ -122,7 +122,10 @@ fn absent_light_features_compose_no_code() {
         "environment",
         "fn env_",
         "ENV_VISIBLE",
-        "aov",
+        "film_aov",
+        "aov_albedo",
+        "fn converge",
+        "film_converged",
         "#if",
     ] {
         assert!(!bare.contains(absent), "{absent} in the shader of a scene without light samples");
@@ -184,14 +187,15 @@ fn frame_params_layout_matches_wgsl() {
                 environment: true,
                 env_sampling: true,
                 aovs: light_bvh,
+                adaptive: light_bvh,
             },
         ));
     }
-    // AOVs on an f64 film (the F32Pass one is composed above).
-    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(
-        FilmPrecision::F64,
-        SceneFeatures { aovs: true, ..Default::default() },
-    ));
+    // AOVs and adaptive sampling's GPU test on an f64 film (the F32Pass one is composed above).
+    let f64_all =
+        shader_source(FilmPrecision::F64, SceneFeatures { aovs: true, adaptive: true, ..Default::default() });
+    assert!(f64_all.contains("fn converge(") && f64_all.contains("film_aov"));
+    furnace_tests::layout::assert_gpu_struct::<FrameParams>(&f64_all);
     furnace_tests::layout::assert_gpu_struct::<GpuPointLight>(&shader_source(
         FilmPrecision::F64,
         SceneFeatures::default(),

@@ -8,7 +8,8 @@
 // adds each pass into f64 and clears the GPU sums.
 //
 // Requires the composing shader to declare (see furnace_gpu::film::FilmPrecision::bindings):
-//   film_sum:   array<vec4<f32>>  per pixel: this pass's sum of accepted samples (rgb)
+//   film_sum:   array<vec4<f32>>  per pixel: this pass's sum of accepted samples (rgb), and in w
+//               the sum of their squared luminances (adaptive sampling's noise, folded on the host)
 //   film_count: array<vec2<u32>>  per pixel: (accepted, rejected) this pass
 // A pixel must be owned by one invocation per dispatch (no atomics).
 
@@ -19,10 +20,14 @@ fn film_is_finite(v: vec3<f32>) -> bool {
     return all(e != vec3<u32>(0x7f800000u));
 }
 
+// Rec. 709 luminance weights (furnace_render::LUMINANCE).
+const FILM_LUMINANCE: vec3<f32> = vec3<f32>(0.2126, 0.7152, 0.0722);
+
 // Adds one sample to `pixel`; a non-finite sample is rejected: not added, counted apart.
 fn film_add(pixel: u32, value: vec3<f32>) {
     if film_is_finite(value) {
-        film_sum[pixel] = film_sum[pixel] + vec4<f32>(value, 0.0);
+        let l = dot(value, FILM_LUMINANCE);
+        film_sum[pixel] = film_sum[pixel] + vec4<f32>(value, l * l);
         film_count[pixel].x = film_count[pixel].x + 1u;
     } else {
         film_count[pixel].y = film_count[pixel].y + 1u;

@@ -607,8 +607,14 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
     let sub = l % sg;
     let x = wg.x * tw + p % tw;
     let y = params.row_offset + wg.y * th + p / tw;
-    let inside = x < params.width && y < params.height;
     let pixel = y * params.width + x;
+    var inside = x < params.width && y < params.height;
+    // #if ADAPTIVE
+    // A converged pixel takes no more samples (adaptive sampling).
+    if inside {
+        inside = film_converged[pixel] == 0u;
+    }
+    // #endif
     if sg == 1u {
         if inside {
             for (var k = 0u; k < params.samples; k++) {
@@ -644,3 +650,41 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
         atomicMax(&ray_counter[7], trace_stats.max_depth);
     }
 }
+
+// #if ADAPTIVE_ON_GPU
+// Twin of furnace_render::AdaptiveSampling::converged over the f64 film: the relative standard
+// error of the pixel's luminance below params.noise_threshold, compared squared (no f64 sqrt).
+fn adaptive_converged(pixel: u32) -> bool {
+    let count = film_count[pixel].x;
+    if count < 2u {
+        return false;
+    }
+    let s = film_sum[pixel];
+    let n = f64(count);
+    let w = vec3<f64>(FILM_LUMINANCE);
+    let mean = (s.x * w.x + s.y * w.y + s.z * w.z) / n;
+    let v = (s.w - n * mean * mean) / (n - 1.0);
+    if v <= 0.0 {
+        return true;
+    }
+    let t = f64(params.noise_threshold);
+    return mean > 0.0 && v < t * t * n * mean * mean;
+}
+
+// Adaptive sampling's test (furnace_render::Film::test_convergence): marks the pixels that have
+// converged and counts every converged pixel. A 2-D grid of workgroups over the pixels in order.
+@compute @workgroup_size(GROUP_SIZE)
+fn converge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
+            @builtin(local_invocation_index) l: u32) {
+    let pixel = (wg.y * groups.x + wg.x) * GROUP_SIZE + l;
+    if pixel >= params.width * params.height {
+        return;
+    }
+    if film_converged[pixel] == 0u && adaptive_converged(pixel) {
+        film_converged[pixel] = 1u;
+    }
+    if film_converged[pixel] != 0u {
+        atomicAdd(&converged_counter[0], 1u);
+    }
+}
+// #endif
