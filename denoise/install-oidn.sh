@@ -31,6 +31,8 @@ wheel_sha256=32ad13368f8de1ef63001942ad05b02a00cd732d1206d97f352d3a3f606d823e
 
 cache=${FURNACE_CACHE:-${XDG_CACHE_HOME:-$HOME/.cache}/furnace}
 prefix=${1:-${OIDN_PREFIX:-$cache/oidn-$version}}
+# Absolute: it becomes OIDN_DIR, and an rpath.
+prefix=$(realpath -m -- "$prefix")
 stamp=$prefix/.furnace-oidn-install
 
 say() { echo "install-oidn: $*" >&2; }
