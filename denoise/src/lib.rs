@@ -33,8 +33,8 @@
 //!    device's name and the time each step took ([`Denoised`]).
 //!
 //! Each call creates its own device and filters: simple, and the cost is measured
-//! ([`Denoised::device_seconds`] is a few milliseconds; the first filter commit, which loads
-//! the weights, is part of [`Denoised::seconds`]).
+//! ([`Denoised::device_seconds`] is at most a few milliseconds; the first filter commit, which
+//! loads the weights, is part of [`Denoised::seconds`]).
 //!
 //! ## Example
 //!
@@ -82,7 +82,7 @@ pub enum DeviceKind {
     /// [`Denoised::device`] can say which device ran (the safe `oidn` API cannot query it).
     #[default]
     Default,
-    /// The CPU (oneDNN/ISPC kernels on TBB threads: all cores).
+    /// The CPU (on TBB threads: all cores).
     Cpu,
     /// An NVIDIA GPU through CUDA (needs the NVIDIA driver's `libcuda.so.1`).
     Cuda,
