@@ -6,7 +6,9 @@ use crate::resume;
 use crate::shared::{Outcome, image_size};
 use furnace_brdf::SpecularOptions;
 use furnace_cli::backend;
-use furnace_post::{ExrWithState, Metadata, read_exr_with_state, to_srgb8, write_exr_with_state, write_png};
+use furnace_post::{
+    ExrWithState, ExtraChannel, Metadata, read_exr_with_state, to_srgb8, write_exr_with_state_and, write_png,
+};
 use furnace_render::{Budget, Film, Integrator, RenderSettings, SAMPLER_LAYOUT_VERSION, Session, Stop};
 use furnace_scene::{Camera, Projection, Scene, builtin};
 use glam::Vec3;
@@ -89,6 +91,10 @@ pub(crate) struct Prepared {
 /// `--sun-angle` and the environment options, chooses the camera and the size, and checks that
 /// a resumed file matches. `command` names the subcommand in messages.
 pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String> {
+    if a.denoise && !furnace_denoise::available() {
+        // Before any rendering: the one line that says how to get it.
+        return Err(furnace_denoise::DenoiseError::NotBuilt.to_string());
+    }
     let mut args = a.clone();
     // With --resume: the file's record fills the settings not given.
     let resumed = match &a.resume {
@@ -152,7 +158,10 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         clamp: args.clamp,
         // The file's AOVs are kept when resuming; they cannot be added to a file without them
         // (they must sum the same samples as the image, from the first).
-        aovs: args.aovs || resumed.as_ref().and_then(|f| f.state.as_ref()).is_some_and(Film::has_aovs),
+        // --denoise takes the albedo and normal as guides: AOVs on for a new render.
+        aovs: args.aovs
+            || (args.denoise && resumed.is_none())
+            || resumed.as_ref().and_then(|f| f.state.as_ref()).is_some_and(Film::has_aovs),
         adaptive: args
             .noise_threshold
             .map(|threshold| furnace_render::AdaptiveSampling { threshold, min_samples: args.min_spp }),
@@ -344,9 +353,62 @@ pub(crate) fn write_outputs(
 ) -> Result<(), String> {
     let (width, height) = (film.width(), film.height());
     let radiance: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
-    write_exr_with_state(exr_path, film, metadata).map_err(|e| e.to_string())?;
+    let denoised = if a.denoise { Some(denoise(film, &radiance, a)?) } else { None };
+    let extra: Vec<ExtraChannel> = denoised
+        .iter()
+        .flat_map(|d| {
+            (0..3).map(|c| ExtraChannel {
+                name: format!("denoised.{}", ["R", "G", "B"][c]),
+                values: d.iter().map(|p| p[c]).collect(),
+            })
+        })
+        .collect();
+    write_exr_with_state_and(exr_path, film, metadata, &extra).map_err(|e| e.to_string())?;
     let srgb = to_srgb8(&radiance, a.exposure, a.tonemap);
-    write_png(png_path, width, height, &srgb).map_err(|e| e.to_string())
+    write_png(png_path, width, height, &srgb).map_err(|e| e.to_string())?;
+    if let Some(d) = &denoised {
+        let path = denoised_png_path(png_path);
+        write_png(&path, width, height, &to_srgb8(d, a.exposure, a.tonemap)).map_err(|e| e.to_string())?;
+        if !a.quiet {
+            eprintln!("wrote {}", path.display());
+        }
+    }
+    Ok(())
+}
+
+/// `PATH.png` → `PATH.denoised.png`.
+pub(crate) fn denoised_png_path(png: &Path) -> PathBuf {
+    png.with_extension("denoised.png")
+}
+
+/// The film's image denoised by Open Image Denoise, with its albedo and normal as guides when
+/// it has AOVs (a resumed render that had none: the colour alone, said in a note).
+fn denoise(film: &Film, radiance: &[Vec3], a: &RenderArgs) -> Result<Vec<Vec3>, String> {
+    let images = film.aov_images();
+    if images.is_none() {
+        eprintln!("note: the film has no AOVs (it was rendered without them): denoising without guides");
+    }
+    let guides = furnace_denoise::Guides {
+        albedo: images.as_ref().map(|i| i.albedo.as_slice()),
+        normal: images.as_ref().map(|i| i.normal.as_slice()),
+    };
+    let options = furnace_denoise::Options {
+        device: a.denoise_device.into(),
+        prefilter_guides: a.denoise_prefilter,
+        ..furnace_denoise::Options::default()
+    };
+    let d = furnace_denoise::denoise(film.width(), film.height(), radiance, guides, &options)
+        .map_err(|e| format!("denoising: {e}"))?;
+    if !a.quiet {
+        eprintln!("denoised on {} in {:.2} s", d.device, d.seconds);
+    }
+    if d.non_finite.total() > 0 {
+        eprintln!(
+            "warning: denoising: {} non-finite input values replaced by their neighbours' mean",
+            d.non_finite.total()
+        );
+    }
+    Ok(d.pixels)
 }
 
 /// The film saved in `file`, checked: its state must be that of its own RGB image (each

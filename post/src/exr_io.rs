@@ -652,7 +652,7 @@ mod tests {
             .from_file(&path)
             .unwrap();
         let channel = |name: &str| -> Vec<f32> {
-            let c = image.layer_data.channel_data.list.iter().find(|c| c.name == Text::from(name));
+            let c = image.layer_data.channel_data.list.iter().find(|c| c.name == *name);
             c.unwrap_or_else(|| panic!("no channel {name}")).sample_data.values_as_f32().collect()
         };
         assert_eq!(channel("albedo.R"), [0.55, 1.0]);

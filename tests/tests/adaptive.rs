@@ -66,8 +66,8 @@ fn converged_pixels_take_no_more_samples() {
     cpu.render_into(&mut film, 32, 32).unwrap();
     let marks = before.converged().unwrap();
     let mut still = 0;
-    for i in 0..marks.len() {
-        if marks[i] {
+    for (i, &marked) in marks.iter().enumerate() {
+        if marked {
             assert_eq!(film.sums()[i], before.sums()[i], "converged pixel {i} changed");
             assert_eq!(film.counts()[i], before.counts()[i]);
         } else {
@@ -77,8 +77,8 @@ fn converged_pixels_take_no_more_samples() {
         }
     }
     // A pixel marks itself only when its noise was below the threshold at a test.
-    for i in 0..marks.len() {
-        if marks[i] {
+    for (i, &marked) in marks.iter().enumerate() {
+        if marked {
             let noise =
                 relative_noise(before.sums()[i], before.lum_sq_sums().unwrap()[i], before.counts()[i]);
             assert!(noise < f64::from(RULE.threshold), "pixel {i}: noise {noise}");
@@ -116,10 +116,13 @@ fn gpu_adaptive_sampling_matches_the_cpu_and_resumes_exactly() {
         assert!(same * 100 >= n * 98, "only {same}/{n} marks agree");
         // Converged pixels stopped at the test that marked them: a multiple of 8 samples from
         // 16 on (the box has no rejected samples).
-        for i in 0..n {
+        for (i, &marked) in gm.iter().enumerate() {
             let c = g.counts()[i];
-            if gm[i] {
-                assert!(c % 8 == 0 && (16..=48).contains(&c), "pixel {i}: converged with {c} samples");
+            if marked {
+                assert!(
+                    c.is_multiple_of(8) && (16..=48).contains(&c),
+                    "pixel {i}: converged with {c} samples"
+                );
             } else {
                 assert_eq!(c, 48, "pixel {i}");
             }
