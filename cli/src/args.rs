@@ -517,6 +517,14 @@ pub struct ChartArgs {
     #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
     pub backends: Vec<ChartBackend>,
     /// The GPU adapter for --backends gpu: a part of its name or its index.
+    /// Adaptive sampling (render --noise-threshold): off and/or thresholds, each its own
+    /// configuration (checkpoints at the same spp; fewer samples taken, so less time).
+    #[arg(long, value_delimiter = ',', default_value = "off", value_parser = parse_threshold_choice)]
+    pub noise_threshold: Vec<Threshold>,
+    /// Denoising with Open Image Denoise (render --denoise, guided by the AOVs): off and/or on,
+    /// each its own configuration; a denoised checkpoint's time includes the denoising.
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "off")]
+    pub denoise: Vec<Switch>,
     #[arg(long, value_name = "NAME|INDEX")]
     pub adapter: Option<String>,
     /// Samples per pixel of the last checkpoint (checkpoints: 1, 2, 4, … and this).
@@ -860,6 +868,30 @@ fn parse_sun_angle(s: &str) -> Result<f32, String> {
     } else {
         Err(format!("the sun's angular diameter must be between 0 and 180 degrees (got {s})"))
     }
+}
+
+/// A `chart --noise-threshold` value: `off`, or a threshold (its `f32` bits: `Eq` for the axes).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub struct Threshold(pub Option<u32>);
+
+impl Threshold {
+    /// The threshold, `None` for off.
+    pub fn value(self) -> Option<f32> {
+        self.0.map(f32::from_bits)
+    }
+
+    /// `off` or the number.
+    pub fn name(self) -> String {
+        self.value().map_or_else(|| "off".to_string(), |t| t.to_string())
+    }
+}
+
+/// `off` or a finite number above 0.
+fn parse_threshold_choice(s: &str) -> Result<Threshold, String> {
+    if s.trim().eq_ignore_ascii_case("off") {
+        return Ok(Threshold(None));
+    }
+    parse_noise_threshold(s).map(|t| Threshold(Some(t.to_bits())))
 }
 
 /// `--noise-threshold T`: a finite T > 0.

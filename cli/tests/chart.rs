@@ -99,14 +99,14 @@ fn a_tiny_study_writes_csv_json_png_and_svg() {
     assert_eq!(
         lines[0],
         "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,cpu_seconds,\
-         light_sampling,triangle_sampling,light_selection,env_sampling"
+         light_sampling,triangle_sampling,light_selection,env_sampling,noise_threshold,denoise,mean_spp"
     );
     // 4 configurations × checkpoints 1, 2, 4, 8.
     assert_eq!(lines.len(), 1 + 16, "{csv}");
     let mut seen = Vec::new();
     for line in &lines[1..] {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 15, "{line}");
+        assert_eq!(f.len(), 18, "{line}");
         // The default light sampling, triangle sampling and light selection: mis, solid-angle, bvh.
         assert_eq!((f[11], f[12], f[13], f[14]), ("mis", "solid-angle", "bvh", "compensated"), "{line}");
         assert_eq!(
@@ -429,7 +429,7 @@ fn triangle_sampling_is_an_axis() {
     assert!(
         csv.lines()
             .skip(1)
-            .all(|l| l.ends_with(",bvh,importance") == l.contains(",nee,") && l.contains(",bvh,")),
+            .all(|l| l.contains(",bvh,importance,off,off,") == l.contains(",nee,") && l.contains(",bvh,")),
         "{csv}"
     );
     let svg = std::fs::read_to_string(out.join("rmse_vs_spp.svg")).unwrap();
@@ -485,11 +485,16 @@ fn light_selection_is_an_axis() {
     let csv = std::fs::read_to_string(out.join("chart.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 4 * 3, "{csv}");
     assert!(
-        csv.lines().next().unwrap().ends_with(",triangle_sampling,light_selection,env_sampling"),
+        csv.lines()
+            .next()
+            .unwrap()
+            .ends_with(",triangle_sampling,light_selection,env_sampling,noise_threshold,denoise,mean_spp"),
         "{csv}"
     );
     assert!(
-        csv.lines().skip(1).all(|l| l.ends_with(",power,compensated") || l.ends_with(",bvh,compensated")),
+        csv.lines()
+            .skip(1)
+            .all(|l| l.contains(",power,compensated,off,off,") || l.contains(",bvh,compensated,off,off,")),
         "{csv}"
     );
     let svg = std::fs::read_to_string(out.join("rmse_vs_spp.svg")).unwrap();
@@ -708,4 +713,74 @@ fn env_sampling_is_an_axis() {
     let o = study(&["--env", "studio", "--env-rotation", "90"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("was rendered from another scene"), "{}", stderr(&o));
+}
+
+/// `--noise-threshold` and `--denoise` are axes: adaptive configurations are named
+/// `…/adaptive-T`, take fewer samples than their spp (`mean_spp`) and are labelled; `--denoise
+/// on` needs the denoise feature (one line without it), and with it the denoised rows beat the
+/// raw ones at low spp.
+#[test]
+fn adaptive_sampling_and_denoising_are_axes() {
+    let dir = temp_dir("chart_adaptive");
+    let reference = reference(&dir, 16, 256);
+    let run = |reference: &Path, out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "chart",
+            "--quiet",
+            "--reference",
+            reference.to_str().unwrap(),
+            "--samplers",
+            "sobol",
+            "--sampling",
+            "caps",
+            "--backends",
+            "cpu",
+            "--spp",
+            "64",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        furnace(&args)
+    };
+    let out = dir.join("study");
+    let o = run(&reference, &out, &["--noise-threshold", "off,0.1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let doc = json(&out.join("chart.json"));
+    let rows = doc["rows"].as_array().unwrap();
+    let last = |config: &str| {
+        rows.iter().find(|r| r["config"] == config && r["spp"] == 64).unwrap_or_else(|| panic!("no {config}"))
+    };
+    let plain = last("sobol/caps/mis/solid-angle/bvh/comp-on/cpu");
+    let adaptive = last("sobol/caps/mis/solid-angle/bvh/comp-on/cpu/adaptive-0.1");
+    assert_eq!(plain["mean_spp"].as_f64(), Some(64.0));
+    let taken = adaptive["mean_spp"].as_f64().unwrap();
+    assert!((16.0..64.0).contains(&taken), "adaptive mean spp {taken}");
+    assert_eq!(adaptive["noise_threshold"], "0.1");
+    let svg = std::fs::read_to_string(out.join("rmse_vs_time.svg")).unwrap();
+    assert!(svg.contains("adaptive 0.1") && svg.contains("all pixels"), "legend");
+    // Denoising needs context: at 16×16 OIDN's network does worse than the noise; at 32×32 it
+    // halves the error of 4 spp (measured: the render test's 0.081 → 0.040).
+    let dir32 = dir.join("32");
+    std::fs::create_dir_all(&dir32).unwrap();
+    let reference32 = self::reference(&dir32, 32, 256);
+    let out = dir.join("denoised");
+    let o = run(&reference32, &out, &["--denoise", "off,on"]);
+    if cfg!(feature = "denoise") {
+        assert!(o.status.success(), "{}", stderr(&o));
+        let doc = json(&out.join("chart.json"));
+        let rmse = |config: &str| {
+            let rows = doc["rows"].as_array().unwrap();
+            let r = rows.iter().find(|r| r["config"] == config && r["spp"] == 4).unwrap();
+            r["rmse"].as_f64().unwrap()
+        };
+        let (raw, denoised) = (
+            rmse("sobol/caps/mis/solid-angle/bvh/comp-on/cpu"),
+            rmse("sobol/caps/mis/solid-angle/bvh/comp-on/cpu/denoised"),
+        );
+        assert!(denoised < raw, "denoised {denoised} vs raw {raw} at 4 spp");
+    } else {
+        assert!(!o.status.success());
+        assert!(stderr(&o).contains("--features denoise"), "{}", stderr(&o));
+    }
 }

@@ -42,6 +42,12 @@ pub struct Row {
     /// Whether the reference was rendered with this configuration's model (masking,
     /// compensation); `false`: the error has a bias floor that is not the method's.
     pub reference_matches: bool,
+    /// Adaptive sampling's noise threshold (`off`, or the number).
+    pub noise_threshold: String,
+    /// Whether the image was denoised (`on`, `off`).
+    pub denoise: String,
+    /// Samples per pixel actually taken, on average (below `spp` under adaptive sampling).
+    pub mean_spp: f64,
 }
 
 /// The light sampling of a row saved before the light-sampling axis existed: every
@@ -98,7 +104,7 @@ pub fn config_name(
 /// reader of the older columns by position still works).
 pub const CSV_HEADER: &str = concat!(
     "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,",
-    "cpu_seconds,light_sampling,triangle_sampling,light_selection,env_sampling"
+    "cpu_seconds,light_sampling,triangle_sampling,light_selection,env_sampling,noise_threshold,denoise,mean_spp"
 );
 
 /// The rows as CSV (with [`CSV_HEADER`]); numbers in Rust's shortest round-trip form.
@@ -108,7 +114,7 @@ pub fn to_csv(rows: &[Row]) -> String {
     for r in rows {
         let _ = writeln!(
             s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
             r.config,
             r.sampler,
             r.sampling,
@@ -123,7 +129,10 @@ pub fn to_csv(rows: &[Row]) -> String {
             r.light_sampling,
             r.triangle_sampling,
             r.light_selection,
-            r.env_sampling
+            r.env_sampling,
+            r.noise_threshold,
+            r.denoise,
+            r.mean_spp
         );
     }
     s
@@ -147,6 +156,9 @@ pub fn row_json(r: &Row) -> Value {
         "rmse": finite(r.rmse),
         "relmse": finite(r.relmse),
         "reference_matches": r.reference_matches,
+        "noise_threshold": r.noise_threshold,
+        "denoise": r.denoise,
+        "mean_spp": finite(r.mean_spp),
     })
 }
 
@@ -217,6 +229,10 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
         rmse: num("rmse")?,
         relmse: num("relmse")?,
         reference_matches: v.get("reference_matches").and_then(Value::as_bool).unwrap_or(true),
+        // Rows saved before these axes: no adaptive sampling, not denoised, every sample taken.
+        noise_threshold: v.get("noise_threshold").and_then(Value::as_str).unwrap_or("off").to_string(),
+        denoise: v.get("denoise").and_then(Value::as_str).unwrap_or("off").to_string(),
+        mean_spp: num("mean_spp").unwrap_or(f64::from(spp)),
     })
 }
 
@@ -380,13 +396,16 @@ mod tests {
             rmse: 0.1 + 0.2,
             relmse: 1e-7,
             reference_matches: false,
+            noise_threshold: "0.05".into(),
+            denoise: "on".into(),
+            mean_spp: 6.5,
         };
         assert_eq!(row_from_json(&row_json(&row)).unwrap(), row);
         let csv = to_csv(std::slice::from_ref(&row));
         assert_eq!(
             csv,
             format!(
-                "{CSV_HEADER}\nsobol/caps/nee/area/power/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee,area,power,importance\n"
+                "{CSV_HEADER}\nsobol/caps/nee/area/power/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee,area,power,importance,0.05,on,6.5\n"
             )
         );
     }
@@ -409,8 +428,14 @@ mod tests {
             rmse: 0.25,
             relmse: 0.125,
             reference_matches: true,
+            noise_threshold: "off".into(),
+            denoise: "off".into(),
+            mean_spp: 4.0,
         });
         v.as_object_mut().unwrap().remove("env_sampling");
+        for k in ["noise_threshold", "denoise", "mean_spp"] {
+            v.as_object_mut().unwrap().remove(k);
+        }
         for k in absent {
             v.as_object_mut().unwrap().remove(*k);
         }

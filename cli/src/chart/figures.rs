@@ -94,6 +94,8 @@ struct Varying {
     env_sampling: usize,
     compensations: usize,
     backends: usize,
+    thresholds: usize,
+    denoise: usize,
 }
 
 impl Varying {
@@ -107,6 +109,8 @@ impl Varying {
             env_sampling: dedup(&study.args.env_sampling).len(),
             compensations: study.compensations().len(),
             backends: dedup(&study.args.backends).len(),
+            thresholds: dedup(&study.args.noise_threshold).len(),
+            denoise: dedup(&study.args.denoise).len(),
         }
     }
 
@@ -134,6 +138,16 @@ impl Varying {
         }
         if vary(self.backends) || c.backend == ChartBackend::Gpu {
             parts.push(resume::cli_name(&c.backend));
+        }
+        if let Some(t) = c.noise_threshold.value() {
+            parts.push(format!("adaptive {t}"));
+        } else if vary(self.thresholds) {
+            parts.push("all pixels".into());
+        }
+        if c.denoise == Switch::On {
+            parts.push("denoised".into());
+        } else if vary(self.denoise) {
+            parts.push("raw".into());
         }
         if vary(self.samplers) || parts.len() > 1 { parts.join(" ") } else { c.name() }
     }
@@ -208,6 +222,10 @@ fn config_series(
         if varying.env_sampling > 1 {
             color = tint_env(color, c.env_sampling);
         }
+        if c.noise_threshold.value().is_some() {
+            // Adaptive configurations: the colour's complement-ish, darker.
+            color = plotters::style::RGBColor(color.1 / 2, color.2 / 2 + 60, color.0 / 2 + 60);
+        }
         let style = Style {
             color,
             marker: match c.sampling {
@@ -215,7 +233,7 @@ fn config_series(
                 SamplingArg::Vndf => Marker::Triangle,
                 SamplingArg::Ndf => Marker::Square,
             },
-            dashed: c.compensation == Switch::On,
+            dashed: c.compensation == Switch::On || c.denoise == Switch::On,
             hollow: c.backend == ChartBackend::Gpu,
         };
         series.push(Series { label: text, points, style });

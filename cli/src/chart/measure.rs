@@ -34,6 +34,11 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
         triangle_sampling: c.triangle_sampling.into(),
         light_selection: c.light_selection.into(),
         env_sampling: c.env_sampling.into(),
+        aovs: c.denoise == Switch::On,
+        adaptive: c.noise_threshold.value().map(|threshold| furnace_render::AdaptiveSampling {
+            threshold,
+            min_samples: furnace_render::AdaptiveSampling::DEFAULT_MIN_SAMPLES,
+        }),
         ..study.settings
     };
     let choice = match c.backend {
@@ -58,7 +63,7 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
     while first && start.elapsed().as_secs_f64() < WARM_UP_SECONDS {
         backend.render_pass(0, 1).map_err(|e| e.to_string())?;
     }
-    backend.set_film(&Film::new(settings.width, settings.height)).map_err(|e| e.to_string())?;
+    backend.set_film(&Film::for_settings(&settings)).map_err(|e| e.to_string())?;
     let adapter = match &mut backend {
         Backend::Gpu(g) => Some(g.context().describe()),
         Backend::Cpu(_) => None,
@@ -192,12 +197,42 @@ impl Runner<'_> {
     }
 
     /// Scores `c`'s film at `spp`, replaces its row for that checkpoint, and saves the data.
-    fn checkpoint(&mut self, c: &Config, spp: u32, time: Timing, film: &Film) -> Result<(), String> {
+    fn checkpoint(&mut self, c: &Config, spp: u32, mut time: Timing, film: &Film) -> Result<(), String> {
         let name = c.name();
         let (reference, matches) = self.study.reference_for(c);
-        let (rmse, relmse) = measure(film, &reference.pixels)?;
+        let (rmse, relmse) = if c.denoise == Switch::On {
+            // The denoised image, guided by the AOVs, on OIDN's default device (a GPU it can
+            // drive, else the CPU), as `render --denoise`; its wall and CPU time count as the
+            // checkpoint's.
+            let rgb: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
+            let images = film.aov_images();
+            let guides = furnace_denoise::Guides {
+                albedo: images.as_ref().map(|i| i.albedo.as_slice()),
+                normal: images.as_ref().map(|i| i.normal.as_slice()),
+            };
+            let cpu = furnace_render::process_cpu_seconds();
+            let start = Instant::now();
+            let d = furnace_denoise::denoise(
+                film.width(),
+                film.height(),
+                &rgb,
+                guides,
+                &furnace_denoise::Options { prefilter_guides: false, ..Default::default() },
+            )
+            .map_err(|e| format!("{name}: denoising: {e}"))?;
+            time.wall += start.elapsed().as_secs_f64();
+            time.cpu += match (cpu, furnace_render::process_cpu_seconds()) {
+                (Some(a), Some(b)) => b - a,
+                _ => f64::NAN,
+            };
+            let s = score(&d.pixels, &reference.pixels, None, None).map_err(|e| e.to_string())?;
+            (s.rmse, s.rel_mse)
+        } else {
+            measure(film, &reference.pixels)?
+        };
+        let mean_spp = film.counts().iter().sum::<u64>() as f64 / film.counts().len().max(1) as f64;
         self.rows.retain(|r| !(r.config == name && r.spp == spp));
-        self.rows.push(c.row(spp, time, rmse, relmse, matches));
+        self.rows.push(c.row(spp, time, rmse, relmse, matches, mean_spp));
         if film.rejected() > 0 {
             self.progress
                 .bar

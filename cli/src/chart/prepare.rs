@@ -72,16 +72,22 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
                             }
                             for sampling in dedup(&a.sampling) {
                                 for sampler in dedup(&a.samplers) {
-                                    study.configs.push(Config {
-                                        sampler,
-                                        sampling,
-                                        light_sampling,
-                                        triangle_sampling,
-                                        light_selection,
-                                        env_sampling,
-                                        compensation,
-                                        backend,
-                                    });
+                                    for noise_threshold in dedup(&a.noise_threshold) {
+                                        for denoise in dedup(&a.denoise) {
+                                            study.configs.push(Config {
+                                                sampler,
+                                                sampling,
+                                                light_sampling,
+                                                triangle_sampling,
+                                                light_selection,
+                                                env_sampling,
+                                                compensation,
+                                                backend,
+                                                noise_threshold,
+                                                denoise,
+                                            });
+                                        }
+                                    }
                                 }
                             }
                         }
@@ -89,6 +95,9 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
                 }
             }
         }
+    }
+    if a.denoise.contains(&Switch::On) && !furnace_denoise::available() {
+        return Err(furnace_denoise::DenoiseError::NotBuilt.to_string());
     }
     if study.configs.is_empty() {
         return Err(

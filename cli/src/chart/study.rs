@@ -6,7 +6,7 @@ use super::data::{Row, config_name, rows_of};
 use super::reference::Reference;
 use crate::args::{
     ChartArgs, ChartBackend, EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, SamplingArg,
-    Switch, TriangleSamplingArg,
+    Switch, Threshold, TriangleSamplingArg,
 };
 use crate::resume;
 use furnace_render::{RenderSettings, Timing};
@@ -25,12 +25,26 @@ pub(super) struct Config {
     pub(super) env_sampling: EnvSamplingArg,
     pub(super) compensation: Switch,
     pub(super) backend: ChartBackend,
+    pub(super) noise_threshold: Threshold,
+    pub(super) denoise: Switch,
 }
 
 impl Config {
     /// `sobol/caps/mis/solid-angle/bvh/comp-off/cpu` (`…/bvh/env-off/comp-off/cpu` for an
-    /// environment sampling other than importance).
+    /// environment sampling other than importance), then `/adaptive-T` with adaptive sampling
+    /// and `/denoised` when denoised (absent otherwise: older studies' names stay valid).
     pub(super) fn name(&self) -> String {
+        let mut name = self.base_name();
+        if let Some(t) = self.noise_threshold.value() {
+            name.push_str(&format!("/adaptive-{t}"));
+        }
+        if self.denoise == Switch::On {
+            name.push_str("/denoised");
+        }
+        name
+    }
+
+    fn base_name(&self) -> String {
         config_name(
             &self.sampler.to_string(),
             &resume::cli_name(&self.sampling),
@@ -43,7 +57,16 @@ impl Config {
         )
     }
 
-    pub(super) fn row(&self, spp: u32, time: Timing, rmse: f64, relmse: f64, reference_matches: bool) -> Row {
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn row(
+        &self,
+        spp: u32,
+        time: Timing,
+        rmse: f64,
+        relmse: f64,
+        reference_matches: bool,
+        mean_spp: f64,
+    ) -> Row {
         Row {
             config: self.name(),
             sampler: self.sampler.to_string(),
@@ -60,6 +83,9 @@ impl Config {
             rmse,
             relmse,
             reference_matches,
+            noise_threshold: self.noise_threshold.name(),
+            denoise: resume::cli_name(&self.denoise),
+            mean_spp,
         }
     }
 }
@@ -116,7 +142,7 @@ impl Study {
 
     pub(super) fn settings_json(&self) -> Value {
         let names = |v: Vec<String>| Value::from(v);
-        json!({
+        let mut v = json!({
             "scene": self.scene_name,
             "scene_hash": self.scene.content_hash(),
             "width": self.settings.width,
@@ -140,7 +166,18 @@ impl Study {
             "adapter": self.args.adapter,
             "reference": self.reference.settings(),
             "reference_compensated": self.compensated.as_ref().map(Reference::settings),
-        })
+        });
+        // The adaptive and denoising axes are recorded only when used: a study from before them
+        // resumes.
+        let thresholds = dedup(&self.args.noise_threshold);
+        if thresholds != [Threshold(None)] {
+            v["noise_threshold"] = names(thresholds.iter().map(|t| t.name()).collect());
+        }
+        let denoise = dedup(&self.args.denoise);
+        if denoise != [Switch::Off] {
+            v["denoise"] = names(denoise.iter().map(resume::cli_name).collect());
+        }
+        v
     }
 
     pub(super) fn compensations(&self) -> Vec<Switch> {
