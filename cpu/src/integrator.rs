@@ -340,11 +340,14 @@ impl CpuRenderer {
             let interpolated = self.shading_normal(t, b1, b2);
             let surface = scene.surface_point(t, (b1, b2), material, uv, direction, interpolated);
             if let Some(aov) = aov.take() {
+                let (base_color, emission) = match &shading {
+                    Shading::Constant(c) => (c.base_color, c.emission),
+                    Shading::Evaluated(params) => (params.base_color, params.emission),
+                };
+                // The front of an emitter: its colour is its light, like the sky's (albedo 1).
+                let emits = emission != Vec3::ZERO && surface.as_ref().is_some_and(|s| !s.back_face);
                 *aov = AovSample {
-                    albedo: match &shading {
-                        Shading::Constant(c) => c.base_color,
-                        Shading::Evaluated(params) => params.base_color,
-                    },
+                    albedo: if emits { Vec3::ONE } else { base_color },
                     // The back of a single-sided surface (black) has no shading normal.
                     normal: surface.as_ref().map_or(Vec3::ZERO, |s| s.shading),
                     depth: Some(hit.t),

@@ -2,9 +2,10 @@
 //! prefiltered albedo + normal, on the synthetic scene of the tests (16-sample-like noise):
 //!
 //! ```text
-//! OIDN_DIR=… cargo run --release -p furnace-denoise --features oidn --example bench -- [DEVICE] [REPS] [QUALITY]
+//! OIDN_DIR=… cargo run --release -p furnace-denoise --features oidn --example bench -- [DEVICE] [REPS] [QUALITY] [SIZES]
 //! ```
 //!
+//! SIZES: comma-separated `WxH` (default `512x512,1920x1080`).
 //! DEVICE: `default` (the default), `cpu`, `cuda`, `hip`, `sycl`, `metal`; REPS: runs per case
 //! (default 3; the best and the median are printed); QUALITY: `default`, `fast`, `balanced`,
 //! `high`. Also prints each result's RMSE against the clean image, so a fast but wrong run shows.
@@ -41,7 +42,16 @@ fn main() {
         "{:>10}  {:<22} {:>12} {:>12} {:>12} {:>10}  {:>8}  device",
         "size", "guides", "best s", "median s", "prefilter s", "device s", "RMSE"
     );
-    for (w, h) in [(512, 512), (1920, 1080)] {
+    let sizes: Vec<(u32, u32)> = args
+        .get(3)
+        .map_or("512x512,1920x1080", String::as_str)
+        .split(',')
+        .map(|s| {
+            let (w, h) = s.split_once('x').expect("SIZES: WxH,…");
+            (w.parse().expect("a width"), h.parse().expect("a height"))
+        })
+        .collect();
+    for (w, h) in sizes {
         let scene = Scene::new(w, h);
         let noisy = scene.noisy(16, 1);
         let both = Guides { albedo: Some(&scene.albedo), normal: Some(&scene.normal) };

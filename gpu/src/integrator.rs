@@ -284,6 +284,14 @@ const COUNTER_WORDS: usize = 8;
 /// Uniform slots are this far apart (WebGPU's largest `min_uniform_buffer_offset_alignment`).
 const SLOT: u64 = 256;
 
+/// A block of a pass: samples `first..end`, then (with `converge`) adaptive sampling's test.
+#[derive(Debug, Clone, Copy)]
+struct Block {
+    first: u32,
+    end: u32,
+    converge: bool,
+}
+
 /// One dispatch of a pass: rows `row_offset ..` × samples `first_sample ..`.
 #[derive(Debug, Clone, Copy)]
 struct Dispatch {
@@ -819,6 +827,7 @@ impl GpuRenderer {
                 .transpose()?;
         }
         self.converged = settings.adaptive.map(|_| 0);
+        self.write_converged_counter(0)?;
         if (settings.width, settings.height, settings.aovs, settings.adaptive.is_some())
             != (old.width, old.height, old.aovs, old.adaptive.is_some())
         {
@@ -1013,30 +1022,35 @@ impl GpuRenderer {
         self.sampler.check_index(first_sample.saturating_add(samples_per_pixel - 1))?;
         let end = first_sample.saturating_add(samples_per_pixel);
         let Some(rule) = self.settings.adaptive else {
-            let seconds = self.render_block(first_sample, end, false)?;
-            if let Some(t) = &mut self.timer {
-                t.last = seconds;
-            }
+            self.render_blocks(&[Block { first: first_sample, end, converge: false }])?;
             return self.film.fold(&self.ctx);
         };
         // Adaptive sampling tests pixels at multiples of ADAPTIVE_STEP: blocks that end there,
-        // each followed by the test where it applies (on the GPU for an f64 film, after the
-        // fold on the host for an F32Pass one).
-        let mut total = Some(0.0);
+        // each followed by the test where it applies.
+        let mut blocks = Vec::new();
         let mut block = first_sample;
         while block < end {
             let block_end = (block / ADAPTIVE_STEP + 1).saturating_mul(ADAPTIVE_STEP).min(end);
-            let test = rule.tests_at(block_end);
-            let seconds = self.render_block(block, block_end, test && self.converge.is_some())?;
+            blocks.push(Block { first: block, end: block_end, converge: rule.tests_at(block_end) });
+            block = block_end;
+        }
+        if self.converge.is_some() {
+            // An f64 film: every block and test in one submission, the count read once.
+            self.render_blocks(&blocks)?;
+            if blocks.iter().any(|b| b.converge) {
+                self.converged = Some(self.read_converged_counter()?);
+            }
+            return Ok(());
+        }
+        // An F32Pass film: each block folded on the host and tested there.
+        let mut total = Some(0.0);
+        for b in &blocks {
+            let seconds = self.render_blocks(&[Block { converge: false, ..*b }])?;
             total = total.zip(seconds).map(|(a, b)| a + b);
             self.film.fold(&self.ctx)?;
-            if test {
-                match self.film.test_convergence_on_host(&self.ctx, &rule)? {
-                    Some(n) => self.converged = Some(n),
-                    None => self.converged = Some(self.read_converged_counter()?),
-                }
+            if b.converge {
+                self.converged = self.film.test_convergence_on_host(&self.ctx, &rule)?;
             }
-            block = block_end;
         }
         if let Some(t) = &mut self.timer {
             t.last = total;
@@ -1044,29 +1058,51 @@ impl GpuRenderer {
         Ok(())
     }
 
-    /// The GPU's count of converged pixels, from the last `converge` dispatch.
+    /// The GPU's count of converged pixels (kept by the `converge` kernel).
     fn read_converged_counter(&self) -> Result<u64, GpuError> {
         let Some(counter) = &self.converged_counter else { return Ok(0) };
         Ok(u64::from(crate::film::read_buffer(&self.ctx, counter)?[0]))
     }
 
-    /// Samples `first..end` of every pixel still taking samples, then (with `converge`) the GPU's
-    /// adaptive-sampling test; returns the device seconds of the samples when timing.
-    fn render_block(&mut self, first_sample: u32, end: u32, converge: bool) -> Result<Option<f64>, GpuError> {
-        let group_samples = self.group_samples(end - first_sample);
-        let (tile_width, tile_height) = tile(group_samples);
-        let dispatches = self.dispatches(first_sample, end - first_sample, group_samples, tile_height);
-        let mut bytes = vec![0u8; dispatches.len() * SLOT as usize];
-        for (k, d) in dispatches.iter().enumerate() {
-            let p = FrameParams {
-                first_sample: d.first_sample,
-                samples: d.samples,
-                row_offset: d.row_offset,
-                group_samples,
-                tile_width,
-                ..self.base
-            };
-            bytes[k * SLOT as usize..][..size_of::<FrameParams>()].copy_from_slice(bytemuck::bytes_of(&p));
+    /// Sets the GPU's count of converged pixels (after a film was loaded or cleared).
+    fn write_converged_counter(&self, n: u64) -> Result<(), GpuError> {
+        if let Some(counter) = &self.converged_counter {
+            let n = u32::try_from(n).map_err(|_| GpuError::Wgpu(format!("{n} converged pixels")))?;
+            self.ctx.queue.write_buffer(counter, 0, bytemuck::cast_slice(&[n, 0, 0, 0]));
+            self.ctx.queue.submit([]);
+            self.ctx.wait()?;
+        }
+        Ok(())
+    }
+
+    /// Renders `blocks` in order in one compute pass and one submission: each block's samples
+    /// of every pixel still taking samples, then (with `converge`) the GPU's adaptive-sampling
+    /// test; returns the device seconds when timing.
+    fn render_blocks(&mut self, blocks: &[Block]) -> Result<Option<f64>, GpuError> {
+        let mut slots: Vec<FrameParams> = Vec::new();
+        // Per block: its dispatches (slot, rows), its grouping, whether the test follows.
+        let mut plan = Vec::new();
+        for b in blocks {
+            let group_samples = self.group_samples(b.end - b.first);
+            let (tile_width, tile_height) = tile(group_samples);
+            let dispatches = self.dispatches(b.first, b.end - b.first, group_samples, tile_height);
+            let mut list = Vec::new();
+            for d in &dispatches {
+                list.push((slots.len(), d.rows.div_ceil(tile_height)));
+                slots.push(FrameParams {
+                    first_sample: d.first_sample,
+                    samples: d.samples,
+                    row_offset: d.row_offset,
+                    group_samples,
+                    tile_width,
+                    ..self.base
+                });
+            }
+            plan.push((list, tile_width, b.converge));
+        }
+        let mut bytes = vec![0u8; slots.len().max(1) * SLOT as usize];
+        for (k, p) in slots.iter().enumerate() {
+            bytes[k * SLOT as usize..][..size_of::<FrameParams>()].copy_from_slice(bytemuck::bytes_of(p));
         }
         let device = &self.ctx.device;
         let params = self.ctx.buffer_init("frame params", &bytes, wgpu::BufferUsages::UNIFORM)?;
@@ -1109,29 +1145,23 @@ impl GpuRenderer {
                 label: Some("integrator"),
                 timestamp_writes,
             });
-            pass.set_pipeline(&self.pipeline);
-            for (k, d) in dispatches.iter().enumerate() {
-                pass.set_bind_group(0, &bind, &[(k as u64 * SLOT) as u32]);
-                pass.dispatch_workgroups(
-                    self.settings.width.div_ceil(tile_width),
-                    d.rows.div_ceil(tile_height),
-                    1,
-                );
+            let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
+            for (list, tile_width, converge) in &plan {
+                pass.set_pipeline(&self.pipeline);
+                for &(slot, groups_y) in list {
+                    pass.set_bind_group(0, &bind, &[(slot as u64 * SLOT) as u32]);
+                    pass.dispatch_workgroups(self.settings.width.div_ceil(*tile_width), groups_y, 1);
+                }
+                if *converge && let Some(pipeline) = &self.converge {
+                    // After the block's samples (wgpu orders the dispatches' storage accesses):
+                    // every pixel not yet converged tested once, the newly converged counted.
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(0, &bind, &[0]);
+                    let groups = pixels.div_ceil(u64::from(GROUP_SIZE));
+                    let x = groups.clamp(1, 65_535) as u32;
+                    pass.dispatch_workgroups(x, groups.div_ceil(u64::from(x)).max(1) as u32, 1);
+                }
             }
-        }
-        if converge && let (Some(pipeline), Some(counter)) = (&self.converge, &self.converged_counter) {
-            // After the block's samples: every pixel tested once, converged ones counted.
-            encoder.clear_buffer(counter, 0, None);
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("adaptive sampling test"),
-                timestamp_writes: None,
-            });
-            pass.set_pipeline(pipeline);
-            pass.set_bind_group(0, &bind, &[0]);
-            let groups = (u64::from(self.settings.width) * u64::from(self.settings.height))
-                .div_ceil(u64::from(GROUP_SIZE));
-            let x = groups.min(65_535) as u32;
-            pass.dispatch_workgroups(x, groups.div_ceil(u64::from(x)) as u32, 1);
         }
         if let Some(t) = &self.timer {
             encoder.resolve_query_set(&t.queries, 0..2, &t.resolve, 0);
@@ -1156,7 +1186,7 @@ impl GpuRenderer {
     pub fn load_film(&mut self, data: &Film) -> Result<(), GpuError> {
         self.film.write(&self.ctx, data)?;
         self.converged = data.converged_count();
-        Ok(())
+        self.write_converged_counter(self.converged.unwrap_or(0))
     }
 }
 

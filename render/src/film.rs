@@ -42,7 +42,9 @@ struct AdaptiveState {
 ///
 /// * `albedo`: the material's base colour at the hit (the diffuse colour of a dielectric, the
 ///   normal-incidence reflectance of a metal, as Open Image Denoise asks); 1 for a ray that
-///   escapes (its colour is all light, like Cycles' denoising albedo of the background);
+///   escapes and for the emitting side of an emitter (their colour is their light, like Cycles'
+///   denoising albedo of the background; an emitter's base colour is often black, and a 0 guide
+///   made Open Image Denoise smear the light's edges: measured on `cbox_area`);
 /// * `normal`: the world-space shading normal at the hit (facing the ray); 0 for a ray that
 ///   escapes (Open Image Denoise's "no surface");
 /// * `depth`: the distance along the (unit) camera ray to the hit; `None` for a ray that escapes.

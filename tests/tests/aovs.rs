@@ -238,3 +238,24 @@ fn a_sample_and_its_aovs() {
     let (_, corner) = cpu.sample_with_aovs(0, 0, 0);
     assert_eq!(corner, AovSample::MISS);
 }
+
+/// The emitting side of an emitter has albedo 1 (its base colour, black here, would tell a
+/// denoiser the light has no colour), on both backends.
+#[test]
+fn an_emitter_seen_directly_has_albedo_one() {
+    let path = furnace_tests::data::reference("lights/cbox_area.gltf");
+    let scene = Scene::load(&path).unwrap();
+    let s = settings(64, true);
+    let cpu = CpuRenderer::with_default_camera(scene.clone(), s).unwrap();
+    // The ceiling panel covers the pixels around (32, 11) of the 64² view (x 25–39, y 9–14 at
+    // 256² scaled by 1/4).
+    let (_, aov) = cpu.sample_with_aovs(32, 11, 0);
+    assert_eq!(aov.albedo, Vec3::ONE, "{aov:?}");
+    let film = render_cpu(&scene, s, 4);
+    let i = 11 * 64 + 32;
+    assert_eq!(film.aov(i).unwrap().albedo, DVec3::ONE);
+    let Some(ctx) = test_context() else { return };
+    let mut gpu = GpuRenderer::new(ctx, &scene, &scene.default_camera(), s).unwrap();
+    gpu.render_pass(0, 4).unwrap();
+    assert_eq!(gpu.film().unwrap().aov(i).unwrap().albedo, DVec3::ONE);
+}

@@ -438,7 +438,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         if event == 0u {
             // The back of a single-sided surface (black) has no shading normal.
             let n = select(vec3<f32>(0.0), surface.shading, surface.valid != 0u);
-            aov_albedo_depth = vec4<f32>(ms.base_color, hit.t);
+            // The front of an emitter: its colour is its light, like the sky's (albedo 1).
+            let emits = any(ms.emission != vec3<f32>(0.0)) && surface.valid != 0u && surface.back_face == 0u;
+            aov_albedo_depth = vec4<f32>(select(ms.base_color, vec3<f32>(1.0), emits), hit.t);
             aov_normal_hit = vec4<f32>(n, 1.0);
         }
         // #endif
@@ -672,7 +674,8 @@ fn adaptive_converged(pixel: u32) -> bool {
 }
 
 // Adaptive sampling's test (furnace_render::Film::test_convergence): marks the pixels that have
-// converged and counts every converged pixel. A 2-D grid of workgroups over the pixels in order.
+// converged and adds the newly converged to the running count. A 2-D grid of workgroups over the
+// pixels in order.
 @compute @workgroup_size(GROUP_SIZE)
 fn converge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>,
             @builtin(local_invocation_index) l: u32) {
@@ -682,8 +685,6 @@ fn converge(@builtin(workgroup_id) wg: vec3<u32>, @builtin(num_workgroups) group
     }
     if film_converged[pixel] == 0u && adaptive_converged(pixel) {
         film_converged[pixel] = 1u;
-    }
-    if film_converged[pixel] != 0u {
         atomicAdd(&converged_counter[0], 1u);
     }
 }
