@@ -223,8 +223,14 @@ fn config_series(
             color = tint_env(color, c.env_sampling);
         }
         if c.noise_threshold.value().is_some() {
-            // Adaptive configurations: the colour's complement-ish, darker.
-            color = plotters::style::RGBColor(color.1 / 2, color.2 / 2 + 60, color.0 / 2 + 60);
+            // Adaptive configurations: mixed with a colour of their own per threshold.
+            let k = dedup(&study.args.noise_threshold)
+                .iter()
+                .filter(|t| t.value().is_some())
+                .position(|t| *t == c.noise_threshold);
+            let own = [(44, 160, 44), (255, 127, 14), (148, 103, 189), (140, 86, 75)][k.unwrap_or(0) % 4];
+            let mix = |a: u8, b: u8| ((u16::from(a) + 3 * u16::from(b)) / 4) as u8;
+            color = RGBColor(mix(color.0, own.0), mix(color.1, own.1), mix(color.2, own.2));
         }
         let style = Style {
             color,
