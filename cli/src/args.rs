@@ -132,8 +132,9 @@ pub struct RenderArgs {
     pub clamp: Option<f32>,
     /// Adaptive sampling: a pixel stops taking samples once the relative standard error of its
     /// luminance is below T (0.01: about 1 %), tested every 8 samples from --min-spp on; the
-    /// render ends when every pixel has (or at --spp / --time-limit). Biased where a pixel's
-    /// first samples all miss its rare bright paths: see docs/accuracy.md.
+    /// render ends when every pixel has (or at --spp / --time-limit). A pixel whose first
+    /// samples all miss its rare bright paths can stop too dark (--min-spp guards against it;
+    /// measured in docs/accuracy.md).
     #[arg(long, value_name = "T", value_parser = parse_noise_threshold)]
     pub noise_threshold: Option<f32>,
     /// Adaptive sampling: no pixel stops before this many samples.
