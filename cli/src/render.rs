@@ -381,24 +381,34 @@ pub(crate) fn denoised_png_path(png: &Path) -> PathBuf {
     png.with_extension("denoised.png")
 }
 
-/// The film's image denoised by Open Image Denoise, with its albedo and normal as guides when
-/// it has AOVs (a resumed render that had none: the colour alone, said in a note).
-fn denoise(film: &Film, radiance: &[Vec3], a: &RenderArgs) -> Result<Vec<Vec3>, String> {
+/// The film's image (`radiance`, its means) denoised by Open Image Denoise, with the film's
+/// albedo and normal as guides when it has AOVs, the colour alone otherwise: what `render
+/// --denoise` and `chart --denoise` run.
+pub(crate) fn denoise_film(
+    film: &Film,
+    radiance: &[Vec3],
+    options: &furnace_denoise::Options,
+) -> Result<furnace_denoise::Denoised, furnace_denoise::DenoiseError> {
     let images = film.aov_images();
-    if images.is_none() {
-        eprintln!("note: the film has no AOVs (it was rendered without them): denoising without guides");
-    }
     let guides = furnace_denoise::Guides {
         albedo: images.as_ref().map(|i| i.albedo.as_slice()),
         normal: images.as_ref().map(|i| i.normal.as_slice()),
     };
+    furnace_denoise::denoise(film.width(), film.height(), radiance, guides, options)
+}
+
+/// [`denoise_film`] with `render`'s options and messages (a resumed render that had no AOVs is
+/// denoised without guides, said in a note).
+fn denoise(film: &Film, radiance: &[Vec3], a: &RenderArgs) -> Result<Vec<Vec3>, String> {
+    if !film.has_aovs() {
+        eprintln!("note: the film has no AOVs (it was rendered without them): denoising without guides");
+    }
     let options = furnace_denoise::Options {
         device: a.denoise_device.into(),
         prefilter_guides: a.denoise_prefilter,
         ..furnace_denoise::Options::default()
     };
-    let d = furnace_denoise::denoise(film.width(), film.height(), radiance, guides, &options)
-        .map_err(|e| format!("denoising: {e}"))?;
+    let d = denoise_film(film, radiance, &options).map_err(|e| format!("denoising: {e}"))?;
     if !a.quiet {
         eprintln!("denoised on {} in {:.2} s", d.device, d.seconds);
     }

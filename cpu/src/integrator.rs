@@ -149,7 +149,7 @@ impl CpuRenderer {
             light_bvh,
             point_lights: scene.point_lights().copied().collect(),
             sky: scene.sky(),
-            film: empty_film(&settings),
+            film: Film::for_settings(&settings),
             scene,
             settings,
             bvh,
@@ -189,7 +189,7 @@ impl CpuRenderer {
 
     /// An empty film of the settings' size (with AOVs if [`RenderSettings::aovs`]).
     pub fn new_film(&self) -> Film {
-        empty_film(&self.settings)
+        Film::for_settings(&self.settings)
     }
 
     /// The film of [`Integrator::render_pass`].
@@ -565,11 +565,6 @@ impl Integrator for CpuRenderer {
         let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
         (262_144 / pixels.max(1)).clamp(1, 4) as u32
     }
-}
-
-/// An empty film for `settings`: with AOVs if it asks for them.
-fn empty_film(settings: &RenderSettings) -> Film {
-    Film::for_settings(settings)
 }
 
 /// The BSDF of evaluated material parameters.

@@ -111,8 +111,9 @@ pub struct GpuFilm {
 }
 
 /// Rec. 709 luminance weights: the `f64` film sums each sample's squared luminance with them
-/// (`film_f64.wgsl`'s `FILM_LUMINANCE`), for the viewer's noise estimate.
-pub const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
+/// (`film_f64.wgsl`'s `FILM_LUMINANCE`), for the viewer's noise estimate and adaptive
+/// sampling: [`furnace_render::LUMINANCE`].
+pub const LUMINANCE: [f32; 3] = furnace_render::LUMINANCE;
 
 /// The buffers a display reads a film from ([`GpuFilm::display_source`]).
 #[derive(Debug, Clone, Copy)]

@@ -539,6 +539,29 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
     ])
 }
 
+/// The film `settings` need: with AOVs and adaptive-sampling marks when they ask for them.
+fn film_for(
+    ctx: &GpuContext,
+    settings: &RenderSettings,
+    precision: FilmPrecision,
+) -> Result<GpuFilm, GpuError> {
+    GpuFilm::with_parts(
+        ctx,
+        settings.width,
+        settings.height,
+        precision,
+        settings.aovs,
+        settings.adaptive.is_some(),
+    )
+}
+
+/// Adaptive sampling's count of converged pixels (kept by the `converge` kernel); `None`
+/// without adaptive sampling.
+fn converged_counter(ctx: &GpuContext, settings: &RenderSettings) -> Result<Option<wgpu::Buffer>, GpuError> {
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST;
+    settings.adaptive.map(|_| ctx.buffer_init("converged counter", &[0; 16], usage)).transpose()
+}
+
 /// A storage buffer of `words`, padded to 16 bytes (a binding cannot be empty); large buffers
 /// (an environment map's texels) are not copied on the way.
 fn storage_buffer(ctx: &GpuContext, label: &str, words: &[u32]) -> Result<wgpu::Buffer, GpuError> {
@@ -680,26 +703,10 @@ impl GpuRenderer {
         let emitters = emitter_buffer(&ctx, scene, scene_emitters.as_ref(), features)?;
         let environment = environment_buffers(&ctx, scene, &settings, limit)?;
         let precision = FilmPrecision::for_context(&ctx);
-        let film = GpuFilm::with_parts(
-            &ctx,
-            settings.width,
-            settings.height,
-            precision,
-            settings.aovs,
-            settings.adaptive.is_some(),
-        )?;
+        let film = film_for(&ctx, &settings, precision)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
         let (layout, pipeline, converge) = integrator_pipeline(&ctx, precision, features)?;
-        let converged_counter = settings
-            .adaptive
-            .map(|_| {
-                ctx.buffer_init(
-                    "converged counter",
-                    &[0; 16],
-                    wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
-                )
-            })
-            .transpose()?;
+        let converged_counter = converged_counter(&ctx, &settings)?;
         // Software adapters (lavapipe) run ~1 Msample/s and end any shader loop after 65535
         // iterations per invocation (all loops together): one sample per invocation there.
         let software = !crate::context::is_hardware(&ctx.info);
@@ -813,32 +820,14 @@ impl GpuRenderer {
                 integrator_pipeline(&self.ctx, precision, features)?;
         }
         if settings.adaptive.is_some() != old.adaptive.is_some() {
-            self.converged_counter = settings
-                .adaptive
-                .map(|_| {
-                    self.ctx.buffer_init(
-                        "converged counter",
-                        &[0; 16],
-                        wgpu::BufferUsages::STORAGE
-                            | wgpu::BufferUsages::COPY_SRC
-                            | wgpu::BufferUsages::COPY_DST,
-                    )
-                })
-                .transpose()?;
+            self.converged_counter = converged_counter(&self.ctx, &settings)?;
         }
         self.converged = settings.adaptive.map(|_| 0);
         self.write_converged_counter(0)?;
         if (settings.width, settings.height, settings.aovs, settings.adaptive.is_some())
             != (old.width, old.height, old.aovs, old.adaptive.is_some())
         {
-            self.film = GpuFilm::with_parts(
-                &self.ctx,
-                settings.width,
-                settings.height,
-                precision,
-                settings.aovs,
-                settings.adaptive.is_some(),
-            )?;
+            self.film = film_for(&self.ctx, &settings, precision)?;
             if self.display {
                 self.film.enable_display(&self.ctx)?;
             }

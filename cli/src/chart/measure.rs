@@ -205,21 +205,11 @@ impl Runner<'_> {
             // drive, else the CPU), as `render --denoise`; its wall and CPU time count as the
             // checkpoint's.
             let rgb: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
-            let images = film.aov_images();
-            let guides = furnace_denoise::Guides {
-                albedo: images.as_ref().map(|i| i.albedo.as_slice()),
-                normal: images.as_ref().map(|i| i.normal.as_slice()),
-            };
             let cpu = furnace_render::process_cpu_seconds();
             let start = Instant::now();
-            let d = furnace_denoise::denoise(
-                film.width(),
-                film.height(),
-                &rgb,
-                guides,
-                &furnace_denoise::Options { prefilter_guides: false, ..Default::default() },
-            )
-            .map_err(|e| format!("{name}: denoising: {e}"))?;
+            let options = furnace_denoise::Options { prefilter_guides: false, ..Default::default() };
+            let d = crate::render::denoise_film(film, &rgb, &options)
+                .map_err(|e| format!("{name}: denoising: {e}"))?;
             time.wall += start.elapsed().as_secs_f64();
             time.cpu += match (cpu, furnace_render::process_cpu_seconds()) {
                 (Some(a), Some(b)) => b - a,
