@@ -11,6 +11,9 @@
 //!   ([`turquin`]) from tables this crate computes itself.
 //! * [`MetallicRoughness`] — the glTF 2.0 metallic-roughness material with
 //!   KHR_materials_specular, one Lambert and one merged GGX lobe.
+//! * [`Dielectric`] — glass: smooth, rough (Walter et al. 2007) or thin-walled, with the exact
+//!   unpolarised Fresnel reflectance; [`Transmissive`] mixes one with the opaque material
+//!   (KHR_materials_transmission). Dielectrics see both hemispheres ([`dielectric`]).
 //!
 //! ## Conventions ([`Bsdf`])
 //!
@@ -53,6 +56,7 @@
 //! assert!((gold.pdf(wo, s.wi) - s.pdf).abs() < 1e-3 * s.pdf);
 //! ```
 
+pub mod dielectric;
 mod frame;
 pub mod fresnel;
 pub mod ggx;
@@ -63,6 +67,7 @@ mod specular;
 mod tables;
 pub mod turquin;
 
+pub use dielectric::{Dielectric, Fresnel, Interface, ScatterSample, Transmissive, fresnel_dielectric};
 pub use frame::Frame;
 pub use ggx::{Ggx, Masking, SpecularSampling};
 pub use lambert::Lambert;

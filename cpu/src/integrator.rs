@@ -1,7 +1,10 @@
 //! [`CpuRenderer`]: the path tracer.
 
 use furnace_accel::{BuildOptions, Bvh, Hit, offset_ray_origin_scaled, offset_scale_of_bounds};
-use furnace_brdf::{Bsdf, Frame, MetallicRoughness, MetallicRoughnessParams, SpecularOptions};
+use furnace_brdf::{
+    Bsdf, Dielectric, Frame, Interface, MetallicRoughness, MetallicRoughnessParams, ScatterSample,
+    SpecularOptions, Transmissive,
+};
 use furnace_render::layout::{
     self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
 };
@@ -41,6 +44,9 @@ pub struct CpuRenderer {
     normals: Vec<Vec3>,
     /// Whether any material is alpha-masked (otherwise rays skip the mask callback).
     any_masked: bool,
+    /// Whether any material is a thin-walled transmissive sheet (otherwise shadow rays are
+    /// plain occlusion tests).
+    any_thin: bool,
     /// The ray offsets' length scale (`furnace_accel::offset_scale_of_bounds`).
     offset_scale: f32,
     /// The scene's delta suns ([`Scene::suns`] without a disc).
@@ -71,7 +77,7 @@ pub struct CpuRenderer {
 /// A material's emission and BSDF, when they are the same everywhere on its surface.
 struct ConstantMaterial {
     emission: Vec3,
-    bsdf: MetallicRoughness,
+    bsdf: HitBsdf,
     /// The base colour: the albedo AOV.
     base_color: Vec3,
 }
@@ -109,6 +115,7 @@ impl CpuRenderer {
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         let triangle_materials = (0..g.triangle_count()).map(|t| scene.triangle_material(t) as u32).collect();
         let any_masked = scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }));
+        let any_thin = scene.materials.iter().any(|m| m.is_thin_walled());
         let constant_materials = scene
             .materials
             .iter()
@@ -117,7 +124,7 @@ impl CpuRenderer {
                     let params = m.evaluate(Vec2::ZERO, &scene.textures, &scene.images);
                     ConstantMaterial {
                         emission: params.emission,
-                        bsdf: bsdf(&params, settings.specular),
+                        bsdf: bsdf(&params, m, settings.specular),
                         base_color: params.base_color,
                     }
                 })
@@ -159,6 +166,7 @@ impl CpuRenderer {
             constant_materials,
             normals,
             any_masked,
+            any_thin,
             offset_scale,
         })
     }
@@ -307,24 +315,40 @@ impl CpuRenderer {
         let mut throughput = Vec3::ONE;
         // `event` counts the scattering events so far; the loop body handles one ray.
         let mut event = 0;
-        // The solid-angle pdf of the BSDF sample that made the ray (`None`: the camera's), for
-        // the MIS weights of the lights it reaches.
+        // The solid-angle pdf of the BSDF sample that made the ray (`None`: the camera's, or a
+        // delta event's), for the MIS weights of the lights it reaches.
         let mut bsdf_pdf: Option<f32> = None;
         // The receiving side (geometric normal) of the vertex the ray left, for the light BVH's
-        // probabilities in those weights.
+        // probabilities in those weights (zero: both sides).
         let mut normal = Vec3::ZERO;
+        // Where that vertex took its light samples from (`origin` unless the ray crossed a
+        // surface since), for the same weights.
+        let mut mis_origin: Option<Vec3> = None;
+        // The absorption coefficient of the volume the ray travels in (0: air).
+        let mut medium = Vec3::ZERO;
+        // Passes straight through thin-walled sheets since the last event (not events
+        // themselves), and the lobe number they left unused for the next choice.
+        let mut passes = 0u32;
+        let mut carried_uc: Option<f32> = None;
         loop {
             let Some(hit) = self.closest_hit(origin, direction) else {
+                if medium != Vec3::ZERO {
+                    throughput *= absorption(medium, f32::INFINITY);
+                }
                 // The ray leaves the scene: the sky, the environment and the sun discs it sees.
                 radiance += throughput * self.sky;
                 if let Some(env) = &self.environment {
-                    radiance += throughput * self.environment_seen(env, direction, bsdf_pdf);
+                    radiance += throughput * self.environment_seen(env, direction, bsdf_pdf, event == 0);
                 }
                 if !self.sun_discs.is_empty() {
                     radiance += throughput * self.sun_discs_seen(direction, bsdf_pdf);
                 }
                 break;
             };
+            if medium != Vec3::ZERO {
+                // Beer–Lambert over the segment inside the volume.
+                throughput *= absorption(medium, hit.t);
+            }
             let material_index = self.triangle_materials[hit.triangle as usize] as usize;
             let material = &scene.materials[material_index];
             // Textured materials are evaluated at the hit's UV; the others were built once.
@@ -366,76 +390,94 @@ impl CpuRenderer {
             if !surface.back_face {
                 if self.emitters.is_some() && emission != Vec3::ZERO {
                     let cos_light = -surface.geometric.dot(direction);
+                    // The distance from where the light samples were taken (the ray's own
+                    // length unless it crossed a surface on the way).
+                    let (from, distance) = match mis_origin {
+                        Some(o) => (o, (surface.position - o).length()),
+                        None => (origin, hit.t),
+                    };
                     let w =
-                        self.emission_weight(bsdf_pdf, origin, normal, material_index, t, hit.t, cos_light);
+                        self.emission_weight(bsdf_pdf, from, normal, material_index, t, distance, cos_light);
                     radiance += throughput * emission * w;
                 } else {
                     radiance += throughput * emission;
                 }
             }
-            if event == self.settings.bounces {
-                break;
-            }
             let evaluated;
             let bsdf = match &shading {
                 Shading::Constant(c) => &c.bsdf,
                 Shading::Evaluated(params) => {
-                    evaluated = bsdf(params, self.settings.specular);
+                    evaluated = bsdf(params, material, self.settings.specular);
                     &evaluated
                 }
             };
-            let frame = Frame::new(surface.shading);
+            // A thin-walled sheet can still be passed after the last event (the pass is none).
+            let last = event == self.settings.bounces;
+            if last && !bsdf.is_thin() {
+                break;
+            }
+            // A solid's interface is shaded in its outward frame (the side of index 1), where
+            // `wo` may be inside; every other surface in the frame facing the ray.
+            let outward =
+                if bsdf.is_volume() && surface.back_face { -surface.shading } else { surface.shading };
+            let frame = Frame::new(outward);
             let wo = frame.to_local(-direction);
             let leave = offset_ray_origin_scaled(surface.position, surface.geometric, self.offset_scale);
+            let behind = || offset_ray_origin_scaled(surface.position, -surface.geometric, self.offset_scale);
+            let vertex = Vertex {
+                throughput,
+                bsdf,
+                wo,
+                frame,
+                surface: &surface,
+                leave,
+                leave_behind: bsdf.transmits_light_samples().then(behind),
+                medium,
+            };
 
-            // Delta suns: gathered by a shadow ray only.
-            for sun in &self.suns {
-                let to_sun = -sun.direction;
-                if to_sun.dot(surface.geometric) > 0.0 {
-                    let f = bsdf.eval(wo, frame.to_local(to_sun));
-                    if f != Vec3::ZERO && !self.occluded(leave, to_sun) {
-                        radiance += throughput * f * sun.irradiance;
-                    }
-                }
-            }
-
-            // Point and spot lights, delta lights too: a shadow ray to each.
-            if !self.point_lights.is_empty() {
-                radiance += self.gather_point_lights(throughput, bsdf, wo, frame, &surface, leave);
-            }
-
-            // Emitters, sun discs and the environment: one light sample each (next-event
-            // estimation).
-            if self.settings.light_sampling != LightSampling::Bsdf
-                && (self.emitters.is_some() || !self.sun_discs.is_empty() || self.env_sampler.is_some())
-            {
-                let vertex = Vertex { throughput, bsdf, wo, frame, surface: &surface, leave };
-                if self.emitters.is_some() {
-                    radiance += self.sample_emitter(pixel, index, event, &vertex);
-                }
-                if !self.sun_discs.is_empty() {
-                    radiance += self.sample_sun_discs(pixel, index, event, &vertex);
-                }
-                if self.env_sampler.is_some() {
-                    radiance += self.sample_environment(pixel, index, event, &vertex);
-                }
+            if !last && !bsdf.is_delta() {
+                self.light_samples(pixel, index, event, &vertex, &mut radiance);
             }
 
             // Continue the path by sampling the BSDF.
             let dim = layout::bounce(event);
             let [u1, u2] = self.sampler.value_2d(pixel, index, dim + BOUNCE_BSDF_DIRECTION);
-            // The lobe choice `uc` is drawn only where the material has two lobes.
-            let uc = || self.sampler.value(pixel, index, dim + BOUNCE_BSDF_LOBE);
-            let Some(s) = bsdf.sample_lazy(wo, Vec2::new(u1, u2), uc) else { break };
+            // The lobe choice `uc` is drawn only where the material has two lobes (or left over
+            // by a pass through a sheet at this event).
+            let uc =
+                || carried_uc.unwrap_or_else(|| self.sampler.value(pixel, index, dim + BOUNCE_BSDF_LOBE));
+            let Some(s) = bsdf.sample(wo, Vec2::new(u1, u2), uc) else { break };
             let wi = frame.to_world(s.wi);
-            if !(wi.dot(surface.geometric) > 0.0) {
-                // Above the shading normal's horizon but below the surface: the path ends
-                // (continuing would enter the surface from its own side).
+            // Reflections leave on the side the ray came from, transmissions on the other; a
+            // direction the shading normal allows but the surface does not ends the path.
+            let side = wi.dot(surface.geometric);
+            if !(if s.transmitted { side < 0.0 } else { side > 0.0 }) {
+                break;
+            }
+            if s.delta && s.transmitted && bsdf.is_thin() {
+                // Straight through a sheet: no event, the MIS state of the last one kept.
+                passes += 1;
+                if passes > MAX_PASSES {
+                    break;
+                }
+                throughput *= s.weight;
+                carried_uc = Some(s.rest);
+                mis_origin.get_or_insert(origin);
+                origin = behind();
+                continue;
+            }
+            if last {
                 break;
             }
             throughput *= s.weight;
-            bsdf_pdf = Some(s.pdf);
+            bsdf_pdf = (!s.delta).then_some(s.pdf);
             event += 1;
+            passes = 0;
+            carried_uc = None;
+            if s.transmitted && bsdf.is_volume() {
+                // Into the solid from outside (wo on the outward side), or out of it.
+                medium = if wo.z > 0.0 { material.absorption } else { Vec3::ZERO };
+            }
             if self.settings.russian_roulette && event >= 3 {
                 let survive = furnace_render::russian_roulette_survival(throughput);
                 if !(self.sampler.value(pixel, index, dim + BOUNCE_RUSSIAN_ROULETTE) < survive) {
@@ -443,11 +485,54 @@ impl CpuRenderer {
                 }
                 throughput /= survive;
             }
-            origin = leave;
-            normal = surface.geometric;
+            normal = vertex.receiver_normal();
+            if s.transmitted {
+                origin = behind();
+                mis_origin = Some(leave);
+            } else {
+                origin = leave;
+                mis_origin = None;
+            }
             direction = wi;
         }
         radiance
+    }
+
+    /// The lights gathered at a non-delta scattering event (throughput included): a shadow ray
+    /// to each delta sun, point and spot light, and one light sample each of the emitters, sun
+    /// discs and environment (next-event estimation).
+    fn light_samples(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>, radiance: &mut Vec3) {
+        // Delta suns: gathered by a shadow ray only.
+        for sun in &self.suns {
+            let to_sun = -sun.direction;
+            if let Some(origin) = v.origin_towards(to_sun) {
+                let f = v.bsdf.eval(v.wo, v.frame.to_local(to_sun));
+                if f != Vec3::ZERO {
+                    let contribution = v.throughput * f * sun.irradiance;
+                    *radiance += contribution * self.transmittance(origin, to_sun, f32::INFINITY, v.medium);
+                }
+            }
+        }
+
+        // Point and spot lights, delta lights too: a shadow ray to each.
+        if !self.point_lights.is_empty() {
+            *radiance += self.gather_point_lights(v);
+        }
+
+        // Emitters, sun discs and the environment: one light sample each.
+        if self.settings.light_sampling != LightSampling::Bsdf
+            && (self.emitters.is_some() || !self.sun_discs.is_empty() || self.env_sampler.is_some())
+        {
+            if self.emitters.is_some() {
+                *radiance += self.sample_emitter(pixel, index, event, v);
+            }
+            if !self.sun_discs.is_empty() {
+                *radiance += self.sample_sun_discs(pixel, index, event, v);
+            }
+            if self.env_sampler.is_some() {
+                *radiance += self.sample_environment(pixel, index, event, v);
+            }
+        }
     }
 
     /// `Geometry::shading_normal` over the pre-decoded normals (same arithmetic, same bits).
@@ -475,34 +560,24 @@ impl CpuRenderer {
     /// shadow ray to each, stopping `SHADOW_EPSILON·d` short of it; a contribution that is not
     /// finite (a light on the surface, d → 0) adds nothing. Summed over the lights first, as
     /// the WGSL twin does.
-    fn gather_point_lights(
-        &self,
-        throughput: Vec3,
-        bsdf: &MetallicRoughness,
-        wo: Vec3,
-        frame: Frame,
-        surface: &furnace_scene::SurfacePoint,
-        leave: Vec3,
-    ) -> Vec3 {
+    fn gather_point_lights(&self, v: &Vertex<'_>) -> Vec3 {
         let mut sum = Vec3::ZERO;
         for light in &self.point_lights {
-            let to_light = light.position - surface.position;
+            let to_light = light.position - v.surface.position;
             let d2 = to_light.length_squared();
             if !(d2 > 0.0) {
                 continue;
             }
             let d = d2.sqrt();
             let wi = to_light / d;
-            if wi.dot(surface.geometric) > 0.0 {
+            if let Some(origin) = v.origin_towards(wi) {
                 let li = light.intensity_towards(-wi, d);
                 if li != Vec3::ZERO {
-                    let f = bsdf.eval(wo, frame.to_local(wi));
-                    let contribution = throughput * f * li / d2;
-                    if f != Vec3::ZERO
-                        && contribution.is_finite()
-                        && !self.occluded_within(leave, wi, d * (1.0 - furnace_render::SHADOW_EPSILON))
-                    {
-                        sum += contribution;
+                    let f = v.bsdf.eval(v.wo, v.frame.to_local(wi));
+                    let contribution = v.throughput * f * li / d2;
+                    if f != Vec3::ZERO && contribution.is_finite() {
+                        let t_max = d * (1.0 - furnace_render::SHADOW_EPSILON);
+                        sum += contribution * self.transmittance(origin, wi, t_max, v.medium);
                     }
                 }
             }
@@ -510,8 +585,38 @@ impl CpuRenderer {
         sum
     }
 
-    fn occluded(&self, origin: Vec3, direction: Vec3) -> bool {
-        self.occluded_within(origin, direction, f32::INFINITY)
+    /// The fraction of light a shadow ray from `origin` along `direction` carries over
+    /// `t_max`: 0 where a surface blocks it, else the product of the thin-walled sheets' T′
+    /// it crosses and the absorption of the volume it starts in (`medium`).
+    fn transmittance(&self, origin: Vec3, direction: Vec3, t_max: f32, medium: Vec3) -> Vec3 {
+        let mut carried = if medium == Vec3::ZERO { Vec3::ONE } else { absorption(medium, t_max) };
+        if !self.any_thin {
+            return if self.occluded_within(origin, direction, t_max) { Vec3::ZERO } else { carried };
+        }
+        let scene = &self.scene;
+        let blocked = self.bvh.occluded_masked(origin, direction, t_max, |t, b| {
+            if self.any_masked && !self.alpha_passes(t, b) {
+                return false;
+            }
+            let material_index = self.triangle_materials[t as usize] as usize;
+            let material = &scene.materials[material_index];
+            if !material.is_thin_walled() {
+                return true;
+            }
+            // A sheet: T′ at the angle to its shading normal, times its tint.
+            let normal = self.shading_normal(t as usize, b.x, b.y).unwrap_or(Vec3::Z);
+            let params = match &self.constant_materials[material_index] {
+                Some(c) => c.bsdf.sheet_transmittance(direction.dot(normal)),
+                None => {
+                    let uv = scene.geometry.uv(t as usize, b.x, b.y);
+                    let p = material.evaluate(uv, &scene.textures, &scene.images);
+                    bsdf(&p, material, self.settings.specular).sheet_transmittance(direction.dot(normal))
+                }
+            };
+            carried *= params;
+            carried == Vec3::ZERO
+        });
+        if blocked { Vec3::ZERO } else { carried }
     }
 
     /// Whether a surface lies along `direction` from `origin` closer than `t_max`.
@@ -567,16 +672,124 @@ impl Integrator for CpuRenderer {
     }
 }
 
-/// The BSDF of evaluated material parameters.
-fn bsdf(params: &MaterialSample, specular: SpecularOptions) -> MetallicRoughness {
-    MetallicRoughness::new(
-        MetallicRoughnessParams {
-            base_color: params.base_color,
-            metallic: params.metallic,
-            roughness: params.roughness,
-            specular_factor: params.specular_factor,
-            specular_color: params.specular_color,
-        },
-        specular,
-    )
+/// How many sheets a path may pass straight through between two events (a guard against a
+/// ray caught between coincident sheets; real scenes stay far below it).
+const MAX_PASSES: u32 = 64;
+
+/// `exp(−σ·t)` per channel, 1 where σ is 0 (also for t = ∞).
+#[inline]
+fn absorption(sigma: Vec3, t: f32) -> Vec3 {
+    let f = |s: f32| if s > 0.0 { (-s * t).exp() } else { 1.0 };
+    Vec3::new(f(sigma.x), f(sigma.y), f(sigma.z))
+}
+
+/// The BSDF at a hit: the opaque glTF material, or one that transmits
+/// (KHR_materials_transmission).
+#[derive(Debug, Clone, Copy)]
+pub(crate) enum HitBsdf {
+    Opaque(MetallicRoughness),
+    /// The mixture, and whether it bounds a solid (KHR_materials_volume).
+    Transmissive(Transmissive, bool),
+}
+
+impl HitBsdf {
+    /// The BSDF times `|cos θi|`.
+    #[inline]
+    pub(crate) fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
+        match self {
+            Self::Opaque(b) => b.eval(wo, wi),
+            Self::Transmissive(b, _) => b.eval(wo, wi),
+        }
+    }
+
+    /// The density of the non-delta part of `sample`.
+    #[inline]
+    pub(crate) fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match self {
+            Self::Opaque(b) => b.pdf(wo, wi),
+            Self::Transmissive(b, _) => b.pdf(wo, wi),
+        }
+    }
+
+    /// Samples a direction; the lobe number `uc` is drawn only where it decides something.
+    #[inline]
+    fn sample(&self, wo: Vec3, u: Vec2, uc: impl FnOnce() -> f32) -> Option<ScatterSample> {
+        match self {
+            Self::Opaque(b) => b.sample_lazy(wo, u, uc).map(|s| ScatterSample {
+                wi: s.wi,
+                weight: s.weight,
+                pdf: s.pdf,
+                delta: false,
+                transmitted: false,
+                rest: 0.0,
+            }),
+            Self::Transmissive(b, _) => b.sample(wo, uc(), u),
+        }
+    }
+
+    /// Only delta lobes: no light sample can reach a direction.
+    #[inline]
+    fn is_delta(&self) -> bool {
+        matches!(self, Self::Transmissive(b, _) if b.is_delta())
+    }
+
+    /// A thin-walled sheet (straight passes are no events).
+    #[inline]
+    fn is_thin(&self) -> bool {
+        matches!(self, Self::Transmissive(b, _) if b.dielectric.interface == Interface::ThinWalled)
+    }
+
+    /// The interface of a solid.
+    #[inline]
+    fn is_volume(&self) -> bool {
+        matches!(self, Self::Transmissive(_, true))
+    }
+
+    /// Light samples may arrive from behind the surface (a rough solid interface).
+    #[inline]
+    fn transmits_light_samples(&self) -> bool {
+        matches!(self, Self::Transmissive(b, true) if b.dielectric.interface == Interface::Rough)
+    }
+
+    /// What a shadow ray crossing a sheet at cosine `cos` keeps: `g·T′·tint + (1 − g)·0`.
+    fn sheet_transmittance(&self, cos: f32) -> Vec3 {
+        match self {
+            Self::Transmissive(b, false) => b.weight * b.dielectric.shadow_transmittance(cos),
+            _ => Vec3::ZERO,
+        }
+    }
+}
+
+/// The BSDF of evaluated material parameters: the glTF metallic-roughness material, mixed with
+/// a dielectric interface where it transmits.
+fn bsdf(params: &MaterialSample, material: &furnace_scene::Material, specular: SpecularOptions) -> HitBsdf {
+    let mr = |metallic: f32| {
+        MetallicRoughness::new(
+            MetallicRoughnessParams {
+                base_color: params.base_color,
+                metallic,
+                roughness: params.roughness,
+                specular_factor: params.specular_factor,
+                specular_color: params.specular_color,
+            },
+            specular,
+        )
+    };
+    let metallic = params.metallic.clamp(0.0, 1.0);
+    let g = params.transmission.clamp(0.0, 1.0) * (1.0 - metallic);
+    if !(g > 0.0) {
+        return HitBsdf::Opaque(mr(params.metallic));
+    }
+    let roughness = params.roughness.clamp(0.0, 1.0);
+    // Sheets are smooth (the loader warns about rough ones).
+    let dielectric = Dielectric::new(
+        material.ior,
+        roughness * roughness,
+        !material.volume,
+        specular.masking,
+        params.base_color,
+    );
+    // The opaque rest: metal m and the untransmitted dielectric (1 − m)(1 − T), renormalised.
+    let opaque = mr(if g < 1.0 { (metallic / (1.0 - g)).min(1.0) } else { 0.0 });
+    HitBsdf::Transmissive(Transmissive { dielectric, opaque, weight: g.min(1.0) }, material.volume)
 }

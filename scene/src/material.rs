@@ -1,5 +1,6 @@
-//! Materials: glTF 2.0 metallic-roughness with KHR_materials_specular and
-//! KHR_materials_emissive_strength, as factors and texture references. Textures are sampled by
+//! Materials: glTF 2.0 metallic-roughness with KHR_materials_specular,
+//! KHR_materials_emissive_strength, KHR_materials_transmission, KHR_materials_ior and
+//! KHR_materials_volume, as factors and texture references. Textures are sampled by
 //! [`Material::evaluate`] into the per-shading-point values the integrator feeds to
 //! `furnace_brdf::MetallicRoughnessParams`.
 
@@ -51,8 +52,22 @@ pub struct Material {
     pub double_sided: bool,
     /// KHR_materials_specular `specularFactor` (default 1).
     pub specular_factor: f32,
-    /// KHR_materials_specular `specularColorFactor` (default 1; may exceed 1).
+    /// KHR_materials_specular `specularColorFactor` (default 1; may exceed 1). The loader folds
+    /// KHR_materials_ior into it for the opaque BSDF's Fresnel: `F0 = ((ior − 1)/(ior + 1))²`
+    /// is `0.04 × specularColor` there.
     pub specular_color_factor: Vec3,
+    /// KHR_materials_transmission `transmissionFactor` (default 0: opaque).
+    pub transmission_factor: f32,
+    /// KHR_materials_transmission `transmissionTexture` (linear, R channel).
+    pub transmission_texture: Option<TextureRef>,
+    /// KHR_materials_ior `ior` (default 1.5): the index of the transmissive solid or sheet.
+    pub ior: f32,
+    /// KHR_materials_volume: the surface bounds a solid (`thicknessFactor` > 0, a flag only:
+    /// distances are ray-traced); otherwise a transmissive surface is thin-walled.
+    pub volume: bool,
+    /// The volume's absorption coefficient σ_a = −ln(attenuationColor)/attenuationDistance per
+    /// channel, in 1/m (0: clear; +∞ where a channel is black).
+    pub absorption: Vec3,
 }
 
 impl Default for Material {
@@ -73,6 +88,11 @@ impl Default for Material {
             double_sided: false,
             specular_factor: 1.0,
             specular_color_factor: Vec3::ONE,
+            transmission_factor: 0.0,
+            transmission_texture: None,
+            ior: 1.5,
+            volume: false,
+            absorption: Vec3::ZERO,
         }
     }
 }
@@ -94,6 +114,8 @@ pub struct MaterialSample {
     pub specular_factor: f32,
     /// KHR_materials_specular `specularColorFactor`.
     pub specular_color: Vec3,
+    /// `transmissionFactor × texture.r`: the share of the dielectric part that is transmissive.
+    pub transmission: f32,
 }
 
 impl Material {
@@ -103,6 +125,18 @@ impl Material {
             || self.metallic_roughness_texture.is_some()
             || self.normal_texture.is_some()
             || self.emissive_texture.is_some()
+            || self.transmission_texture.is_some()
+    }
+
+    /// Whether light can pass through the surface (`transmissionFactor` > 0): rendered as a
+    /// dielectric interface (a solid's surface with [`Material::volume`], else a thin sheet).
+    pub fn is_transmissive(&self) -> bool {
+        self.transmission_factor > 0.0
+    }
+
+    /// Whether the surface is a thin-walled transmissive sheet, which shadow rays cross.
+    pub fn is_thin_walled(&self) -> bool {
+        self.is_transmissive() && !self.volume
     }
 
     /// Evaluates factors × textures at `uv` (UV0; ignored without textures).
@@ -113,6 +147,10 @@ impl Material {
         let base = self.base_color_factor * sample(&self.base_color_texture);
         let mr = sample(&self.metallic_roughness_texture);
         let emission = self.emissive * sample(&self.emissive_texture).truncate();
+        let transmission = match &self.transmission_texture {
+            Some(t) => self.transmission_factor * t.sample_bilinear(uv, textures, images).x,
+            None => self.transmission_factor,
+        };
         MaterialSample {
             base_color: base.truncate(),
             alpha: base.w,
@@ -121,6 +159,7 @@ impl Material {
             emission,
             specular_factor: self.specular_factor,
             specular_color: self.specular_color_factor,
+            transmission,
         }
     }
 

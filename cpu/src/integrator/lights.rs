@@ -2,8 +2,8 @@
 //! and the environment map, with the MIS weights of both strategies
 //! ([`furnace_render::LightSampling`], [`furnace_render::EnvSampling`]).
 
-use super::CpuRenderer;
-use furnace_brdf::{Bsdf, Frame, MetallicRoughness};
+use super::{CpuRenderer, HitBsdf};
+use furnace_brdf::Frame;
 use furnace_render::layout::{
     self, LIGHT_EMITTER_BIN, LIGHT_EMITTER_POINT, LIGHT_ENVIRONMENT, LIGHT_SUN_DISC,
 };
@@ -46,12 +46,41 @@ impl SunDisc {
 /// What a light sample needs of the scattering event it is taken at.
 pub(super) struct Vertex<'a> {
     pub throughput: Vec3,
-    pub bsdf: &'a MetallicRoughness,
+    pub bsdf: &'a HitBsdf,
     pub wo: Vec3,
     pub frame: Frame,
     pub surface: &'a SurfacePoint,
-    /// The offset origin of rays leaving the surface.
+    /// The offset origin of rays leaving the surface on the side it was reached from (the
+    /// side of `surface.geometric`); light samples are taken from this point.
     pub leave: Vec3,
+    /// The offset origin on the other side, for a BSDF that transmits light from there (a rough
+    /// dielectric); `None` for a one-sided reflection.
+    pub leave_behind: Option<Vec3>,
+    /// The absorption coefficient of the volume the vertex is in (0 in air).
+    pub medium: Vec3,
+}
+
+impl Vertex<'_> {
+    /// The origin of a shadow ray along `wi`: `leave` above the surface, `leave_behind` below
+    /// it where the BSDF transmits; `None` where it does neither.
+    #[inline]
+    pub fn origin_towards(&self, wi: Vec3) -> Option<Vec3> {
+        let side = wi.dot(self.surface.geometric);
+        if side > 0.0 {
+            Some(self.leave)
+        } else if side < 0.0 {
+            self.leave_behind
+        } else {
+            None
+        }
+    }
+
+    /// The receiving side for the light BVH's importance: the geometric normal, or none
+    /// (zero) for a vertex lit from both sides.
+    #[inline]
+    pub fn receiver_normal(&self) -> Vec3 {
+        if self.leave_behind.is_some() { Vec3::ZERO } else { self.surface.geometric }
+    }
 }
 
 impl CpuRenderer {
@@ -70,7 +99,7 @@ impl CpuRenderer {
         // The triangle and, for the BVH, its probability (the alias table's follows from the
         // material and the area below).
         let (t, bvh_pmf) = match &self.light_bvh {
-            Some(bvh) => match bvh.sample(v.leave, v.surface.geometric, to_unit_f32(bits)) {
+            Some(bvh) => match bvh.sample(v.leave, v.receiver_normal(), to_unit_f32(bits)) {
                 Some((item, pmf)) => (emitters.triangles()[item] as usize, Some(pmf)),
                 None => return Vec3::ZERO, // no emitter can light this point
             },
@@ -104,9 +133,7 @@ impl CpuRenderer {
         let d = d2.sqrt();
         let wi = to_light / d;
         let cos_light = -geometric_normal(v0, v1, v2).dot(wi);
-        if !(cos_light > 0.0 && wi.dot(v.surface.geometric) > 0.0) {
-            return Vec3::ZERO;
-        }
+        let Some(origin) = v.origin_towards(wi).filter(|_| cos_light > 0.0) else { return Vec3::ZERO };
         if self.any_masked && !self.alpha_passes(t as u32, bary) {
             return Vec3::ZERO; // a cut-out of an alpha-masked emitter emits nothing
         }
@@ -126,12 +153,10 @@ impl CpuRenderer {
         let w = self.settings.light_sampling.light_weight(pdf, v.bsdf.pdf(v.wo, wi_local));
         let contribution = v.throughput * f * emission * (w / pdf);
         // A light sample that is not finite (an emitter touching the surface) adds nothing.
-        if !(contribution.is_finite() && contribution != Vec3::ZERO)
-            || self.occluded_within(v.leave, wi, d * (1.0 - furnace_render::SHADOW_EPSILON))
-        {
+        if !(contribution.is_finite() && contribution != Vec3::ZERO) {
             return Vec3::ZERO;
         }
-        contribution
+        contribution * self.transmittance(origin, wi, d * (1.0 - furnace_render::SHADOW_EPSILON), v.medium)
     }
 
     /// One light sample of each sun disc at scattering event `event` (throughput included): a
@@ -143,9 +168,7 @@ impl CpuRenderer {
             let [u1, u2] = self.sampler.value_2d(pixel, index, dim);
             let wi =
                 Frame::new(disc.axis).to_world(square_to_uniform_cone(Vec2::new(u1, u2), disc.one_minus_cos));
-            if !(wi.dot(v.surface.geometric) > 0.0) {
-                continue;
-            }
+            let Some(origin) = v.origin_towards(wi) else { continue };
             let wi_local = v.frame.to_local(wi);
             let f = v.bsdf.eval(v.wo, wi_local);
             if f == Vec3::ZERO {
@@ -153,8 +176,8 @@ impl CpuRenderer {
             }
             let w = self.settings.light_sampling.light_weight(disc.pdf, v.bsdf.pdf(v.wo, wi_local));
             let contribution = v.throughput * f * disc.estimate * w;
-            if contribution != Vec3::ZERO && !self.occluded(v.leave, wi) {
-                sum += contribution;
+            if contribution != Vec3::ZERO {
+                sum += contribution * self.transmittance(origin, wi, f32::INFINITY, v.medium);
             }
         }
         sum
@@ -168,7 +191,8 @@ impl CpuRenderer {
         let dim = layout::light(self.settings.bounces, event) + LIGHT_ENVIRONMENT;
         let u = Vec2::from(self.sampler.value_2d(pixel, index, dim));
         let Some(s) = sampler.sample(env, u) else { return Vec3::ZERO };
-        if !(s.direction.dot(v.surface.geometric) > 0.0) || s.radiance == Vec3::ZERO {
+        let Some(origin) = v.origin_towards(s.direction) else { return Vec3::ZERO };
+        if s.radiance == Vec3::ZERO {
             return Vec3::ZERO;
         }
         let wi_local = v.frame.to_local(s.direction);
@@ -178,18 +202,27 @@ impl CpuRenderer {
         }
         let w = self.env_weights.light_weight(s.pdf, v.bsdf.pdf(v.wo, wi_local));
         let contribution = v.throughput * f * s.radiance * (w / s.pdf);
-        if !(contribution.is_finite() && contribution != Vec3::ZERO) || self.occluded(v.leave, s.direction) {
+        if !(contribution.is_finite() && contribution != Vec3::ZERO) {
             return Vec3::ZERO;
         }
-        contribution
+        contribution * self.transmittance(origin, s.direction, f32::INFINITY, v.medium)
     }
 
     /// The environment's radiance along an escaping ray (`direction`), weighted against its
-    /// light samples at the previous vertex (`bsdf_pdf`; `None` for a camera ray: weight 1, and
-    /// nothing where the camera does not see the environment).
-    pub(super) fn environment_seen(&self, env: &Environment, direction: Vec3, bsdf_pdf: Option<f32>) -> Vec3 {
+    /// light samples at the previous vertex (`bsdf_pdf`; `None` for a camera ray or a delta
+    /// event: weight 1). A `camera` ray (no scattering event yet) sees nothing where the camera
+    /// does not see the environment.
+    pub(super) fn environment_seen(
+        &self,
+        env: &Environment,
+        direction: Vec3,
+        bsdf_pdf: Option<f32>,
+        camera: bool,
+    ) -> Vec3 {
+        if camera && !env.visible {
+            return Vec3::ZERO;
+        }
         let w = match (bsdf_pdf, &self.env_sampler) {
-            (None, _) if !env.visible => return Vec3::ZERO,
             (Some(p), Some(sampler)) => self.env_weights.bsdf_weight(p, sampler.pdf(direction)),
             _ => 1.0,
         };

@@ -11,6 +11,9 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_materials_specular",
     "KHR_materials_emissive_strength",
+    "KHR_materials_transmission",
+    "KHR_materials_ior",
+    "KHR_materials_volume",
     "KHR_texture_transform",
     "KHR_mesh_quantization",
 ];

@@ -81,25 +81,113 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
         texture_ref(ctx, m.emissive_texture(), ColorSpace::Srgb, format!("{p}.emissiveTexture"));
     let emissive = emissive(ctx, m, &p);
     let alpha_mode = alpha_mode(ctx, m, &p);
-    let (specular_factor, specular_color_factor) = specular(ctx, m, &p);
+    let (specular_factor, mut specular_color_factor) = specular(ctx, m, &p);
+    let ior = ior(ctx, m, &p);
+    if ior != 1.5 {
+        // The opaque BSDF's dielectric F0 is 0.04·specularColor; KHR_materials_ior sets it to
+        // ((ior − 1)/(ior + 1))² (1.5 gives 0.04: left exactly as it was).
+        let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
+        specular_color_factor *= f0 / 0.04;
+    }
+    let transmission = transmission(ctx, m, &p);
     warn_ignored(ctx, m);
     let clamp01 = |x: f32| if x.is_nan() { 1.0 } else { x.clamp(0.0, 1.0) };
+    let roughness_factor = clamp01(pbr.roughness_factor());
+    let transmissive = transmission.factor > 0.0;
+    if transmissive && !transmission.volume && roughness_factor > 0.0 {
+        ctx.warn(
+            format!("{p}.extensions.KHR_materials_transmission"),
+            "rough thin-walled transmission is not supported: the sheet is rendered smooth",
+        );
+    }
     Material {
         name: m.name().map(str::to_string),
         base_color_factor: Vec4::from(pbr.base_color_factor()),
         base_color_texture,
         metallic_factor: clamp01(pbr.metallic_factor()),
-        roughness_factor: clamp01(pbr.roughness_factor()),
+        roughness_factor,
         metallic_roughness_texture,
         normal_texture,
         normal_scale,
         emissive,
         emissive_texture,
         alpha_mode,
-        double_sided: m.double_sided(),
+        // A solid's surface is one interface whatever doubleSided says (KHR_materials_volume),
+        // and a sheet is seen from both sides: transmissive surfaces are two-sided.
+        double_sided: m.double_sided() || transmissive,
         specular_factor,
         specular_color_factor,
+        transmission_factor: transmission.factor,
+        transmission_texture: transmission.texture,
+        ior,
+        volume: transmissive && transmission.volume,
+        absorption: transmission.absorption,
     }
+}
+
+/// KHR_materials_ior's `ior` (1.5 without it). glTF allows 0 (meaning "very large", a
+/// metal-like Fresnel) and values ≥ 1; others are invalid.
+fn ior(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> f32 {
+    let Some(ior) = m.ior() else { return 1.5 };
+    if ior == 0.0 {
+        ctx.warn(format!("{p}.extensions.KHR_materials_ior.ior"), "0 (infinite index) is rendered as 100");
+        return 100.0;
+    }
+    if !(ior.is_finite() && ior >= 1.0) {
+        ctx.warn(format!("{p}.extensions.KHR_materials_ior.ior"), format!("{ior} is not ≥ 1: 1.5 used"));
+        return 1.5;
+    }
+    ior.min(100.0)
+}
+
+/// What KHR_materials_transmission and KHR_materials_volume say.
+struct TransmissionExt {
+    factor: f32,
+    texture: Option<TextureRef>,
+    volume: bool,
+    absorption: Vec3,
+}
+
+fn transmission(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> TransmissionExt {
+    let mut t = TransmissionExt { factor: 0.0, texture: None, volume: false, absorption: Vec3::ZERO };
+    if let Some(tr) = m.transmission() {
+        let f = tr.transmission_factor();
+        t.factor = if f.is_nan() { 0.0 } else { f.clamp(0.0, 1.0) };
+        t.texture = texture_ref(
+            ctx,
+            tr.transmission_texture(),
+            ColorSpace::Linear,
+            format!("{p}.extensions.KHR_materials_transmission.transmissionTexture"),
+        );
+    }
+    if let Some(v) = m.volume() {
+        let path = format!("{p}.extensions.KHR_materials_volume");
+        if m.transmission().is_none() {
+            ctx.warn(path.clone(), "a volume without KHR_materials_transmission is opaque: ignored");
+        }
+        t.volume = v.thickness_factor() > 0.0;
+        if v.thickness_texture().is_some() {
+            ctx.warn(path.clone(), "thicknessTexture ignored (thickness is ray-traced)");
+        }
+        let d = v.attenuation_distance();
+        let c = Vec3::from(v.attenuation_color());
+        if !(d > 0.0) || !(c.min_element() >= 0.0) || !c.is_finite() {
+            ctx.warn(path, "attenuationDistance must be > 0 and attenuationColor in [0, 1]: no absorption");
+        } else if d.is_finite() {
+            // σ_a = −ln(c)/d; a black channel absorbs everything (+∞).
+            let sigma = |c: f32| {
+                if c >= 1.0 {
+                    0.0
+                } else if c > 0.0 {
+                    -c.ln() / d
+                } else {
+                    f32::INFINITY
+                }
+            };
+            t.absorption = Vec3::new(sigma(c.x), sigma(c.y), sigma(c.z));
+        }
+    }
+    t
 }
 
 /// The normal map and its scale (1 without one).
@@ -173,9 +261,6 @@ fn warn_ignored(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) {
         ctx.warn("", "occlusionTexture ignored (a path tracer computes occlusion)");
     }
     for (present, name) in [
-        (m.transmission().is_some(), "KHR_materials_transmission"),
-        (m.volume().is_some(), "KHR_materials_volume"),
-        (m.ior().is_some(), "KHR_materials_ior"),
         (m.unlit(), "KHR_materials_unlit"),
         (m.pbr_specular_glossiness().is_some(), "KHR_materials_pbrSpecularGlossiness"),
     ] {

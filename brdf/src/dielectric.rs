@@ -1,0 +1,436 @@
+//! Dielectric interfaces — glass, water, thin sheets — with the exact unpolarised Fresnel
+//! reflectance, and the glTF material that mixes one with the opaque metallic-roughness BSDF
+//! (KHR_materials_transmission).
+//!
+//! * Smooth: mirror reflection with probability R, Snell refraction with 1 − R (delta lobes).
+//! * Rough: the microfacet BSDF of Walter, Marschner, Li & Torrance, "Microfacet Models for
+//!   Refraction through Rough Surfaces", EGSR 2007, with GGX, Smith masking (separable or
+//!   height-correlated, the same form for both lobes as pbrt-v4), sampled by visible normals
+//!   (Heitz 2018's distribution, drawn with Dupuy & Benyoub's spherical caps) of the side `wo`
+//!   is on, then reflection or refraction chosen by F at the sampled normal (as Mitsuba 3's
+//!   `roughdielectric` with `sample_visible`).
+//! * Thin-walled: a sheet that reflects R′ = 2R/(1 + R) and lets T′ = 1 − R′ pass straight
+//!   through (the sum of its inner reflections taken with the unpolarised R; Mitsuba's
+//!   `thindielectric`).
+//!
+//! Unlike the reflection models, a dielectric sees both hemispheres: the local frame's z is the
+//! surface's **outward** normal (the side of index 1), `wo` may be on either side, and which
+//! side it is on decides the relative index. Radiance is the transported quantity: light
+//! refracted from index n_l into n_v carries (n_v / n_l)² of its radiance (the radiance-mode
+//! BSDF: on a path from a camera in air to lights in air the factors cancel).
+
+use crate::ggx::{ALPHA_MIN, Ggx, Masking, SpecularSampling, reflect};
+use crate::material::MetallicRoughness;
+use crate::{Bsdf, Rgb, clamp_rgb};
+use glam::{Vec2, Vec3};
+
+/// The exact unpolarised Fresnel reflectance of a dielectric interface and the refracted
+/// cosine ([`fresnel_dielectric`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Fresnel {
+    /// `R = (r_s² + r_p²)/2`; 1 under total internal reflection.
+    pub reflectance: f32,
+    /// The refracted direction's cosine to the normal, of the sign opposite to `cos_i`'s
+    /// (0 under total internal reflection).
+    pub cos_t: f32,
+    /// `n_t / n_i`: the index beyond the interface over the index on the incident side.
+    pub eta_it: f32,
+    /// `n_i / n_t = 1 / eta_it`.
+    pub eta_ti: f32,
+}
+
+/// The exact unpolarised Fresnel reflectance for a direction at cosine `cos_i` to the normal
+/// of an interface between index 1 (the side the normal points to) and index `eta` (the
+/// other): `cos_i > 0` comes from the outside, `cos_i < 0` from inside.
+///
+/// `r_s = (cos θi − η′ cos θt)/(cos θi + η′ cos θt)`, `r_p = (η′ cos θi − cos θt)/(η′ cos θi +
+/// cos θt)`, η′ = n_t/n_i; at grazing incidence R = 1, at `eta` = 1 exactly R = 0 and the ray
+/// goes on (`cos_t = −cos_i`).
+#[inline]
+pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> Fresnel {
+    let outside = cos_i >= 0.0;
+    let (eta_it, eta_ti) = if outside { (eta, 1.0 / eta) } else { (1.0 / eta, eta) };
+    if eta == 1.0 {
+        return Fresnel { reflectance: 0.0, cos_t: -cos_i, eta_it, eta_ti };
+    }
+    let ci = cos_i.abs().min(1.0);
+    // Snell: sin²θt = η_ti² sin²θi.
+    let cos_t2 = 1.0 - eta_ti * eta_ti * (1.0 - ci * ci);
+    if !(cos_t2 > 0.0) {
+        return Fresnel { reflectance: 1.0, cos_t: 0.0, eta_it, eta_ti };
+    }
+    let ct = cos_t2.sqrt();
+    let rs = (ci - eta_it * ct) / (ci + eta_it * ct);
+    let rp = (eta_it * ci - ct) / (eta_it * ci + ct);
+    let reflectance = (0.5 * (rs * rs + rp * rp)).clamp(0.0, 1.0);
+    Fresnel { reflectance, cos_t: if outside { -ct } else { ct }, eta_it, eta_ti }
+}
+
+/// The reflectance `R′ = 2R/(1 + R)` of a thin-walled sheet of index `eta` at cosine `cos_i`
+/// (either side); it transmits `1 − R′`.
+#[inline]
+pub fn thin_reflectance(cos_i: f32, eta: f32) -> f32 {
+    let r = fresnel_dielectric(cos_i.abs(), eta).reflectance;
+    2.0 * r / (1.0 + r)
+}
+
+/// The kind of interface a [`Dielectric`] is.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Interface {
+    /// α below [`ALPHA_MIN`]: mirror reflection and Snell refraction (delta lobes).
+    Smooth,
+    /// GGX microfacets (Walter et al. 2007).
+    Rough,
+    /// A smooth thin-walled sheet: reflection R′, straight transmission T′ (delta lobes).
+    ThinWalled,
+}
+
+/// A sampled direction of a [`Dielectric`] or [`Transmissive`] BSDF.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScatterSample {
+    /// The sampled direction towards the light, unit, on either side.
+    pub wi: Vec3,
+    /// `eval/pdf` per channel (for a delta event: its weight, the event's probability divided
+    /// out).
+    pub weight: Rgb,
+    /// The solid-angle pdf for a non-delta sample; for a delta event the probability with which
+    /// that event was chosen.
+    pub pdf: f32,
+    /// A delta event: no light sample can reach `wi` (no MIS).
+    pub delta: bool,
+    /// `wi` is on the other side of the interface (refraction, or the pass through a sheet).
+    pub transmitted: bool,
+    /// What is left of `uc` after the choices it made, rescaled to `[0, 1)`: independent of
+    /// them, so a path that passes straight through a sheet (no scattering event) can reuse it
+    /// for the next choice at the same event.
+    pub rest: f32,
+}
+
+/// `uc` rescaled after the choice `uc < p` (`taken`): uniform in `[0, 1)` again.
+#[inline]
+pub fn rescale(uc: f32, p: f32, taken: bool) -> f32 {
+    let r = if taken { uc / p } else { (uc - p) / (1.0 - p) };
+    if r.is_finite() { r.clamp(0.0, ONE_BELOW) } else { 0.0 }
+}
+
+/// A dielectric interface between index 1 (outside, the side the local z points to) and
+/// index `eta` (inside). See the [module docs](self).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Dielectric {
+    /// Inside over outside index, in `[ETA_MIN, ETA_MAX]`.
+    pub eta: f32,
+    /// The microfacet distribution (used when [`Interface::Rough`]).
+    pub ggx: Ggx,
+    /// Smooth, rough or thin-walled.
+    pub interface: Interface,
+    /// The masking-shadowing form of the rough interface.
+    pub masking: Masking,
+    /// Multiplies transmitted light (glTF: the base colour tints transmission).
+    pub tint: Rgb,
+}
+
+/// The smallest relative index a [`Dielectric`] takes (inputs are clamped).
+pub const ETA_MIN: f32 = 1e-2;
+/// The largest relative index a [`Dielectric`] takes.
+pub const ETA_MAX: f32 = 1e2;
+
+impl Dielectric {
+    /// An interface of relative index `eta` (NaN → 1.5, clamped to `[ETA_MIN, ETA_MAX]`) and
+    /// roughness `alpha` (α = glTF roughness²): smooth below [`ALPHA_MIN`] (and for NaN ≤ 0),
+    /// else rough with α clamped to 1; `thin_walled` makes it a smooth sheet whatever α.
+    /// `tint` is clamped to `[0, 1]` (NaN → 0).
+    pub fn new(eta: f32, alpha: f32, thin_walled: bool, masking: Masking, tint: Rgb) -> Self {
+        let eta = if eta.is_nan() { 1.5 } else { eta.clamp(ETA_MIN, ETA_MAX) };
+        let interface = if thin_walled {
+            Interface::ThinWalled
+        } else if alpha >= ALPHA_MIN {
+            Interface::Rough
+        } else {
+            Interface::Smooth
+        };
+        Self { eta, ggx: Ggx::new(alpha), interface, masking, tint: clamp_rgb(tint, 1.0) }
+    }
+
+    /// Whether every lobe is a delta (smooth or thin-walled): `eval` and `pdf` are 0.
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        self.interface != Interface::Rough
+    }
+
+    /// The BSDF times `|cos θi|`, per channel: 0 for delta interfaces.
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if self.interface != Interface::Rough {
+            return Rgb::ZERO;
+        }
+        let Some(m) = self.microfacet(wo, wi) else { return Rgb::ZERO };
+        let d = self.ggx.d(m.h);
+        let fr = fresnel_dielectric(m.cos_oh, self.eta);
+        let g_over_co = self.g2_over_cos_o(wo, wi);
+        if m.reflect {
+            Rgb::splat(fr.reflectance * d * g_over_co * 0.25)
+        } else {
+            let den = m.cos_oh + m.eta_it * m.cos_ih;
+            let f = (m.cos_oh * m.cos_ih).abs() * (1.0 - fr.reflectance) * d * g_over_co / (den * den);
+            if f.is_finite() { self.tint * f } else { Rgb::ZERO }
+        }
+    }
+
+    /// The solid-angle density of [`Dielectric::sample`] at `wi`: 0 for delta interfaces.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if self.interface != Interface::Rough {
+            return 0.0;
+        }
+        let Some(m) = self.microfacet(wo, wi) else { return 0.0 };
+        let fr = fresnel_dielectric(m.cos_oh, self.eta);
+        // Visible normals of the side wo is on: G1(wo)·|wo·h|·D(h)/|cos θo|, G1/|cos| = 2/(|z| + a).
+        let d_vis_over_cos_oh = 2.0 / (wo.z.abs() + self.ggx_a(wo)) * self.ggx.d(m.h);
+        let pdf = if m.reflect {
+            // pdf_h · F / (4|wo·h|)
+            d_vis_over_cos_oh * fr.reflectance * 0.25
+        } else {
+            let den = m.cos_oh + m.eta_it * m.cos_ih;
+            d_vis_over_cos_oh
+                * m.cos_oh.abs()
+                * (1.0 - fr.reflectance)
+                * (m.eta_it * m.eta_it * m.cos_ih.abs() / (den * den))
+        };
+        if pdf.is_finite() { pdf } else { 0.0 }
+    }
+
+    /// Samples `wi` from `uc` (reflection or transmission) and `u` (the microfacet normal of a
+    /// rough interface). `None` when `wo` lies in the interface's plane or a rough sample lands
+    /// on the wrong side.
+    pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<ScatterSample> {
+        if !(wo.z != 0.0) || !wo.is_finite() {
+            return None;
+        }
+        match self.interface {
+            Interface::Smooth => {
+                let fr = fresnel_dielectric(wo.z, self.eta);
+                Some(if uc < fr.reflectance {
+                    ScatterSample {
+                        wi: Vec3::new(-wo.x, -wo.y, wo.z),
+                        weight: Rgb::ONE,
+                        pdf: fr.reflectance,
+                        delta: true,
+                        transmitted: false,
+                        rest: rescale(uc, fr.reflectance, true),
+                    }
+                } else {
+                    let wi = Vec3::new(-fr.eta_ti * wo.x, -fr.eta_ti * wo.y, fr.cos_t);
+                    ScatterSample {
+                        wi,
+                        weight: self.tint * (fr.eta_ti * fr.eta_ti),
+                        pdf: 1.0 - fr.reflectance,
+                        delta: true,
+                        transmitted: true,
+                        rest: rescale(uc, fr.reflectance, false),
+                    }
+                })
+            }
+            Interface::ThinWalled => {
+                let r = thin_reflectance(wo.z, self.eta);
+                Some(if uc < r {
+                    ScatterSample {
+                        wi: Vec3::new(-wo.x, -wo.y, wo.z),
+                        weight: Rgb::ONE,
+                        pdf: r,
+                        delta: true,
+                        transmitted: false,
+                        rest: rescale(uc, r, true),
+                    }
+                } else {
+                    ScatterSample {
+                        wi: -wo,
+                        weight: self.tint,
+                        pdf: 1.0 - r,
+                        delta: true,
+                        transmitted: true,
+                        rest: rescale(uc, r, false),
+                    }
+                })
+            }
+            Interface::Rough => {
+                let flip = if wo.z > 0.0 { 1.0 } else { -1.0 };
+                let h = self.ggx.sample_wm(wo * flip, u, SpecularSampling::SphericalCaps);
+                let cos_oh = wo.dot(h);
+                let fr = fresnel_dielectric(cos_oh, self.eta);
+                let (wi, transmitted) = if uc < fr.reflectance {
+                    (reflect(wo, h), false)
+                } else {
+                    // Mitsuba's refract: h·(cos_oh·η_ti + cos_t) − wo·η_ti.
+                    (h * (cos_oh * fr.eta_ti + fr.cos_t) - wo * fr.eta_ti, true)
+                };
+                // Reflection stays on wo's side, refraction crosses.
+                if (wi.z * flip > 0.0) == transmitted || wi.z == 0.0 {
+                    return None;
+                }
+                let wi = wi.normalize_or_zero();
+                let pdf = self.pdf(wo, wi);
+                if !(pdf > 0.0) {
+                    return None;
+                }
+                // eval/pdf in closed form: G2/G1(wo), times η_ti² and the tint when refracted.
+                let g1o = self.ggx.g1(wo);
+                let g = self.g2_over_cos_o(wo, wi) * wo.z.abs();
+                let mut weight = if g1o > 0.0 { g / g1o } else { 0.0 };
+                if transmitted {
+                    let eta_ti = if wo.z > 0.0 { 1.0 / self.eta } else { self.eta };
+                    weight *= eta_ti * eta_ti;
+                }
+                let weight = if transmitted { self.tint * weight } else { Rgb::splat(weight) };
+                let rest = rescale(uc, fr.reflectance, !transmitted);
+                Some(ScatterSample { wi, weight, pdf, delta: false, transmitted, rest })
+            }
+        }
+    }
+
+    /// The fraction a shadow ray crossing this surface at cosine `cos` keeps: T′ = 1 − R′ times
+    /// the tint for a thin-walled sheet; 0 for a closed volume's interface (it blocks shadow
+    /// rays, as Mitsuba's `volpath` does).
+    pub fn shadow_transmittance(&self, cos: f32) -> Rgb {
+        match self.interface {
+            Interface::ThinWalled => self.tint * (1.0 - thin_reflectance(cos, self.eta)),
+            _ => Rgb::ZERO,
+        }
+    }
+
+    /// `a(ω) = √(z² + α²(x² + y²))`.
+    #[inline]
+    fn ggx_a(&self, w: Vec3) -> f32 {
+        let a2 = self.ggx.alpha() * self.ggx.alpha();
+        (w.z * w.z + a2 * (w.x * w.x + w.y * w.y)).sqrt()
+    }
+
+    /// `G2(wo, wi)/|cos θo|` of the chosen masking form, with no 1/cos singularity:
+    /// separable `2/(|zo| + ao) · G1(wi)`, height-correlated `2|zi|/(ao|zi| + ai|zo|)`.
+    #[inline]
+    fn g2_over_cos_o(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let (zo, zi) = (wo.z.abs(), wi.z.abs());
+        let (ao, ai) = (self.ggx_a(wo), self.ggx_a(wi));
+        let r = match self.masking {
+            Masking::Separable => 2.0 / (zo + ao) * (2.0 * zi / (zi + ai)),
+            Masking::HeightCorrelated => 2.0 * zi / (ao * zi + ai * zo),
+        };
+        if r.is_finite() { r } else { 0.0 }
+    }
+
+    /// The microfacet normal joining `wo` and `wi` and its cosines, or `None` where the BSDF is
+    /// 0 (a direction in the plane, a normal that either direction sees from behind).
+    #[inline]
+    fn microfacet(&self, wo: Vec3, wi: Vec3) -> Option<Microfacet> {
+        let (zo, zi) = (wo.z, wi.z);
+        if zo == 0.0 || zi == 0.0 || !(zo.is_finite() && zi.is_finite()) {
+            return None;
+        }
+        let reflect = (zo > 0.0) == (zi > 0.0);
+        let eta_it = if zo > 0.0 { self.eta } else { 1.0 / self.eta };
+        let h = if reflect { wo + wi } else { wo + wi * eta_it };
+        let h = h.normalize_or_zero();
+        if h == Vec3::ZERO {
+            return None;
+        }
+        let h = if h.z < 0.0 { -h } else { h };
+        let (cos_oh, cos_ih) = (wo.dot(h), wi.dot(h));
+        // Smith's side condition: each direction sees the microfacet from the side it is on.
+        if !(cos_oh * zo > 0.0 && cos_ih * zi > 0.0) {
+            return None;
+        }
+        Some(Microfacet { h, cos_oh, cos_ih, reflect, eta_it })
+    }
+}
+
+struct Microfacet {
+    h: Vec3,
+    cos_oh: f32,
+    cos_ih: f32,
+    reflect: bool,
+    eta_it: f32,
+}
+
+/// The glTF material with KHR_materials_transmission at one shading point: with weight
+/// `g = transmission·(1 − metallic)` a [`Dielectric`], otherwise the opaque
+/// [`MetallicRoughness`] (whose metallic is then `metallic / (1 − g)`: glTF's
+/// `mix(dielectric(mix(diffuse, transmission, T)), metal, metallic)` regrouped).
+///
+/// `eval = g·dielectric + (1 − g)·opaque`, `pdf` the same mixture; `sample` picks the part by
+/// `uc` (rescaled to `[0, 1)` for the part's own choice). The opaque part reflects only on the
+/// outside (z > 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Transmissive {
+    /// The interface.
+    pub dielectric: Dielectric,
+    /// The opaque rest.
+    pub opaque: MetallicRoughness,
+    /// `g`, the probability of the dielectric, in `(0, 1]`.
+    pub weight: f32,
+}
+
+impl Transmissive {
+    /// Whether both parts are delta (a pure smooth or thin dielectric): no light sample can
+    /// find a direction.
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        self.weight >= 1.0 && self.dielectric.is_delta()
+    }
+
+    /// `g·dielectric + (1 − g)·opaque`, times `|cos θi|`.
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        let g = self.weight;
+        let mut f = Rgb::ZERO;
+        if !self.dielectric.is_delta() {
+            f += g * self.dielectric.eval(wo, wi);
+        }
+        if g < 1.0 {
+            f += (1.0 - g) * self.opaque.eval(wo, wi);
+        }
+        f
+    }
+
+    /// The density of the non-delta parts of `sample`.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let g = self.weight;
+        let mut p = 0.0;
+        if !self.dielectric.is_delta() {
+            p += g * self.dielectric.pdf(wo, wi);
+        }
+        if g < 1.0 {
+            p += (1.0 - g) * self.opaque.pdf(wo, wi);
+        }
+        p
+    }
+
+    /// Samples a part by `uc`, then a direction from it; non-delta samples are weighted by the
+    /// whole mixture (one-sample MIS).
+    pub fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<ScatterSample> {
+        let g = self.weight;
+        if g >= 1.0 {
+            return self.dielectric.sample(wo, uc, u);
+        }
+        let s = if uc < g {
+            let s = self.dielectric.sample(wo, rescale(uc, g, true), u)?;
+            if s.delta {
+                return Some(s);
+            }
+            s
+        } else {
+            let s = self.opaque.sample(wo, rescale(uc, g, false), u)?;
+            ScatterSample {
+                wi: s.wi,
+                weight: s.weight,
+                pdf: s.pdf,
+                delta: false,
+                transmitted: false,
+                rest: 0.0,
+            }
+        };
+        let pdf = self.pdf(wo, s.wi);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        Some(ScatterSample { weight: self.eval(wo, s.wi) / pdf, pdf, ..s })
+    }
+}
+
+/// The largest `f32` below 1: a rescaled uniform number stays in `[0, 1)`.
+pub const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
