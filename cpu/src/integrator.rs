@@ -457,7 +457,7 @@ impl CpuRenderer {
             if s.delta && s.transmitted && bsdf.is_thin() {
                 // Straight through a sheet: no event, the MIS state of the last one kept.
                 passes += 1;
-                if passes > MAX_PASSES {
+                if passes > furnace_render::MAX_SHEET_PASSES {
                     break;
                 }
                 throughput *= s.weight;
@@ -671,10 +671,6 @@ impl Integrator for CpuRenderer {
         (262_144 / pixels.max(1)).clamp(1, 4) as u32
     }
 }
-
-/// How many sheets a path may pass straight through between two events (a guard against a
-/// ray caught between coincident sheets; real scenes stay far below it).
-const MAX_PASSES: u32 = 64;
 
 /// `exp(−σ·t)` per channel, 1 where σ is 0 (also for t = ∞).
 #[inline]

@@ -398,6 +398,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     bindings.extend(scene::binding_list());
     bindings.push(Binding::read("turquin_table", "array<f32>"));
     bindings.push(Binding::read("point_lights", "array<PointLight>"));
+    if features.transmission {
+        bindings.push(Binding::read("scene_transmission", "array<SceneTransmission>"));
+    }
     if features.emitters {
         // Chosen by the light BVH: 16-byte records and nodes, read as vec4 (three loads a node).
         let ty = if features.light_bvh { "array<vec4<u32>>" } else { "array<u32>" };
@@ -442,6 +445,11 @@ pub struct SceneFeatures {
     /// Adaptive sampling ([`RenderSettings::adaptive`]: converged pixels are skipped; with an
     /// `f64` film the test runs on the GPU, the `converge` entry point).
     pub adaptive: bool,
+    /// A transmissive material (the dielectric BSDF, volumes' absorption, the
+    /// `scene_transmission` records).
+    pub transmission: bool,
+    /// A thin-walled transmissive sheet (shadow rays cross it, multiplied by its T′).
+    pub thin_walled: bool,
 }
 
 impl SceneFeatures {
@@ -461,6 +469,8 @@ impl SceneFeatures {
                 && settings.env_sampling.light_samples(settings.light_sampling).is_some(),
             aovs: settings.aovs,
             adaptive: settings.adaptive.is_some(),
+            transmission: scene.materials.iter().any(|m| m.is_transmissive()),
+            thin_walled: scene.materials.iter().any(|m| m.is_thin_walled()),
         }
     }
 
@@ -471,7 +481,8 @@ impl SceneFeatures {
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
     /// `HAS_EMITTERS`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
-    /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `AOVS` and `ADAPTIVE`
+    /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `AOVS`, `ADAPTIVE`,
+    /// `TRANSMISSION` and `THIN_WALLED`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
         match name {
@@ -484,6 +495,8 @@ impl SceneFeatures {
             "HAS_POINT_LIGHTS" => self.point_lights,
             "AOVS" => self.aovs,
             "ADAPTIVE" => self.adaptive,
+            "TRANSMISSION" => self.transmission,
+            "THIN_WALLED" => self.transmission && self.thin_walled,
             _ => panic!("no scene feature {name} (integrator.wgsl's #if)"),
         }
     }
@@ -504,6 +517,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         point_light_flags_wgsl(),
         wgsl_struct::<GpuPointLight>(false),
         format!("const SHADOW_EPSILON: f32 = {:?};\n", furnace_render::SHADOW_EPSILON),
+        format!("const MAX_SHEET_PASSES: u32 = {}u;\n", furnace_render::MAX_SHEET_PASSES),
         format!(
             "const SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE: f32 = {:?};\nconst SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE: f32 = {:?};\n",
             furnace_sampling::warp::SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE,
@@ -529,6 +543,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         &generated,
         wgsl::SAMPLING,
         wgsl::BRDF,
+        if features.transmission { wgsl::DIELECTRIC } else { "" },
         wgsl::SCENE,
         wgsl::TRAVERSE,
         &light_bvh,
@@ -1105,6 +1120,9 @@ impl GpuRenderer {
         resources.extend(self.scene.resources());
         resources.push(self.turquin.as_entire_binding());
         resources.push(self.point_lights.as_entire_binding());
+        if let Some(t) = &self.scene.transmission {
+            resources.push(t.as_entire_binding());
+        }
         if let Some(e) = &self.emitters {
             resources.push(e.as_entire_binding());
         }

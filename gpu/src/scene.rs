@@ -82,6 +82,11 @@ crate::wgsl_consts! {
     pub const WRAP_CLAMP: u32 = 1;
     /// Wrap code of [`WrapMode::MirroredRepeat`].
     pub const WRAP_MIRRORED: u32 = 2;
+
+    /// [`GpuTransmission::flags`]: the material transmits (`transmissionFactor` > 0).
+    pub const TRANSMISSIVE: u32 = 1;
+    /// [`GpuTransmission::flags`]: it bounds a solid (KHR_materials_volume); otherwise a sheet.
+    pub const VOLUME: u32 = 2;
 }
 
 crate::gpu_struct! {
@@ -163,6 +168,27 @@ crate::gpu_struct! {
     }
 }
 
+crate::gpu_struct! {
+    /// A material's transmission (WGSL `SceneTransmission`): KHR_materials_transmission, _ior
+    /// and _volume. One per material in `scene_transmission`, bound only for a scene with a
+    /// transmissive material. 80 bytes.
+    pub struct GpuTransmission as "SceneTransmission" {
+        /// `transmissionTexture` (R channel).
+        pub transmission_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// σ_a per channel (1/m), `Material::absorption`.
+        pub absorption: [f32; 3] => WgslType::VEC3_F32,
+        /// `ior`.
+        pub ior: f32 => WgslType::F32,
+        /// `transmissionFactor`.
+        pub transmission_factor: f32 => WgslType::F32,
+        /// [`TRANSMISSIVE`], [`VOLUME`].
+        pub flags: u32 => WgslType::U32,
+        /// Rust-only zeros up to 80 bytes (WGSL pads by itself).
+        pub pad: [u32; 2] => WgslType::PAD,
+    }
+}
+
+const _: () = assert!(size_of::<GpuTransmission>() == 80);
 const _: () = assert!(size_of::<GpuSceneTriangle>() == 16);
 const _: () = assert!(size_of::<GpuVertex>() == 16);
 const _: () = assert!(size_of::<GpuTextureRef>() == 48);
@@ -183,6 +209,7 @@ pub fn declarations() -> String {
         wgsl_struct::<GpuVertex>(false),
         wgsl_struct::<GpuTextureRef>(false),
         wgsl_struct::<GpuMaterial>(false),
+        wgsl_struct::<GpuTransmission>(false),
     ]
     .concat()
 }
@@ -232,6 +259,8 @@ pub struct SceneBuffers {
     pub texels: Vec<u32>,
     /// Images stored (those some material slot uses).
     pub image_count: usize,
+    /// `scene_transmission`, one record per material; empty unless some material transmits.
+    pub transmission: Vec<GpuTransmission>,
 }
 
 impl SceneBuffers {
@@ -281,6 +310,7 @@ impl SceneBuffers {
                 &m.metallic_roughness_texture,
                 if normal_mapped { &m.normal_texture } else { &None },
                 &m.emissive_texture,
+                &m.transmission_texture,
             ];
             for slot in slots {
                 if let Some((_, tex)) = resolve(scene, slot) {
@@ -407,6 +437,24 @@ impl SceneBuffers {
             })
             .collect();
 
+        let transmission = if scene.materials.iter().any(|m| m.is_transmissive()) {
+            scene
+                .materials
+                .iter()
+                .map(|m| GpuTransmission {
+                    transmission_texture: texture_ref(&m.transmission_texture),
+                    absorption: m.absorption.to_array(),
+                    ior: m.ior,
+                    transmission_factor: m.transmission_factor,
+                    flags: if m.is_transmissive() { TRANSMISSIVE } else { 0 }
+                        | if m.volume { VOLUME } else { 0 },
+                    pad: [0; 2],
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+
         let mut texels = Vec::with_capacity(words as usize);
         texels.extend((0..256).map(|i| srgb_to_linear(i as f32 / 255.0).to_bits()));
         texels.extend((0..256u32).map(|i| (i as f32 / 255.0).to_bits()));
@@ -418,7 +466,7 @@ impl SceneBuffers {
             texels.resize(texels.len() + n.saturating_sub(img.texels.len()), 0);
         }
         debug_assert_eq!(texels.len() as u64, words);
-        Ok(Self { triangles, vertices, uvs, tangents, materials, texels, image_count: used.len() })
+        Ok(Self { triangles, vertices, uvs, tangents, materials, texels, image_count: used.len(), transmission })
     }
 
     /// The six buffers' words in binding order (an absent one as 4 zero words), e.g. for
@@ -472,6 +520,8 @@ pub struct GpuScene {
     pub geometry_bytes: u64,
     /// [`SceneBuffers::bytes`].
     pub bytes: u64,
+    /// `scene_transmission` ([`SceneBuffers::transmission`]); `None` without transmission.
+    pub transmission: Option<wgpu::Buffer>,
 }
 
 impl GpuScene {
@@ -507,6 +557,15 @@ impl GpuScene {
             )?);
         }
         let buffers: [wgpu::Buffer; 6] = made.try_into().expect("one buffer per name");
+        let transmission = if packed.transmission.is_empty() {
+            None
+        } else {
+            Some(ctx.buffer_init(
+                "scene transmission",
+                bytemuck::cast_slice(&packed.transmission),
+                wgpu::BufferUsages::STORAGE,
+            )?)
+        };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Wgpu(e.to_string()));
         }
@@ -515,7 +574,8 @@ impl GpuScene {
             buffers,
             triangle_count: packed.triangles.len(),
             geometry_bytes: packed.geometry_bytes(),
-            bytes: packed.bytes(),
+            bytes: packed.bytes() + size_of_val(packed.transmission.as_slice()) as u64,
+            transmission,
         })
     }
 

@@ -17,6 +17,10 @@ pub const SAMPLING: &str = include_str!("wgsl/sampling.wgsl");
 /// metallic-roughness. Needs [`SAMPLING`] (warps).
 pub const BRDF: &str = include_str!("wgsl/brdf.wgsl");
 
+/// `furnace-brdf`'s dielectric module: exact Fresnel, smooth / rough / thin-walled interfaces
+/// and the glTF transmissive mixture. Needs [`BRDF`].
+pub const DIELECTRIC: &str = include_str!("wgsl/dielectric.wgsl");
+
 /// `furnace-scene`'s per-hit code over the scene buffers of [`crate::scene`]: attribute
 /// interpolation (octahedral normals, UVs, tangents), bilinear RGBA8 texture lookups with wrap
 /// modes, sRGB decode and KHR_texture_transform, `Material::evaluate`, furnace-cpu's

@@ -79,6 +79,11 @@ pub use settings::{
 /// integrators use it (the GPU's WGSL gets it as a generated `const`).
 pub const SHADOW_EPSILON: f32 = 1e-4;
 
+/// How many thin-walled sheets a path may pass straight through between two scattering events
+/// (a pass is no event): a guard against a ray caught between coincident sheets; real scenes
+/// stay far below it. Both integrators use it.
+pub const MAX_SHEET_PASSES: u32 = 64;
+
 /// Russian roulette's survival probability for a path of `throughput`: its largest channel, at
 /// most 1 (a path whose throughput has grown past 1 always survives). NaN channels are ignored
 /// (`f32::max`). Both integrators play roulette from the

@@ -17,12 +17,164 @@
 var<private> rays_traced: u32 = 0u;
 
 
-// The alpha-mask callback of traverse.wgsl: masked materials' cut-outs are not hits.
+// #if THIN_WALLED
+// A shadow ray is being traced (`shadow`): thin-walled sheets are crossed, not hits, and the
+// light it carries is multiplied by their T′ in `shadow_carried`.
+var<private> shadow_query: bool = false;
+var<private> shadow_carried: vec3<f32>;
+// #endif
+
+// The alpha-mask callback of traverse.wgsl: masked materials' cut-outs are not hits (and, for a
+// shadow ray, thin-walled sheets are crossed).
 fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {
-    if (params.flags & FRAME_ANY_MASKED) == 0u {
-        return true;
+    if (params.flags & FRAME_ANY_MASKED) != 0u && !scene_alpha_passes(triangle_id, u, v) {
+        return false;
     }
-    return scene_alpha_passes(triangle_id, u, v);
+    // #if THIN_WALLED
+    if shadow_query {
+        let material = scene_triangles[triangle_id].material;
+        let flags = scene_transmission[material].flags;
+        if (flags & (SCENE_TRANSMISSIVE | SCENE_VOLUME)) == SCENE_TRANSMISSIVE {
+            var uv = vec2<f32>(0.0);
+            if scene_material_is_textured(material) {
+                uv = scene_uv(triangle_id, u, v);
+            }
+            let b = hit_bsdf(scene_material_evaluate(material, uv), material, uv);
+            // CpuRenderer::transmittance: T′ at the angle to the sheet's shading normal.
+            var n = scene_shading_normal(triangle_id, u, v);
+            let cos = scene_dot(shadow_direction, n);
+            shadow_carried *= b.t.weight * dielectric_shadow_transmittance(b.t.d, cos);
+            return all(shadow_carried == vec3<f32>(0.0));
+        }
+    }
+    // #endif
+    return true;
+}
+
+// The BSDF at a hit and what light samples need of it besides (furnace-cpu's HitBsdf and
+// Vertex): the opaque record, or with TRANSMISSION the transmissive mixture.
+struct HitBsdf {
+    m: BsdfParams,
+    // #if TRANSMISSION
+    t: Transmissive,
+    // SCENE_TRANSMISSIVE | SCENE_VOLUME bits (0: opaque).
+    kind: u32,
+    // Light samples may also arrive from behind (a rough solid interface), leaving from `behind`.
+    two_sided: bool,
+    behind: vec3<f32>,
+    // The absorption coefficient of the volume the vertex is in (0: air).
+    medium: vec3<f32>,
+    // #endif
+}
+
+// furnace-cpu's `bsdf`: the material's BSDF at a hit.
+fn hit_bsdf(ms: MaterialSample, material: u32, uv: vec2<f32>) -> HitBsdf {
+    var b: HitBsdf;
+    b.m = bsdf_params(ms.base_color, ms.metallic, ms.roughness, ms.specular_factor, ms.specular_color,
+                      params.bsdf_flags);
+    // #if TRANSMISSION
+    let tr = scene_transmission[material];
+    let transmission = tr.transmission_factor * scene_texture_sample(tr.transmission_texture, uv).x;
+    let metallic = brdf_clamp(ms.metallic, 0.0, 1.0);
+    let g = brdf_clamp(transmission, 0.0, 1.0) * (1.0 - metallic);
+    if g > 0.0 {
+        let rough = brdf_clamp(ms.roughness, 0.0, 1.0);
+        let d = dielectric_new(tr.ior, rough * rough, (tr.flags & SCENE_VOLUME) == 0u,
+                               brdf_height_correlated(b.m), ms.base_color);
+        var m_opaque = 0.0;
+        if g < 1.0 {
+            m_opaque = min(metallic / (1.0 - g), 1.0);
+        }
+        let opaque = bsdf_params(ms.base_color, m_opaque, ms.roughness, ms.specular_factor, ms.specular_color,
+                                 params.bsdf_flags);
+        b.t = Transmissive(d, opaque, min(g, 1.0));
+        b.kind = tr.flags;
+    }
+    // #endif
+    return b;
+}
+
+// HitBsdf::eval.
+fn hit_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    // #if TRANSMISSION
+    if b.kind != 0u {
+        return transmissive_eval(b.t, wo, wi);
+    }
+    // #endif
+    return bsdf_eval(b.m, wo, wi);
+}
+
+// HitBsdf::pdf.
+fn hit_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    // #if TRANSMISSION
+    if b.kind != 0u {
+        return transmissive_pdf(b.t, wo, wi);
+    }
+    // #endif
+    return bsdf_pdf(b.m, wo, wi);
+}
+
+// Vertex::origin_towards: the origin of a shadow ray along wi (xyz) and whether there is one (w).
+fn shadow_origin(b: HitBsdf, surface: SceneSurfacePoint, leave: vec3<f32>, wi: vec3<f32>) -> vec4<f32> {
+    let side = scene_dot(wi, surface.geometric);
+    if side > 0.0 {
+        return vec4<f32>(leave, 1.0);
+    }
+    // #if TRANSMISSION
+    if side < 0.0 && b.two_sided {
+        return vec4<f32>(b.behind, 1.0);
+    }
+    // #endif
+    return vec4<f32>(0.0);
+}
+
+// Vertex::receiver_normal: the receiving side for the light BVH (zero: both sides).
+fn receiver_normal(b: HitBsdf, surface: SceneSurfacePoint) -> vec3<f32> {
+    // #if TRANSMISSION
+    if b.two_sided {
+        return vec3<f32>(0.0);
+    }
+    // #endif
+    return surface.geometric;
+}
+
+// #if TRANSMISSION
+// furnace-cpu's absorption: exp(−σ·t) per channel, 1 where σ is 0.
+fn absorption(sigma: vec3<f32>, t: f32) -> vec3<f32> {
+    return select(vec3<f32>(1.0), exp(-sigma * t), sigma > vec3<f32>(0.0));
+}
+// #endif
+
+// #if THIN_WALLED
+var<private> shadow_direction: vec3<f32>;
+// #endif
+
+// CpuRenderer::transmittance: what a shadow ray from `origin` along `dir` carries over t_max
+// (0 where blocked; the sheets' T′ and the vertex's volume absorption otherwise).
+fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32> {
+    rays_traced += 1u;
+    var carried = vec3<f32>(1.0);
+    // #if TRANSMISSION
+    if any(b.medium != vec3<f32>(0.0)) {
+        carried = absorption(b.medium, t_max);
+    }
+    // #endif
+    // #if THIN_WALLED
+    shadow_carried = carried;
+    shadow_direction = dir;
+    shadow_query = true;
+    let blocked = trace_any(origin, dir, t_max);
+    shadow_query = false;
+    if blocked {
+        return vec3<f32>(0.0);
+    }
+    return shadow_carried;
+    // #else
+    if trace_any(origin, dir, t_max) {
+        return vec3<f32>(0.0);
+    }
+    return carried;
+    // #endif
 }
 
 // furnace_scene::PointLight::intensity_towards: the intensity sent along unit `direction` (from
@@ -43,7 +195,7 @@ fn point_light_intensity(light: PointLight, direction: vec3<f32>, distance: f32)
 
 // furnace-cpu's loop over the point and spot lights at a scattering event: what they add to
 // the path's radiance (throughput included).
-fn gather_point_lights(throughput: vec3<f32>, bsdf: BsdfParams, wo: vec3<f32>, frame: Frame,
+fn gather_point_lights(throughput: vec3<f32>, bsdf: HitBsdf, wo: vec3<f32>, frame: Frame,
                        surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < params.point_light_count; i++) {
@@ -55,17 +207,15 @@ fn gather_point_lights(throughput: vec3<f32>, bsdf: BsdfParams, wo: vec3<f32>, f
         }
         let d = sqrt(d2);
         let wi = to_light / d;
-        if dot(wi, surface.geometric) > 0.0 {
+        let o = shadow_origin(bsdf, surface, leave, wi);
+        if o.w != 0.0 {
             let li = point_light_intensity(light, -wi, d);
             if any(li != vec3<f32>(0.0)) {
-                let f = bsdf_eval(bsdf, wo, frame_to_local(frame, wi));
+                let f = hit_eval(bsdf, wo, frame_to_local(frame, wi));
                 let contribution = throughput * f * li / d2;
                 // A light on the surface (d → 0) would add ∞: it adds nothing instead.
                 if any(f != vec3<f32>(0.0)) && film_is_finite(contribution) {
-                    rays_traced += 1u;
-                    if !trace_any(leave, wi, d * (1.0 - SHADOW_EPSILON)) {
-                        sum += contribution;
-                    }
+                    sum += contribution * shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON));
                 }
             }
         }
@@ -166,14 +316,15 @@ fn triangle_solid_angle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
     return -1.0;
 }
 
-fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: BsdfParams,
+fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: HitBsdf,
                   wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
     let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event;
     // The bin's bits and the coin: one pair (LIGHT_EMITTER_COIN = LIGHT_EMITTER_BIN + 1).
     let bin_coin = sampler_bits_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_BIN);
     // #if LIGHT_BVH
     // The light BVH descends by the bits alone; its nodes follow the emitters' records.
-    let choice = light_bvh_sample(params.emitter_count, leave, surface.geometric, to_unit_f32(bin_coin.x));
+    let choice = light_bvh_sample(params.emitter_count, leave, receiver_normal(bsdf, surface),
+                                  to_unit_f32(bin_coin.x));
     if !(choice.pmf > 0.0) {
         return vec3<f32>(0.0);
     }
@@ -214,7 +365,8 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     let d = sqrt(d2);
     let wi = to_light / d;
     let cos_light = -scene_dot(scene_geometric_normal(v0, v1, v2), wi);
-    if !(cos_light > 0.0 && scene_dot(wi, surface.geometric) > 0.0) {
+    let o = shadow_origin(bsdf, surface, leave, wi);
+    if !(cos_light > 0.0 && o.w != 0.0) {
         return vec3<f32>(0.0);
     }
     if (params.flags & FRAME_ANY_MASKED) != 0u && !scene_alpha_passes(t, b.x, b.y) {
@@ -227,7 +379,7 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     }
     let emission = scene_material_evaluate(material, uv).emission;
     let wi_local = frame_to_local(frame, wi);
-    let f = bsdf_eval(bsdf, wo, wi_local);
+    let f = hit_eval(bsdf, wo, wi_local);
     if all(emission == vec3<f32>(0.0)) || all(f == vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
     }
@@ -243,16 +395,12 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     } else {
         pdf = selection * d2 / (area * cos_light);
     }
-    let w = light_weight(pdf, bsdf_pdf(bsdf, wo, wi_local));
+    let w = light_weight(pdf, hit_pdf(bsdf, wo, wi_local));
     let contribution = throughput * f * emission * (w / pdf);
     if !(film_is_finite(contribution) && any(contribution != vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
-    rays_traced += 1u;
-    if trace_any(leave, wi, d * (1.0 - SHADOW_EPSILON)) {
-        return vec3<f32>(0.0);
-    }
-    return contribution;
+    return contribution * shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON));
 }
 
 // CpuRenderer::emission_weight: the MIS weight of emission reached by a BSDF sample of pdf
@@ -294,32 +442,29 @@ fn emission_weight(bsdf_pdf_value: f32, origin: vec3<f32>, normal: vec3<f32>, ma
 
 // #if HAS_SUN_DISC
 // CpuRenderer::sample_sun_discs for the one sun: a direction uniform in its cone, a shadow ray.
-fn sample_sun_disc(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: BsdfParams,
+fn sample_sun_disc(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: HitBsdf,
                    wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
     let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event + LIGHT_SUN_DISC;
     let u = sampler_value_2d(params.sampler, pixel, index, dim);
     let t = params.sun_direction.w;
     let wi = frame_to_world(frame_new(-params.sun_direction.xyz), warp_uniform_cone(u, t));
-    if !(scene_dot(wi, surface.geometric) > 0.0) {
+    let o = shadow_origin(bsdf, surface, leave, wi);
+    if o.w == 0.0 {
         return vec3<f32>(0.0);
     }
     let wi_local = frame_to_local(frame, wi);
-    let f = bsdf_eval(bsdf, wo, wi_local);
+    let f = hit_eval(bsdf, wo, wi_local);
     if all(f == vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
     }
-    let w = light_weight(uniform_cone_pdf(t), bsdf_pdf(bsdf, wo, wi_local));
+    let w = light_weight(uniform_cone_pdf(t), hit_pdf(bsdf, wo, wi_local));
     // Sun::cone_estimate: E · 2 / (2 − t).
     let estimate = params.sun_irradiance.xyz * (2.0 / (2.0 - t));
     let contribution = throughput * f * estimate * w;
     if all(contribution == vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
     }
-    rays_traced += 1u;
-    if trace_any(leave, wi, bitcast<f32>(0x7f800000u)) {
-        return vec3<f32>(0.0);
-    }
-    return contribution;
+    return contribution * shadow(bsdf, o.xyz, wi, bitcast<f32>(0x7f800000u));
 }
 
 // CpuRenderer::sun_discs_seen for the one sun: its radiance along an escaping ray.
@@ -346,29 +491,26 @@ fn frame_env() -> EnvMap {
 // #if SAMPLES_ENVIRONMENT
 // CpuRenderer::sample_environment: one light sample of the environment map (throughput
 // included): a direction from its importance distribution, a shadow ray to infinity.
-fn sample_environment(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: BsdfParams,
+fn sample_environment(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: HitBsdf,
                       wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
     let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event + LIGHT_ENVIRONMENT;
     let u = sampler_value_2d(params.sampler, pixel, index, dim);
     let s = env_sample(frame_env(), u);
-    if !(s.pdf > 0.0) || !(scene_dot(s.direction, surface.geometric) > 0.0) || all(s.radiance == vec3<f32>(0.0)) {
+    let o = shadow_origin(bsdf, surface, leave, s.direction);
+    if !(s.pdf > 0.0) || o.w == 0.0 || all(s.radiance == vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
     }
     let wi_local = frame_to_local(frame, s.direction);
-    let f = bsdf_eval(bsdf, wo, wi_local);
+    let f = hit_eval(bsdf, wo, wi_local);
     if all(f == vec3<f32>(0.0)) {
         return vec3<f32>(0.0);
     }
-    let w = light_weight(s.pdf, bsdf_pdf(bsdf, wo, wi_local));
+    let w = light_weight(s.pdf, hit_pdf(bsdf, wo, wi_local));
     let contribution = throughput * f * s.radiance * (w / s.pdf);
     if !(film_is_finite(contribution) && any(contribution != vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
-    rays_traced += 1u;
-    if trace_any(leave, s.direction, bitcast<f32>(0x7f800000u)) {
-        return vec3<f32>(0.0);
-    }
-    return contribution;
+    return contribution * shadow(bsdf, o.xyz, s.direction, bitcast<f32>(0x7f800000u));
 }
 // #endif
 // #endif
@@ -393,18 +535,34 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
     var throughput = vec3<f32>(1.0);
     var event = 0u;
     // #if SAMPLES_LIGHTS
-    // The pdf of the BSDF sample that made the ray (−1: the camera's), for MIS weights.
+    // The pdf of the BSDF sample that made the ray (−1: the camera's or a delta event's), for
+    // MIS weights.
     var ray_pdf = -1.0;
     // #endif
     // #if HAS_EMITTERS
     // The receiving side (geometric normal) of the vertex the ray left, for the light BVH.
     var normal = vec3<f32>(0.0);
     // #endif
+    // #if TRANSMISSION
+    // Where that vertex took its light samples (when the ray has since crossed a surface).
+    var mis_origin = vec3<f32>(0.0);
+    var mis_moved = false;
+    // The absorption coefficient of the volume the ray travels in (0: air).
+    var medium = vec3<f32>(0.0);
+    // Passes through sheets since the last event, and the lobe number they left (< 0: none).
+    var passes = 0u;
+    var carried_uc = -1.0;
+    // #endif
     let inf = bitcast<f32>(0x7f800000u);
     loop {
         rays_traced += 1u;
         let hit = trace_closest(origin, direction, inf);
         if !hit.hit {
+            // #if TRANSMISSION
+            if any(medium != vec3<f32>(0.0)) {
+                throughput *= absorption(medium, inf);
+            }
+            // #endif
             // The ray leaves the scene: the sky and what else is at infinity.
             radiance += throughput * params.sky.xyz;
             // #if HAS_ENVIRONMENT
@@ -413,7 +571,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             if event > 0u || (params.env_flags & ENV_VISIBLE) != 0u {
                 var w = 1.0;
                 // #if SAMPLES_ENVIRONMENT
-                if event > 0u {
+                if ray_pdf >= 0.0 {
                     w = bsdf_weight(ray_pdf, env_pdf(frame_env(), direction));
                 }
                 // #endif
@@ -427,6 +585,12 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // #endif
             break;
         }
+        // #if TRANSMISSION
+        if any(medium != vec3<f32>(0.0)) {
+            // Beer–Lambert over the segment inside the volume.
+            throughput *= absorption(medium, hit.t);
+        }
+        // #endif
         let material = scene_triangle_material(hit.triangle);
         var uv = vec2<f32>(0.0);
         if scene_material_is_textured(material) {
@@ -453,64 +617,146 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // #if HAS_EMITTERS
             if any(ms.emission != vec3<f32>(0.0)) {
                 let cos_light = -scene_dot(surface.geometric, direction);
-                let w = emission_weight(ray_pdf, origin, normal, material, hit.triangle, hit.t, cos_light);
+                var mis_from = origin;
+                var distance = hit.t;
+                // #if TRANSMISSION
+                if mis_moved {
+                    mis_from = mis_origin;
+                    distance = length(surface.position - mis_origin);
+                }
+                // #endif
+                let w = emission_weight(ray_pdf, mis_from, normal, material, hit.triangle, distance, cos_light);
                 radiance += throughput * ms.emission * w;
             }
             // #else
             radiance += throughput * ms.emission;
             // #endif
         }
-        if event == params.bounces {
+        let last = event == params.bounces;
+        // #if !TRANSMISSION
+        if last {
             break;
         }
-        let bsdf = bsdf_params(ms.base_color, ms.metallic, ms.roughness, ms.specular_factor,
-                               ms.specular_color, params.bsdf_flags);
-        let frame = frame_new(surface.shading);
+        // #endif
+        var bsdf = hit_bsdf(ms, material, uv);
+        var shading = surface.shading;
+        var delta = false;
+        // #if TRANSMISSION
+        let thin = bsdf.kind == SCENE_TRANSMISSIVE;
+        let volume = (bsdf.kind & SCENE_VOLUME) != 0u;
+        if last && !thin {
+            break;
+        }
+        // A solid's interface is shaded in its outward frame (wo may be inside).
+        if volume && surface.back_face != 0u {
+            shading = -shading;
+        }
+        delta = bsdf.kind != 0u && transmissive_is_delta(bsdf.t);
+        // #endif
+        let frame = frame_new(shading);
         let wo = frame_to_local(frame, -direction);
         let leave = offset_ray_origin_scaled(surface.position, surface.geometric, params.offset_scale);
+        // #if TRANSMISSION
+        let behind = offset_ray_origin_scaled(surface.position, -surface.geometric, params.offset_scale);
+        bsdf.two_sided = volume && bsdf.t.d.iface == DIELECTRIC_ROUGH;
+        bsdf.behind = behind;
+        bsdf.medium = medium;
+        // #endif
 
-        // #if !HAS_SUN_DISC
-        // The sun, a delta light: gathered by a shadow ray only.
-        if (params.flags & FRAME_HAS_SUN) != 0u {
-            let to_sun = -params.sun_direction.xyz;
-            if dot(to_sun, surface.geometric) > 0.0 {
-                let f = bsdf_eval(bsdf, wo, frame_to_local(frame, to_sun));
-                if any(f != vec3<f32>(0.0)) {
-                    rays_traced += 1u;
-                    if !trace_any(leave, to_sun, inf) {
-                        radiance += throughput * f * params.sun_irradiance.xyz;
+        if !last && !delta {
+            // #if !HAS_SUN_DISC
+            // The sun, a delta light: gathered by a shadow ray only.
+            if (params.flags & FRAME_HAS_SUN) != 0u {
+                let to_sun = -params.sun_direction.xyz;
+                let o = shadow_origin(bsdf, surface, leave, to_sun);
+                if o.w != 0.0 {
+                    let f = hit_eval(bsdf, wo, frame_to_local(frame, to_sun));
+                    if any(f != vec3<f32>(0.0)) {
+                        radiance += throughput * f * params.sun_irradiance.xyz * shadow(bsdf, o.xyz, to_sun, inf);
                     }
                 }
             }
-        }
-        // #endif
+            // #endif
 
-        // Point and spot lights, delta lights too: a shadow ray to each (composed only for a
-        // scene that has them: HAS_POINT_LIGHTS is a generated constant).
-        if HAS_POINT_LIGHTS {
-            radiance += gather_point_lights(throughput, bsdf, wo, frame, surface, leave);
-        }
+            // Point and spot lights, delta lights too: a shadow ray to each (composed only for a
+            // scene that has them: HAS_POINT_LIGHTS is a generated constant).
+            if HAS_POINT_LIGHTS {
+                radiance += gather_point_lights(throughput, bsdf, wo, frame, surface, leave);
+            }
 
-        // #if SAMPLES_LIGHTS
-        // Emitters and the sun disc: one light sample each (next-event estimation).
-        if (params.flags & FRAME_NO_LIGHT_SAMPLES) == 0u {
-            // #if HAS_EMITTERS
-            radiance += sample_emitter(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
-            // #endif
-            // #if HAS_SUN_DISC
-            radiance += sample_sun_disc(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
-            // #endif
-            // #if SAMPLES_ENVIRONMENT
-            radiance += sample_environment(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+            // #if SAMPLES_LIGHTS
+            // Emitters and the sun disc: one light sample each (next-event estimation).
+            if (params.flags & FRAME_NO_LIGHT_SAMPLES) == 0u {
+                // #if HAS_EMITTERS
+                radiance += sample_emitter(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+                // #endif
+                // #if HAS_SUN_DISC
+                radiance += sample_sun_disc(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+                // #endif
+                // #if SAMPLES_ENVIRONMENT
+                radiance += sample_environment(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+                // #endif
+            }
             // #endif
         }
-        // #endif
 
         // Continue the path by sampling the BSDF.
         let dim = DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE * event;
         let u = sampler_value_2d(params.sampler, pixel, index, dim + BOUNCE_BSDF_DIRECTION);
-        let uc = sampler_value(params.sampler, pixel, index, dim + BOUNCE_BSDF_LOBE);
-        let s = bsdf_sample(bsdf, wo, uc, u);
+        var uc: f32;
+        // #if TRANSMISSION
+        if carried_uc >= 0.0 {
+            uc = carried_uc;
+        } else {
+            uc = sampler_value(params.sampler, pixel, index, dim + BOUNCE_BSDF_LOBE);
+        }
+        var s: ScatterSample;
+        if bsdf.kind != 0u {
+            s = transmissive_sample(bsdf.t, wo, uc, u);
+        } else {
+            let o = bsdf_sample(bsdf.m, wo, uc, u);
+            s = ScatterSample(o.wi, o.pdf, o.weight, 0.0, false, false, o.lobe != BSDF_LOBE_NONE);
+        }
+        if !s.valid {
+            break;
+        }
+        let wi = frame_to_world(frame, s.wi);
+        // Reflections leave on the side the ray came from, transmissions on the other.
+        let side = dot(wi, surface.geometric);
+        if !select(side > 0.0, side < 0.0, s.transmitted) {
+            break;
+        }
+        if s.delta && s.transmitted && thin {
+            // Straight through a sheet: no event, the MIS state of the last one kept.
+            passes += 1u;
+            if passes > MAX_SHEET_PASSES {
+                break;
+            }
+            throughput *= s.weight;
+            carried_uc = s.rest;
+            if !mis_moved {
+                mis_origin = origin;
+                mis_moved = true;
+            }
+            origin = behind;
+            continue;
+        }
+        if last {
+            break;
+        }
+        throughput *= s.weight;
+        // #if SAMPLES_LIGHTS
+        ray_pdf = select(s.pdf, -1.0, s.delta);
+        // #endif
+        passes = 0u;
+        carried_uc = -1.0;
+        if s.transmitted && volume {
+            // Into the solid from outside (wo on the outward side), or out of it.
+            medium = select(vec3<f32>(0.0), scene_transmission[material].absorption, wo.z > 0.0);
+        }
+        // #else
+        uc = sampler_value(params.sampler, pixel, index, dim + BOUNCE_BSDF_LOBE);
+        let s = bsdf_sample(bsdf.m, wo, uc, u);
         if s.lobe == BSDF_LOBE_NONE {
             break;
         }
@@ -523,6 +769,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         // #if SAMPLES_LIGHTS
         ray_pdf = s.pdf;
         // #endif
+        // #endif
         event += 1u;
         if (params.flags & FRAME_RUSSIAN_ROULETTE) != 0u && event >= 3u {
             let survive = russian_roulette_survival(throughput);
@@ -531,9 +778,20 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             }
             throughput /= survive;
         }
-        origin = leave;
         // #if HAS_EMITTERS
-        normal = surface.geometric;
+        normal = receiver_normal(bsdf, surface);
+        // #endif
+        // #if TRANSMISSION
+        if s.transmitted {
+            origin = behind;
+            mis_origin = leave;
+            mis_moved = true;
+        } else {
+            origin = leave;
+            mis_moved = false;
+        }
+        // #else
+        origin = leave;
         // #endif
         direction = wi;
     }

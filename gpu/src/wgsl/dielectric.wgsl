@@ -1,0 +1,337 @@
+// furnace-gpu: twin of furnace-brdf's `dielectric` module — the exact unpolarised Fresnel
+// reflectance, smooth / rough (Walter et al. 2007) / thin-walled dielectric interfaces and the
+// glTF transmissive mixture (`Transmissive`). Composed only for scenes with a transmissive
+// material. Requires brdf.wgsl (its GGX helpers and BsdfParams functions) before it.
+//
+// The local frame's z is the outward normal (the side of index 1); wo may be on either side.
+
+const DIELECTRIC_SMOOTH: u32 = 0u;
+const DIELECTRIC_ROUGH: u32 = 1u;
+const DIELECTRIC_THIN: u32 = 2u;
+// `dielectric::ETA_MIN`, `ETA_MAX`, `ONE_BELOW`.
+const DIELECTRIC_ETA_MIN: f32 = 1e-2;
+const DIELECTRIC_ETA_MAX: f32 = 1e2;
+const DIELECTRIC_ONE_BELOW: f32 = 0.99999994;
+
+// `dielectric::Fresnel`.
+struct Fresnel {
+    reflectance: f32,
+    cos_t: f32,
+    eta_it: f32,
+    eta_ti: f32,
+}
+
+// `fresnel_dielectric`: exact unpolarised R for cos_i to the normal (> 0 from outside).
+fn fresnel_dielectric(cos_i: f32, eta: f32) -> Fresnel {
+    let outside = cos_i >= 0.0;
+    var eta_it = 1.0 / eta;
+    var eta_ti = eta;
+    if outside {
+        eta_it = eta;
+        eta_ti = 1.0 / eta;
+    }
+    if eta == 1.0 {
+        return Fresnel(0.0, -cos_i, eta_it, eta_ti);
+    }
+    let ci = min(abs(cos_i), 1.0);
+    let cos_t2 = 1.0 - eta_ti * eta_ti * (1.0 - ci * ci);
+    if !(cos_t2 > 0.0) {
+        return Fresnel(1.0, 0.0, eta_it, eta_ti);
+    }
+    let ct = sqrt(cos_t2);
+    let rs = (ci - eta_it * ct) / (ci + eta_it * ct);
+    let rp = (eta_it * ci - ct) / (eta_it * ci + ct);
+    let r = brdf_clamp(0.5 * (rs * rs + rp * rp), 0.0, 1.0);
+    return Fresnel(r, select(ct, -ct, outside), eta_it, eta_ti);
+}
+
+// `thin_reflectance`: R′ = 2R/(1 + R).
+fn thin_reflectance(cos_i: f32, eta: f32) -> f32 {
+    let r = fresnel_dielectric(abs(cos_i), eta).reflectance;
+    return 2.0 * r / (1.0 + r);
+}
+
+// `Dielectric` (α already clamped for rough interfaces).
+struct Dielectric {
+    eta: f32,
+    alpha: f32,
+    iface: u32,
+    height_correlated: u32,
+    tint: vec3<f32>,
+}
+
+// `Dielectric::new`.
+fn dielectric_new(eta_in: f32, alpha: f32, thin_walled: bool, height_correlated: bool,
+                  tint: vec3<f32>) -> Dielectric {
+    let eta = brdf_sanitize(eta_in, DIELECTRIC_ETA_MIN, DIELECTRIC_ETA_MAX, 1.5);
+    var iface = DIELECTRIC_SMOOTH;
+    if thin_walled {
+        iface = DIELECTRIC_THIN;
+    } else if alpha >= BSDF_ALPHA_MIN {
+        iface = DIELECTRIC_ROUGH;
+    }
+    let a = brdf_sanitize(alpha, BSDF_ALPHA_MIN, 1.0, 1.0);
+    return Dielectric(eta, a, iface, select(0u, 1u, height_correlated), brdf_clamp_rgb(tint, 1.0));
+}
+
+// `dielectric::ScatterSample` (valid == false is `None`).
+struct ScatterSample {
+    wi: vec3<f32>,
+    pdf: f32,
+    weight: vec3<f32>,
+    rest: f32,
+    delta: bool,
+    transmitted: bool,
+    valid: bool,
+}
+
+fn scatter_none() -> ScatterSample {
+    return ScatterSample(vec3<f32>(0.0), 0.0, vec3<f32>(0.0), 0.0, false, false, false);
+}
+
+// `dielectric::rescale`.
+fn dielectric_rescale(uc: f32, p: f32, taken: bool) -> f32 {
+    var r: f32;
+    if taken {
+        r = uc / p;
+    } else {
+        r = (uc - p) / (1.0 - p);
+    }
+    if brdf_is_finite(r) {
+        return brdf_clamp(r, 0.0, DIELECTRIC_ONE_BELOW);
+    }
+    return 0.0;
+}
+
+// `Dielectric::g2_over_cos_o`.
+fn dielectric_g2_over_cos_o(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let zo = abs(wo.z);
+    let zi = abs(wi.z);
+    let ao = brdf_ggx_a(d.alpha, wo);
+    let ai = brdf_ggx_a(d.alpha, wi);
+    var r: f32;
+    if d.height_correlated != 0u {
+        r = 2.0 * zi / (ao * zi + ai * zo);
+    } else {
+        r = 2.0 / (zo + ao) * (2.0 * zi / (zi + ai));
+    }
+    if brdf_is_finite(r) {
+        return r;
+    }
+    return 0.0;
+}
+
+// `Dielectric::microfacet`: h (xyz) and validity; the cosines and the lobe are recomputed.
+struct Microfacet {
+    h: vec3<f32>,
+    cos_oh: f32,
+    cos_ih: f32,
+    eta_it: f32,
+    reflect: bool,
+    valid: bool,
+}
+
+fn dielectric_microfacet(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> Microfacet {
+    var m = Microfacet(vec3<f32>(0.0), 0.0, 0.0, 1.0, false, false);
+    let zo = wo.z;
+    let zi = wi.z;
+    if zo == 0.0 || zi == 0.0 || !brdf_is_finite(zo) || !brdf_is_finite(zi) {
+        return m;
+    }
+    let reflect = (zo > 0.0) == (zi > 0.0);
+    var eta_it = 1.0 / d.eta;
+    if zo > 0.0 {
+        eta_it = d.eta;
+    }
+    var h = wo + wi;
+    if !reflect {
+        h = wo + wi * eta_it;
+    }
+    h = brdf_normalize_or(h, vec3<f32>(0.0));
+    if all(h == vec3<f32>(0.0)) {
+        return m;
+    }
+    if h.z < 0.0 {
+        h = -h;
+    }
+    let cos_oh = brdf_dot(wo, h);
+    let cos_ih = brdf_dot(wi, h);
+    if !(cos_oh * zo > 0.0 && cos_ih * zi > 0.0) {
+        return m;
+    }
+    return Microfacet(h, cos_oh, cos_ih, eta_it, reflect, true);
+}
+
+// `Dielectric::eval`: BSDF × |cos θi| (0 for delta interfaces).
+fn dielectric_eval(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    if d.iface != DIELECTRIC_ROUGH {
+        return vec3<f32>(0.0);
+    }
+    let m = dielectric_microfacet(d, wo, wi);
+    if !m.valid {
+        return vec3<f32>(0.0);
+    }
+    let dd = brdf_ggx_d(d.alpha, m.h);
+    let fr = fresnel_dielectric(m.cos_oh, d.eta);
+    let g = dielectric_g2_over_cos_o(d, wo, wi);
+    if m.reflect {
+        return vec3<f32>(fr.reflectance * dd * g * 0.25);
+    }
+    let den = m.cos_oh + m.eta_it * m.cos_ih;
+    let f = abs(m.cos_oh * m.cos_ih) * (1.0 - fr.reflectance) * dd * g / (den * den);
+    if brdf_is_finite(f) {
+        return d.tint * f;
+    }
+    return vec3<f32>(0.0);
+}
+
+// `Dielectric::pdf`.
+fn dielectric_pdf(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    if d.iface != DIELECTRIC_ROUGH {
+        return 0.0;
+    }
+    let m = dielectric_microfacet(d, wo, wi);
+    if !m.valid {
+        return 0.0;
+    }
+    let fr = fresnel_dielectric(m.cos_oh, d.eta);
+    let dv = 2.0 / (abs(wo.z) + brdf_ggx_a(d.alpha, wo)) * brdf_ggx_d(d.alpha, m.h);
+    var pdf: f32;
+    if m.reflect {
+        pdf = dv * fr.reflectance * 0.25;
+    } else {
+        let den = m.cos_oh + m.eta_it * m.cos_ih;
+        pdf = dv * abs(m.cos_oh) * (1.0 - fr.reflectance) * (m.eta_it * m.eta_it * abs(m.cos_ih) / (den * den));
+    }
+    if brdf_is_finite(pdf) {
+        return pdf;
+    }
+    return 0.0;
+}
+
+// `Dielectric::sample`.
+fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> ScatterSample {
+    if !(wo.z != 0.0) || !brdf_is_finite(wo.x + wo.y + wo.z) {
+        return scatter_none();
+    }
+    if d.iface == DIELECTRIC_SMOOTH {
+        let fr = fresnel_dielectric(wo.z, d.eta);
+        if uc < fr.reflectance {
+            return ScatterSample(vec3<f32>(-wo.x, -wo.y, wo.z), fr.reflectance, vec3<f32>(1.0),
+                                 dielectric_rescale(uc, fr.reflectance, true), true, false, true);
+        }
+        let wi = vec3<f32>(-fr.eta_ti * wo.x, -fr.eta_ti * wo.y, fr.cos_t);
+        return ScatterSample(wi, 1.0 - fr.reflectance, d.tint * (fr.eta_ti * fr.eta_ti),
+                             dielectric_rescale(uc, fr.reflectance, false), true, true, true);
+    }
+    if d.iface == DIELECTRIC_THIN {
+        let r = thin_reflectance(wo.z, d.eta);
+        if uc < r {
+            return ScatterSample(vec3<f32>(-wo.x, -wo.y, wo.z), r, vec3<f32>(1.0),
+                                 dielectric_rescale(uc, r, true), true, false, true);
+        }
+        return ScatterSample(-wo, 1.0 - r, d.tint, dielectric_rescale(uc, r, false), true, true, true);
+    }
+    let flip = select(-1.0, 1.0, wo.z > 0.0);
+    let h = brdf_ggx_sample_vndf_caps(d.alpha, wo * flip, u);
+    let cos_oh = brdf_dot(wo, h);
+    let fr = fresnel_dielectric(cos_oh, d.eta);
+    var wi: vec3<f32>;
+    let transmitted = !(uc < fr.reflectance);
+    if transmitted {
+        wi = h * (cos_oh * fr.eta_ti + fr.cos_t) - wo * fr.eta_ti;
+    } else {
+        wi = brdf_reflect(wo, h);
+    }
+    if (wi.z * flip > 0.0) == transmitted || wi.z == 0.0 {
+        return scatter_none();
+    }
+    wi = brdf_normalize_or(wi, vec3<f32>(0.0));
+    let pdf = dielectric_pdf(d, wo, wi);
+    if !(pdf > 0.0) {
+        return scatter_none();
+    }
+    let g1o = brdf_ggx_g1(d.alpha, wo);
+    let g = dielectric_g2_over_cos_o(d, wo, wi) * abs(wo.z);
+    var weight = 0.0;
+    if g1o > 0.0 {
+        weight = g / g1o;
+    }
+    var w = vec3<f32>(weight);
+    if transmitted {
+        var eta_ti = d.eta;
+        if wo.z > 0.0 {
+            eta_ti = 1.0 / d.eta;
+        }
+        w = d.tint * (weight * (eta_ti * eta_ti));
+    }
+    return ScatterSample(wi, pdf, w, dielectric_rescale(uc, fr.reflectance, !transmitted), false, transmitted, true);
+}
+
+// `Dielectric::shadow_transmittance`: T′·tint for a sheet, 0 otherwise.
+fn dielectric_shadow_transmittance(d: Dielectric, cos: f32) -> vec3<f32> {
+    if d.iface == DIELECTRIC_THIN {
+        return d.tint * (1.0 - thin_reflectance(cos, d.eta));
+    }
+    return vec3<f32>(0.0);
+}
+
+// `Transmissive`: the dielectric with probability `weight`, else the opaque BSDF.
+struct Transmissive {
+    d: Dielectric,
+    opaque: BsdfParams,
+    weight: f32,
+}
+
+fn transmissive_is_delta(t: Transmissive) -> bool {
+    return t.weight >= 1.0 && t.d.iface != DIELECTRIC_ROUGH;
+}
+
+fn transmissive_eval(t: Transmissive, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    var f = vec3<f32>(0.0);
+    if t.d.iface == DIELECTRIC_ROUGH {
+        f += t.weight * dielectric_eval(t.d, wo, wi);
+    }
+    if t.weight < 1.0 {
+        f += (1.0 - t.weight) * bsdf_eval(t.opaque, wo, wi);
+    }
+    return f;
+}
+
+fn transmissive_pdf(t: Transmissive, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    var p = 0.0;
+    if t.d.iface == DIELECTRIC_ROUGH {
+        p += t.weight * dielectric_pdf(t.d, wo, wi);
+    }
+    if t.weight < 1.0 {
+        p += (1.0 - t.weight) * bsdf_pdf(t.opaque, wo, wi);
+    }
+    return p;
+}
+
+fn transmissive_sample(t: Transmissive, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> ScatterSample {
+    let g = t.weight;
+    if g >= 1.0 {
+        return dielectric_sample(t.d, wo, uc, u);
+    }
+    var s: ScatterSample;
+    if uc < g {
+        s = dielectric_sample(t.d, wo, dielectric_rescale(uc, g, true), u);
+        if !s.valid || s.delta {
+            return s;
+        }
+    } else {
+        let o = bsdf_sample(t.opaque, wo, dielectric_rescale(uc, g, false), u);
+        if o.lobe == BSDF_LOBE_NONE {
+            return scatter_none();
+        }
+        s = ScatterSample(o.wi, o.pdf, o.weight, 0.0, false, false, true);
+    }
+    let pdf = transmissive_pdf(t, wo, s.wi);
+    if !brdf_positive_finite(pdf) {
+        return scatter_none();
+    }
+    s.pdf = pdf;
+    s.weight = transmissive_eval(t, wo, s.wi) / pdf;
+    return s;
+}
