@@ -94,7 +94,7 @@ pub struct ScatterSample {
     /// out).
     pub weight: Rgb,
     /// The solid-angle pdf for a non-delta sample; for a delta event the probability with which
-    /// that event was chosen.
+    /// the dielectric chose that event (within a [`Transmissive`] mixture, not times its weight).
     pub pdf: f32,
     /// A delta event: no light sample can reach `wi` (no MIS).
     pub delta: bool,
@@ -136,14 +136,17 @@ pub const ETA_MAX: f32 = 1e2;
 
 impl Dielectric {
     /// An interface of relative index `eta` (NaN → 1.5, clamped to `[ETA_MIN, ETA_MAX]`) and
-    /// roughness `alpha` (α = glTF roughness²): smooth below [`ALPHA_MIN`] (and for NaN ≤ 0),
+    /// roughness `alpha` (α = glTF roughness²): smooth below [`ALPHA_MIN`] (and for NaN ≤ 0) or
+    /// at η = 1,
     /// else rough with α clamped to 1; `thin_walled` makes it a smooth sheet whatever α.
     /// `tint` is clamped to `[0, 1]` (NaN → 0).
     pub fn new(eta: f32, alpha: f32, thin_walled: bool, masking: Masking, tint: Rgb) -> Self {
         let eta = if eta.is_nan() { 1.5 } else { eta.clamp(ETA_MIN, ETA_MAX) };
+        // At η = 1 exactly the interface is invisible whatever α (every microfacet refracts
+        // straight through, a delta the microfacet form cannot represent).
         let interface = if thin_walled {
             Interface::ThinWalled
-        } else if alpha >= ALPHA_MIN {
+        } else if alpha >= ALPHA_MIN && eta != 1.0 {
             Interface::Rough
         } else {
             Interface::Smooth

@@ -37,8 +37,8 @@
 //! * **Mixture** (`transmissive_*`): weights and pdfs of the one-sample mixture, and the delta
 //!   events of a smooth dielectric inside it.
 //!
-//! `rough_interface_at_eta_one_lets_light_through` is ignored: it found that a rough interface
-//! of η = 1 exactly rejects every sample (see its comment).
+//! `rough_interface_at_eta_one_lets_light_through` found that a rough interface of η = 1
+//! exactly rejected every sample; η = 1 is now a smooth (invisible) interface whatever α.
 //!
 //! Run with `--nocapture` to see the per-configuration statistics. On failure the chi-square
 //! tables go to `target/test-output/chi2-brdf/dielectric_*.{txt,csv,ppm}` and the other tables
@@ -1385,7 +1385,8 @@ fn no_nan_inf_or_negative_for_degenerate_inputs() {
                     let expected_eta = if eta.is_nan() { 1.5 } else { eta.clamp(ETA_MIN, ETA_MAX) };
                     let expected_interface = if thin {
                         Interface::ThinWalled
-                    } else if alpha >= ALPHA_MIN {
+                    } else if alpha >= ALPHA_MIN && expected_eta != 1.0 {
+                        // η = 1 is invisible whatever α: smooth.
                         Interface::Rough
                     } else {
                         Interface::Smooth
@@ -1461,16 +1462,12 @@ fn check_stability(
     }
 }
 
-/// **Ignored: a bug.** A rough interface of η = 1 exactly (index-matched: glass in glycerine, or
-/// a glTF `ior` of 1) should let light through undeviated. Instead every sample is `None`:
-/// `fresnel_dielectric` returns R = 0 and `cos_t = −cos_i` at η = 1, so the refraction formula
-/// `h(cos_oh·η_ti + cos_t) − wo·η_ti` gives `wi = −wo` for every microfacet; `pdf(wo, −wo)` then
-/// finds the generalised half vector `wo + wi·η = 0`, `microfacet` returns `None`, the pdf is 0
-/// and `sample` rejects. The interface absorbs everything (η = 1 ± 10⁻⁶ works: the refracted
-/// lobe is merely very narrow). Expected: ≥ 99% of samples accepted, mean weight (tint removed)
-/// ≈ 1 — what η = 1.001 gives.
+/// A rough interface of η = 1 exactly (index-matched: glass in glycerine, or a glTF `ior` of 1)
+/// lets light through undeviated. (It once absorbed everything: at η = 1 every microfacet
+/// refracts to `wi = −wo`, whose generalised half vector `wo + wi·η` is 0, so the pdf was 0 and
+/// every sample rejected; η = 1 is now the smooth interface.) Expected: ≥ 99% of samples
+/// accepted, mean weight (tint removed) ≈ 1 — what η = 1.001 gives.
 #[test]
-#[ignore = "bug in dielectric.rs: a rough interface of eta = 1 rejects every sample (see the doc comment)"]
 fn rough_interface_at_eta_one_lets_light_through() {
     let mut failures = Vec::new();
     for alpha in [ALPHA_MIN, 0.01, 0.3, 1.0] {

@@ -11,7 +11,8 @@
 //! twin (`--backend cpu`, same sampler and paths), and evaluates every prefix N ∈ {32, 64, …}
 //! against the downsampled reference. `--crop C`: only the central C×C pixels. `--lights point`:
 //! the point-light box of `tests/data/references/lights/` (4 bounces); `--lights area`,
-//! `many_lights`, `sun_disc`: the other light references there.
+//! `many_lights`, `sun_disc`: the other light references there. `--glass box|absorb` (with
+//! `--bounces 8`): the glass references of `tests/data/references/glass/`.
 
 use furnace_brdf::SpecularOptions;
 use furnace_cpu::CpuRenderer;
@@ -50,23 +51,24 @@ fn main() {
         SpecularOptions::mitsuba()
     };
     // `--lights point`: the point-light box of `references/lights/` instead of the Cornell box.
+    // `--glass box|absorb`: a glass reference of `references/glass/` (8 bounces).
     let lights = opt("--lights");
-    let stem = match (lights.as_deref(), bounces) {
-        (Some(kind), _) => format!("cbox_{kind}_ref_bounces4"),
-        (None, 1) => "cbox_ref_direct".to_string(),
-        (None, _) => "cbox_ref_bounces4".to_string(),
+    let glass = opt("--glass");
+    let (folder, file, stem) = match (glass.as_deref(), lights.as_deref(), bounces) {
+        (Some(kind), _, _) => ("glass", format!("glass_{kind}"), format!("glass_{kind}_ref_bounces8")),
+        (None, Some(kind), _) => ("lights", format!("cbox_{kind}"), format!("cbox_{kind}_ref_bounces4")),
+        (None, None, 1) => ("cbox", String::new(), "cbox_ref_direct".to_string()),
+        (None, None, _) => ("cbox", String::new(), "cbox_ref_bounces4".to_string()),
     };
     let stem = stem.as_str();
-    let full = match &lights {
-        Some(_) => Reference::load_in("lights", stem),
-        None => Reference::load(stem),
+    let full = match folder {
+        "cbox" => Reference::load(stem),
+        _ => Reference::load_in(folder, stem),
     };
-    let base_scene = match &lights {
-        Some(kind) => {
-            furnace_scene::Scene::load(furnace_tests::data::reference(&format!("lights/cbox_{kind}.gltf")))
-                .expect("the reference's scene")
-        }
-        None => furnace_scene::builtin::cornell_box().expect("the built-in Cornell box"),
+    let base_scene = match folder {
+        "cbox" => furnace_scene::builtin::cornell_box().expect("the built-in Cornell box"),
+        _ => furnace_scene::Scene::load(furnace_tests::data::reference(&format!("{folder}/{file}.gltf")))
+            .expect("the reference's scene"),
     };
     let factor = full.mean.width / size as usize;
     let small = cbox::downsample(&full, factor);

@@ -67,7 +67,7 @@ fn dielectric_new(eta_in: f32, alpha: f32, thin_walled: bool, height_correlated:
     var iface = DIELECTRIC_SMOOTH;
     if thin_walled {
         iface = DIELECTRIC_THIN;
-    } else if alpha >= BSDF_ALPHA_MIN {
+    } else if alpha >= BSDF_ALPHA_MIN && eta != 1.0 {
         iface = DIELECTRIC_ROUGH;
     }
     let a = brdf_sanitize(alpha, BSDF_ALPHA_MIN, 1.0, 1.0);
