@@ -289,13 +289,21 @@ impl Dielectric {
     }
 
     /// The fraction a shadow ray crossing this surface at cosine `cos` keeps: T′ = 1 − R′ times
-    /// the tint for a thin-walled sheet; 0 for a closed volume's interface (it blocks shadow
-    /// rays, as Mitsuba's `volpath` does).
+    /// the tint for a thin-walled sheet, the tint for an interface of η = 1 (invisible); 0 for
+    /// any other interface of a solid (it blocks shadow rays, as Mitsuba's `volpath` does).
     pub fn shadow_transmittance(&self, cos: f32) -> Rgb {
         match self.interface {
             Interface::ThinWalled => self.tint * (1.0 - thin_reflectance(cos, self.eta)),
+            Interface::Smooth if self.eta == 1.0 => self.tint,
             _ => Rgb::ZERO,
         }
+    }
+
+    /// Whether a transmitted ray goes on undeviated (a thin-walled sheet, or η = 1): the pass
+    /// is no scattering event.
+    #[inline]
+    pub fn is_straight(&self) -> bool {
+        self.interface == Interface::ThinWalled || (self.interface == Interface::Smooth && self.eta == 1.0)
     }
 
     /// `a(ω) = √(z² + α²(x² + y²))`.

@@ -44,9 +44,9 @@ pub struct CpuRenderer {
     normals: Vec<Vec3>,
     /// Whether any material is alpha-masked (otherwise rays skip the mask callback).
     any_masked: bool,
-    /// Whether any material is a thin-walled transmissive sheet (otherwise shadow rays are
-    /// plain occlusion tests).
-    any_thin: bool,
+    /// Whether shadow rays can cross some material (a thin-walled sheet, an η = 1 solid);
+    /// otherwise they are plain occlusion tests.
+    any_crossable: bool,
     /// The ray offsets' length scale (`furnace_accel::offset_scale_of_bounds`).
     offset_scale: f32,
     /// The scene's delta suns ([`Scene::suns`] without a disc).
@@ -115,7 +115,7 @@ impl CpuRenderer {
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         let triangle_materials = (0..g.triangle_count()).map(|t| scene.triangle_material(t) as u32).collect();
         let any_masked = scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }));
-        let any_thin = scene.materials.iter().any(|m| m.is_thin_walled());
+        let any_crossable = scene.materials.iter().any(|m| m.passes_shadow_rays());
         let constant_materials = scene
             .materials
             .iter()
@@ -166,7 +166,7 @@ impl CpuRenderer {
             constant_materials,
             normals,
             any_masked,
-            any_thin,
+            any_crossable,
             offset_scale,
         })
     }
@@ -324,8 +324,10 @@ impl CpuRenderer {
         // Where that vertex took its light samples from (`origin` unless the ray crossed a
         // surface since), for the same weights.
         let mut mis_origin: Option<Vec3> = None;
-        // The absorption coefficient of the volume the ray travels in (0: air).
+        // The absorption coefficient of the volume the ray travels in (0: air), and the surface
+        // point the ray left (its offset origin would shorten the path by the offset).
         let mut medium = Vec3::ZERO;
+        let mut left_from = origin;
         // Passes straight through thin-walled sheets since the last event (not events
         // themselves), and the lobe number they left unused for the next choice.
         let mut passes = 0u32;
@@ -345,10 +347,6 @@ impl CpuRenderer {
                 }
                 break;
             };
-            if medium != Vec3::ZERO {
-                // Beer–Lambert over the segment inside the volume.
-                throughput *= absorption(medium, hit.t);
-            }
             let material_index = self.triangle_materials[hit.triangle as usize] as usize;
             let material = &scene.materials[material_index];
             // Textured materials are evaluated at the hit's UV; the others were built once.
@@ -381,6 +379,10 @@ impl CpuRenderer {
                 // The back of a single-sided surface: black, like a one-sided BSDF.
                 break;
             };
+            if medium != Vec3::ZERO {
+                // Beer–Lambert over the segment inside the volume, surface to surface.
+                throughput *= absorption(medium, (surface.position - left_from).length());
+            }
             let emission = match &shading {
                 Shading::Constant(c) => c.emission,
                 Shading::Evaluated(params) => params.emission,
@@ -411,9 +413,10 @@ impl CpuRenderer {
                     &evaluated
                 }
             };
-            // A thin-walled sheet can still be passed after the last event (the pass is none).
+            // A sheet (or an η = 1 interface) can still be passed after the last event (the
+            // pass is none).
             let last = event == self.settings.bounces;
-            if last && !bsdf.is_thin() {
+            if last && !bsdf.is_straight() {
                 break;
             }
             // A solid's interface is shaded in its outward frame (the side of index 1), where
@@ -449,13 +452,20 @@ impl CpuRenderer {
             let Some(s) = bsdf.sample(wo, Vec2::new(u1, u2), uc) else { break };
             let wi = frame.to_world(s.wi);
             // Reflections leave on the side the ray came from, transmissions on the other; a
-            // direction the shading normal allows but the surface does not ends the path.
+            // direction the shading normal allows but the surface does not ends the path —
+            // except at a solid's interface, where the ray goes on to whichever side it points
+            // (as Mitsuba's, which switches media by that side too).
             let side = wi.dot(surface.geometric);
-            if !(if s.transmitted { side < 0.0 } else { side > 0.0 }) {
+            let crosses = if bsdf.is_volume() { side < 0.0 } else { s.transmitted };
+            if !(if crosses { side < 0.0 } else { side > 0.0 }) {
                 break;
             }
-            if s.delta && s.transmitted && bsdf.is_thin() {
-                // Straight through a sheet: no event, the MIS state of the last one kept.
+            if s.delta && s.transmitted && bsdf.is_straight() {
+                // Straight through a sheet or an invisible interface: no event, the MIS state of
+                // the last one kept (a solid's medium changes).
+                if bsdf.is_volume() {
+                    medium = if surface.back_face { Vec3::ZERO } else { material.absorption };
+                }
                 passes += 1;
                 if passes > furnace_render::MAX_SHEET_PASSES {
                     break;
@@ -464,6 +474,7 @@ impl CpuRenderer {
                 carried_uc = Some(s.rest);
                 mis_origin.get_or_insert(origin);
                 origin = behind();
+                left_from = surface.position;
                 continue;
             }
             if last {
@@ -474,9 +485,9 @@ impl CpuRenderer {
             event += 1;
             passes = 0;
             carried_uc = None;
-            if s.transmitted && bsdf.is_volume() {
-                // Into the solid from outside (wo on the outward side), or out of it.
-                medium = if wo.z > 0.0 { material.absorption } else { Vec3::ZERO };
+            if crosses && bsdf.is_volume() {
+                // Into the solid from outside, or out of it.
+                medium = if surface.back_face { Vec3::ZERO } else { material.absorption };
             }
             if self.settings.russian_roulette && event >= 3 {
                 let survive = furnace_render::russian_roulette_survival(throughput);
@@ -486,7 +497,8 @@ impl CpuRenderer {
                 throughput /= survive;
             }
             normal = vertex.receiver_normal();
-            if s.transmitted {
+            left_from = surface.position;
+            if crosses {
                 origin = behind();
                 mis_origin = Some(leave);
             } else {
@@ -590,7 +602,7 @@ impl CpuRenderer {
     /// it crosses and the absorption of the volume it starts in (`medium`).
     fn transmittance(&self, origin: Vec3, direction: Vec3, t_max: f32, medium: Vec3) -> Vec3 {
         let mut carried = if medium == Vec3::ZERO { Vec3::ONE } else { absorption(medium, t_max) };
-        if !self.any_thin {
+        if !self.any_crossable {
             return if self.occluded_within(origin, direction, t_max) { Vec3::ZERO } else { carried };
         }
         let scene = &self.scene;
@@ -600,10 +612,10 @@ impl CpuRenderer {
             }
             let material_index = self.triangle_materials[t as usize] as usize;
             let material = &scene.materials[material_index];
-            if !material.is_thin_walled() {
+            if !material.passes_shadow_rays() {
                 return true;
             }
-            // A sheet: T′ at the angle to its shading normal, times its tint.
+            // A sheet (or an η = 1 solid): T′ at the angle to its shading normal, times its tint.
             let normal = self.shading_normal(t as usize, b.x, b.y).unwrap_or(Vec3::Z);
             let params = match &self.constant_materials[material_index] {
                 Some(c) => c.bsdf.sheet_transmittance(direction.dot(normal)),
@@ -729,10 +741,10 @@ impl HitBsdf {
         matches!(self, Self::Transmissive(b, _) if b.is_delta())
     }
 
-    /// A thin-walled sheet (straight passes are no events).
+    /// A thin-walled sheet or an η = 1 interface: straight passes are no events.
     #[inline]
-    fn is_thin(&self) -> bool {
-        matches!(self, Self::Transmissive(b, _) if b.dielectric.interface == Interface::ThinWalled)
+    fn is_straight(&self) -> bool {
+        matches!(self, Self::Transmissive(b, _) if b.dielectric.is_straight())
     }
 
     /// The interface of a solid.
@@ -747,10 +759,11 @@ impl HitBsdf {
         matches!(self, Self::Transmissive(b, true) if b.dielectric.interface == Interface::Rough)
     }
 
-    /// What a shadow ray crossing a sheet at cosine `cos` keeps: `g·T′·tint + (1 − g)·0`.
+    /// What a shadow ray crossing a sheet (or an η = 1 interface) at cosine `cos` keeps:
+    /// `g·T′·tint + (1 − g)·0`.
     fn sheet_transmittance(&self, cos: f32) -> Vec3 {
         match self {
-            Self::Transmissive(b, false) => b.weight * b.dielectric.shadow_transmittance(cos),
+            Self::Transmissive(b, _) => b.weight * b.dielectric.shadow_transmittance(cos),
             _ => Vec3::ZERO,
         }
     }

@@ -448,7 +448,7 @@ pub struct SceneFeatures {
     /// A transmissive material (the dielectric BSDF, volumes' absorption, the
     /// `scene_transmission` records).
     pub transmission: bool,
-    /// A thin-walled transmissive sheet (shadow rays cross it, multiplied by its T′).
+    /// A material shadow rays cross (a thin-walled sheet, multiplied by its T′; an η = 1 solid).
     pub thin_walled: bool,
 }
 
@@ -470,7 +470,7 @@ impl SceneFeatures {
             aovs: settings.aovs,
             adaptive: settings.adaptive.is_some(),
             transmission: scene.materials.iter().any(|m| m.is_transmissive()),
-            thin_walled: scene.materials.iter().any(|m| m.is_thin_walled()),
+            thin_walled: scene.materials.iter().any(|m| m.passes_shadow_rays()),
         }
     }
 

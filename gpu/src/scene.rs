@@ -466,7 +466,16 @@ impl SceneBuffers {
             texels.resize(texels.len() + n.saturating_sub(img.texels.len()), 0);
         }
         debug_assert_eq!(texels.len() as u64, words);
-        Ok(Self { triangles, vertices, uvs, tangents, materials, texels, image_count: used.len(), transmission })
+        Ok(Self {
+            triangles,
+            vertices,
+            uvs,
+            tangents,
+            materials,
+            texels,
+            image_count: used.len(),
+            transmission,
+        })
     }
 
     /// The six buffers' words in binding order (an absent one as 4 zero words), e.g. for

@@ -59,6 +59,23 @@ pub fn metal(alpha: f32) -> Material {
     }
 }
 
+/// A clear dielectric (KHR_materials_transmission 1, KHR_materials_ior `ior`, white) of GGX
+/// `alpha` (0: smooth): the surface of a solid (KHR_materials_volume, absorbing `absorption`
+/// per metre) when `volume`, else a thin-walled sheet.
+pub fn glass(ior: f32, alpha: f32, volume: bool, absorption: Vec3) -> Material {
+    Material {
+        base_color_factor: Vec4::ONE,
+        metallic_factor: 0.0,
+        roughness_factor: alpha.max(0.0).sqrt(),
+        double_sided: true,
+        transmission_factor: 1.0,
+        ior,
+        volume,
+        absorption: if volume { absorption } else { Vec3::ZERO },
+        ..Material::default()
+    }
+}
+
 /// Dimensions of [`sunlit_interior`]'s room in metres (x, y = up, z), centred on x and z with
 /// the floor at y = 0.
 pub const INTERIOR_ROOM: Vec3 = Vec3::new(12.0, 4.0, 10.0);

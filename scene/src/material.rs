@@ -134,9 +134,15 @@ impl Material {
         self.transmission_factor > 0.0
     }
 
-    /// Whether the surface is a thin-walled transmissive sheet, which shadow rays cross.
+    /// Whether the surface is a thin-walled transmissive sheet.
     pub fn is_thin_walled(&self) -> bool {
         self.is_transmissive() && !self.volume
+    }
+
+    /// Whether shadow rays cross the surface (multiplied by what it transmits): a thin-walled
+    /// sheet, or the invisible interface of a solid of index 1. Other solids block them.
+    pub fn passes_shadow_rays(&self) -> bool {
+        self.is_transmissive() && (!self.volume || self.ior == 1.0)
     }
 
     /// Evaluates factors × textures at `uv` (UV0; ignored without textures).

@@ -211,7 +211,7 @@ fn dielectric_pdf(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
 
 // `Dielectric::sample`.
 fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> ScatterSample {
-    if !(wo.z != 0.0) || !brdf_is_finite(wo.x + wo.y + wo.z) {
+    if !(wo.z != 0.0) || !(brdf_is_finite(wo.x) && brdf_is_finite(wo.y) && brdf_is_finite(wo.z)) {
         return scatter_none();
     }
     if d.iface == DIELECTRIC_SMOOTH {
@@ -268,12 +268,20 @@ fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
     return ScatterSample(wi, pdf, w, dielectric_rescale(uc, fr.reflectance, !transmitted), false, transmitted, true);
 }
 
-// `Dielectric::shadow_transmittance`: T′·tint for a sheet, 0 otherwise.
+// `Dielectric::shadow_transmittance`: T′·tint for a sheet, the tint at η = 1, 0 otherwise.
 fn dielectric_shadow_transmittance(d: Dielectric, cos: f32) -> vec3<f32> {
     if d.iface == DIELECTRIC_THIN {
         return d.tint * (1.0 - thin_reflectance(cos, d.eta));
     }
+    if d.iface == DIELECTRIC_SMOOTH && d.eta == 1.0 {
+        return d.tint;
+    }
     return vec3<f32>(0.0);
+}
+
+// `Dielectric::is_straight`: a transmitted ray goes on undeviated (a sheet, or η = 1).
+fn dielectric_is_straight(d: Dielectric) -> bool {
+    return d.iface == DIELECTRIC_THIN || (d.iface == DIELECTRIC_SMOOTH && d.eta == 1.0);
 }
 
 // `Transmissive`: the dielectric with probability `weight`, else the opaque BSDF.

@@ -33,8 +33,9 @@ fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {
     // #if THIN_WALLED
     if shadow_query {
         let material = scene_triangles[triangle_id].material;
-        let flags = scene_transmission[material].flags;
-        if (flags & (SCENE_TRANSMISSIVE | SCENE_VOLUME)) == SCENE_TRANSMISSIVE {
+        let tr = scene_transmission[material];
+        // Material::passes_shadow_rays: a sheet, or a solid of index 1.
+        if (tr.flags & SCENE_TRANSMISSIVE) != 0u && ((tr.flags & SCENE_VOLUME) == 0u || tr.ior == 1.0) {
             var uv = vec2<f32>(0.0);
             if scene_material_is_textured(material) {
                 uv = scene_uv(triangle_id, u, v);
@@ -547,8 +548,10 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
     // Where that vertex took its light samples (when the ray has since crossed a surface).
     var mis_origin = vec3<f32>(0.0);
     var mis_moved = false;
-    // The absorption coefficient of the volume the ray travels in (0: air).
+    // The absorption coefficient of the volume the ray travels in (0: air), and the surface
+    // point the ray left (its offset origin would shorten the path by the offset).
     var medium = vec3<f32>(0.0);
+    var left_from = origin_in;
     // Passes through sheets since the last event, and the lobe number they left (< 0: none).
     var passes = 0u;
     var carried_uc = -1.0;
@@ -585,12 +588,6 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // #endif
             break;
         }
-        // #if TRANSMISSION
-        if any(medium != vec3<f32>(0.0)) {
-            // Beer–Lambert over the segment inside the volume.
-            throughput *= absorption(medium, hit.t);
-        }
-        // #endif
         let material = scene_triangle_material(hit.triangle);
         var uv = vec2<f32>(0.0);
         if scene_material_is_textured(material) {
@@ -612,6 +609,12 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // The back of a single-sided surface: black.
             break;
         }
+        // #if TRANSMISSION
+        if any(medium != vec3<f32>(0.0)) {
+            // Beer–Lambert over the segment inside the volume, surface to surface.
+            throughput *= absorption(medium, length(surface.position - left_from));
+        }
+        // #endif
         // Emission is one-sided: the back of a double-sided emitter does not emit.
         if surface.back_face == 0u {
             // #if HAS_EMITTERS
@@ -642,9 +645,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         var shading = surface.shading;
         var delta = false;
         // #if TRANSMISSION
-        let thin = bsdf.kind == SCENE_TRANSMISSIVE;
         let volume = (bsdf.kind & SCENE_VOLUME) != 0u;
-        if last && !thin {
+        let straight = bsdf.kind != 0u && dielectric_is_straight(bsdf.t.d);
+        if last && !straight {
             break;
         }
         // A solid's interface is shaded in its outward frame (wo may be inside).
@@ -721,13 +724,19 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             break;
         }
         let wi = frame_to_world(frame, s.wi);
-        // Reflections leave on the side the ray came from, transmissions on the other.
+        // Reflections leave on the side the ray came from, transmissions on the other (at a
+        // solid's interface, whichever side the ray points to).
         let side = dot(wi, surface.geometric);
-        if !select(side > 0.0, side < 0.0, s.transmitted) {
+        let crosses = select(s.transmitted, side < 0.0, volume);
+        if !select(side > 0.0, side < 0.0, crosses) {
             break;
         }
-        if s.delta && s.transmitted && thin {
-            // Straight through a sheet: no event, the MIS state of the last one kept.
+        if s.delta && s.transmitted && straight {
+            // Straight through a sheet or an invisible interface: no event, the MIS state of the
+            // last one kept (a solid's medium changes).
+            if volume {
+                medium = select(scene_transmission[material].absorption, vec3<f32>(0.0), surface.back_face != 0u);
+            }
             passes += 1u;
             if passes > MAX_SHEET_PASSES {
                 break;
@@ -739,6 +748,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
                 mis_moved = true;
             }
             origin = behind;
+            left_from = surface.position;
             continue;
         }
         if last {
@@ -750,9 +760,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         // #endif
         passes = 0u;
         carried_uc = -1.0;
-        if s.transmitted && volume {
-            // Into the solid from outside (wo on the outward side), or out of it.
-            medium = select(vec3<f32>(0.0), scene_transmission[material].absorption, wo.z > 0.0);
+        if crosses && volume {
+            // Into the solid from outside, or out of it.
+            medium = select(scene_transmission[material].absorption, vec3<f32>(0.0), surface.back_face != 0u);
         }
         // #else
         uc = sampler_value(params.sampler, pixel, index, dim + BOUNCE_BSDF_LOBE);
@@ -782,7 +792,8 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         normal = receiver_normal(bsdf, surface);
         // #endif
         // #if TRANSMISSION
-        if s.transmitted {
+        left_from = surface.position;
+        if crosses {
             origin = behind;
             mis_origin = leave;
             mis_moved = true;
