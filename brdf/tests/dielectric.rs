@@ -37,9 +37,6 @@
 //! * **Mixture** (`transmissive_*`): weights and pdfs of the one-sample mixture, and the delta
 //!   events of a smooth dielectric inside it.
 //!
-//! `rough_interface_at_eta_one_lets_light_through` found that a rough interface of η = 1
-//! exactly rejected every sample; η = 1 is now a smooth (invisible) interface whatever α.
-//!
 //! Run with `--nocapture` to see the per-configuration statistics. On failure the chi-square
 //! tables go to `target/test-output/chi2-brdf/dielectric_*.{txt,csv,ppm}` and the other tables
 //! to `target/test-output/brdf/dielectric_*.txt`.
@@ -1463,10 +1460,10 @@ fn check_stability(
 }
 
 /// A rough interface of η = 1 exactly (index-matched: glass in glycerine, or a glTF `ior` of 1)
-/// lets light through undeviated. (It once absorbed everything: at η = 1 every microfacet
-/// refracts to `wi = −wo`, whose generalised half vector `wo + wi·η` is 0, so the pdf was 0 and
-/// every sample rejected; η = 1 is now the smooth interface.) Expected: ≥ 99% of samples
-/// accepted, mean weight (tint removed) ≈ 1 — what η = 1.001 gives.
+/// lets light through undeviated: at η = 1 every microfacet refracts to `wi = −wo`, whose
+/// generalised half vector `wo + wi·η` is 0, which the microfacet form cannot represent, so
+/// η = 1 is the smooth interface. Expected: ≥ 99% of samples accepted, mean weight (tint
+/// removed) ≈ 1 — what η = 1.001 gives.
 #[test]
 fn rough_interface_at_eta_one_lets_light_through() {
     let mut failures = Vec::new();
