@@ -338,7 +338,7 @@ fn same_samples(scene: &furnace_scene::Scene) {
 /// (α 0.1) dielectric interfaces, a thin-walled sheet (straight passes, shadow rays crossing it
 /// with T′), Beer–Lambert in a volume; 8 bounces, Mitsuba's masking. 32², 8 spp: lavapipe
 /// traces glass paths ~7× slower than the box's, and compiles each shader variant once (this
-/// one, transmission with sheets, is also `tests/glass.rs`'s).
+/// one, transmission with sheets, is also `tests/glass_cases/closed_forms.rs`'s).
 #[test]
 fn same_samples_give_the_same_image_with_glass() {
     {
@@ -517,3 +517,10 @@ fn ray_counter_counts_every_ray_only_when_asked() {
     assert_eq!(gpu.take_ray_count().unwrap(), 0, "taking the count resets it");
     assert!(gpu.bvh_bytes() > 0 && gpu.scene_bytes() > 0);
 }
+
+// Glass against closed forms and the WGSL dielectric's parity: modules of this test binary
+// rather than binaries of their own (each test binary of this crate costs CI a link).
+#[path = "glass_cases/dielectric_parity.rs"]
+mod dielectric_parity;
+#[path = "glass_cases/closed_forms.rs"]
+mod glass;
