@@ -336,7 +336,7 @@ fn same_samples(scene: &furnace_scene::Scene) {
 
 /// The glass box with its smooth sphere made absorbing (glass_absorb's σ_a): smooth and rough
 /// (α 0.1) dielectric interfaces, a thin-walled sheet (straight passes, shadow rays crossing it
-/// with T′), Beer–Lambert in a volume; 8 bounces, Mitsuba's masking. 32², 8 spp: lavapipe
+/// with T′), Beer–Lambert in a volume; 8 bounces, Mitsuba's masking. 24², 16 spp: lavapipe
 /// traces glass paths ~7× slower than the box's, and compiles each shader variant once (this
 /// one, transmission with sheets, is also `tests/glass_cases/closed_forms.rs`'s).
 #[test]
@@ -350,8 +350,8 @@ fn same_samples_give_the_same_image_with_glass() {
         same_samples_with(
             &scene,
             RenderSettings {
-                width: 32,
-                height: 32,
+                width: 24,
+                height: 24,
                 bounces: 8,
                 specular: furnace_brdf::SpecularOptions::mitsuba(),
                 ..settings(SamplerKind::Sobol, 3)

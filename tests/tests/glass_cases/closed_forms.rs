@@ -185,9 +185,11 @@ fn white_furnace_of_glass_spheres() {
         let mut scene = builtin::furnace_sphere(material, 96);
         scene.cameras =
             vec![Camera::look_at(Vec3::new(0.0, 0.0, 20.0), Vec3::ZERO, Vec3::Y, 6.6f32.to_radians())];
-        let (m, se, pixels) = sphere_mean(&scene, settings, 1024);
+        let (m, se, pixels) = sphere_mean(&scene, settings, 512);
         eprintln!("{name}: {m:.5} ± {se:.5} over {pixels} pixels (expected {expected})");
-        assert!(se < 7e-4, "{name}: standard error {se} too large for the check");
+        // 512 samples of 540 pixels: ≤ 7.5·10⁻⁴ for the rough sphere (its paths' values spread
+        // over [0, 1]); 4σ of that still tells 0.747 from the 0.808 of the wrong view.
+        assert!(se < 1e-3, "{name}: standard error {se} too large for the check");
         assert!(
             (m - expected).abs() < tolerance + 4.0 * se,
             "{name}: furnace {m} ± {se}, expected {expected}"
