@@ -106,6 +106,13 @@ pub struct ScatterSample {
     pub rest: f32,
 }
 
+impl From<crate::Sample> for ScatterSample {
+    /// A reflection model's sample: non-delta, reflected, no lobe number left over.
+    fn from(s: crate::Sample) -> Self {
+        Self { wi: s.wi, weight: s.weight, pdf: s.pdf, delta: false, transmitted: false, rest: 0.0 }
+    }
+}
+
 /// `uc` rescaled after the choice `uc < p` (`taken`): uniform in `[0, 1)` again.
 #[inline]
 pub fn rescale(uc: f32, p: f32, taken: bool) -> f32 {
@@ -425,15 +432,7 @@ impl Transmissive {
             }
             s
         } else {
-            let s = self.opaque.sample(wo, rescale(uc, g, false), u)?;
-            ScatterSample {
-                wi: s.wi,
-                weight: s.weight,
-                pdf: s.pdf,
-                delta: false,
-                transmitted: false,
-                rest: 0.0,
-            }
+            ScatterSample::from(self.opaque.sample(wo, rescale(uc, g, false), u)?)
         };
         let pdf = self.pdf(wo, s.wi);
         if !(pdf > 0.0 && pdf.is_finite()) {

@@ -723,14 +723,7 @@ impl HitBsdf {
     #[inline]
     fn sample(&self, wo: Vec3, u: Vec2, uc: impl FnOnce() -> f32) -> Option<ScatterSample> {
         match self {
-            Self::Opaque(b) => b.sample_lazy(wo, u, uc).map(|s| ScatterSample {
-                wi: s.wi,
-                weight: s.weight,
-                pdf: s.pdf,
-                delta: false,
-                transmitted: false,
-                rest: 0.0,
-            }),
+            Self::Opaque(b) => b.sample_lazy(wo, u, uc).map(ScatterSample::from),
             Self::Transmissive(b, _) => b.sample(wo, uc(), u),
         }
     }
