@@ -22,6 +22,8 @@
 //! this file found: within about 0.01° of the horizon `pdf(wo, wi)` was 0 for some directions
 //! that `sample` had returned with a positive pdf.
 
+mod common;
+use common::Worst;
 use furnace_brdf::{
     Bsdf, GgxSpecular, Lambert, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions,
     SpecularSampling,
@@ -158,24 +160,6 @@ fn material_cases() -> Vec<Case> {
 fn relative_error(a: f32, b: f32) -> f32 {
     let scale = a.abs().max(b.abs());
     if scale == 0.0 { 0.0 } else { (a - b).abs() / scale }
-}
-
-/// The worst value of some error seen in a group, with the input that produced it.
-#[derive(Default)]
-struct Worst {
-    ratio: f32,
-    what: String,
-}
-
-impl Worst {
-    /// Records `error / tolerance`.
-    fn record(&mut self, error: f32, tolerance: f32, what: impl FnOnce() -> String) {
-        let ratio = error / tolerance;
-        if ratio > self.ratio || ratio.is_nan() {
-            self.ratio = ratio;
-            self.what = what();
-        }
-    }
 }
 
 /// The error model behind the tolerances of `sample` against `eval`/`pdf`.

@@ -42,7 +42,7 @@
 //! to `target/test-output/brdf/dielectric_*.txt`.
 
 mod common;
-use common::write_output;
+use common::{Worst, write_output};
 use furnace_brdf::dielectric::{ETA_MAX, ETA_MIN, ONE_BELOW, thin_reflectance};
 use furnace_brdf::ggx::ALPHA_MIN;
 use furnace_brdf::{
@@ -111,30 +111,6 @@ fn relative_error(a: f32, b: f32) -> f32 {
 /// The largest channel of [`relative_error`].
 fn relative_error_rgb(a: Rgb, b: Rgb) -> f32 {
     (0..3).map(|c| relative_error(a[c], b[c])).fold(0.0, f32::max)
-}
-
-/// The worst `error / tolerance` seen in a group, with the input that produced it.
-#[derive(Default)]
-struct Worst {
-    ratio: f32,
-    what: String,
-}
-
-impl Worst {
-    fn record(&mut self, error: f32, tolerance: f32, what: impl FnOnce() -> String) {
-        let ratio = error / tolerance;
-        if ratio > self.ratio || ratio.is_nan() {
-            self.ratio = ratio;
-            self.what = what();
-        }
-    }
-
-    /// Appends a failure to `failures` if the worst ratio exceeds 1 (or is NaN).
-    fn check(&self, label: &str, failures: &mut Vec<String>) {
-        if !(self.ratio <= 1.0) {
-            failures.push(format!("{label}: error {:.3}x its tolerance at {}", self.ratio, self.what));
-        }
-    }
 }
 
 /// Independent uniform triples `(uc, u)` from three fixed-seed counter-based streams.

@@ -1,4 +1,5 @@
-//! Shared helpers of the brdf integration tests.
+//! Shared helpers of the brdf integration tests (each test binary uses some of them).
+#![allow(dead_code)]
 
 use std::path::PathBuf;
 
@@ -11,4 +12,29 @@ pub fn write_output(name: &str, text: &str) -> PathBuf {
     let path = dir.join(name);
     std::fs::write(&path, text).expect("write test output");
     path
+}
+
+/// The worst `error / tolerance` seen in a group, with the input that produced it.
+#[derive(Default)]
+pub struct Worst {
+    pub ratio: f32,
+    pub what: String,
+}
+
+impl Worst {
+    /// Records `error / tolerance` (NaN counts as the worst).
+    pub fn record(&mut self, error: f32, tolerance: f32, what: impl FnOnce() -> String) {
+        let ratio = error / tolerance;
+        if ratio > self.ratio || ratio.is_nan() {
+            self.ratio = ratio;
+            self.what = what();
+        }
+    }
+
+    /// Appends a failure to `failures` if the worst ratio exceeds 1 (or is NaN).
+    pub fn check(&self, label: &str, failures: &mut Vec<String>) {
+        if !(self.ratio <= 1.0) {
+            failures.push(format!("{label}: error {:.3}x its tolerance at {}", self.ratio, self.what));
+        }
+    }
 }
