@@ -3,7 +3,7 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
-use furnace_render::{EnvSampling, LightSampling, LightSelection, TriangleSampling};
+use furnace_render::{EnvSampling, LightSampling, LightSelection, SampleRange, TriangleSampling};
 use furnace_sampling::SamplerKind;
 use furnace_scene::Camera;
 use glam::Vec3;
@@ -36,6 +36,11 @@ pub enum Command {
     /// Score a candidate EXR against a reference EXR (furnace_post::metrics): RMSE,
     /// relative MSE, per-channel mean ratio and, with --stderr, per-pixel z-score statistics.
     Compare(CompareArgs),
+    /// Add up the parts of a split render (`furnace render --samples A..B`) into PATH.exr and
+    /// PATH.png, as the single run would have written them (the same film to float rounding);
+    /// refuses parts of different renders, overlapping parts and, unless --allow-gaps, missing
+    /// samples (listed).
+    Merge(MergeArgs),
     /// Measure a backend on a scene: Msamples/s, Mrays/s, ms per frame, time to first frame and
     /// GPU bytes per triangle, as a Markdown table and JSON.
     Bench(BenchArgs),
@@ -61,6 +66,17 @@ pub struct RenderArgs {
     /// not given are the file's; settings given must match it. Writes to PATH unless --out.
     #[arg(long, value_name = "PATH.exr")]
     pub resume: Option<PathBuf>,
+    /// Render only the global sample indices A to B−1 of the render: one part of a split render
+    /// (`furnace merge` adds the parts up to the film of a single run). --spp is then the whole
+    /// render's sample count (default B; the fixed-N samplers hammersley and cmj need it given).
+    /// The part is recorded in the EXR; --resume continues it up to B.
+    #[arg(long, value_name = "A..B", conflicts_with = "noise_threshold")]
+    pub samples: Option<SampleRange>,
+    /// Also save the render so far (EXR and PNG, atomically) every SECONDS of rendering, so that
+    /// a process killed without warning (SIGKILL, a lost node) loses at most that much work.
+    /// Ctrl-C and SIGTERM (a scheduler's cancel, preemption or time limit) always save.
+    #[arg(long, value_name = "SECONDS", value_parser = parse_interval)]
+    pub checkpoint: Option<f64>,
     /// Scattering events per path (0: only what the camera sees directly; 1: direct lighting).
     #[arg(long, default_value_t = 4)]
     pub bounces: u32,
@@ -179,8 +195,9 @@ pub struct RenderArgs {
     /// slower than the CPU integrator and used only when asked for).
     #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
     pub backend: BackendArg,
-    /// The GPU adapter: a part of its name (case-insensitive) or its index in the list that an
-    /// unknown name prints; implies --backend gpu when --backend is auto.
+    /// The GPU adapter: a part of its name (case-insensitive), its PCI address (0000:18:00.0, as
+    /// `nvidia-smi --query-gpu=pci.bus_id` prints it) or its index in the list that an unknown
+    /// name prints; implies --backend gpu when --backend is auto.
     #[arg(long, value_name = "NAME|INDEX")]
     pub adapter: Option<String>,
     /// Output path: writes PATH.png and PATH.exr (a .png or .exr extension is replaced).
@@ -324,6 +341,8 @@ impl std::fmt::Display for LookAt {
     mut_arg("out", |a| a.help("Where Ctrl+S saves: PATH.png and PATH.exr (a .png or .exr extension is replaced)")),
     mut_arg("time_limit", |a| a.help("Stop accumulating after this many seconds of rendering")),
     mut_arg("quiet", |a| a.help("No messages on stderr (warnings and errors are still printed)")),
+    mut_arg("samples", |a| a.hide(true)),
+    mut_arg("checkpoint", |a| a.hide(true)),
     mut_arg("backend", |a| a.help("gpu or auto (both: the GPU integrator, software adapters such as lavapipe included); cpu is refused: the window shows the GPU's film"))
 )]
 pub struct ViewArgs {
@@ -361,6 +380,32 @@ pub struct CompareArgs {
     /// Write a PNG of |candidate − reference| per pixel, its 99th percentile mapped to white.
     #[arg(long, value_name = "PATH.png")]
     pub error_map: Option<PathBuf>,
+}
+
+/// `furnace merge`.
+#[derive(Debug, Clone, Args)]
+pub struct MergeArgs {
+    /// The parts: EXRs written by `furnace render --samples A..B` of one render (whole renders
+    /// and earlier merges of it are parts too), in any order.
+    #[arg(required = true, value_name = "PART.exr")]
+    pub parts: Vec<PathBuf>,
+    /// Output path: writes PATH.exr and PATH.png (a .png or .exr extension is replaced); never
+    /// one of the parts.
+    #[arg(long, short, value_name = "PATH")]
+    pub out: PathBuf,
+    /// Merge even if sample indices of the render are missing (a part not rendered, or stopped
+    /// early): the image is then the mean over the samples present, and the file lists them.
+    #[arg(long)]
+    pub allow_gaps: bool,
+    /// Tone map of the PNG: aces, pbr-neutral, clamp [default: the parts'].
+    #[arg(long)]
+    pub tonemap: Option<Tonemap>,
+    /// Exposure of the PNG in stops [default: the parts'].
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_exposure)]
+    pub exposure: Option<f32>,
+    /// No summary (errors are still printed).
+    #[arg(long, short)]
+    pub quiet: bool,
 }
 
 /// `furnace bench`.
@@ -919,6 +964,15 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
         Ok(ev)
     } else {
         Err(format!("exposure must be between -64 and 64 stops (got {s})"))
+    }
+}
+
+fn parse_interval(s: &str) -> Result<f64, String> {
+    let t: f64 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    if t.is_finite() && t > 0.0 {
+        Ok(t)
+    } else {
+        Err(format!("the checkpoint interval must be a positive number of seconds (got {s})"))
     }
 }
 

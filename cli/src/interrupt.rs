@@ -1,6 +1,8 @@
-//! Ctrl-C: the first one asks the render loop to stop after the current pass (which then saves
-//! the partial image); a second one exits at once with code 130 (outputs already written stay
-//! intact: every file is written to a temporary name and renamed into place).
+//! Ctrl-C (SIGINT), and SIGTERM / SIGHUP, which schedulers such as Slurm send before they kill
+//! a job (cancel, requeue, preemption, time limit): the first one asks the render loop to stop
+//! after the current pass (which then saves the partial image); a second one exits at once with
+//! code 130 (outputs already written stay intact: every file is written to a temporary name and
+//! renamed into place).
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
@@ -12,7 +14,7 @@ pub struct Interrupt {
 }
 
 impl Interrupt {
-    /// Installs the process's Ctrl-C (SIGINT) handler. If that fails (another handler is
+    /// Installs the process's handler of SIGINT (Ctrl-C), SIGTERM and SIGHUP. If that fails (another handler is
     /// installed), warns and returns an `Interrupt` that is never set: Ctrl-C then ends the
     /// process the default way.
     pub fn install() -> Self {

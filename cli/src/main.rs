@@ -16,6 +16,9 @@
 //!   saves what `render` writes (`view.rs`).
 //! * `furnace info SCENE` prints a scene's sizes, lights, cameras (with their `--camera` index)
 //!   and loader warnings.
+//! * `furnace render --samples A..B` renders one part of a split render (global sample indices
+//!   A…B−1); `furnace merge PARTS… -o OUT` checks that the parts are of one render and disjoint,
+//!   lists missing samples, and adds their films into the single run's (`merge.rs`).
 //! * `furnace compare CANDIDATE.exr REFERENCE.exr [--stderr …]` scores a render against a
 //!   reference with `furnace_post::metrics` (RMSE, relative MSE, mean ratio, z-scores).
 //! * `furnace bench [--backend …] [--scene cbox|interior:N|PATH]` measures a backend:
@@ -35,6 +38,7 @@ mod compare;
 mod env;
 mod info;
 mod interrupt;
+mod merge;
 mod render;
 mod resume;
 mod shared;
@@ -66,6 +70,7 @@ fn main() -> ExitCode {
         args::Command::View(a) => view::run(&a, &interrupt::Interrupt::install()),
         args::Command::Info(a) => info::run(&a).map(|()| shared::Outcome::Done),
         args::Command::Compare(a) => compare::run(&a).map(|()| shared::Outcome::Done),
+        args::Command::Merge(a) => merge::run(&a).map(|()| shared::Outcome::Done),
         args::Command::Bench(a) => bench::run(&a).map(|()| shared::Outcome::Done),
         args::Command::Chart(a) => chart::run(&a, &interrupt::Interrupt::install()),
     };

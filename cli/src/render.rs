@@ -58,6 +58,7 @@ impl Job {
                 (resume::EXPOSURE, a.exposure.to_string()),
             ]
             .into_iter()
+            .chain(a.samples.map(|r| (resume::SAMPLE_RANGE, r.to_string())))
             .chain(a.sun_angle.map(|d| (resume::SUN_ANGLE, d.to_string())))
             .chain(a.clamp.map(|x| (resume::CLAMP, x.to_string())))
             .chain(a.noise_threshold.map(|t| (resume::NOISE_THRESHOLD, t.to_string())))
@@ -118,6 +119,7 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
     if args.given("env_sampling") {
         crate::env::check_sampling(args.env_sampling, args.light_sampling)?;
     }
+    check_samples(&mut args)?;
     let mut scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
         // The scene came from the file's record: say so, and how to point at it.
         (Some(file), None) => {
@@ -193,21 +195,55 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
     Ok(Prepared { job, scene, view, saved })
 }
 
+/// `--samples A..B` against `--spp N` (the whole render's count): N defaults to B for a
+/// progressive sampler, must be given for a fixed-N one, and the range must lie in `0..N`.
+fn check_samples(args: &mut RenderArgs) -> Result<(), String> {
+    let Some(range) = args.samples else { return Ok(()) };
+    if !args.given("spp") && args.resume.is_none() {
+        if args.sampler.needs_sample_count() {
+            return Err(format!(
+                "--samples {range}: the {} sampler builds one pattern of N samples per pixel, so a part \
+                 needs the whole render's N: give --spp N",
+                args.sampler
+            ));
+        }
+        args.spp = range.end;
+    }
+    if range.end > args.spp {
+        return Err(format!(
+            "--samples {range} goes past the render's {} samples per pixel (--spp is the whole render's \
+             count; sample indices run from 0 to {})",
+            args.spp,
+            args.spp - 1
+        ));
+    }
+    Ok(())
+}
+
 pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     let Prepared { job, scene, view, saved } = prepare(a, "render")?;
     let a = &job.args;
     let (width, height) = (job.settings.width, job.settings.height);
     let settings = job.settings;
+    // The sample indices this run renders: the part's range, or the whole render's.
+    let (start, end) = a.samples.map_or((0, a.spp), |r| (r.start, r.end));
     if let Some(s) = &saved
-        && s.spp >= a.spp
+        && start + s.spp >= end
     {
-        eprintln!(
-            "{} already has {} samples per pixel (target {}): nothing to render; give a \
-             larger --spp to continue",
-            a.resume.clone().unwrap_or_default().display(),
-            s.spp,
-            a.spp
-        );
+        let file = a.resume.clone().unwrap_or_default();
+        match a.samples {
+            Some(range) => eprintln!(
+                "{} already holds every sample of its part {range}: nothing to render",
+                file.display()
+            ),
+            None => eprintln!(
+                "{} already has {} samples per pixel (target {}): nothing to render; give a \
+                 larger --spp to continue",
+                file.display(),
+                s.spp,
+                a.spp
+            ),
+        }
         return Ok(Outcome::Done);
     }
 
@@ -219,8 +255,8 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         );
     }
     let (film, first, previous_time, previous_backend) = match saved {
-        Some(s) => (Some(s.film), s.spp, s.render_time_s, s.backend),
-        None => (None, 0, 0.0, None),
+        Some(s) => (Some(s.film), start + s.spp, s.render_time_s, s.backend),
+        None => (None, start, 0.0, None),
     };
     let mut backend = backend::open(a.backend.into(), a.adapter.as_deref(), Arc::new(scene), &view, settings)
         .map_err(|e| e.to_string())?;
@@ -240,35 +276,46 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             backend.describe()
         );
     }
-    let pass = render_passes(&mut backend, &job, first, interrupt)?;
+    let (png_path, exr_path) = output_paths(&a.out);
+    // The EXR and PNG of the film holding samples start..done after `seconds` of this run.
+    let save = |backend: &mut dyn Integrator, done: u32, seconds: f64, a: &RenderArgs| {
+        let film = backend.film().map_err(|e| e.to_string())?;
+        let mut metadata = job.metadata(done - start, previous_time + seconds, film.rejected());
+        metadata.extra.insert(resume::BACKEND.to_string(), backend_record.clone());
+        write_outputs(&film, &metadata, a, &exr_path, &png_path).map(|()| film)
+    };
+    // Checkpoints are not denoised (only the final image is).
+    let checkpoint_args = RenderArgs { denoise: false, ..a.clone() };
+    let mut checkpoint = |backend: &mut dyn Integrator, done: u32, seconds: f64| {
+        save(backend, done, seconds, &checkpoint_args).map(drop)
+    };
+    let pass = render_passes(&mut backend, &job, (first, end), interrupt, &mut checkpoint)?;
     if pass.done == first {
         // Ctrl-C before the first pass: nothing new; leave every file as it was.
         eprintln!("interrupted before the first pass: nothing rendered, nothing written");
         return Ok(Outcome::Interrupted);
     }
-
-    let film = backend.film().map_err(|e| e.to_string())?;
-    let (png_path, exr_path) = output_paths(&a.out);
-    let render_time = previous_time + pass.seconds;
-    let mut metadata = job.metadata(pass.done, render_time, film.rejected());
-    metadata.extra.insert(resume::BACKEND.to_string(), backend_record);
-    write_outputs(&film, &metadata, a, &exr_path, &png_path)?;
+    let film = save(&mut backend, pass.done, pass.seconds, a)?;
 
     let stopped_by_user = pass.stop == Stop::Cancelled;
     if !a.quiet || stopped_by_user {
         let rendered = u64::from(pass.done - first);
         let rate = (u64::from(width) * u64::from(height) * rendered) as f64 / pass.seconds.max(1e-9) / 1e6;
-        let from = if first > 0 { format!(" (resumed at {first})") } else { String::new() };
+        let from = if first > start { format!(" (resumed at {first})") } else { String::new() };
+        let asked = a.samples.map_or_else(|| a.spp.to_string(), |r| r.to_string());
         let stopped = match pass.stop {
             Stop::Finished => String::new(),
-            Stop::TimeLimit => format!(" (stopped by --time-limit; asked {})", a.spp),
-            Stop::Cancelled => format!(" (interrupted; asked {})", a.spp),
+            Stop::TimeLimit => format!(" (stopped by --time-limit; asked {asked})"),
+            Stop::Cancelled => format!(" (interrupted; asked {asked})"),
             Stop::Converged => " (every pixel converged)".to_string(),
         };
+        let held = match a.samples {
+            Some(_) => format!("samples {start}..{} of {}", pass.done, a.spp),
+            None => format!("{} spp", pass.done),
+        };
         eprintln!(
-            "{}: {width}×{height}, {} spp{from}{stopped}, {} bounces, {} sampler, {} backend: {:.2} s ({rate:.2} Msamples/s)",
+            "{}: {width}×{height}, {held}{from}{stopped}, {} bounces, {} sampler, {} backend: {:.2} s ({rate:.2} Msamples/s)",
             job.scene_name,
-            pass.done,
             a.bounces,
             a.sampler,
             backend.name(),
@@ -287,10 +334,10 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             eprintln!("warning: {} non-finite samples rejected", film.rejected());
         }
         eprintln!("wrote {} and {}", exr_path.display(), png_path.display());
-        if pass.done < a.spp && pass.stop != Stop::Converged {
+        if pass.done < end && pass.stop != Stop::Converged {
+            let to = a.samples.map_or_else(|| format!("{end} spp"), |r| format!("the end of part {r}"));
             eprintln!(
-                "to continue to {} spp: furnace render --resume {}",
-                a.spp,
+                "to continue to {to}: furnace render --resume {}",
                 shell_quote(&exr_path.display().to_string())
             );
         }
@@ -307,38 +354,65 @@ struct Passes {
     stop: Stop,
 }
 
-/// Renders passes from sample index `first` up to the job's `--spp`, until done, the time limit
-/// or Ctrl-C, with a progress bar (or, when stderr is not a terminal, a progress line after the
-/// first pass and then every 10 s). A pass that fails leaves the film with the passes before it,
-/// which are saved.
+/// Saves the render so far: given the integrator, the next sample index and the seconds of
+/// this run.
+type Checkpoint<'a> = dyn FnMut(&mut dyn Integrator, u32, f64) -> Result<(), String> + 'a;
+
+/// Renders passes from sample index `first` up to `end` (`(first, end)`), until done, the time
+/// limit or Ctrl-C / SIGTERM, with a progress bar (or, when stderr is not a terminal, a progress
+/// line after the first pass and then every 10 s), calling `checkpoint` (the integrator, the
+/// next sample index, seconds so far) every `--checkpoint` seconds. A pass that fails leaves
+/// the film with the passes before it.
 fn render_passes(
     backend: &mut dyn Integrator,
     job: &Job,
-    first: u32,
+    (first, end): (u32, u32),
     interrupt: &Interrupt,
+    checkpoint: &mut Checkpoint<'_>,
 ) -> Result<Passes, String> {
     let a = &job.args;
-    let bar = progress_bar(a.quiet, a.spp, first);
+    let bar = progress_bar(a.quiet, end, first);
     let log_lines = !a.quiet && bar.is_hidden();
     let mut last_log: Option<Instant> = None;
     let start = Instant::now();
     let mut session = Session::new(backend, first);
-    let budget = Budget { time_limit: a.time_limit, ..Budget::spp(a.spp) };
-    let stop = session
-        .run(&budget, &|| interrupt.requested(), &mut |p| {
-            bar.set_position(u64::from(p.done));
-            let converged =
-                p.converged.map(|c| format!(", {:.1} % converged", 100.0 * c)).unwrap_or_default();
-            bar.set_message(format!("{:.2} Msamples/s{converged}", p.msamples_per_s));
-            if log_lines && last_log.is_none_or(|t| t.elapsed().as_secs_f64() >= 10.0) {
-                eprintln!(
-                    "progress: {}/{} spp, {:.1} s, {:.2} Msamples/s{converged}",
-                    p.done, p.target, p.elapsed, p.msamples_per_s
-                );
-                last_log = Some(Instant::now());
-            }
-        })
-        .map_err(|e| e.to_string())?;
+    let mut progress = |p: &furnace_render::Progress| {
+        bar.set_position(u64::from(p.done));
+        let converged = p.converged.map(|c| format!(", {:.1} % converged", 100.0 * c)).unwrap_or_default();
+        bar.set_message(format!("{:.2} Msamples/s{converged}", p.msamples_per_s));
+        if log_lines && last_log.is_none_or(|t| t.elapsed().as_secs_f64() >= 10.0) {
+            let done = match a.samples {
+                Some(r) => format!("{}/{} spp of part {r}", p.done - r.start, r.len()),
+                None => format!("{}/{} spp", p.done, p.target),
+            };
+            eprintln!("progress: {done}, {:.1} s, {:.2} Msamples/s{converged}", p.elapsed, p.msamples_per_s);
+            last_log = Some(Instant::now());
+        }
+    };
+    let stop = loop {
+        // Each run of the session ends at the time limit (what is left of it), or with
+        // --checkpoint after the first pass that ends past the interval.
+        let elapsed = start.elapsed().as_secs_f64();
+        let budget = Budget {
+            spp: end,
+            time_limit: a.time_limit.map(|t| (t - elapsed).max(0.0)),
+            min_seconds: a.checkpoint,
+        };
+        let stop =
+            session.run(&budget, &|| interrupt.requested(), &mut progress).map_err(|e| e.to_string())?;
+        if a.checkpoint.is_none() || stop != Stop::TimeLimit {
+            break stop;
+        }
+        // The interval or the time limit: the limit if, at the mean pass time, the next pass
+        // would end past it.
+        let t = session.timing();
+        let mean_pass = t.wall / t.passes.max(1) as f64;
+        if a.time_limit.is_some_and(|limit| start.elapsed().as_secs_f64() + mean_pass > limit) {
+            break stop;
+        }
+        let done = session.done();
+        checkpoint(session.integrator(), done, start.elapsed().as_secs_f64())?;
+    };
     bar.finish_and_clear();
     Ok(Passes { done: session.done(), seconds: start.elapsed().as_secs_f64(), stop })
 }
@@ -423,7 +497,7 @@ fn denoise(film: &Film, radiance: &[Vec3], a: &RenderArgs) -> Result<Vec<Vec3>, 
 
 /// The film saved in `file`, checked: its state must be that of its own RGB image (each
 /// pixel's `f32(sum / count)`), which catches a file edited after furnace wrote it.
-fn restore(path: &Path, file: ExrWithState) -> Result<Saved, String> {
+pub(crate) fn restore(path: &Path, file: ExrWithState) -> Result<Saved, String> {
     let p = path.display();
     let meta = &file.metadata;
     let spp = meta.spp.ok_or_else(|| format!("{p}: no 'furnace.spp' attribute; it cannot be resumed"))?;

@@ -29,7 +29,7 @@ use crate::args::{
 };
 use clap::ValueEnum;
 use furnace_post::Metadata;
-use furnace_render::resume;
+use furnace_render::{SampleRange, resume};
 use furnace_sampling::SamplerKind;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
@@ -90,6 +90,12 @@ pub const ENV_ROTATION: &str = "furnace.env_rotation_deg";
 pub const ENV_VISIBLE: &str = "furnace.env_visible";
 /// Attribute: the `--spp` target (for a fixed-N sampler, its N).
 pub const TARGET_SPP: &str = "furnace.target_spp";
+/// A part of a split render: the `--samples A..B` it renders (absent: the whole render,
+/// `0..furnace.target_spp`). Its film holds samples `A..A+furnace.spp`.
+pub const SAMPLE_RANGE: &str = "furnace.sample_range";
+/// The sample indices a merge with gaps holds, `A..B,C..D` (`furnace_render::split::format_ranges`;
+/// absent: those that [`SAMPLE_RANGE`] and `furnace.spp` say). Such a file is not resumable.
+pub const SAMPLES: &str = "furnace.samples";
 /// `--tonemap` (PNG only; free to change on resume).
 pub const TONEMAP: &str = "furnace.tonemap";
 /// `--exposure` (PNG only; free to change on resume).
@@ -349,6 +355,30 @@ pub fn apply_recorded(
         && let Some(v) = meta.extra.get(ENV_VISIBLE)
     {
         e.env_visible = Some(enum_value::<Switch>(v).ok_or_else(|| invalid(ENV_VISIBLE, v))?);
+    }
+    if let Some(v) = meta.extra.get(SAMPLES) {
+        return Err(format!(
+            "{}: a merge of parts with samples missing (it holds samples {v}): it cannot be continued; \
+             render the missing ranges with --samples and merge them with it",
+            file.display()
+        ));
+    }
+    if let Some(v) = meta.extra.get(SAMPLE_RANGE) {
+        let recorded: SampleRange = v.parse().map_err(|_| invalid(SAMPLE_RANGE, v))?;
+        match a.samples {
+            Some(given) if given != recorded => {
+                return Err(format!(
+                    "{}: it renders samples {recorded} of a split render, not --samples {given}",
+                    file.display()
+                ));
+            }
+            _ => a.samples = Some(recorded),
+        }
+    } else if let Some(given) = a.samples {
+        return Err(format!(
+            "{}: a whole render, not a part: --samples {given} cannot continue it",
+            file.display()
+        ));
     }
     if !a.given("spp") {
         let v = extra(TARGET_SPP)?;

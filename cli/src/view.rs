@@ -33,8 +33,21 @@ pub fn run(v: &ViewArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             Some(ScriptSource::File(p.clone(), furnace_view::script::parse(&p.display().to_string(), &text)?))
         }
     };
+    if a.checkpoint.is_some() {
+        return Err("--checkpoint is for `furnace render`; the viewer saves with Ctrl+S".into());
+    }
     let Prepared { job, scene, view, saved } = prepare(a, "view")?;
     let a = &job.args;
+    if let Some(range) = a.samples {
+        let what = match &a.resume {
+            Some(file) => format!("{} is a part (samples {range}) of a split render", file.display()),
+            None => "--samples renders a part of a split render".to_string(),
+        };
+        return Err(format!(
+            "{what}: the viewer shows whole renders (continue a part with `furnace render --resume`, or \
+             `furnace merge` the parts and view the merged file)"
+        ));
+    }
     // Without --spp the viewer accumulates until closed; the fixed-N samplers need N.
     let target_spp =
         (a.given("spp") || a.sampler.needs_sample_count() || a.resume.is_some()).then_some(a.spp);

@@ -1220,3 +1220,6 @@ fn denoise_writes_a_denoised_image_closer_to_the_converged_one() {
         furnace(&["render", "--quiet", "--resume", raw.to_str().unwrap(), "--spp", "8", "--backend", "cpu"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }
+
+#[path = "split_cases/merge.rs"]
+mod split;

@@ -147,6 +147,22 @@ fn rank(t: wgpu::DeviceType) -> u8 {
     }
 }
 
+/// A PCI address `[DOMAIN:]BUS:DEVICE.FUNCTION` in hex (`0000:18:00.0`, nvidia-smi's
+/// `00000000:18:00.0`, `18:00.0`), as `(domain, bus, device, function)`; `None` if `s` is not one.
+/// How a job on a host with several GPUs names the one its scheduler gave it
+/// (`nvidia-smi --query-gpu=pci.bus_id`): Vulkan does not read `CUDA_VISIBLE_DEVICES`.
+pub fn pci_address(s: &str) -> Option<(u32, u32, u32, u32)> {
+    let s = s.trim();
+    let (rest, function) = s.rsplit_once('.')?;
+    let mut fields: Vec<&str> = rest.split(':').collect();
+    if fields.len() == 2 {
+        fields.insert(0, "0");
+    }
+    let [domain, bus, device] = fields[..] else { return None };
+    let hex = |v: &str| (!v.is_empty() && v.len() <= 8).then(|| u32::from_str_radix(v, 16).ok()).flatten();
+    Some((hex(domain)?, hex(bus)?, hex(device)?, hex(function)?))
+}
+
 /// Whether an adapter runs on real GPU hardware.
 pub fn is_hardware(info: &wgpu::AdapterInfo) -> bool {
     matches!(
@@ -178,7 +194,12 @@ impl GpuContext {
                 .enumerate()
                 .map(|(i, a)| {
                     let i2 = a.get_info();
-                    format!("{i}: {} ({:?}, {:?})", i2.name, i2.device_type, i2.backend)
+                    let bus = if i2.device_pci_bus_id.is_empty() {
+                        String::new()
+                    } else {
+                        format!(", PCI {}", i2.device_pci_bus_id)
+                    };
+                    format!("{i}: {} ({:?}, {:?}{bus})", i2.name, i2.device_type, i2.backend)
                 })
                 .collect();
             if names.is_empty() { String::new() } else { format!("; adapters present: {}", names.join(", ")) }
@@ -186,9 +207,12 @@ impl GpuContext {
         let picked = match choice {
             AdapterChoice::Best => adapters.first(),
             AdapterChoice::Hardware => adapters.iter().find(|a| is_hardware(&a.get_info())),
-            AdapterChoice::Named(name) => match name.parse::<usize>() {
-                Ok(i) => adapters.get(i),
-                Err(_) => {
+            AdapterChoice::Named(name) => match (name.parse::<usize>(), pci_address(name)) {
+                (Ok(i), _) => adapters.get(i),
+                (_, Some(bus)) => {
+                    adapters.iter().find(|a| pci_address(&a.get_info().device_pci_bus_id) == Some(bus))
+                }
+                _ => {
                     let n = name.to_lowercase();
                     adapters.iter().find(|a| a.get_info().name.to_lowercase().contains(&n))
                 }
@@ -312,5 +336,22 @@ impl GpuContext {
     /// The largest storage buffer binding this device accepts, in bytes.
     pub fn max_storage_binding(&self) -> u64 {
         self.device.limits().max_storage_buffer_binding_size
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::pci_address;
+
+    #[test]
+    fn pci_addresses_parse_in_every_spelling() {
+        let want = Some((0, 0x18, 0, 0));
+        assert_eq!(pci_address("0000:18:00.0"), want);
+        assert_eq!(pci_address("00000000:18:00.0"), want, "nvidia-smi's spelling");
+        assert_eq!(pci_address("18:00.0"), want);
+        assert_eq!(pci_address(" 0001:c1:1f.7 "), Some((1, 0xc1, 0x1f, 7)));
+        for bad in ["", "0", "18:00", "H200", "0000:18:00:00.0", "zz:00.0", "1:2:3.x"] {
+            assert_eq!(pci_address(bad), None, "{bad}");
+        }
     }
 }

@@ -47,5 +47,5 @@ pub mod shared;
 pub mod traverse;
 pub mod wgsl;
 
-pub use context::{AdapterChoice, GpuContext, GpuError};
+pub use context::{AdapterChoice, GpuContext, GpuError, pci_address};
 pub use integrator::GpuRenderer;

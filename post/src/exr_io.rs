@@ -284,6 +284,29 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(u32, u32, Vec<Vec3>, Metadata
     Ok((size.0 as u32, size.1 as u32, pixels.clone(), metadata))
 }
 
+/// The size and [`Metadata`] of an EXR written by [`write_exr`] or [`write_exr_with_state`],
+/// read from its header alone (no pixel is decoded: milliseconds for a 4K film, where
+/// [`read_exr_with_state`] takes seconds). The first part's header, as [`read_exr`] reads.
+///
+/// # Errors
+/// [`PostError::Exr`] if the file is not a readable EXR; [`PostError::InvalidMetadataValue`] for
+/// a furnace attribute that does not parse. Both name `path`.
+pub fn read_exr_metadata(path: impl AsRef<Path>) -> Result<(u32, u32, Metadata), PostError> {
+    let path = path.as_ref();
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|source| PostError::Exr { path: path.to_path_buf(), source })?;
+    let Some(header) = meta.headers.first() else {
+        return Err(PostError::Exr {
+            path: path.to_path_buf(),
+            source: exr::error::Error::Invalid("no header".into()),
+        });
+    };
+    let attributes = header.shared_attributes.other.iter().chain(header.own_attributes.other.iter());
+    let metadata = Metadata::from_attributes(path, attributes)?;
+    // The exr crate limits sizes to i32 range, so these fit.
+    Ok((header.layer_size.0 as u32, header.layer_size.1 as u32, metadata))
+}
+
 /// The layer (channel-name prefix) holding a progressive render's accumulation state.
 ///
 /// Beside the `R`, `G`, `B` means (which viewers show as the image), [`write_exr_with_state`]

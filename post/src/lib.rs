@@ -68,8 +68,8 @@ mod tonemap;
 pub use atomic::{write_atomic, write_bytes_atomic};
 pub use error::PostError;
 pub use exr_io::{
-    AOV_CHANNELS, ExrWithState, ExtraChannel, Metadata, RESUME_LAYER, read_exr, read_exr_with_state,
-    write_exr, write_exr_with_state, write_exr_with_state_and,
+    AOV_CHANNELS, ExrWithState, ExtraChannel, Metadata, RESUME_LAYER, read_exr, read_exr_metadata,
+    read_exr_with_state, write_exr, write_exr_with_state, write_exr_with_state_and,
 };
 pub use png_io::write_png;
 pub use srgb::{linear_to_srgb, pixel_to_srgb8, quantize_unorm8, srgb_to_linear, srgb8_to_linear, to_srgb8};

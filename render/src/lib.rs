@@ -14,7 +14,9 @@
 //! * [`Session`] — a progressive render: passes until a [`Budget`] (spp, time limit) is spent
 //!   or the caller cancels, with progress reports and pass timing;
 //! * [`resume`] — the identity of a saved render and the checks that decide whether it may be
-//!   continued.
+//!   continued;
+//! * [`split`] — ranges of global sample indices ([`SampleRange`]), so that one render can be
+//!   traced in parts on many machines and their films merged ([`Coverage`], [`merge_bound`]).
 //!
 //! ## Example
 //!
@@ -64,6 +66,7 @@ pub mod layout;
 pub mod resume;
 mod session;
 mod settings;
+pub mod split;
 
 pub use adaptive::{ADAPTIVE_STEP, AdaptiveSampling, LUMINANCE, luminance, relative_noise};
 pub use film::{AovImages, AovMean, AovSample, AovSum, Film, FilmRow, FilmSizeError};
@@ -73,6 +76,7 @@ pub use session::{Budget, Progress, Session, Stop, Timing, process_cpu_seconds};
 pub use settings::{
     EnvSampling, LightSampling, LightSelection, RenderSettings, TriangleSampling, power_heuristic,
 };
+pub use split::{Coverage, SampleRange, merge_bound};
 
 /// A shadow ray towards a point light stops this fraction of the distance short of it (pbrt's
 /// `ShadowEpsilon`), so that a light mounted on a surface is not shadowed by that surface. Both
