@@ -1,7 +1,7 @@
 //! Trees deeper than obvhs's 32-level limits: building never panics (obvhs's debug-build
 //! validator asserted a CWBVH depth below 32), and queries agree with brute force.
 
-mod common;
+use crate::common;
 
 use common::*;
 use furnace_accel::{BuildOptions, BuildQuality, Bvh, Layout, intersect_triangle};

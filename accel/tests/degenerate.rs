@@ -1,7 +1,7 @@
 //! Degenerate inputs: empty, one triangle, coplanar sheets, huge and tiny coordinates, NaN and
 //! zero-area triangles among valid ones, bad indices. Each is checked against brute force.
 
-mod common;
+use crate::common;
 
 use common::*;
 use furnace_accel::{BuildOptions, BuildQuality, Bvh, Layout};

@@ -7,7 +7,7 @@
 //! test is from the exact answer; its statistics go to
 //! `target/test-output/accel/agreement.md`.
 
-mod common;
+use crate::common;
 
 use common::*;
 use furnace_accel::{BuildOptions, BuildQuality, Bvh, Hit, Layout, intersect_triangle};

@@ -7,7 +7,7 @@
 //! triangle, for origins moved by `offset_ray_origin` (Wächter & Binder) and by the thesis's fixed
 //! `p + 1e-3 · n`. The table goes to `target/test-output/accel/self_intersection.md`.
 
-mod common;
+use crate::common;
 
 use common::*;
 use furnace_accel::{Bvh, offset_ray_origin};

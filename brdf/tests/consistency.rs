@@ -22,7 +22,7 @@
 //! this file found: within about 0.01° of the horizon `pdf(wo, wi)` was 0 for some directions
 //! that `sample` had returned with a positive pdf.
 
-mod common;
+use crate::common;
 use common::Worst;
 use furnace_brdf::{
     Bsdf, GgxSpecular, Lambert, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions,

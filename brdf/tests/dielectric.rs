@@ -41,7 +41,7 @@
 //! tables go to `target/test-output/chi2-brdf/dielectric_*.{txt,csv,ppm}` and the other tables
 //! to `target/test-output/brdf/dielectric_*.txt`.
 
-mod common;
+use crate::common;
 use common::{Worst, write_output};
 use furnace_brdf::dielectric::{ETA_MAX, ETA_MIN, ONE_BELOW, thin_reflectance};
 use furnace_brdf::ggx::ALPHA_MIN;

@@ -38,7 +38,7 @@
 //! and material: energy bounds and where they are exceeded by design) and
 //! `white_furnace_full_range` (the compensated white furnace down to α = μ = 1e-4).
 
-mod common;
+use crate::common;
 use common::write_output;
 use furnace_brdf::ggx::{ALPHA_MIN, reflect};
 use furnace_brdf::{

@@ -22,7 +22,7 @@
 //!
 //! Tables that explain a failure go to `target/test-output/brdf/turquin_tables*.md`.
 
-mod common;
+use crate::common;
 use common::write_output;
 use furnace_brdf::Masking;
 use furnace_brdf::turquin::{

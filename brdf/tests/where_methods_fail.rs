@@ -27,7 +27,7 @@
 //!
 //! The table is printed and written to `target/test-output/brdf/where_methods_fail.md`.
 
-mod common;
+use crate::common;
 use common::write_output;
 use furnace_brdf::ggx::reflect;
 use furnace_brdf::turquin::directional_albedo;

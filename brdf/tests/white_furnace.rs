@@ -18,7 +18,7 @@
 //! Owen-scrambled Sobol points with independent scrambles per replicate, so the spread of the
 //! replicate means is an honest standard error (RQMC).
 
-mod common;
+use crate::common;
 use common::write_output;
 use furnace_brdf::turquin::{self, directional_albedo};
 use furnace_brdf::{

@@ -1,7 +1,7 @@
 //! End-to-end tests of `furnace chart`: the files a study writes, resuming, refusing other
 //! settings, and the convergence rate it measures for independent random sampling.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::{Path, PathBuf};

@@ -1,6 +1,6 @@
 //! End-to-end tests of the `furnace` binary.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::{Path, PathBuf};

@@ -18,7 +18,7 @@
 //! [`resume_across_backends_adds_the_missing_samples_of_the_other_backend`] checks that
 //! continuation to the bit.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::path::{Path, PathBuf};
@@ -92,7 +92,7 @@ fn gpu_resume_two_plus_two_is_bit_identical_to_four() {
     if skip_gpu() {
         return;
     }
-    let dir = temp_dir("resume_2_2");
+    let dir = temp_dir("gpu_resume_2_2");
     // Russian roulette on, 6 bounces: the paths use more sampler dimensions and branch on them.
     let settings = ["--russian-roulette", "on", "--bounces", "6", "--seed", "3"];
     let two = render_ok(&dir, "two", 16, "gpu", &[&settings[..], &["--spp", "2"]].concat());
@@ -111,7 +111,7 @@ fn gpu_ctrl_c_saves_a_partial_render_that_resumes_exactly() {
     if skip_gpu() {
         return;
     }
-    let dir = temp_dir("ctrl_c");
+    let dir = temp_dir("gpu_ctrl_c");
     let (mut child, mut reader, seen) = start_long_render(&dir.join("p"), 8, &["--backend", "gpu"]);
     assert!(seen.contains("rendering on "), "not on a GPU: {seen}");
     sigint(&child);

@@ -21,7 +21,7 @@
 //! Without Xvfb, xwininfo or import the test fails with what to install (`.ci/run` installs
 //! them); `FURNACE_SKIP_GPU_TESTS=1` skips it with the GPU tests.
 
-mod common;
+use crate::common;
 
 use common::*;
 use std::io::{BufRead, BufReader, Write};

@@ -3,7 +3,7 @@
 # reference (tests/mitsuba.rs's ignored GPU test, run on hardware), the full-size image means, a
 # scene without a map against the previous binary (it must pay nothing), and an 8192x4096 map's
 # time to first frame and peak memory. Needs .dev/furnace-new.xz, .dev/furnace-old.xz and
-# .dev/mitsuba-test.xz (the stripped `tests/mitsuba.rs` test binary, test profile).
+# .dev/mitsuba-test.xz (the stripped furnace-tests `all` test binary, test profile, whose `mitsuba` module is `tests/mitsuba.rs`).
 for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 for b in new old; do xz -dc .dev/furnace-$b.xz > /tmp/f$b; chmod +x /tmp/f$b; done
@@ -16,7 +16,7 @@ E=$PWD/tests/data/references/envmap
 echo "== the GPU against Mitsuba's envmap reference (20x15 of 16x16 blocks, 512 passes x 64 spp)"
 # The test binary finds tests/data beside the crate it was built from.
 [ "$PWD" = /work/main ] || { mkdir -p /work/main && ln -sfn $PWD/tests /work/main/tests; }
-(cd /work/main/tests && /tmp/mt --ignored --exact environment_map_matches_mitsuba_gpu --nocapture 2>&1 | grep -v XDG | grep -E '^\||test result|panicked' )
+(cd /work/main/tests && /tmp/mt --ignored --exact mitsuba::environment_map_matches_mitsuba_gpu --nocapture 2>&1 | grep -v XDG | grep -E '^\||test result|panicked' )
 echo "== full size 320x240, 65536 spp, GPU, Mitsuba's model: image mean against the reference"
 for es in importance compensated; do
   /tmp/fnew render $E/envmap_spheres.gltf --spp 65536 --width 320 --masking separable --compensation off --backend gpu --env-sampling $es --out $W/full_$es -q

@@ -4,7 +4,7 @@
 # box with and without its glass objects (1920x1080, 8 bounces), scenes without transmission
 # against the previous binary (they must pay nothing), and error against time at 256^2.
 # Needs .dev/furnace-new.xz, .dev/furnace-old.xz, .dev/mitsuba-test.xz (the stripped
-# tests/mitsuba.rs binary, test profile), .dev/oracle/ and .mi/mitsuba-cuda.tar.xz (README here),
+# furnace-tests `all` test binary, test profile: its `mitsuba` module), .dev/oracle/ and .mi/mitsuba-cuda.tar.xz (README here),
 # and .dev/sc/cbox.{gltf,bin} (the Cornell box's glTF from the shared references, for Mitsuba).
 for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
@@ -24,7 +24,7 @@ save() { tar -czf $OUT/results.tgz -C $W .; }
 nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
 echo "== the GPU against Mitsuba's glass references, 256^2, 512 passes x 128 spp"
 [ "$PWD" = /work/main ] || { mkdir -p /work/main && ln -sfn $PWD/tests /work/main/tests; }
-(cd /work/main/tests && timeout 300 /tmp/mt --ignored --exact glass_matches_mitsuba_gpu --nocapture 2>&1 | grep -v XDG | grep -E '^\||test result|panicked' )
+(cd /work/main/tests && timeout 300 /tmp/mt --ignored --exact mitsuba::glass_matches_mitsuba_gpu --nocapture 2>&1 | grep -v XDG | grep -E '^\||test result|panicked' )
 save
 echo "== 1920x1080, 8 bounces, 256 spp: Mitsuba and furnace interleaved (cbox = the box with the metal sphere, no glass)"
 for round in 1 2; do

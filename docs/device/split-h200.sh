@@ -14,10 +14,11 @@ echo "adapter by PCI address $bus:"
 opts=(--backend gpu --adapter "$bus" --width 1920 --height 1080 --bounces 8)
 /tmp/f render $S "${opts[@]}" --spp 16 --out $W/warm 2>&1 | grep -E "rendering on|Msamples"
 now() { date +%s.%N; }
+sub() { awk -v a="$1" -v b="$2" 'BEGIN { printf "%.2f", a - b }'; }
 for round in 1 2; do
   echo "== round $round"
   s=$(now); /tmp/f render $S "${opts[@]}" --spp 1024 --out $W/single 2>&1 | grep Msamples; e=$(now)
-  echo "single run: $(echo "$e - $s" | bc) s wall"
+  echo "single run: $(sub $e $s) s wall"
   s=$(now)
   for k in 0 1 2 3; do
     /tmp/f render $S "${opts[@]}" --spp 1024 --samples $((k * 256))..$(((k + 1) * 256)) --out $W/part-$k 2>&1 | grep Msamples
@@ -25,7 +26,7 @@ for round in 1 2; do
   m=$(now)
   /tmp/f merge $W/part-0.exr $W/part-1.exr $W/part-2.exr $W/part-3.exr -o $W/merged
   e=$(now)
-  echo "4 parts: $(echo "$m - $s" | bc) s wall, merge $(echo "$e - $m" | bc) s"
+  echo "4 parts: $(sub $m $s) s wall, merge $(sub $e $m) s"
   /tmp/f compare $W/merged.exr $W/single.exr | grep -E "RMSE|relative MSE"
 done
 echo "== 64 parts of 16 spp (start-up cost per part)"
@@ -36,5 +37,5 @@ done
 m=$(now)
 /tmp/f merge $W/p64-*.exr -o $W/merged64 --quiet
 e=$(now)
-echo "64 parts: $(echo "$m - $s" | bc) s wall, merge $(echo "$e - $m" | bc) s"
+echo "64 parts: $(sub $m $s) s wall, merge $(sub $e $m) s"
 /tmp/f compare $W/merged64.exr $W/single.exr | grep -E "RMSE|relative MSE"

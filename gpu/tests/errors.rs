@@ -226,8 +226,13 @@ fn oom_child() {
 /// Runs [`oom_child`] in a child process with `FURNACE_OOM_CHILD=mode`; returns its result
 /// line, asserting that it ended normally.
 fn oom_child_says(mode: &str) -> String {
+    // The test's name in this binary: its module path without the crate's name.
+    let name = match module_path!().split_once("::") {
+        Some((_, module)) => format!("{module}::oom_child"),
+        None => "oom_child".to_string(),
+    };
     let o = std::process::Command::new(std::env::current_exe().unwrap())
-        .args(["--exact", "oom_child", "--ignored", "--nocapture", "--test-threads", "1"])
+        .args(["--exact", &name, "--ignored", "--nocapture", "--test-threads", "1"])
         .env("FURNACE_OOM_CHILD", mode)
         .output()
         .unwrap();

@@ -14,7 +14,7 @@
 //!
 //! The full table is written to `target/test-output/sampling/convergence.md` on every run.
 
-mod common;
+use crate::common;
 use common::*;
 use furnace_sampling::{AnySampler, SamplerKind};
 

@@ -12,7 +12,7 @@
 //!
 //! The table goes to `target/test-output/sampling/edges.md` on every run.
 
-mod common;
+use crate::common;
 use common::*;
 use furnace_sampling::{AnySampler, SamplerError, SamplerKind};
 

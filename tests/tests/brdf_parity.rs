@@ -2,7 +2,7 @@
 //! eval, pdf and sample on the same inputs, for every `SpecularOptions` combination, plus the
 //! WGSL constructor, the Turquin lookup, the constants and the record layout.
 //!
-//! `cargo test -p furnace-tests --test brdf_parity -- --nocapture` prints the table of maximum
+//! `cargo test -p furnace-tests --test all brdf_parity:: -- --nocapture` prints the table of maximum
 //! errors per function and configuration.
 //!
 //! eval and pdf get identical inputs on both sides and are compared directly (relative 1e-5,

@@ -3,7 +3,7 @@
 //! every tone map and exposures of −4, −1.5, 0 and +2.5 EV; plus the module's constants, names
 //! and the kernel's layout.
 //!
-//! `cargo test -p furnace-tests --test display_parity -- --nocapture` prints the largest float
+//! `cargo test -p furnace-tests --test all display_parity:: -- --nocapture` prints the largest float
 //! difference per tone map and exposure and the number of 8-bit codes that differ.
 //!
 //! The inputs: a log-spaced sweep of radiance over 1e-6 … 1e6 (grey and coloured triples, so

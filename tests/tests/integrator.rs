@@ -520,6 +520,42 @@ fn ray_counter_counts_every_ray_only_when_asked() {
 
 // Glass against closed forms and the WGSL dielectric's parity: modules of this test binary
 // rather than binaries of their own (each test binary of this crate costs CI a link).
+/// A split render on the GPU: samples 0..5 and 5..12 traced into two fresh films (the second
+/// part starting at an index no pass of a single run starts at) and added equal the film of
+/// 0..12 from one pass — the GPU addresses samples by their global index, as `furnace render
+/// --samples` and `furnace merge` need. Counts exactly; sums to the rounding of their additions:
+/// `merge_bound` for `f64` films; for films summed per pass in `f32` (GPUs without `f64`), each
+/// of the three pass sums is within `(k−1)·2⁻²⁴·Σx` of exact, so `2·(n−1)·2⁻²⁴·Σx` bounds them.
+#[test]
+fn gpu_parts_add_up_to_one_run() {
+    use furnace_render::{Film, Integrator, merge_bound};
+    let Some(ctx) = test_context() else { return };
+    let scene = builtin::cornell_box().unwrap();
+    let s = RenderSettings { width: 16, height: 16, ..settings(SamplerKind::Sobol, 3) };
+    let mut gpu = GpuRenderer::new(ctx, &scene, &scene.default_camera(), s).unwrap();
+    gpu.render_pass(0, 12).unwrap();
+    let whole = gpu.film().unwrap();
+    let mut merged = Film::new(s.width, s.height);
+    for (first, n) in [(5, 7), (0, 5)] {
+        gpu.set_film(&Film::new(s.width, s.height)).unwrap();
+        gpu.render_pass(first, n).unwrap();
+        merged.add_film(&gpu.film().unwrap()).unwrap();
+    }
+    assert_eq!(merged.counts(), whole.counts());
+    assert_eq!(merged.rejected(), whole.rejected());
+    let precision = gpu.film_precision();
+    for (i, (m, w)) in merged.sums().iter().zip(whole.sums()).enumerate() {
+        let n = whole.counts()[i];
+        let relative = match precision {
+            FilmPrecision::F64 => merge_bound(n),
+            FilmPrecision::F32Pass => 2.0 * (n as f64 - 1.0) * 2f64.powi(-24) + merge_bound(n),
+        };
+        let bound = relative * w.max_element();
+        let diff = (*m - *w).abs().max_element();
+        assert!(diff <= bound, "pixel {i} ({precision:?}): parts {m} one run {w}: |Δ| {diff:e} > {bound:e}");
+    }
+}
+
 #[path = "glass_cases/dielectric_parity.rs"]
 mod dielectric_parity;
 #[path = "glass_cases/closed_forms.rs"]

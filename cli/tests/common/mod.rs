@@ -1,5 +1,5 @@
-//! Helpers shared by the `furnace` binary's end-to-end tests (`cli.rs`, `gpu.rs`, `chart.rs`);
-//! each test file uses some of them.
+//! Helpers shared by the `furnace` binary's end-to-end tests (`cli.rs`, `gpu.rs`, `chart.rs`,
+//! `view.rs`); each test module uses some of them.
 #![allow(dead_code)]
 
 use std::path::{Path, PathBuf};
@@ -15,10 +15,10 @@ pub fn stderr(o: &Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
-/// A fresh, empty directory for one test (under the test binary's own folder).
+/// A fresh, empty directory for one test (under the test binary's own folder). The tests of all
+/// modules run in one binary, in parallel: every name must be unique among them.
 pub fn temp_dir(name: &str) -> PathBuf {
-    let dir =
-        Path::new(env!("CARGO_TARGET_TMPDIR")).join("furnace-cli").join(env!("CARGO_CRATE_NAME")).join(name);
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("furnace-cli").join(name);
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     dir

@@ -44,7 +44,7 @@
 //! part) only the GPU's pdf and weight at its own direction ("rim"). Every count is bounded.
 //!
 //! Measured on lavapipe (llvmpipe, Mesa 22.3.6, LLVM 15, x86-64), 508 991 records, about 1.5 s
-//! (the compile and the dispatch 0.7 s); `cargo test -p furnace-tests --test dielectric_parity
+//! (the compile and the dispatch 0.7 s); `cargo test -p furnace-tests --test all dielectric_parity::
 //! -- --nocapture` prints the table per group:
 //! * bit-identical: every Fresnel field, R′, the shadow transmittance, `dielectric_new`, and the
 //!   dielectric's eval and pdf (the same operations, correctly rounded on both sides); the

@@ -1,0 +1,13 @@
+//! The integration tests of furnace-scene, as one test binary: one compile and link of the
+//! crate's dependencies for all of them, instead of one per file (most of CI's build time on
+//! 2 cores). Each module is one file beside this one, run alone with
+//! `cargo test -p furnace-scene --test all MODULE::`.
+
+#[path = "bad_geometry.rs"]
+mod bad_geometry;
+#[path = "corpus.rs"]
+mod corpus;
+#[path = "environment.rs"]
+mod environment;
+#[path = "scenes.rs"]
+mod scenes;
