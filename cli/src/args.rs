@@ -403,6 +403,15 @@ pub struct MergeArgs {
     /// Exposure of the PNG in stops [default: the parts'].
     #[arg(long, allow_negative_numbers = true, value_parser = parse_exposure)]
     pub exposure: Option<f32>,
+    /// Denoise the merged image with Intel Open Image Denoise (guided by the albedo and normal
+    /// when every part has AOVs: render them with --aovs or --denoise): writes
+    /// PATH.denoised.png and the EXR layer denoised.R/G/B, as `render --denoise` does. Needs a
+    /// furnace built with `--features denoise`.
+    #[arg(long)]
+    pub denoise: bool,
+    /// Where Open Image Denoise runs: auto, cpu, cuda, hip, sycl, metal.
+    #[arg(long, value_enum, default_value_t = DenoiseDeviceArg::Auto, value_name = "DEVICE")]
+    pub denoise_device: DenoiseDeviceArg,
     /// No summary (errors are still printed).
     #[arg(long, short)]
     pub quiet: bool,

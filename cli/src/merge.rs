@@ -14,14 +14,11 @@
 //! is an ordinary render at M samples per pixel: `furnace render --resume` continues it.
 
 use crate::args::MergeArgs;
-use crate::render::{output_paths, restore};
+use crate::render::{Look, denoise_options, output_paths, restore, write_outputs};
 use crate::resume::{self, SAMPLE_RANGE, SAMPLES, TARGET_SPP};
-use furnace_post::{
-    Metadata, read_exr_metadata, read_exr_with_state, to_srgb8, write_exr_with_state_and, write_png,
-};
+use furnace_post::{Metadata, read_exr_metadata, read_exr_with_state};
 use furnace_render::Film;
 use furnace_render::split::{Coverage, SampleRange, format_ranges, parse_ranges};
-use glam::Vec3;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -108,6 +105,10 @@ impl Part {
 
 /// Merges `a.parts` into `a.out`.
 pub fn run(a: &MergeArgs) -> Result<(), String> {
+    if a.denoise && !furnace_denoise::available() {
+        // Before any reading: the one line that says how to get it.
+        return Err(furnace_denoise::DenoiseError::NotBuilt.to_string());
+    }
     let start = Instant::now();
     let (png_path, exr_path) = output_paths(&a.out);
     for part in &a.parts {
@@ -183,10 +184,16 @@ pub fn run(a: &MergeArgs) -> Result<(), String> {
         Some(x) => x,
         None => parts[0].metadata.extra.get(resume::EXPOSURE).and_then(|v| v.parse().ok()).unwrap_or(0.0),
     };
-    write_exr_with_state_and(&exr_path, &film, &metadata, &[]).map_err(|e| e.to_string())?;
-    let radiance: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
-    write_png(&png_path, width, height, &to_srgb8(&radiance, exposure, tonemap))
-        .map_err(|e| e.to_string())?;
+    // The look recorded is the look written (a resumed merge keeps it).
+    metadata.extra.insert(resume::TONEMAP.into(), tonemap.to_string());
+    metadata.extra.insert(resume::EXPOSURE.into(), exposure.to_string());
+    let look = Look {
+        exposure,
+        tonemap,
+        denoise: a.denoise.then(|| denoise_options(a.denoise_device, false)),
+        quiet: a.quiet,
+    };
+    write_outputs(&film, &metadata, &look, &exr_path, &png_path)?;
     if !a.quiet {
         let held = format_ranges(&coverage.union);
         let per_pixel = coverage.samples();

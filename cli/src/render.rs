@@ -1,13 +1,14 @@
 //! `furnace render`: load, render in passes with a progress bar, write EXR + PNG.
 
-use crate::args::{RenderArgs, Switch};
+use crate::args::{DenoiseDeviceArg, RenderArgs, Switch};
 use crate::interrupt::Interrupt;
 use crate::resume;
 use crate::shared::{Outcome, image_size};
 use furnace_brdf::SpecularOptions;
 use furnace_cli::backend;
 use furnace_post::{
-    ExrWithState, ExtraChannel, Metadata, read_exr_with_state, to_srgb8, write_exr_with_state_and, write_png,
+    ExrWithState, ExtraChannel, Metadata, Tonemap, read_exr_with_state, to_srgb8, write_exr_with_state_and,
+    write_png,
 };
 use furnace_render::{Budget, Film, Integrator, RenderSettings, SAMPLER_LAYOUT_VERSION, Session, Stop};
 use furnace_scene::{Camera, Projection, Scene, builtin};
@@ -282,7 +283,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         let film = backend.film().map_err(|e| e.to_string())?;
         let mut metadata = job.metadata(done - start, previous_time + seconds, film.rejected());
         metadata.extra.insert(resume::BACKEND.to_string(), backend_record.clone());
-        write_outputs(&film, &metadata, a, &exr_path, &png_path).map(|()| film)
+        write_outputs(&film, &metadata, &Look::of(a), &exr_path, &png_path).map(|()| film)
     };
     // Checkpoints are not denoised (only the final image is).
     let checkpoint_args = RenderArgs { denoise: false, ..a.clone() };
@@ -417,17 +418,54 @@ fn render_passes(
     Ok(Passes { done: session.done(), seconds: start.elapsed().as_secs_f64(), stop })
 }
 
+/// How [`write_outputs`] writes a film: the PNG's look, and whether to denoise.
+pub(crate) struct Look {
+    /// Exposure in stops.
+    pub exposure: f32,
+    /// The PNG's tone map.
+    pub tonemap: Tonemap,
+    /// Open Image Denoise's options when the image is denoised too (`PATH.denoised.png` and the
+    /// EXR's `denoised.*` layer).
+    pub denoise: Option<furnace_denoise::Options>,
+    /// No messages but warnings.
+    pub quiet: bool,
+}
+
+impl Look {
+    /// What `render`'s arguments ask for.
+    pub(crate) fn of(a: &RenderArgs) -> Self {
+        Self {
+            exposure: a.exposure,
+            tonemap: a.tonemap,
+            denoise: a.denoise.then(|| denoise_options(a.denoise_device, a.denoise_prefilter)),
+            quiet: a.quiet,
+        }
+    }
+}
+
+/// Open Image Denoise's options for `--denoise-device` and `--denoise-prefilter`.
+pub(crate) fn denoise_options(device: DenoiseDeviceArg, prefilter_guides: bool) -> furnace_denoise::Options {
+    furnace_denoise::Options {
+        device: device.into(),
+        prefilter_guides,
+        ..furnace_denoise::Options::default()
+    }
+}
+
 /// Writes the EXR (RGB, metadata and the resume state) and the tone-mapped PNG, each atomically.
 pub(crate) fn write_outputs(
     film: &Film,
     metadata: &Metadata,
-    a: &RenderArgs,
+    a: &Look,
     exr_path: &Path,
     png_path: &Path,
 ) -> Result<(), String> {
     let (width, height) = (film.width(), film.height());
     let radiance: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
-    let denoised = if a.denoise { Some(denoise(film, &radiance, a)?) } else { None };
+    let denoised = match &a.denoise {
+        Some(options) => Some(denoise(film, &radiance, options, a.quiet)?),
+        None => None,
+    };
     let extra: Vec<ExtraChannel> = denoised
         .iter()
         .flat_map(|d| {
@@ -471,19 +509,19 @@ pub(crate) fn denoise_film(
     furnace_denoise::denoise(film.width(), film.height(), radiance, guides, options)
 }
 
-/// [`denoise_film`] with `render`'s options and messages (a resumed render that had no AOVs is
-/// denoised without guides, said in a note).
-fn denoise(film: &Film, radiance: &[Vec3], a: &RenderArgs) -> Result<Vec<Vec3>, String> {
+/// [`denoise_film`] with messages (a film without AOVs is denoised without guides, said in a
+/// note).
+fn denoise(
+    film: &Film,
+    radiance: &[Vec3],
+    options: &furnace_denoise::Options,
+    quiet: bool,
+) -> Result<Vec<Vec3>, String> {
     if !film.has_aovs() {
         eprintln!("note: the film has no AOVs (it was rendered without them): denoising without guides");
     }
-    let options = furnace_denoise::Options {
-        device: a.denoise_device.into(),
-        prefilter_guides: a.denoise_prefilter,
-        ..furnace_denoise::Options::default()
-    };
-    let d = denoise_film(film, radiance, &options).map_err(|e| format!("denoising: {e}"))?;
-    if !a.quiet {
+    let d = denoise_film(film, radiance, options).map_err(|e| format!("denoising: {e}"))?;
+    if !quiet {
         eprintln!("denoised on {} in {:.2} s", d.device, d.seconds);
     }
     if d.non_finite.total() > 0 {

@@ -6,7 +6,7 @@ use crate::args::{
     TriangleSamplingArg, ViewArgs,
 };
 use crate::interrupt::Interrupt;
-use crate::render::{Job, Prepared, output_paths, prepare, write_outputs};
+use crate::render::{Job, Look, Prepared, output_paths, prepare, write_outputs};
 use crate::resume;
 use crate::shared::Outcome;
 use furnace_brdf::{Masking, SpecularSampling};
@@ -133,7 +133,7 @@ impl ViewHost for CliHost<'_> {
         let (record, _) =
             furnace_render::resume::backend_record(self.previous_backend.as_deref(), &r.backend);
         meta.extra.insert(resume::BACKEND.to_string(), record);
-        write_outputs(&r.film, &meta, &job.args, &exr, &png)?;
+        write_outputs(&r.film, &meta, &Look::of(&job.args), &exr, &png)?;
         let mut message = format!("saved {} and {} ({} spp)", exr.display(), png.display(), r.spp);
         if matches!(r.camera, CameraPose::MovedOrthographic) {
             message.push_str(

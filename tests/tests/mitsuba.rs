@@ -238,7 +238,8 @@
 //! | glass box | 16² | 1.023, 1.227 | 1.181, 1.214, 1.262, 1.209, 1.243 | 1.119, 1.147, 1.172 | 1.082, 1.075, 1.070 |
 //! | glass absorb | 64² | 1.005, 1.020 (N = 1024: 1.021, 1.011) | — | — | — |
 //!
-//! Hence the **CPU at 16², 4096 passes of 16 spp** for the glass box (16.8 M paths, 20 s; seed
+//! Hence the **CPU at 16², 4096 passes of 16 spp** for the glass box (16.8 M paths, 20 s alone,
+//! so ignored in CI: `glass_box_matches_mitsuba_cpu`; seed
 //! 11 gives ratios 1.0001, 1.0000, 0.9999 (± 0.0006), z mean −0.26, z std 1.131) and **64²,
 //! 1024 passes of 1 spp** for the absorbing box (4.2 M paths, 6.5 s; 1.0000, 1.0003, 1.0004
 //! (± 0.0003), z std 1.005). The GPU test is the full-size one (256², 512 passes of 128 spp,
@@ -577,6 +578,13 @@ fn environment_map_matches_mitsuba_gpu() {
 #[test]
 fn glass_matches_mitsuba_cpu() {
     compare(Backend::Cpu, "glass_absorb_ref_bounces8");
+}
+
+#[test]
+#[ignore = "65 536 spp per pixel (the caustic's skew, above): 20 s alone, about 50 s of CI's 2 busy cores; \
+            CI traces the glass box on both backends from the same samples (tests/integrator.rs) and checks \
+            its interfaces in closed form (glass_cases/closed_forms.rs); run with --ignored"]
+fn glass_box_matches_mitsuba_cpu() {
     compare(Backend::Cpu, "glass_box_ref_bounces8");
 }
 

@@ -233,3 +233,37 @@ fn checkpoints_and_sigterm_keep_the_work() {
     assert_eq!(child.wait().unwrap().code(), Some(130), "{rest}");
     assert!(rest.contains("interrupted") && dir.join("t.exr").is_file(), "{rest}");
 }
+
+/// Without the `denoise` feature, `merge --denoise` says in one line how to get it, before it
+/// reads a part.
+#[cfg(not(feature = "denoise"))]
+#[test]
+fn merge_denoise_without_the_feature_says_how_to_get_it() {
+    let dir = temp_dir("merge_denoise_missing");
+    let o = merge(&dir, "m", &[&dir.join("absent.exr")], &["--denoise"]);
+    assert_eq!(o.status.code(), Some(1));
+    let err = stderr(&o);
+    assert!(err.contains("--features denoise") && !err.contains("absent.exr"), "{err}");
+}
+
+/// With the feature: the merged image of parts with AOVs is denoised (guided), as `render
+/// --denoise` writes it: PATH.denoised.png and the EXR's denoised layer beside the exact film.
+#[cfg(feature = "denoise")]
+#[test]
+fn merge_denoises_the_merged_image() {
+    let dir = temp_dir("merge_denoise");
+    let a = part(&dir, "a", &["--aovs", "--samples", "0..2", "--spp", "4", "--backend", "cpu"]);
+    let b = part(&dir, "b", &["--aovs", "--samples", "2..4", "--spp", "4", "--backend", "cpu"]);
+    let o = merge(&dir, "m", &[&a, &b], &["--denoise", "--denoise-device", "cpu"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(dir.join("m.denoised.png").is_file());
+    let channels = exr::meta::MetaData::read_from_file(dir.join("m.exr"), false).unwrap().headers[0]
+        .channels
+        .list
+        .iter()
+        .map(|c| c.name.to_string())
+        .collect::<Vec<_>>();
+    assert!(channels.iter().any(|c| c == "denoised.R"), "{channels:?}");
+    let r = furnace_post::read_exr_with_state(dir.join("m.exr")).unwrap();
+    assert!(r.state.unwrap().has_aovs(), "the guides' AOVs are merged too");
+}
