@@ -977,20 +977,20 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
 }
 
 fn parse_interval(s: &str) -> Result<f64, String> {
-    let t: f64 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
-    if t.is_finite() && t > 0.0 {
-        Ok(t)
-    } else {
-        Err(format!("the checkpoint interval must be a positive number of seconds (got {s})"))
-    }
+    positive_seconds(s, "the checkpoint interval")
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {
+    positive_seconds(s, "the time limit")
+}
+
+/// A positive, finite number of seconds; `what` names it in the error.
+fn positive_seconds(s: &str, what: &str) -> Result<f64, String> {
     let t: f64 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
     if t.is_finite() && t > 0.0 {
         Ok(t)
     } else {
-        Err(format!("the time limit must be a positive number of seconds (got {s})"))
+        Err(format!("{what} must be a positive number of seconds (got {s})"))
     }
 }
 

@@ -18,6 +18,7 @@ use crate::render::{Look, denoise_options, output_paths, restore, write_outputs}
 use crate::resume::{self, SAMPLE_RANGE, SAMPLES, TARGET_SPP};
 use furnace_post::{Metadata, read_exr_metadata, read_exr_with_state};
 use furnace_render::Film;
+use furnace_render::resume::ResumeError;
 use furnace_render::split::{Coverage, SampleRange, format_ranges, parse_ranges};
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -216,31 +217,28 @@ pub fn run(a: &MergeArgs) -> Result<(), String> {
 
 /// `Err` unless every part has the first part's identity and sampler layout.
 fn check_one_render(parts: &[Part]) -> Result<(), String> {
+    // The resume identity, and the sampler layout the paths were drawn with.
+    let identity = |p: &Part| {
+        let mut id = resume::identity(&p.metadata, p.width, p.height);
+        id.push(("sampler layout", p.metadata.extra.get(resume::SAMPLER_LAYOUT).cloned()));
+        id
+    };
     let first = &parts[0];
-    let id = resume::identity(&first.metadata, first.width, first.height);
-    let layout = |p: &Part| p.metadata.extra.get(resume::SAMPLER_LAYOUT).cloned();
+    let id = identity(first);
     for p in &parts[1..] {
-        let other = resume::identity(&p.metadata, p.width, p.height);
-        let show = |v: &Option<String>| v.clone().unwrap_or_else(|| "(not recorded)".into());
-        let mut differences: Vec<String> = id
-            .iter()
-            .zip(&other)
-            .filter(|((_, a), (_, b))| a != b)
-            .map(|((setting, a), (_, b))| format!("{setting} is {} there but {} here", show(a), show(b)))
-            .collect();
-        if layout(first) != layout(p) {
-            differences.push(format!(
-                "its samples were drawn with sampler layout {} there but {} here",
-                show(&layout(first)),
-                show(&layout(p))
-            ));
-        }
-        if !differences.is_empty() {
+        if let Err(ResumeError::Different(differences)) =
+            furnace_render::resume::check_same(&id, &identity(p))
+        {
+            let show = |v: &Option<String>| v.clone().unwrap_or_else(|| "(not recorded)".into());
+            let list: Vec<String> = differences
+                .iter()
+                .map(|d| format!("{} is {} there but {} here", d.setting, show(&d.recorded), show(&d.now)))
+                .collect();
             return Err(format!(
                 "{}: not a part of the render of {}: {}",
                 p.path.display(),
                 first.path.display(),
-                differences.join("; ")
+                list.join("; ")
             ));
         }
     }

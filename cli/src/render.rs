@@ -279,16 +279,16 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     }
     let (png_path, exr_path) = output_paths(&a.out);
     // The EXR and PNG of the film holding samples start..done after `seconds` of this run.
-    let save = |backend: &mut dyn Integrator, done: u32, seconds: f64, a: &RenderArgs| {
+    let save = |backend: &mut dyn Integrator, done: u32, seconds: f64, look: &Look| {
         let film = backend.film().map_err(|e| e.to_string())?;
         let mut metadata = job.metadata(done - start, previous_time + seconds, film.rejected());
         metadata.extra.insert(resume::BACKEND.to_string(), backend_record.clone());
-        write_outputs(&film, &metadata, &Look::of(a), &exr_path, &png_path).map(|()| film)
+        write_outputs(&film, &metadata, look, &exr_path, &png_path).map(|()| film)
     };
     // Checkpoints are not denoised (only the final image is).
-    let checkpoint_args = RenderArgs { denoise: false, ..a.clone() };
+    let checkpoint_look = Look { denoise: None, ..Look::of(a) };
     let mut checkpoint = |backend: &mut dyn Integrator, done: u32, seconds: f64| {
-        save(backend, done, seconds, &checkpoint_args).map(drop)
+        save(backend, done, seconds, &checkpoint_look).map(drop)
     };
     let pass = render_passes(&mut backend, &job, (first, end), interrupt, &mut checkpoint)?;
     if pass.done == first {
@@ -296,7 +296,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         eprintln!("interrupted before the first pass: nothing rendered, nothing written");
         return Ok(Outcome::Interrupted);
     }
-    let film = save(&mut backend, pass.done, pass.seconds, a)?;
+    let film = save(&mut backend, pass.done, pass.seconds, &Look::of(a))?;
 
     let stopped_by_user = pass.stop == Stop::Cancelled;
     if !a.quiet || stopped_by_user {
