@@ -476,7 +476,7 @@ pub struct BenchArgs {
     #[arg(long)]
     pub no_rays: bool,
     /// GPU: invocations per pixel in a workgroup (a power of two, 1–256: up to the workgroup's
-    /// size) instead of the renderer's choice (16 on hardware, 1 on software adapters) — for
+    /// size) instead of the renderer's choice (on hardware 16 for small images, fewer for large ones; 1 on software adapters) — for
     /// occupancy studies.
     #[arg(
         long,

@@ -307,11 +307,25 @@ struct Dispatch {
 /// (BENCHMARKS.md, "GPU integrator"). The film is the same, bit for bit, for every size.
 pub const GROUP_SIZE: u32 = 256;
 
-/// Invocations per pixel on hardware adapters: 16, where throughput stops growing at every
-/// image size measured (`furnace bench --group-samples N`, BENCHMARKS.md "Occupancy"). Small
-/// images alone do not fill a large GPU, and one short invocation per sample retires and is
-/// replaced sooner than a loop whose warp waits for its slowest path each time.
+/// The most invocations per pixel on hardware adapters: 16, where throughput stops growing on
+/// small images (`furnace bench --group-samples N`, BENCHMARKS.md "Occupancy"): a 256² image
+/// alone does not fill a large GPU.
 const HARDWARE_GROUP_SAMPLES: u32 = 16;
+
+/// Invocations per pixel on a hardware adapter for an image of `pixels` pixels: the largest
+/// power of two up to [`HARDWARE_GROUP_SAMPLES`] whose dispatch of every pixel stays within
+/// `samples_per_dispatch` invocations (at least 1). Small images get 16 invocations per pixel to
+/// fill the GPU; large ones few, so that one dispatch covers the whole image: measured on the
+/// H200 (BENCHMARKS.md, "Speed"), 1920×1440 at 4 per pixel was cut into dispatches of 1092 and
+/// 348 rows and ran 23 % slower than at 2 (one dispatch per 2 samples), while 1920×1080 is as
+/// fast at 4 as at 16.
+pub fn hardware_group_samples(pixels: u64, samples_per_dispatch: u64) -> u32 {
+    let mut n = HARDWARE_GROUP_SAMPLES;
+    while n > 1 && pixels * u64::from(n) > samples_per_dispatch {
+        n /= 2;
+    }
+    n
+}
 
 /// The tile of a workgroup with `group_samples` invocations per pixel: (width, height) pixels,
 /// as square as powers of two allow (width ≥ height).
@@ -634,8 +648,118 @@ fn environment_buffers(
     Ok(environment)
 }
 
+/// The runtime checks wgpu adds to the integrator's shader when it translates it (naga's
+/// SPIR-V for Vulkan): none of them changes what a correct shader computes, only its speed and
+/// its compile time.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ShaderChecks {
+    /// wgpu's defaults: local arrays' indices clamped, every loop bounded by a 64-bit counter,
+    /// integer division guarded (buffer accesses: by the driver's robustBufferAccess2 where it
+    /// has it). Hardware adapters: on the H200 the loop counters *speed up* the Cornell box and
+    /// light scenes by 14–25 % (the driver compiles the traversal loop differently) while the
+    /// sunlit interior runs 16–19 % faster without them (BENCHMARKS.md, "Speed").
+    Checked,
+    /// No loop counters (the other checks kept). Software adapters: lavapipe compiles the
+    /// megakernel 3–4 times faster without them (a test's first frame 35.6 s instead of 52.7 s).
+    NoLoopBounding,
+    /// None of the checks (profiling only).
+    Unchecked,
+}
+
+impl ShaderChecks {
+    /// The default: [`ShaderChecks::Checked`] on hardware, [`ShaderChecks::NoLoopBounding`] on a
+    /// software adapter.
+    pub fn for_adapter(software: bool) -> Self {
+        if software { Self::NoLoopBounding } else { Self::Checked }
+    }
+
+    /// wgpu's runtime checks for this choice.
+    pub fn runtime_checks(self) -> wgpu::ShaderRuntimeChecks {
+        match self {
+            Self::Checked => wgpu::ShaderRuntimeChecks::checked(),
+            Self::NoLoopBounding => {
+                let mut c = wgpu::ShaderRuntimeChecks::checked();
+                c.force_loop_bounding = false;
+                c
+            }
+            // SAFETY (of the value; creating a module with it is the unsafe step): see
+            // `integrator_pipeline`.
+            Self::Unchecked => wgpu::ShaderRuntimeChecks::unchecked(),
+        }
+    }
+}
+
+/// Overrides of the integrator's shader for profiling, read from the environment when a
+/// pipeline is built (`docs/device/speed-*.sh`); unset, the shader is the tested one:
+///
+/// | variable | effect |
+/// |---|---|
+/// | `FURNACE_SHADER_CHECKS=checked\|noloop\|unchecked` | [`ShaderChecks`] instead of the adapter's default |
+/// | `FURNACE_TRV_STACK=N` | a traversal stack of N node groups ([`crate::traverse::module_with_stack_size`]) |
+/// | `FURNACE_NO_TRACE_COUNTERS=1` | no per-invocation node/triangle/depth counters in the traversal (`furnace bench` then counts 0 nodes and triangles) |
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ProfilingOverrides {
+    /// `FURNACE_SHADER_CHECKS`.
+    pub checks: Option<ShaderChecks>,
+    /// `FURNACE_TRV_STACK`.
+    pub stack: Option<u32>,
+    /// `FURNACE_NO_TRACE_COUNTERS`.
+    pub no_trace_counters: bool,
+}
+
+impl ProfilingOverrides {
+    /// The overrides set in the environment.
+    ///
+    /// # Errors
+    /// [`GpuError::Unsupported`] naming the variable when a value is not one of the table's.
+    pub fn from_env() -> Result<Self, GpuError> {
+        let var = |name: &str| std::env::var(name).ok().filter(|v| !v.is_empty());
+        let checks = match var("FURNACE_SHADER_CHECKS").as_deref() {
+            None => None,
+            Some("checked") => Some(ShaderChecks::Checked),
+            Some("noloop") => Some(ShaderChecks::NoLoopBounding),
+            Some("unchecked") => Some(ShaderChecks::Unchecked),
+            Some(v) => {
+                return Err(GpuError::Unsupported(format!(
+                    "FURNACE_SHADER_CHECKS={v}: expected checked, noloop or unchecked"
+                )));
+            }
+        };
+        let stack = match var("FURNACE_TRV_STACK") {
+            None => None,
+            Some(v) => Some(v.parse::<u32>().ok().filter(|&n| n > 0).ok_or_else(|| {
+                GpuError::Unsupported(format!("FURNACE_TRV_STACK={v}: expected a positive integer"))
+            })?),
+        };
+        Ok(Self {
+            checks,
+            stack,
+            no_trace_counters: var("FURNACE_NO_TRACE_COUNTERS").is_some_and(|v| v == "1"),
+        })
+    }
+
+    /// `source` (a [`shader_source`]) with the stack and counter overrides applied.
+    pub fn apply(&self, source: String) -> String {
+        let mut s = source;
+        if let Some(n) = self.stack {
+            s = s.replace(crate::wgsl::TRAVERSE, &crate::traverse::module_with_stack_size(n));
+        }
+        if self.no_trace_counters {
+            for counter in [
+                "trace_stats.nodes += 1u;",
+                "trace_stats.triangles += 1u;",
+                "trace_stats.max_depth = max(trace_stats.max_depth, depth);",
+            ] {
+                s = s.replace(counter, "");
+            }
+        }
+        s
+    }
+}
+
 /// The integrator's bind group layout and compute pipeline for a film precision and the scene
 /// features.
+#[allow(unsafe_code)]
 fn integrator_pipeline(
     ctx: &GpuContext,
     precision: FilmPrecision,
@@ -653,10 +777,25 @@ fn integrator_pipeline(
         bind_group_layouts: &[Some(&layout)],
         immediate_size: 0,
     });
-    let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+    let overrides = ProfilingOverrides::from_env()?;
+    let software = !crate::context::is_hardware(&ctx.info);
+    let checks = overrides.checks.unwrap_or(ShaderChecks::for_adapter(software));
+    let desc = wgpu::ShaderModuleDescriptor {
         label: Some("integrator"),
-        source: wgpu::ShaderSource::Wgsl(shader_source(precision, features).into()),
-    });
+        source: wgpu::ShaderSource::Wgsl(overrides.apply(shader_source(precision, features)).into()),
+    };
+    let module = match checks {
+        ShaderChecks::Checked => device.create_shader_module(desc),
+        // SAFETY: the checks turned off guard against what this shader does not do. Every loop
+        // of the integrator ends (loops over counts, over the bits of a mask that each iteration
+        // clears, a binary search, the traversal of a finite tree built here, the path loop
+        // bounded by the bounces and MAX_SHEET_PASSES); with `Unchecked` (a profiling override
+        // only), its local arrays are indexed within bounds (the traversal stack by a depth kept
+        // below TRV_STACK_SIZE), integer divisions are by non-zero values (group_samples ≥ 1,
+        // the emitter count tested first), and buffer accesses stay in bounds on a device with
+        // robustBufferAccess2 regardless (wgpu leaves those checks to the driver there).
+        _ => unsafe { device.create_shader_module_trusted(desc, checks.runtime_checks()) },
+    };
     let entry = |name: &str| {
         device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
             label: Some(name),
@@ -918,8 +1057,8 @@ impl GpuRenderer {
         })
     }
 
-    /// Invocations per pixel in a workgroup: `None` (the default) chooses — 16 on hardware
-    /// (measured best at every size, see `HARDWARE_GROUP_SAMPLES`), 1 on software adapters;
+    /// Invocations per pixel in a workgroup: `None` (the default) chooses — on hardware, up to
+    /// 16 by image size ([`hardware_group_samples`]), 1 on software adapters;
     /// `Some(n)` forces `n` (rounded down to a power of two in 1..=[`GROUP_SIZE`]). The film
     /// does not depend on it, bit for bit.
     pub fn set_group_samples(&mut self, n: Option<u32>) {
@@ -930,7 +1069,12 @@ impl GpuRenderer {
     pub fn group_samples(&self, samples_per_pixel: u32) -> u32 {
         // Software adapters (lavapipe) run invocations on a few CPU threads: nothing to fill.
         let software = self.max_samples_per_invocation == 1;
-        let n = self.group_samples.unwrap_or(if software { 1 } else { HARDWARE_GROUP_SAMPLES });
+        let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
+        let n = self.group_samples.unwrap_or(if software {
+            1
+        } else {
+            hardware_group_samples(pixels, self.samples_per_dispatch)
+        });
         // More invocations than samples would idle.
         let cap = samples_per_pixel.max(1);
         if n > cap { 1 << cap.ilog2() } else { n }
@@ -994,9 +1138,12 @@ impl GpuRenderer {
         };
         // At least one row, at most the image (an image shorter than a tile is one dispatch: the
         // `clamp(8, h)` here before panicked for images under 8 rows), whole tiles.
-        let rows =
-            (self.samples_per_dispatch / (u64::from(w) * u64::from(per_invocation))).clamp(1, u64::from(h));
-        let rows = (rows as u32).div_ceil(tile_height) * tile_height;
+        let rows = (self.samples_per_dispatch / (u64::from(w) * u64::from(per_invocation)))
+            .clamp(1, u64::from(h)) as u32;
+        // As many dispatches as that needs, of equal heights: a thin last dispatch would leave
+        // the GPU idle behind its few long paths.
+        let rows = h.div_ceil(h.div_ceil(rows));
+        let rows = rows.div_ceil(tile_height) * tile_height;
         let mut v = Vec::new();
         let mut s = 0;
         while s < n {
@@ -1339,4 +1486,57 @@ fn set_camera_params(p: &mut FrameParams, camera: &Camera) {
     p.fov_scale = fov_scale;
     p.aspect = p.width.max(1) as f32 / p.height.max(1) as f32;
     p.flags = (p.flags & !FRAME_ORTHOGRAPHIC) | ortho;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 16 per pixel while a whole-image dispatch stays within the budget, then halves: the
+    /// sizes measured on the H200 (BENCHMARKS.md, "Speed").
+    #[test]
+    fn invocations_per_pixel_follow_the_image_size() {
+        let budget = 1 << 23;
+        for (w, h, n) in [
+            (256, 256, 16),
+            (512, 512, 16),
+            (1024, 1024, 8),
+            (1920, 1080, 4),
+            (1920, 1440, 2),
+            (3840, 2160, 1),
+            (8192, 8192, 1),
+            (1, 1, 16),
+        ] {
+            assert_eq!(hardware_group_samples(w * h, budget), n, "{w}×{h}");
+        }
+    }
+
+    /// The stack override rewrites the traversal's stack size; the counters override removes
+    /// every counter update; no override leaves the shader as composed.
+    #[test]
+    fn profiling_overrides_rewrite_the_shader() {
+        let source = shader_source(FilmPrecision::F64, SceneFeatures::default());
+        assert_eq!(ProfilingOverrides::default().apply(source.clone()), source);
+        let stack = ProfilingOverrides { stack: Some(8), ..Default::default() }.apply(source.clone());
+        assert!(
+            stack.contains("const TRV_STACK_SIZE: u32 = 8u;") && !stack.contains("TRV_STACK_SIZE: u32 = 16u")
+        );
+        let bare = ProfilingOverrides { no_trace_counters: true, ..Default::default() }.apply(source.clone());
+        assert!(source.contains("trace_stats.nodes += 1u;"));
+        assert!(!bare.contains("trace_stats.nodes +=") && !bare.contains("trace_stats.triangles +="));
+        assert!(!bare.contains("trace_stats.max_depth = max"));
+    }
+
+    /// Loop counters are off only on software adapters by default; every choice keeps the
+    /// other checks as documented.
+    #[test]
+    fn shader_checks_by_adapter() {
+        assert_eq!(ShaderChecks::for_adapter(false), ShaderChecks::Checked);
+        assert_eq!(ShaderChecks::for_adapter(true), ShaderChecks::NoLoopBounding);
+        let c = ShaderChecks::NoLoopBounding.runtime_checks();
+        assert!(!c.force_loop_bounding && c.bounds_checks && c.int_div_checks);
+        let c = ShaderChecks::Checked.runtime_checks();
+        assert!(c.force_loop_bounding && c.bounds_checks);
+        assert!(!ShaderChecks::Unchecked.runtime_checks().bounds_checks);
+    }
 }

@@ -80,9 +80,12 @@ struct TraceStats {
 
 var<private> trace_stats: TraceStats;
 
-/// Node groups the traversal stack holds; see "Traversal stack and its overflow" above. The
-/// Rust side rewrites this line to test the overflow path: keep its form.
-const TRV_STACK_SIZE: u32 = 32u;
+/// Node groups the traversal stack holds; see "Traversal stack and its overflow" above. 16, not
+/// the CPU's 32: measured on the H200, the 32-entry stack took 112 bytes of local memory per
+/// invocation and more shared memory, and the megakernel ran 7–15 % slower (BENCHMARKS.md); the
+/// deepest stack seen in a real scene is 10 (10^7 triangles). The Rust side rewrites this line
+/// to test the overflow path: keep its form.
+const TRV_STACK_SIZE: u32 = 16u;
 
 /// `accel`'s CULL_SLACK, 1 + 2^-12: boxes are culled only beyond t_best · (1 + 2^-12), so that
 /// a triangle a few ULPs nearer than the best hit, in a box whose computed entry is a few ULPs
