@@ -117,12 +117,9 @@ impl GpuStruct for GpuTriangle {
     }
 }
 
-/// The traversal's two read-only storage bindings: `bvh_nodes`, `bvh_triangles`. Both are
-/// declared as 16-byte words (five per node, three per triangle) and read whole by
-/// `traverse.wgsl`'s `trv_node` / `trv_triangle`: a field-by-field read of the structs made the
-/// driver issue a load per field (BENCHMARKS.md, "Speed").
+/// The traversal's two read-only storage bindings: `bvh_nodes`, `bvh_triangles`.
 pub fn binding_list() -> Vec<Binding> {
-    vec![Binding::read("bvh_nodes", "array<vec4<u32>>"), Binding::read("bvh_triangles", "array<vec4<u32>>")]
+    vec![Binding::read("bvh_nodes", "array<CwbvhNode>"), Binding::read("bvh_triangles", "array<Triangle>")]
 }
 
 /// A CWBVH as the `u32` words of the two storage buffers of the WGSL traversal: the bytes of

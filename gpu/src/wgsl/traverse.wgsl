@@ -23,12 +23,8 @@
 // What the composing shader must declare (this module declares no bindings; Rust:
 // `furnace_gpu::traverse::bindings(group, first)`, which includes the two structs):
 //
-//   @group(G) @binding(B0) var<storage, read> bvh_nodes: array<vec4<u32>>;      // 5 per node
-//   @group(G) @binding(B1) var<storage, read> bvh_triangles: array<vec4<u32>>;  // 3 per triangle
-//
-// The buffers hold `CwbvhNode`s and `Triangle`s, but are declared as 16-byte words and read
-// with `trv_node` / `trv_triangle`: one 16-byte load per word instead of one load per field
-// (measured faster on the H200, BENCHMARKS.md "Speed").
+//   @group(G) @binding(B0) var<storage, read> bvh_nodes: array<CwbvhNode>;
+//   @group(G) @binding(B1) var<storage, read> bvh_triangles: array<Triangle>;
 //   fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool { ... }  // alpha masks; true = solid
 //
 // `hit_filter` is called only for candidates closer than the closest accepted hit so far (for
@@ -233,46 +229,9 @@ fn trv_byte(w: vec2<u32>, k: u32) -> f32 {
     return f32((word >> (8u * (k & 3u))) & 0xffu);
 }
 
-/// Per-ray, per-node data of the child test: each axis' entry and exit plane bytes (lo then hi
-/// for a positive direction, swapped for a negative one) and the plane equation
-/// `t = q · scale + offset`.
-struct TrvPlanes {
-    ex: vec2<u32>,
-    lx: vec2<u32>,
-    ey: vec2<u32>,
-    ly: vec2<u32>,
-    ez: vec2<u32>,
-    lz: vec2<u32>,
-    scale: vec3<f32>,
-    offset: vec3<f32>,
-}
-
-/// Child slot `k` of a node: its bits of the hit mask (0 when empty, missed, or an inner child
-/// while `leaves_only`). Called with constant `k` from `trv_intersect_node`.
-fn trv_child(k: u32, cm: vec2<u32>, pl: TrvPlanes, r: TrvRay, t_cull: f32, leaves_only: bool) -> u32 {
-    let word = select(cm.x, cm.y, k >= 4u);
-    let cmeta = (word >> (8u * (k & 3u))) & 0xffu;
-    // An empty slot sets no bits (obvhs tests it anyway, to the same effect).
-    let is_inner = ((cmeta & (cmeta << 1u)) & 0x10u) != 0u;
-    let tx0 = trv_byte(pl.ex, k) * pl.scale.x + pl.offset.x;
-    let ty0 = trv_byte(pl.ey, k) * pl.scale.y + pl.offset.y;
-    let tz0 = trv_byte(pl.ez, k) * pl.scale.z + pl.offset.z;
-    let tx1 = trv_byte(pl.lx, k) * pl.scale.x + pl.offset.x;
-    let ty1 = trv_byte(pl.ly, k) * pl.scale.y + pl.offset.y;
-    let tz1 = trv_byte(pl.lz, k) * pl.scale.z + pl.offset.z;
-    let enter = max(max(tx0, max(ty0, tz0)), 0.0);
-    let leave = min(min(tx1, min(ty1, tz1)), t_cull);
-    let keep = cmeta != 0u && enter <= leave && !(leaves_only && is_inner);
-    let bit_index = (cmeta ^ select(0u, r.oct_inv4 & 0xffu, is_inner)) & 0x1fu;
-    let child_bits = (cmeta >> 5u) & 7u;
-    return select(0u, child_bits << bit_index, keep);
-}
-
 /// The Ylitie et al. hit mask of `node` for children entered at t ∈ [0, t_cull]: bit 24 + (slot ^
 /// octant) for an inner child, the unary triangle count shifted by the leaf's triangle offset
-/// for a leaf child. `leaves_only` drops inner children (the fallback sweep). The eight slots
-/// are written out rather than looped over: a loop here gets wgpu's loop counter on hardware
-/// adapters, which kept the driver from unrolling it (BENCHMARKS.md, "Speed").
+/// for a leaf child. `leaves_only` drops inner children (the fallback sweep).
 fn trv_intersect_node(node: CwbvhNode, r: TrvRay, t_cull: f32, leaves_only: bool) -> u32 {
     trace_stats.nodes += 1u;
     let e = node.e_imask;
@@ -281,21 +240,41 @@ fn trv_intersect_node(node: CwbvhNode, r: TrvRay, t_cull: f32, leaves_only: bool
         bitcast<f32>(((e >> 8u) & 0xffu) << 23u),
         bitcast<f32>(((e >> 16u) & 0xffu) << 23u),
     );
-    let pl = TrvPlanes(
-        select(node.child_min_x, node.child_max_x, r.neg.x),
-        select(node.child_max_x, node.child_min_x, r.neg.x),
-        select(node.child_min_y, node.child_max_y, r.neg.y),
-        select(node.child_max_y, node.child_min_y, r.neg.y),
-        select(node.child_min_z, node.child_max_z, r.neg.z),
-        select(node.child_max_z, node.child_min_z, r.neg.z),
-        extent * r.inv_d,
-        (vec3<f32>(node.p[0], node.p[1], node.p[2]) - r.o) * r.inv_d,
-    );
-    let m = node.child_meta;
-    return trv_child(0u, m, pl, r, t_cull, leaves_only) | trv_child(1u, m, pl, r, t_cull, leaves_only)
-        | trv_child(2u, m, pl, r, t_cull, leaves_only) | trv_child(3u, m, pl, r, t_cull, leaves_only)
-        | trv_child(4u, m, pl, r, t_cull, leaves_only) | trv_child(5u, m, pl, r, t_cull, leaves_only)
-        | trv_child(6u, m, pl, r, t_cull, leaves_only) | trv_child(7u, m, pl, r, t_cull, leaves_only);
+    let scale = extent * r.inv_d;
+    let offset = (vec3<f32>(node.p[0], node.p[1], node.p[2]) - r.o) * r.inv_d;
+    // Entry / exit planes per axis: lo then hi for a positive direction, swapped for negative.
+    let ex = select(node.child_min_x, node.child_max_x, r.neg.x);
+    let lx = select(node.child_max_x, node.child_min_x, r.neg.x);
+    let ey = select(node.child_min_y, node.child_max_y, r.neg.y);
+    let ly = select(node.child_max_y, node.child_min_y, r.neg.y);
+    let ez = select(node.child_min_z, node.child_max_z, r.neg.z);
+    let lz = select(node.child_max_z, node.child_min_z, r.neg.z);
+    var mask = 0u;
+    for (var k = 0u; k < 8u; k++) {
+        let word = select(node.child_meta.x, node.child_meta.y, k >= 4u);
+        let cmeta = (word >> (8u * (k & 3u))) & 0xffu;
+        if cmeta == 0u {
+            continue; // empty slot: no bits to set (obvhs tests it anyway, to the same effect)
+        }
+        let is_inner = ((cmeta & (cmeta << 1u)) & 0x10u) != 0u;
+        if leaves_only && is_inner {
+            continue;
+        }
+        let tx0 = trv_byte(ex, k) * scale.x + offset.x;
+        let ty0 = trv_byte(ey, k) * scale.y + offset.y;
+        let tz0 = trv_byte(ez, k) * scale.z + offset.z;
+        let tx1 = trv_byte(lx, k) * scale.x + offset.x;
+        let ty1 = trv_byte(ly, k) * scale.y + offset.y;
+        let tz1 = trv_byte(lz, k) * scale.z + offset.z;
+        let enter = max(max(tx0, max(ty0, tz0)), 0.0);
+        let leave = min(min(tx1, min(ty1, tz1)), t_cull);
+        if enter <= leave {
+            let bit_index = (cmeta ^ select(0u, r.oct_inv4 & 0xffu, is_inner)) & 0x1fu;
+            let child_bits = (cmeta >> 5u) & 7u;
+            mask |= child_bits << bit_index;
+        }
+    }
+    return mask;
 }
 
 /// Traversal state shared by the closest-hit and any-hit loops.
@@ -313,31 +292,10 @@ struct TrvState {
     done: bool,
 }
 
-/// Node `i` of `bvh_nodes` (its five 16-byte words).
-fn trv_node(i: u32) -> CwbvhNode {
-    let k = 5u * i;
-    let a = bvh_nodes[k];
-    let b = bvh_nodes[k + 1u];
-    let c = bvh_nodes[k + 2u];
-    let d = bvh_nodes[k + 3u];
-    let e = bvh_nodes[k + 4u];
-    return CwbvhNode(array<f32, 3>(bitcast<f32>(a.x), bitcast<f32>(a.y), bitcast<f32>(a.z)), a.w, b.x, b.y, b.zw,
-                     c.xy, c.zw, d.xy, d.zw, e.xy, e.zw);
-}
-
-/// Triangle slot `slot` of `bvh_triangles` (its three 16-byte words).
-fn trv_triangle(slot: u32) -> Triangle {
-    let k = 3u * slot;
-    let a = bvh_triangles[k];
-    let b = bvh_triangles[k + 1u];
-    let c = bvh_triangles[k + 2u];
-    return Triangle(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w, bitcast<vec3<f32>>(c.xyz), c.w);
-}
-
 /// Tests triangle slot `slot` and updates the state (accel's `visit` closures).
 fn trv_leaf(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>, slot: u32) {
     trace_stats.triangles += 1u;
-    let tri = trv_triangle(slot);
+    let tri = bvh_triangles[slot];
     let h = trv_intersect_triangle(o, d, tri.v0, tri.v1, tri.v2, (*st).t_tri);
     if h.t > 0.0 && hit_filter(tri.id, h.u, h.v) {
         (*st).best = h;
@@ -368,9 +326,9 @@ fn trv_leaves(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>, base: u32
 /// distance (see the top of this file).
 fn trv_sweep(st: ptr<function, TrvState>, r: TrvRay, o: vec3<f32>, d: vec3<f32>) {
     trace_stats.fallbacks += 1u;
-    let n = arrayLength(&bvh_nodes) / 5u;
+    let n = arrayLength(&bvh_nodes);
     for (var i = 0u; i < n; i++) {
-        let node = trv_node(i);
+        let node = bvh_nodes[i];
         let hits = trv_intersect_node(node, r, (*st).t_cull, true);
         trv_leaves(st, o, d, node.primitive_base_idx, hits);
         if (*st).done {
@@ -410,7 +368,7 @@ fn trv_traverse(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>) {
             }
             let slot_index = (child_index_offset - 24u) ^ (r.oct_inv4 & 0xffu);
             let relative_index = countOneBits(hits_imask & ~(0xffffffffu << slot_index));
-            let node = trv_node(current.x + relative_index);
+            let node = bvh_nodes[current.x + relative_index];
             let hitmask = trv_intersect_node(node, r, (*st).t_cull, false);
             current = vec2<u32>(node.child_base_idx, (hitmask & 0xff000000u) | (node.e_imask >> 24u));
             trv_leaves(st, o, d, node.primitive_base_idx, hitmask);
