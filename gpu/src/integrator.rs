@@ -445,6 +445,8 @@ pub struct SceneFeatures {
     pub point_lights: bool,
     /// Emissive triangles (their light samples and the MIS weights of their emission).
     pub emitters: bool,
+    /// A sun without a disc, a delta light (its shadow ray at each scattering event).
+    pub delta_sun: bool,
     /// A sun with a disc (its cone samples, and its radiance seen by escaping rays).
     pub sun_disc: bool,
     /// Emitters chosen by the light BVH ([`LightSelection::Bvh`]; with `emitters` only).
@@ -476,6 +478,7 @@ impl SceneFeatures {
         Self {
             point_lights: scene.point_lights().next().is_some(),
             emitters,
+            delta_sun: scene.sun().is_some_and(|s| !s.is_disc()),
             sun_disc: scene.sun().is_some_and(|s| s.is_disc()),
             light_bvh: emitters && settings.light_selection == LightSelection::Bvh,
             environment: scene.environment().is_some(),
@@ -494,7 +497,7 @@ impl SceneFeatures {
     }
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
-    /// `HAS_EMITTERS`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
+    /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `AOVS`, `ADAPTIVE`,
     /// `TRANSMISSION` and `THIN_WALLED`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
@@ -502,6 +505,7 @@ impl SceneFeatures {
         match name {
             "HAS_EMITTERS" => self.emitters,
             "LIGHT_BVH" => self.emitters && self.light_bvh,
+            "HAS_DELTA_SUN" => self.delta_sun,
             "HAS_SUN_DISC" => self.sun_disc,
             "HAS_ENVIRONMENT" => self.environment,
             "SAMPLES_ENVIRONMENT" => self.environment && self.env_sampling,

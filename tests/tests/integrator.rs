@@ -107,7 +107,7 @@ fn dispatches_cover_every_pixel_once() {
     }
 }
 
-/// A scene without emitters or a sun disc gets a shader without their code, variables or
+/// A scene without emitters, a sun or a sun disc gets a shader without their code, variables or
 /// binding (not code behind a `false` constant: measured on the H200, that cost 2–4 %).
 #[test]
 fn absent_light_features_compose_no_code() {
@@ -130,10 +130,14 @@ fn absent_light_features_compose_no_code() {
         "scene_transmission",
         "shadow_query",
         "fn absorption",
+        "to_sun",
         "#if",
     ] {
         assert!(!bare.contains(absent), "{absent} in the shader of a scene without light samples");
     }
+    // A delta sun: its shadow ray, and nothing of the disc's samples.
+    let sun = shader_source(FilmPrecision::F64, SceneFeatures { delta_sun: true, ..Default::default() });
+    assert!(sun.contains("let to_sun") && !sun.contains("sample_sun_disc") && !sun.contains("ray_pdf"));
     let all = shader_source(
         FilmPrecision::F64,
         SceneFeatures { point_lights: true, emitters: true, sun_disc: true, ..Default::default() },
@@ -197,6 +201,7 @@ fn frame_params_layout_matches_wgsl() {
             SceneFeatures {
                 point_lights: true,
                 emitters: true,
+                delta_sun: true,
                 sun_disc: true,
                 light_bvh,
                 environment: true,

@@ -667,7 +667,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         // #endif
 
         if !last && !delta {
-            // #if !HAS_SUN_DISC
+            // #if HAS_DELTA_SUN
             // The sun, a delta light: gathered by a shadow ray only.
             if (params.flags & FRAME_HAS_SUN) != 0u {
                 let to_sun = -params.sun_direction.xyz;
