@@ -2,28 +2,8 @@
 # Before/after on the H200 (stack of 16, invocations per pixel by image size, balanced dispatch
 # rows), interleaved, with Mitsuba 3 (cuda_ad_rgb) at equal samples in the same run. Inputs as
 # speed-profile.sh, plus .dev/furnace-old.xz (the binary before).
-for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 for b in new old; do xz -dc .dev/furnace-$b.xz > /tmp/f$b; chmod +x /tmp/f$b; done
-[ -d /root/site/mitsuba ] || { mkdir -p /root/site && tar -xJf .mi/mitsuba-cuda.tar.xz -C /root/site; }
-export PYTHONPATH=/root/site WAIT_IDLE=0 ORACLE_SEED_OFFSET=1000
-R=$PWD/tests/data/references; I=/tmp/sc/interior_19880.gltf
-W=/tmp/res; mkdir -p $W /tmp/sc /tmp/mo /tmp/mr
-cp $R/lights/*.gltf $R/lights/*.bin $R/envmap/* .dev/sc/cbox.* .dev/sc/interior_19880.* /tmp/sc/
-export ORACLE_SCENES=/tmp/sc ORACLE_OUT=/tmp/mo ORACLE_RESULTS=/tmp/mr
-nvidia-smi --query-gpu=name,driver_version --format=csv,noheader
-bench() {
-  local name=$1 bin=$2; shift 2
-  /tmp/$bin bench --backend gpu "$@" --no-rays -q --json $W/b.json > $W/b.log 2>&1 || tail -2 $W/b.log
-  python3 -c "import json; d=json.load(open('$W/b.json')); print('$name', round(d['msamples_per_s'],1), 'Ms/s', round(d.get('gpu_timestamp_ms_per_frame') or 0, 3), 'ms/frame gpu, group', d.get('gpu_group_samples'))"
-}
-scenes=("cbox256|--scene cbox --width 256 --height 256"
-        "cbox1080|--scene cbox --width 1920 --height 1080"
-        "area1080|--scene /tmp/sc/cbox_area.gltf --width 1920 --height 1080"
-        "many1080|--scene /tmp/sc/cbox_many_lights.gltf --width 1920 --height 1080"
-        "env1080|--scene /tmp/sc/envmap_spheres.gltf --width 1920 --height 1080"
-        "int1080b4|--scene $I --width 1920 --height 1080"
-        "int1440b6|--scene $I --width 1920 --height 1440 --bounces 6")
+source docs/device/speed-env.sh
 echo "== old / new, random sampler, 2 rounds"
 for round in 1 2; do for sc in "${scenes[@]}"; do for b in old new; do
   bench "${sc%%|*} $b $round" f$b ${sc#*|} --sampler random --min-seconds 1.5
@@ -39,7 +19,6 @@ for sc in "${scenes[@]}"; do
   python3 -c "import json; d=json.load(open('$W/c.json')); print('${sc%%|*} counted', {k: d[k] for k in d if any(w in k for w in ('ray', 'node', 'triangle', 'stack', 'fallback', 'msamples'))})"
 done
 echo "== Mitsuba and furnace (new) at equal samples, random sampler"
-mi() { (cd .dev/oracle && python3 render_ref.py "$@" > /tmp/mi.log 2>&1) || tail -5 /tmp/mi.log; }
 for v in "cbox|256x256|cbox|64|4|4" "cbox|1920x1080|cbox|64|4|4" "cbox_area|1920x1080|/tmp/sc/cbox_area.gltf|64|4|4" \
          "cbox_many_lights|1920x1080|/tmp/sc/cbox_many_lights.gltf|64|4|4" "envmap_spheres|1920x1080|/tmp/sc/envmap_spheres.gltf|64|4|4" \
          "interior_19880|1920x1440|$I|32|4|6"; do

@@ -4,16 +4,8 @@
 # error-vs-time curve (`furnace chart`, GPU) per configuration, and for each Mitsuba point
 # furnace's RMSE after the same seconds (log-log interpolation) and the time furnace needs for
 # Mitsuba's RMSE. Inputs as speed-ab.sh (Mitsuba unpacked to /root/site by a first command).
-for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 xz -dc .dev/furnace-new.xz > /tmp/fn; chmod +x /tmp/fn
-[ -d /root/site/mitsuba ] || { mkdir -p /root/site && tar -xJf .mi/mitsuba-cuda.tar.xz -C /root/site; }
-export PYTHONPATH=/root/site WAIT_IDLE=0 ORACLE_SEED_OFFSET=1000
-R=$PWD/tests/data/references
-W=/tmp/res; mkdir -p $W /tmp/sc /tmp/mo /tmp/mr
-cp $R/lights/*.gltf $R/lights/*.bin $R/envmap/* .dev/sc/cbox.* /tmp/sc/
-export ORACLE_SCENES=/tmp/sc ORACLE_OUT=/tmp/mo ORACLE_RESULTS=/tmp/mr
-mi() { (cd .dev/oracle && python3 render_ref.py "$@" > /tmp/mi.log 2>&1) || tail -5 /tmp/mi.log; }
+source docs/device/speed-env.sh
 for v in "cbox|$R/cbox/cbox_ref_bounces4.exr|" "cbox_area|$R/lights/cbox_area_ref_bounces4.exr|--light-selection power,bvh" \
          "cbox_many_lights|$R/lights/cbox_many_lights_ref_bounces4.exr|--light-selection power,bvh" \
          "envmap_spheres|$R/envmap/envmap_spheres_ref_bounces4.exr|"; do

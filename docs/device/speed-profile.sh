@@ -11,30 +11,15 @@
 export FURNACE_TRV_STACK=32
 # Needs .gl/, .dev/furnace-new.xz, .dev/pipeline-stats.xz, .dev/oracle/, .mi/mitsuba-cuda.tar.xz and
 # .dev/sc/interior_19880.gltf (make_interior.py .dev/sc 2e4).
-for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 xz -dc .dev/furnace-new.xz > /tmp/fn; xz -dc .dev/pipeline-stats.xz > /tmp/ps; chmod +x /tmp/fn /tmp/ps
-# Mitsuba: unpacked to /root/site by a first command that carries .mi alone (the device tree is
-# limited to 64 MiB), or here.
-[ -d /root/site/mitsuba ] || { mkdir -p /root/site && tar -xJf .mi/mitsuba-cuda.tar.xz -C /root/site; }
-export PYTHONPATH=/root/site WAIT_IDLE=0 ORACLE_SEED_OFFSET=1000
-R=$PWD/tests/data/references; I=$PWD/.dev/sc/interior_19880.gltf
-W=/tmp/res; mkdir -p $W /tmp/sc /tmp/mo /tmp/mr
-cp $R/lights/*.gltf $R/lights/*.bin $R/envmap/* .dev/sc/cbox.* .dev/sc/interior_19880.* /tmp/sc/
-export ORACLE_SCENES=/tmp/sc ORACLE_OUT=/tmp/mo ORACLE_RESULTS=/tmp/mr
-nvidia-smi --query-gpu=name,driver_version,clocks.max.sm,clocks.max.mem --format=csv,noheader
+source docs/device/speed-env.sh
 
 echo "== 1. pipeline statistics"
 for s in cbox /tmp/sc/cbox_area.gltf /tmp/sc/envmap_spheres.gltf $I; do for c in checked unchecked; do
   /tmp/ps $s --checks $c 2>&1 | grep -v '^device' | sed "s|^|$(basename $s) $c: |"
 done; done
 
-# bench NAME SCENE-ARGS...: one furnace bench, prints Msamples/s and GPU ms per frame.
-bench() {
-  local name=$1; shift
-  /tmp/fn bench --backend gpu "$@" --no-rays -q --json $W/b.json > $W/b.log 2>&1 || tail -2 $W/b.log
-  python3 -c "import json; d=json.load(open('$W/b.json')); print('$name', round(d['msamples_per_s'],1), 'Ms/s', round(d.get('gpu_timestamp_ms_per_frame') or 0, 3), 'ms/frame gpu', d.get('gpu_group_samples'))"
-}
+# This run's five configurations (the interior by its 1440p name).
 scenes=("cbox256|--scene cbox --width 256 --height 256"
         "cbox1080|--scene cbox --width 1920 --height 1080"
         "area1080|--scene /tmp/sc/cbox_area.gltf --width 1920 --height 1080"
@@ -42,15 +27,14 @@ scenes=("cbox256|--scene cbox --width 256 --height 256"
         "interior1440|--scene $I --width 1920 --height 1440 --bounces 6")
 echo "== 2. runtime checks, random sampler, 2 rounds"
 for round in 1 2; do for sc in "${scenes[@]}"; do for c in checked noloop unchecked; do
-  FURNACE_SHADER_CHECKS=$c bench "${sc%%|*} $c $round" ${sc#*|} --sampler random --min-seconds 2
+  FURNACE_SHADER_CHECKS=$c bench "${sc%%|*} $c $round" fn ${sc#*|} --sampler random --min-seconds 2
 done; done; done
 
 echo "== 3. interior 1920x1440: invocations per pixel; bounces"
-for g in 1 2 4 8 16 32; do bench "interior1440 group $g" --scene $I --width 1920 --height 1440 --bounces 6 --sampler random --min-seconds 2 --group-samples $g; done
-for b in 0 1 2 3 4 5 6; do bench "interior1440 bounces $b" --scene $I --width 1920 --height 1440 --bounces $b --sampler random --min-seconds 2; done
+for g in 1 2 4 8 16 32; do bench "interior1440 group $g" fn --scene $I --width 1920 --height 1440 --bounces 6 --sampler random --min-seconds 2 --group-samples $g; done
+for b in 0 1 2 3 4 5 6; do bench "interior1440 bounces $b" fn --scene $I --width 1920 --height 1440 --bounces $b --sampler random --min-seconds 2; done
 
 echo "== 4. Mitsuba and furnace at equal samples (random sampler), 2 rounds"
-mi() { (cd .dev/oracle && python3 render_ref.py "$@" > /tmp/mi.log 2>&1) || tail -5 /tmp/mi.log; }
 for round in 1; do
   for v in "cbox|256x256|cbox|64|4" "cbox|1920x1080|cbox|64|4" "cbox_area|1920x1080|/tmp/sc/cbox_area.gltf|64|4" \
            "cbox_many_lights|1920x1080|/tmp/sc/cbox_many_lights.gltf|64|4" "envmap_spheres|1920x1080|/tmp/sc/envmap_spheres.gltf|64|4" \
@@ -59,7 +43,7 @@ for round in 1; do
     ORACLE_SIZE=$size mi $s cuda_ad_rgb $spp $passes
     python3 -c "import json; d=json.load(open('/tmp/mr/${s}_cuda_ad_rgb_$((spp*passes))spp.json')); print('mitsuba $s $size $round', round(d['Msamples_per_s'],1), 'render_s', round(d['render_s'],3))"
     b=4; [ $s = interior_19880 ] && b=6
-    FURNACE_SHADER_CHECKS=unchecked bench "furnace $s $size $round" --scene $path --width ${size%x*} --height ${size#*x} --bounces $b --sampler random --spp $((spp*passes))
+    FURNACE_SHADER_CHECKS=unchecked bench "furnace $s $size $round" fn --scene $path --width ${size%x*} --height ${size#*x} --bounces $b --sampler random --spp $((spp*passes))
   done
 done
 tar -czf $OUT/results.tgz -C $W . 2>/dev/null
