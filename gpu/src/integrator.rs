@@ -660,8 +660,9 @@ pub enum ShaderChecks {
     /// wgpu's defaults: local arrays' indices clamped, every loop bounded by a 64-bit counter,
     /// integer division guarded (buffer accesses: by the driver's robustBufferAccess2 where it
     /// has it). Hardware adapters: on the H200 the loop counters *speed up* the Cornell box and
-    /// light scenes by 14–25 % (the driver compiles the traversal loop differently) while the
-    /// sunlit interior runs 16–19 % faster without them (BENCHMARKS.md, "Speed").
+    /// light scenes by 14–25 % while the sunlit interior runs 16–19 % faster without them; the
+    /// difference is the node test's loop over eight children, which the driver unrolls only
+    /// without a counter (BENCHMARKS.md, "Speed").
     Checked,
     /// No loop counters (the other checks kept). Software adapters: lavapipe compiles the
     /// megakernel 3–4 times faster without them (a test's first frame 35.6 s instead of 52.7 s).

@@ -39,8 +39,11 @@ use std::mem::offset_of;
 /// depth 11 (10^7 triangles).
 pub const DEFAULT_STACK_SIZE: u32 = 16;
 
-/// The line of `traverse.wgsl` that [`module_with_stack_size`] rewrites.
-const STACK_LINE: &str = "const TRV_STACK_SIZE: u32 = 16u;";
+/// The line of `traverse.wgsl` that declares a stack of `size` node groups (the module's own is
+/// `stack_line(DEFAULT_STACK_SIZE)`; [`module_with_stack_size`] rewrites it).
+fn stack_line(size: u32) -> String {
+    format!("const TRV_STACK_SIZE: u32 = {size}u;")
+}
 
 /// `u32` words per node (80 bytes).
 pub const NODE_WORDS: usize = size_of::<GpuCwbvhNode>() / 4;
@@ -55,8 +58,9 @@ pub const TRIANGLE_WORDS: usize = size_of::<GpuTriangle>() / 4;
 /// If `size` is 0.
 pub fn module_with_stack_size(size: u32) -> String {
     assert!(size > 0, "the traversal stack needs at least one entry");
-    assert!(crate::wgsl::TRAVERSE.contains(STACK_LINE), "traverse.wgsl lost its stack-size line");
-    crate::wgsl::TRAVERSE.replace(STACK_LINE, &format!("const TRV_STACK_SIZE: u32 = {size}u;"))
+    let line = stack_line(DEFAULT_STACK_SIZE);
+    assert!(crate::wgsl::TRAVERSE.contains(&line), "traverse.wgsl lost its stack-size line");
+    crate::wgsl::TRAVERSE.replace(&line, &stack_line(size))
 }
 
 /// The declarations of the two storage buffers the traversal reads, at `@group(group)`,
