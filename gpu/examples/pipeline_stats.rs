@@ -13,8 +13,9 @@
 //! `robustBufferAccess2` (buffer accesses left to the driver) and the runtime checks of
 //! [`ShaderChecks`] (default: `checked`, what hardware adapters get: local arrays' indices
 //! clamped, loops bounded by a counter, integer division guarded). The profiling overrides
-//! `FURNACE_TRV_STACK` and `FURNACE_NO_TRACE_COUNTERS` apply as when furnace builds the pipeline
-//! ([`ProfilingOverrides`]). The pipeline is created on the first Vulkan device that has the
+//! `FURNACE_TRV_STACK`, `FURNACE_NO_TRACE_COUNTERS` and `FURNACE_GROUP_SIZE` apply as when furnace
+//! builds the pipeline ([`ProfilingOverrides`]); the workgroup size is otherwise the hardware
+//! adapters' ([`furnace_gpu::integrator::HARDWARE_GROUP_SIZE`]). The pipeline is created on the first Vulkan device that has the
 //! extension (NVIDIA's driver has it; Mesa 22's lavapipe does not: then on the first device, for
 //! its compile time only — which for lavapipe leaves the LLVM compile to the first dispatch),
 //! with its bindings from [`furnace_gpu::integrator::binding_table`]. Nothing is dispatched.
@@ -26,7 +27,8 @@ use std::ffi::CStr;
 use ash::vk;
 use furnace_gpu::film::FilmPrecision;
 use furnace_gpu::integrator::{
-    ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table, shader_source,
+    HARDWARE_GROUP_SIZE, ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table, shader_source,
+    with_group_size,
 };
 use furnace_render::RenderSettings;
 use furnace_scene::Scene;
@@ -106,7 +108,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let scene = load(&o.scene)?;
     let settings = RenderSettings { aovs: o.aovs, ..Default::default() };
     let features = SceneFeatures::of(&scene, &settings);
-    let wgsl = ProfilingOverrides::from_env()?.apply(shader_source(o.precision, features));
+    // The hardware default workgroup size unless FURNACE_GROUP_SIZE says otherwise.
+    let wgsl = with_group_size(
+        &ProfilingOverrides::from_env()?.apply(shader_source(o.precision, features)),
+        HARDWARE_GROUP_SIZE,
+    );
     let words = spirv(&wgsl, o.checks)?;
     if let Some(path) = &o.spirv {
         std::fs::write(path, bytemuck::cast_slice::<u32, u8>(&words))?;

@@ -8,7 +8,8 @@
 //!
 //! A pass of `n` samples per pixel is cut into dispatches of a few rows × a few samples, each
 //! bounded to about [`GpuRenderer::samples_per_dispatch`] samples, so that no dispatch runs long
-//! enough to trip a driver watchdog. A workgroup of [`GROUP_SIZE`] invocations covers a tile of
+//! enough to trip a driver watchdog. A workgroup ([`group_size_for`]: 1024 invocations on hardware
+//! adapters that accept it, else [`GROUP_SIZE`]) covers a tile of
 //! pixels with [`GpuRenderer::group_samples`] invocations per pixel: with 1, an invocation owns
 //! its pixel and adds its samples in index order; with more, each computes one sample and the
 //! pixel's first invocation adds them, after a barrier, in index order — the same additions in
@@ -301,11 +302,43 @@ struct Dispatch {
     samples: u32,
 }
 
-/// Invocations in a workgroup (`integrator.wgsl`'s `GROUP_SIZE`, checked by
+/// Invocations in a workgroup as `integrator.wgsl` declares it (`GROUP_SIZE`, checked by
 /// `tests/integrator.rs`): 256, the largest that every WebGPU device accepts
-/// (`max_compute_invocations_per_workgroup`'s default), and the fastest size measured
-/// (BENCHMARKS.md, "GPU integrator"). The film is the same, bit for bit, for every size.
+/// (`max_compute_invocations_per_workgroup`'s default), and faster than 64 or 128 (BENCHMARKS.md,
+/// "GPU integrator"). Hardware adapters that accept [`HARDWARE_GROUP_SIZE`] get that instead
+/// ([`group_size_for`]). The film is the same, bit for bit, for every size.
 pub const GROUP_SIZE: u32 = 256;
+
+/// Invocations in a workgroup on hardware adapters that accept it: 1024. The driver must fit a
+/// whole workgroup on one multiprocessor, so on an NVIDIA GPU (64 Ki registers per SM) the
+/// megakernel gets at most 64 registers per invocation instead of the 128 it takes in workgroups
+/// of 256: twice the resident warps (50 % occupancy instead of 25 %) for some spilling. Measured
+/// on the H200 (BENCHMARKS.md, "Speed"): +2–12 % on the emitter, environment-map and interior
+/// scenes, the Cornell box at 1080p unchanged; 512 (still 128 registers) was slower than 256.
+pub const HARDWARE_GROUP_SIZE: u32 = 1024;
+
+/// The workgroup size of the integrator on an adapter: `FURNACE_GROUP_SIZE` when set
+/// ([`ProfilingOverrides`]), else [`HARDWARE_GROUP_SIZE`] on a hardware adapter whose workgroups
+/// hold that many invocations, else [`GROUP_SIZE`] (software adapters: lavapipe runs an
+/// invocation's loop on a CPU thread, there is no occupancy to gain).
+pub fn group_size_for(ctx: &GpuContext, overrides: &ProfilingOverrides) -> u32 {
+    overrides.group_size.unwrap_or_else(|| {
+        let hardware = crate::context::is_hardware(&ctx.info);
+        if hardware && ctx.device.limits().max_compute_invocations_per_workgroup >= HARDWARE_GROUP_SIZE {
+            HARDWARE_GROUP_SIZE
+        } else {
+            GROUP_SIZE
+        }
+    })
+}
+
+/// `source` (a [`shader_source`]) with workgroups of `n` invocations instead of [`GROUP_SIZE`].
+pub fn with_group_size(source: &str, n: u32) -> String {
+    source.replace(
+        &format!("const GROUP_SIZE: u32 = {GROUP_SIZE}u;"),
+        &format!("const GROUP_SIZE: u32 = {n}u;"),
+    )
+}
 
 /// The most invocations per pixel on hardware adapters: 16, where throughput stops growing on
 /// small images (`furnace bench --group-samples N`, BENCHMARKS.md "Occupancy"): a 256² image
@@ -330,7 +363,13 @@ pub fn hardware_group_samples(pixels: u64, samples_per_dispatch: u64) -> u32 {
 /// The tile of a workgroup with `group_samples` invocations per pixel: (width, height) pixels,
 /// as square as powers of two allow (width ≥ height).
 pub fn tile(group_samples: u32) -> (u32, u32) {
-    let pixels = GROUP_SIZE / group_samples;
+    tile_of(GROUP_SIZE, group_samples)
+}
+
+/// [`tile`] for workgroups of `group_size` invocations (a power of two; see
+/// [`ProfilingOverrides::group_size`]).
+pub fn tile_of(group_size: u32, group_samples: u32) -> (u32, u32) {
+    let pixels = group_size / group_samples;
     let width = 1 << pixels.trailing_zeros().div_ceil(2);
     (width, pixels / width)
 }
@@ -381,6 +420,8 @@ pub struct GpuRenderer {
     samples_per_dispatch: u64,
     max_samples_per_invocation: u32,
     group_samples: Option<u32>,
+    /// Invocations per workgroup: [`GROUP_SIZE`] unless profiling overrides it.
+    group_size: u32,
     timer: Option<Timer>,
     /// Triangles uploaded (what [`GpuRenderer::reconfigure`] checks a scene against).
     triangles: usize,
@@ -702,6 +743,7 @@ impl ShaderChecks {
 /// | `FURNACE_SHADER_CHECKS=checked\|noloop\|unchecked` | [`ShaderChecks`] instead of the adapter's default |
 /// | `FURNACE_TRV_STACK=N` | a traversal stack of N node groups ([`crate::traverse::module_with_stack_size`]) |
 /// | `FURNACE_NO_TRACE_COUNTERS=1` | no per-invocation node/triangle/depth counters in the traversal (`furnace bench` then counts 0 nodes and triangles) |
+/// | `FURNACE_GROUP_SIZE=N` | workgroups of N invocations (a power of two, 32 to 1024, within the adapter's limit) instead of [`group_size_for`]'s choice |
 #[derive(Debug, Clone, Copy, Default)]
 pub struct ProfilingOverrides {
     /// `FURNACE_SHADER_CHECKS`.
@@ -710,6 +752,8 @@ pub struct ProfilingOverrides {
     pub stack: Option<u32>,
     /// `FURNACE_NO_TRACE_COUNTERS`.
     pub no_trace_counters: bool,
+    /// `FURNACE_GROUP_SIZE`.
+    pub group_size: Option<u32>,
 }
 
 impl ProfilingOverrides {
@@ -736,10 +780,23 @@ impl ProfilingOverrides {
                 GpuError::Unsupported(format!("FURNACE_TRV_STACK={v}: expected a positive integer"))
             })?),
         };
+        let group_size = match var("FURNACE_GROUP_SIZE") {
+            None => None,
+            Some(v) => Some(
+                v.parse::<u32>().ok().filter(|n| n.is_power_of_two() && (32..=1024).contains(n)).ok_or_else(
+                    || {
+                        GpuError::Unsupported(format!(
+                            "FURNACE_GROUP_SIZE={v}: expected a power of two, 32 to 1024"
+                        ))
+                    },
+                )?,
+            ),
+        };
         Ok(Self {
             checks,
             stack,
             no_trace_counters: var("FURNACE_NO_TRACE_COUNTERS").is_some_and(|v| v == "1"),
+            group_size,
         })
     }
 
@@ -748,6 +805,9 @@ impl ProfilingOverrides {
         let mut s = source;
         if let Some(n) = self.stack {
             s = s.replace(crate::wgsl::TRAVERSE, &crate::traverse::module_with_stack_size(n));
+        }
+        if let Some(n) = self.group_size {
+            s = with_group_size(&s, n);
         }
         if self.no_trace_counters {
             for counter in [
@@ -769,6 +829,7 @@ fn integrator_pipeline(
     ctx: &GpuContext,
     precision: FilmPrecision,
     features: SceneFeatures,
+    group_size: u32,
 ) -> Result<(wgpu::BindGroupLayout, wgpu::ComputePipeline, Option<wgpu::ComputePipeline>), GpuError> {
     let entries = binding_table(precision, features).layout_entries();
     let device = &ctx.device;
@@ -787,7 +848,9 @@ fn integrator_pipeline(
     let checks = overrides.checks.unwrap_or(ShaderChecks::for_adapter(software));
     let desc = wgpu::ShaderModuleDescriptor {
         label: Some("integrator"),
-        source: wgpu::ShaderSource::Wgsl(overrides.apply(shader_source(precision, features)).into()),
+        source: wgpu::ShaderSource::Wgsl(
+            with_group_size(&overrides.apply(shader_source(precision, features)), group_size).into(),
+        ),
     };
     let module = match checks {
         ShaderChecks::Checked => device.create_shader_module(desc),
@@ -864,7 +927,14 @@ impl GpuRenderer {
         let precision = FilmPrecision::for_context(&ctx);
         let film = film_for(&ctx, &settings, precision)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
-        let (layout, pipeline, converge) = integrator_pipeline(&ctx, precision, features)?;
+        let group_size = group_size_for(&ctx, &ProfilingOverrides::from_env()?);
+        let limit = ctx.device.limits().max_compute_invocations_per_workgroup;
+        if group_size > limit {
+            return Err(GpuError::Unsupported(format!(
+                "FURNACE_GROUP_SIZE={group_size}: the adapter's workgroups hold at most {limit} invocations"
+            )));
+        }
+        let (layout, pipeline, converge) = integrator_pipeline(&ctx, precision, features, group_size)?;
         let converged_counter = converged_counter(&ctx, &settings)?;
         // Software adapters (lavapipe) run ~1 Msample/s and end any shader loop after 65535
         // iterations per invocation (all loops together): one sample per invocation there.
@@ -898,6 +968,7 @@ impl GpuRenderer {
             samples_per_dispatch,
             max_samples_per_invocation,
             group_samples: None,
+            group_size,
             timer: None,
             triangles: scene.geometry.triangles.len(),
             display: false,
@@ -976,7 +1047,7 @@ impl GpuRenderer {
         let precision = self.film.precision();
         if features != self.features {
             (self.layout, self.pipeline, self.converge) =
-                integrator_pipeline(&self.ctx, precision, features)?;
+                integrator_pipeline(&self.ctx, precision, features, self.group_size)?;
         }
         if settings.adaptive.is_some() != old.adaptive.is_some() {
             self.converged_counter = converged_counter(&self.ctx, &settings)?;
@@ -1064,10 +1135,10 @@ impl GpuRenderer {
 
     /// Invocations per pixel in a workgroup: `None` (the default) chooses — on hardware, up to
     /// 16 by image size ([`hardware_group_samples`]), 1 on software adapters;
-    /// `Some(n)` forces `n` (rounded down to a power of two in 1..=[`GROUP_SIZE`]). The film
+    /// `Some(n)` forces `n` (rounded down to a power of two up to the workgroup size). The film
     /// does not depend on it, bit for bit.
     pub fn set_group_samples(&mut self, n: Option<u32>) {
-        self.group_samples = n.map(|n| 1 << n.clamp(1, GROUP_SIZE).ilog2());
+        self.group_samples = n.map(|n| 1 << n.clamp(1, self.group_size).ilog2());
     }
 
     /// The invocations per pixel the next pass of `samples_per_pixel` samples uses.
@@ -1240,7 +1311,7 @@ impl GpuRenderer {
         let mut plan = Vec::new();
         for b in blocks {
             let group_samples = self.group_samples(b.end - b.first);
-            let (tile_width, tile_height) = tile(group_samples);
+            let (tile_width, tile_height) = tile_of(self.group_size, group_samples);
             let dispatches = self.dispatches(b.first, b.end - b.first, group_samples, tile_height);
             let mut list = Vec::new();
             for d in &dispatches {
@@ -1316,7 +1387,7 @@ impl GpuRenderer {
                     // every pixel not yet converged tested once, the newly converged counted.
                     pass.set_pipeline(pipeline);
                     pass.set_bind_group(0, &bind, &[0]);
-                    let groups = pixels.div_ceil(u64::from(GROUP_SIZE));
+                    let groups = pixels.div_ceil(u64::from(self.group_size));
                     let x = groups.clamp(1, 65_535) as u32;
                     pass.dispatch_workgroups(x, groups.div_ceil(u64::from(x)).max(1) as u32, 1);
                 }
@@ -1530,6 +1601,9 @@ mod tests {
         assert!(source.contains("trace_stats.nodes += 1u;"));
         assert!(!bare.contains("trace_stats.nodes +=") && !bare.contains("trace_stats.triangles +="));
         assert!(!bare.contains("trace_stats.max_depth = max"));
+        let wide = ProfilingOverrides { group_size: Some(1024), ..Default::default() }.apply(source.clone());
+        assert!(wide.contains("const GROUP_SIZE: u32 = 1024u;") && !wide.contains("GROUP_SIZE: u32 = 256u"));
+        assert_eq!(tile_of(1024, 4), (16, 16));
     }
 
     /// Loop counters are off only on software adapters by default; every choice keeps the
