@@ -16,7 +16,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{Value, json};
 use std::time::Instant;
 
-/// How long the first configuration of each backend in a process warms up (see `make_backend`).
+/// How long the first configuration of each backend in a process, and every GPU configuration,
+/// warms up (see `make_backend`).
 const WARM_UP_SECONDS: f64 = 1.0;
 
 /// The integrator of `config`, fresh (an empty film), and for a GPU its adapter in one line;
@@ -54,13 +55,17 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
     // its threads, and above all an idle GPU's clocks ramping up (on the H100 the first
     // configuration's checkpoints took 3–5× the same work later, and a 1-spp warm-up did not
     // help): every configuration renders one pass, the first of each backend in the process
-    // passes for WARM_UP_SECONDS.
+    // passes for WARM_UP_SECONDS, and so does every GPU configuration: one that needs a pipeline
+    // of its own (another light selection, say) leaves the GPU idle for the seconds of its
+    // compile, and on the H200 the first checkpoints after that ran several times slower than
+    // the same work warm (a whole configuration's error-vs-time curve 5x off at 16 spp).
     static WARM: [std::sync::atomic::AtomicBool; 2] =
         [std::sync::atomic::AtomicBool::new(false), std::sync::atomic::AtomicBool::new(false)];
     let first = !WARM[c.backend as usize].swap(true, std::sync::atomic::Ordering::Relaxed);
+    let long = first || c.backend == ChartBackend::Gpu;
     let start = Instant::now();
     backend.render_pass(0, 1).map_err(|e| e.to_string())?;
-    while first && start.elapsed().as_secs_f64() < WARM_UP_SECONDS {
+    while long && start.elapsed().as_secs_f64() < WARM_UP_SECONDS {
         backend.render_pass(0, 1).map_err(|e| e.to_string())?;
     }
     backend.set_film(&Film::for_settings(&settings)).map_err(|e| e.to_string())?;
