@@ -11,8 +11,10 @@
 //!
 //! The SPIR-V is naga's, written with the options wgpu 30's Vulkan backend uses on a device with
 //! `robustBufferAccess2` (buffer accesses left to the driver) and the runtime checks of
-//! [`ShaderChecks`] (default: `checked`, what hardware adapters get: local arrays' indices
-//! clamped, loops bounded by a counter, integer division guarded). The profiling overrides
+//! [`ShaderChecks`] (default: what a hardware adapter gets for the scene,
+//! `ShaderChecks::for_adapter(false, features)`: `noloop` for kernels that sample no lights,
+//! else `checked` — local arrays' indices clamped, loops bounded by a counter, integer division
+//! guarded). The profiling overrides
 //! `FURNACE_TRV_STACK`, `FURNACE_NO_TRACE_COUNTERS` and `FURNACE_GROUP_SIZE` apply as when furnace
 //! builds the pipeline ([`ProfilingOverrides`]); the workgroup size is otherwise the hardware
 //! adapters' ([`furnace_gpu::integrator::HARDWARE_GROUP_SIZE`]). The pipeline is created on the first Vulkan device that has the
@@ -35,7 +37,8 @@ use furnace_scene::Scene;
 
 struct Options {
     scene: String,
-    checks: ShaderChecks,
+    /// None: what a hardware adapter gets for the scene.
+    checks: Option<ShaderChecks>,
     aovs: bool,
     precision: FilmPrecision,
     spirv: Option<String>,
@@ -44,7 +47,7 @@ struct Options {
 fn parse() -> Result<Options, String> {
     let mut o = Options {
         scene: "cbox".into(),
-        checks: ShaderChecks::Checked,
+        checks: None,
         aovs: false,
         precision: FilmPrecision::F64,
         spirv: None,
@@ -53,9 +56,9 @@ fn parse() -> Result<Options, String> {
     while let Some(a) = args.next() {
         match a.as_str() {
             "--checks" => match args.next().as_deref() {
-                Some("checked") => o.checks = ShaderChecks::Checked,
-                Some("noloop") => o.checks = ShaderChecks::NoLoopBounding,
-                Some("unchecked") => o.checks = ShaderChecks::Unchecked,
+                Some("checked") => o.checks = Some(ShaderChecks::Checked),
+                Some("noloop") => o.checks = Some(ShaderChecks::NoLoopBounding),
+                Some("unchecked") => o.checks = Some(ShaderChecks::Unchecked),
                 other => return Err(format!("--checks takes checked, noloop or unchecked, not {other:?}")),
             },
             "--aovs" => o.aovs = true,
@@ -113,7 +116,8 @@ fn main() -> Result<(), Box<dyn Error>> {
         &ProfilingOverrides::from_env()?.apply(shader_source(o.precision, features)),
         HARDWARE_GROUP_SIZE,
     );
-    let words = spirv(&wgsl, o.checks)?;
+    let checks = o.checks.unwrap_or(ShaderChecks::for_adapter(false, features));
+    let words = spirv(&wgsl, checks)?;
     if let Some(path) = &o.spirv {
         std::fs::write(path, bytemuck::cast_slice::<u32, u8>(&words))?;
     }
@@ -121,7 +125,7 @@ fn main() -> Result<(), Box<dyn Error>> {
         "scene {}: {:?}\nchecks {:?}, film {:?}, WGSL {} lines, SPIR-V {} words",
         o.scene,
         features,
-        o.checks,
+        checks,
         o.precision,
         wgsl.lines().count(),
         words.len()

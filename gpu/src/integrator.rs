@@ -700,23 +700,26 @@ fn environment_buffers(
 pub enum ShaderChecks {
     /// wgpu's defaults: local arrays' indices clamped, every loop bounded by a 64-bit counter,
     /// integer division guarded (buffer accesses: by the driver's robustBufferAccess2 where it
-    /// has it). Hardware adapters: on the H200 the loop counters *speed up* the Cornell box and
-    /// light scenes by 14–25 % while the sunlit interior runs 16–19 % faster without them; the
-    /// difference is the node test's loop over eight children, which the driver unrolls only
-    /// without a counter (BENCHMARKS.md, "Speed").
+    /// has it). Hardware adapters, for kernels that sample lights: the driver unrolls the node
+    /// test's loop over eight children only without a counter, and on the H200 (workgroups of
+    /// 1024) the unrolled test made the emitter scenes 9 % slower (BENCHMARKS.md, "Speed").
     Checked,
     /// No loop counters (the other checks kept). Software adapters: lavapipe compiles the
     /// megakernel 3–4 times faster without them (a test's first frame 35.6 s instead of 52.7 s).
+    /// Hardware adapters, for kernels whose lights are all delta lights (sun, point and spot
+    /// lights, or none): the unrolled node test ran the sunlit interior 17 % faster on the H200
+    /// (1920×1440, 6 bounces, 21 nodes per ray) and the Cornell box as fast or 2 % faster.
     NoLoopBounding,
     /// None of the checks (profiling only).
     Unchecked,
 }
 
 impl ShaderChecks {
-    /// The default: [`ShaderChecks::Checked`] on hardware, [`ShaderChecks::NoLoopBounding`] on a
-    /// software adapter.
-    pub fn for_adapter(software: bool) -> Self {
-        if software { Self::NoLoopBounding } else { Self::Checked }
+    /// The default: [`ShaderChecks::NoLoopBounding`] on a software adapter and, on hardware, for
+    /// a kernel that samples no lights (no emitters, sun disc or environment sampling: the
+    /// `SAMPLES_LIGHTS` blocks left out); [`ShaderChecks::Checked`] for the others on hardware.
+    pub fn for_adapter(software: bool, features: SceneFeatures) -> Self {
+        if software || !features.enabled("SAMPLES_LIGHTS") { Self::NoLoopBounding } else { Self::Checked }
     }
 
     /// wgpu's runtime checks for this choice.
@@ -845,7 +848,7 @@ fn integrator_pipeline(
     });
     let overrides = ProfilingOverrides::from_env()?;
     let software = !crate::context::is_hardware(&ctx.info);
-    let checks = overrides.checks.unwrap_or(ShaderChecks::for_adapter(software));
+    let checks = overrides.checks.unwrap_or(ShaderChecks::for_adapter(software, features));
     let desc = wgpu::ShaderModuleDescriptor {
         label: Some("integrator"),
         source: wgpu::ShaderSource::Wgsl(
@@ -1610,8 +1613,17 @@ mod tests {
     /// other checks as documented.
     #[test]
     fn shader_checks_by_adapter() {
-        assert_eq!(ShaderChecks::for_adapter(false), ShaderChecks::Checked);
-        assert_eq!(ShaderChecks::for_adapter(true), ShaderChecks::NoLoopBounding);
+        let sun = SceneFeatures { delta_sun: true, point_lights: true, ..Default::default() };
+        let emitters = SceneFeatures { emitters: true, ..sun };
+        let env = SceneFeatures { environment: true, env_sampling: true, ..sun };
+        let env_unsampled = SceneFeatures { environment: true, ..sun };
+        assert_eq!(ShaderChecks::for_adapter(false, sun), ShaderChecks::NoLoopBounding);
+        assert_eq!(ShaderChecks::for_adapter(false, env_unsampled), ShaderChecks::NoLoopBounding);
+        assert_eq!(ShaderChecks::for_adapter(false, emitters), ShaderChecks::Checked);
+        assert_eq!(ShaderChecks::for_adapter(false, env), ShaderChecks::Checked);
+        for f in [sun, emitters, env] {
+            assert_eq!(ShaderChecks::for_adapter(true, f), ShaderChecks::NoLoopBounding);
+        }
         let c = ShaderChecks::NoLoopBounding.runtime_checks();
         assert!(!c.force_loop_bounding && c.bounds_checks && c.int_div_checks);
         let c = ShaderChecks::Checked.runtime_checks();
