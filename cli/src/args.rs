@@ -475,13 +475,14 @@ pub struct BenchArgs {
     /// software included).
     #[arg(long)]
     pub no_rays: bool,
-    /// GPU: invocations per pixel in a workgroup (a power of two, 1–256: up to the workgroup's
-    /// size) instead of the renderer's choice (on hardware 16 for small images, fewer for large ones; 1 on software adapters) — for
+    /// GPU: invocations per pixel in a workgroup (a power of two, 1–1024: up to the workgroup's
+    /// size, 1024 on most hardware and 256 on software adapters) instead of the renderer's choice
+    /// (on hardware 16 for small images, fewer for large ones; 1 on software adapters) — for
     /// occupancy studies.
     #[arg(
         long,
         value_name = "N",
-        value_parser = clap::value_parser!(u32).range(1..=i64::from(furnace_gpu::integrator::GROUP_SIZE))
+        value_parser = clap::value_parser!(u32).range(1..=i64::from(furnace_gpu::integrator::HARDWARE_GROUP_SIZE))
     )]
     pub group_samples: Option<u32>,
     /// No progress line on stderr.

@@ -10,7 +10,10 @@
 //!    issue's bounds; with N = 128 samples the variance estimate inflates z's std by ≈ 1.01).
 
 use furnace_cpu::CpuRenderer;
-use furnace_gpu::integrator::{FrameParams, GROUP_SIZE, GpuPointLight, SceneFeatures, shader_source, tile};
+use furnace_gpu::integrator::{
+    FrameParams, GROUP_SIZE, GpuPointLight, HARDWARE_GROUP_SIZE, SceneFeatures, shader_source, tile, tile_of,
+    with_group_size,
+};
 use furnace_gpu::{GpuRenderer, film::FilmPrecision};
 use furnace_render::RenderSettings;
 use furnace_sampling::SamplerKind;
@@ -68,6 +71,17 @@ fn workgroup_size_matches_wgsl() {
     for g in (0..=GROUP_SIZE.ilog2()).map(|k| 1 << k) {
         let (w, h) = tile(g);
         assert!(w * h * g == GROUP_SIZE && w >= h && w <= 2 * h, "group_samples {g}: tile {w}×{h}");
+    }
+    // The hardware size: the one constant rewritten, the workgroup arrays sized by it.
+    let wide = with_group_size(&src, HARDWARE_GROUP_SIZE);
+    let module =
+        naga::front::wgsl::parse_str(&wide).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&wide)));
+    let main = module.entry_points.iter().find(|e| e.name == "main").expect("entry point main");
+    assert_eq!(main.workgroup_size, [HARDWARE_GROUP_SIZE, 1, 1]);
+    assert!(wide.contains("array<vec4<f32>, GROUP_SIZE>") && !wide.contains(&format!("= {GROUP_SIZE}u;")));
+    for g in (0..=HARDWARE_GROUP_SIZE.ilog2()).map(|k| 1 << k) {
+        let (w, h) = tile_of(HARDWARE_GROUP_SIZE, g);
+        assert!(w * h * g == HARDWARE_GROUP_SIZE && w >= h && w <= 2 * h, "group_samples {g}: tile {w}×{h}");
     }
 }
 
