@@ -78,7 +78,11 @@ fn workgroup_size_matches_wgsl() {
         naga::front::wgsl::parse_str(&wide).unwrap_or_else(|e| panic!("{}", e.emit_to_string(&wide)));
     let main = module.entry_points.iter().find(|e| e.name == "main").expect("entry point main");
     assert_eq!(main.workgroup_size, [HARDWARE_GROUP_SIZE, 1, 1]);
-    assert!(wide.contains("array<vec4<f32>, GROUP_SIZE>") && !wide.contains(&format!("= {GROUP_SIZE}u;")));
+    assert!(
+        wide.contains("array<vec4<f32>, GROUP_SIZE>")
+            && wide.contains(&format!("const GROUP_SIZE: u32 = {HARDWARE_GROUP_SIZE}u;"))
+            && !wide.contains(&format!("const GROUP_SIZE: u32 = {GROUP_SIZE}u;"))
+    );
     for g in (0..=HARDWARE_GROUP_SIZE.ilog2()).map(|k| 1 << k) {
         let (w, h) = tile_of(HARDWARE_GROUP_SIZE, g);
         assert!(w * h * g == HARDWARE_GROUP_SIZE && w >= h && w <= 2 * h, "group_samples {g}: tile {w}×{h}");
