@@ -29,8 +29,8 @@ use std::ffi::CStr;
 use ash::vk;
 use furnace_gpu::film::FilmPrecision;
 use furnace_gpu::integrator::{
-    HARDWARE_GROUP_SIZE, ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table, shader_source,
-    with_group_size,
+    GROUP_SIZE, HARDWARE_GROUP_SIZE, ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table,
+    shader_source, with_group_size, workgroup_bytes,
 };
 use furnace_render::RenderSettings;
 use furnace_scene::Scene;
@@ -111,11 +111,15 @@ fn main() -> Result<(), Box<dyn Error>> {
     let scene = load(&o.scene)?;
     let settings = RenderSettings { aovs: o.aovs, ..Default::default() };
     let features = SceneFeatures::of(&scene, &settings);
-    // The hardware default workgroup size unless FURNACE_GROUP_SIZE says otherwise.
-    let wgsl = with_group_size(
-        &ProfilingOverrides::from_env()?.apply(shader_source(o.precision, features)),
-        HARDWARE_GROUP_SIZE,
-    );
+    // The hardware default workgroup size unless FURNACE_GROUP_SIZE says otherwise, with the
+    // rule of `group_size_for` for a device of 48 KiB of workgroup memory (NVIDIA's).
+    let group = if 2 * workgroup_bytes(HARDWARE_GROUP_SIZE, features) <= 48 * 1024 {
+        HARDWARE_GROUP_SIZE
+    } else {
+        GROUP_SIZE
+    };
+    let wgsl =
+        with_group_size(&ProfilingOverrides::from_env()?.apply(shader_source(o.precision, features)), group);
     let checks = o.checks.unwrap_or(ShaderChecks::for_adapter(false, features));
     let words = spirv(&wgsl, checks)?;
     if let Some(path) = &o.spirv {

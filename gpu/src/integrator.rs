@@ -317,19 +317,32 @@ pub const GROUP_SIZE: u32 = 256;
 /// scenes, the Cornell box at 1080p unchanged; 512 (still 128 registers) was slower than 256.
 pub const HARDWARE_GROUP_SIZE: u32 = 1024;
 
-/// The workgroup size of the integrator on an adapter: `FURNACE_GROUP_SIZE` when set
-/// ([`ProfilingOverrides`]), else [`HARDWARE_GROUP_SIZE`] on a hardware adapter whose workgroups
-/// hold that many invocations, else [`GROUP_SIZE`] (software adapters: lavapipe runs an
+/// The workgroup size of the integrator for a scene's features on an adapter:
+/// `FURNACE_GROUP_SIZE` when set ([`ProfilingOverrides`]), else [`HARDWARE_GROUP_SIZE`] on a
+/// hardware adapter whose workgroups hold that many invocations and whose workgroup memory holds
+/// the shader's per-invocation arrays at that size in at most half of it (the compiler takes
+/// workgroup memory of its own for spilled registers: at 1024 invocations the H200's driver
+/// took 28 KiB besides the kernel's 16 KiB, and its limit is 48 KiB; with AOVs the kernel's
+/// arrays alone are 48 KiB), else [`GROUP_SIZE`] (software adapters: lavapipe runs an
 /// invocation's loop on a CPU thread, there is no occupancy to gain).
-pub fn group_size_for(ctx: &GpuContext, overrides: &ProfilingOverrides) -> u32 {
+pub fn group_size_for(ctx: &GpuContext, overrides: &ProfilingOverrides, features: SceneFeatures) -> u32 {
     overrides.group_size.unwrap_or_else(|| {
         let hardware = crate::context::is_hardware(&ctx.info);
-        if hardware && ctx.device.limits().max_compute_invocations_per_workgroup >= HARDWARE_GROUP_SIZE {
+        let limits = ctx.device.limits();
+        let arrays =
+            2 * workgroup_bytes(HARDWARE_GROUP_SIZE, features) <= limits.max_compute_workgroup_storage_size;
+        if hardware && arrays && limits.max_compute_invocations_per_workgroup >= HARDWARE_GROUP_SIZE {
             HARDWARE_GROUP_SIZE
         } else {
             GROUP_SIZE
         }
     })
+}
+
+/// The bytes of `var<workgroup>` arrays `integrator.wgsl` declares for workgroups of
+/// `group_size`: one `vec4<f32>` per invocation for the samples, two more with AOVs.
+pub fn workgroup_bytes(group_size: u32, features: SceneFeatures) -> u32 {
+    group_size * 16 * if features.aovs { 3 } else { 1 }
 }
 
 /// `source` (a [`shader_source`]) with workgroups of `n` invocations instead of [`GROUP_SIZE`].
@@ -930,7 +943,7 @@ impl GpuRenderer {
         let precision = FilmPrecision::for_context(&ctx);
         let film = film_for(&ctx, &settings, precision)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
-        let group_size = group_size_for(&ctx, &ProfilingOverrides::from_env()?);
+        let group_size = group_size_for(&ctx, &ProfilingOverrides::from_env()?, features);
         let limit = ctx.device.limits().max_compute_invocations_per_workgroup;
         if group_size > limit {
             return Err(GpuError::Unsupported(format!(
@@ -1049,6 +1062,8 @@ impl GpuRenderer {
         }
         let precision = self.film.precision();
         if features != self.features {
+            // The workgroup size follows the features (AOVs' arrays).
+            self.group_size = group_size_for(&self.ctx, &ProfilingOverrides::from_env()?, features);
             (self.layout, self.pipeline, self.converge) =
                 integrator_pipeline(&self.ctx, precision, features, self.group_size)?;
         }
@@ -1607,10 +1622,16 @@ mod tests {
         let wide = ProfilingOverrides { group_size: Some(1024), ..Default::default() }.apply(source.clone());
         assert!(wide.contains("const GROUP_SIZE: u32 = 1024u;") && !wide.contains("GROUP_SIZE: u32 = 256u"));
         assert_eq!(tile_of(1024, 4), (16, 16));
+        // What `group_size_for` weighs against half of a device's workgroup memory (48 KiB on
+        // NVIDIA's Vulkan driver): the kernel's arrays at 1024 fit without AOVs, not with them.
+        let aovs = SceneFeatures { aovs: true, ..Default::default() };
+        assert_eq!(workgroup_bytes(HARDWARE_GROUP_SIZE, SceneFeatures::default()), 16 * 1024);
+        assert_eq!(workgroup_bytes(HARDWARE_GROUP_SIZE, aovs), 48 * 1024);
+        assert_eq!(workgroup_bytes(GROUP_SIZE, aovs), 12 * 1024);
     }
 
-    /// Loop counters are off only on software adapters by default; every choice keeps the
-    /// other checks as documented.
+    /// Loop counters are off on software adapters and for kernels that sample no lights; every
+    /// choice keeps the other checks as documented.
     #[test]
     fn shader_checks_by_adapter() {
         let sun = SceneFeatures { delta_sun: true, point_lights: true, ..Default::default() };
