@@ -313,8 +313,8 @@ pub const GROUP_SIZE: u32 = 256;
 /// whole workgroup on one multiprocessor, so on an NVIDIA GPU (64 Ki registers per SM) the
 /// megakernel gets at most 64 registers per invocation instead of the 128 it takes in workgroups
 /// of 256: twice the resident warps (50 % occupancy instead of 25 %) for some spilling. Measured
-/// on the H200 (BENCHMARKS.md, "Speed"): +2–12 % on the emitter, environment-map and interior
-/// scenes, the Cornell box at 1080p unchanged; 512 (still 128 registers) was slower than 256.
+/// on the H200 (BENCHMARKS.md, "Speed"): +2–15 % on the emitter, environment-map and interior
+/// scenes, the Cornell box within ±3 %; 512 (still 128 registers) was slower than 256.
 pub const HARDWARE_GROUP_SIZE: u32 = 1024;
 
 /// The workgroup size of the integrator for a scene's features on an adapter:
@@ -433,7 +433,7 @@ pub struct GpuRenderer {
     samples_per_dispatch: u64,
     max_samples_per_invocation: u32,
     group_samples: Option<u32>,
-    /// Invocations per workgroup: [`GROUP_SIZE`] unless profiling overrides it.
+    /// Invocations per workgroup ([`group_size_for`]).
     group_size: u32,
     timer: Option<Timer>,
     /// Triangles uploaded (what [`GpuRenderer::reconfigure`] checks a scene against).
