@@ -4,7 +4,7 @@
 //! * Time to first frame: from the start of setup (adapter, scene build or load, BVH, upload,
 //!   pipeline) to the end of the first pass of one sample per pixel. That pass is a warm-up and
 //!   is not part of the measured passes; on a hardware GPU more untimed passes follow for
-//!   [`WARM_UP_SECONDS`], while the GPU's clocks ramp up.
+//!   [`WARM_UP_SECONDS`](crate::shared::WARM_UP_SECONDS), while the GPU's clocks ramp up.
 //! * Then passes of the backend's own size (`Integrator::pass_samples`) until `--min-seconds` have
 //!   passed, or exactly `--spp` samples per pixel.
 //! * Rays (closest-hit and shadow): on the GPU, counted during the measured passes (one atomic
@@ -14,7 +14,7 @@
 //!   available; the output says which.
 
 use crate::args::{BenchArgs, SceneArg};
-use crate::shared::{image_size, write_atomically};
+use crate::shared::{WARM_UP_SECONDS, image_size, write_atomically};
 use furnace_cli::backend::{self, Backend};
 use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
 use furnace_render::{Budget, Integrator, RenderSettings, Session};
@@ -24,13 +24,6 @@ use std::io::Write as _;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Instant;
-
-/// Untimed passes after the first frame on a hardware GPU: an idle GPU's clocks take about a
-/// second to ramp up, so a measurement that starts right after the pipeline's compile (seconds
-/// of an idle GPU) reads low — on the H200, 1-second runs right after the compile gave 20–30 %
-/// less than the same runs repeated (BENCHMARKS.md, "Speed"). The chart's warm-up, for the same
-/// reason.
-pub const WARM_UP_SECONDS: f64 = 1.0;
 
 /// Pixels and samples per pixel of the render on which CPU rays per sample are counted on a
 /// hardware GPU: 65 536 paths.

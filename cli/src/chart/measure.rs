@@ -7,6 +7,7 @@ use super::save::save_data;
 use super::study::{Config, Study};
 use crate::args::{ChartBackend, Switch};
 use crate::interrupt::Interrupt;
+use crate::shared::WARM_UP_SECONDS;
 use furnace_brdf::SpecularOptions;
 use furnace_cli::backend::{self, Backend, BackendChoice};
 use furnace_post::metrics::score;
@@ -15,10 +16,6 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::{Value, json};
 use std::time::Instant;
-
-/// How long the first configuration of each backend in a process, and every GPU configuration,
-/// warms up (see `make_backend`).
-const WARM_UP_SECONDS: f64 = 1.0;
 
 /// The integrator of `config`, fresh (an empty film), and for a GPU its adapter in one line;
 /// `n` is N for a fixed-N sampler.
