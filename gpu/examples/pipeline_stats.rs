@@ -14,13 +14,14 @@
 //! [`ShaderChecks`] (default: what a hardware adapter gets for the scene,
 //! `ShaderChecks::for_adapter(false, features)`: `noloop` for kernels that sample no lights,
 //! else `checked` — local arrays' indices clamped, loops bounded by a counter, integer division
-//! guarded). The profiling overrides
-//! `FURNACE_TRV_STACK`, `FURNACE_NO_TRACE_COUNTERS` and `FURNACE_GROUP_SIZE` apply as when furnace
-//! builds the pipeline ([`ProfilingOverrides`]); the workgroup size is otherwise the hardware
-//! adapters' ([`furnace_gpu::integrator::HARDWARE_GROUP_SIZE`]). The pipeline is created on the first Vulkan device that has the
-//! extension (NVIDIA's driver has it; Mesa 22's lavapipe does not: then on the first device, for
-//! its compile time only — which for lavapipe leaves the LLVM compile to the first dispatch),
-//! with its bindings from [`furnace_gpu::integrator::binding_table`]. Nothing is dispatched.
+//! guarded). The profiling overrides `FURNACE_TRV_STACK`, `FURNACE_NO_TRACE_COUNTERS` and
+//! `FURNACE_GROUP_SIZE` apply as when furnace builds the pipeline ([`ProfilingOverrides`]); the
+//! workgroup size is otherwise what a hardware adapter with NVIDIA's limits gets
+//! ([`furnace_gpu::integrator::default_group_size`]). The pipeline is created on the first
+//! Vulkan device that has the extension (NVIDIA's driver has it; Mesa 22's lavapipe does not:
+//! then on the first device, for its compile time only — which for lavapipe leaves the LLVM
+//! compile to the first dispatch), with its bindings from
+//! [`furnace_gpu::integrator::binding_table`]. Nothing is dispatched.
 #![allow(unsafe_code)]
 
 use std::error::Error;
@@ -29,8 +30,8 @@ use std::ffi::CStr;
 use ash::vk;
 use furnace_gpu::film::FilmPrecision;
 use furnace_gpu::integrator::{
-    GROUP_SIZE, HARDWARE_GROUP_SIZE, ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table,
-    shader_source, with_group_size, workgroup_bytes,
+    ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table, default_group_size, shader_source,
+    with_group_size,
 };
 use furnace_render::RenderSettings;
 use furnace_scene::Scene;
@@ -111,15 +112,11 @@ fn main() -> Result<(), Box<dyn Error>> {
     let scene = load(&o.scene)?;
     let settings = RenderSettings { aovs: o.aovs, ..Default::default() };
     let features = SceneFeatures::of(&scene, &settings);
-    // The hardware default workgroup size unless FURNACE_GROUP_SIZE says otherwise, with the
-    // rule of `group_size_for` for a device of 48 KiB of workgroup memory (NVIDIA's).
-    let group = if 2 * workgroup_bytes(HARDWARE_GROUP_SIZE, features) <= 48 * 1024 {
-        HARDWARE_GROUP_SIZE
-    } else {
-        GROUP_SIZE
-    };
-    let wgsl =
-        with_group_size(&ProfilingOverrides::from_env()?.apply(shader_source(o.precision, features)), group);
+    // The workgroup size furnace would choose on a hardware adapter with NVIDIA's limits (1024
+    // invocations, 48 KiB of workgroup memory), unless FURNACE_GROUP_SIZE says otherwise.
+    let overrides = ProfilingOverrides::from_env()?;
+    let group = overrides.group_size.unwrap_or(default_group_size(true, 1024, 48 * 1024, features));
+    let wgsl = with_group_size(&overrides.apply(shader_source(o.precision, features)), group);
     let checks = o.checks.unwrap_or(ShaderChecks::for_adapter(false, features));
     let words = spirv(&wgsl, checks)?;
     if let Some(path) = &o.spirv {

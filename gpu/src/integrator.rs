@@ -327,16 +327,30 @@ pub const HARDWARE_GROUP_SIZE: u32 = 1024;
 /// invocation's loop on a CPU thread, there is no occupancy to gain).
 pub fn group_size_for(ctx: &GpuContext, overrides: &ProfilingOverrides, features: SceneFeatures) -> u32 {
     overrides.group_size.unwrap_or_else(|| {
-        let hardware = crate::context::is_hardware(&ctx.info);
         let limits = ctx.device.limits();
-        let arrays =
-            2 * workgroup_bytes(HARDWARE_GROUP_SIZE, features) <= limits.max_compute_workgroup_storage_size;
-        if hardware && arrays && limits.max_compute_invocations_per_workgroup >= HARDWARE_GROUP_SIZE {
-            HARDWARE_GROUP_SIZE
-        } else {
-            GROUP_SIZE
-        }
+        default_group_size(
+            crate::context::is_hardware(&ctx.info),
+            limits.max_compute_invocations_per_workgroup,
+            limits.max_compute_workgroup_storage_size,
+            features,
+        )
     })
+}
+
+/// [`group_size_for`]'s rule without the override, for an adapter described by whether it is
+/// hardware and its two workgroup limits (invocations, bytes of workgroup memory).
+pub fn default_group_size(
+    hardware: bool,
+    max_invocations: u32,
+    max_workgroup_bytes: u32,
+    features: SceneFeatures,
+) -> u32 {
+    let arrays_fit = 2 * workgroup_bytes(HARDWARE_GROUP_SIZE, features) <= max_workgroup_bytes;
+    if hardware && arrays_fit && max_invocations >= HARDWARE_GROUP_SIZE {
+        HARDWARE_GROUP_SIZE
+    } else {
+        GROUP_SIZE
+    }
 }
 
 /// The bytes of `var<workgroup>` arrays `integrator.wgsl` declares for workgroups of
@@ -816,14 +830,12 @@ impl ProfilingOverrides {
         })
     }
 
-    /// `source` (a [`shader_source`]) with the stack and counter overrides applied.
+    /// `source` (a [`shader_source`]) with the stack and counter overrides applied (the workgroup
+    /// size is [`group_size_for`]'s, applied with [`with_group_size`]).
     pub fn apply(&self, source: String) -> String {
         let mut s = source;
         if let Some(n) = self.stack {
             s = s.replace(crate::wgsl::TRAVERSE, &crate::traverse::module_with_stack_size(n));
-        }
-        if let Some(n) = self.group_size {
-            s = with_group_size(&s, n);
         }
         if self.no_trace_counters {
             for counter in [
@@ -845,6 +857,7 @@ fn integrator_pipeline(
     ctx: &GpuContext,
     precision: FilmPrecision,
     features: SceneFeatures,
+    overrides: &ProfilingOverrides,
     group_size: u32,
 ) -> Result<(wgpu::BindGroupLayout, wgpu::ComputePipeline, Option<wgpu::ComputePipeline>), GpuError> {
     let entries = binding_table(precision, features).layout_entries();
@@ -859,7 +872,6 @@ fn integrator_pipeline(
         bind_group_layouts: &[Some(&layout)],
         immediate_size: 0,
     });
-    let overrides = ProfilingOverrides::from_env()?;
     let software = !crate::context::is_hardware(&ctx.info);
     let checks = overrides.checks.unwrap_or(ShaderChecks::for_adapter(software, features));
     let desc = wgpu::ShaderModuleDescriptor {
@@ -943,14 +955,16 @@ impl GpuRenderer {
         let precision = FilmPrecision::for_context(&ctx);
         let film = film_for(&ctx, &settings, precision)?;
         let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
-        let group_size = group_size_for(&ctx, &ProfilingOverrides::from_env()?, features);
+        let overrides = ProfilingOverrides::from_env()?;
+        let group_size = group_size_for(&ctx, &overrides, features);
         let limit = ctx.device.limits().max_compute_invocations_per_workgroup;
         if group_size > limit {
             return Err(GpuError::Unsupported(format!(
                 "FURNACE_GROUP_SIZE={group_size}: the adapter's workgroups hold at most {limit} invocations"
             )));
         }
-        let (layout, pipeline, converge) = integrator_pipeline(&ctx, precision, features, group_size)?;
+        let (layout, pipeline, converge) =
+            integrator_pipeline(&ctx, precision, features, &overrides, group_size)?;
         let converged_counter = converged_counter(&ctx, &settings)?;
         // Software adapters (lavapipe) run ~1 Msample/s and end any shader loop after 65535
         // iterations per invocation (all loops together): one sample per invocation there.
@@ -1063,9 +1077,10 @@ impl GpuRenderer {
         let precision = self.film.precision();
         if features != self.features {
             // The workgroup size follows the features (AOVs' arrays).
-            self.group_size = group_size_for(&self.ctx, &ProfilingOverrides::from_env()?, features);
+            let overrides = ProfilingOverrides::from_env()?;
+            self.group_size = group_size_for(&self.ctx, &overrides, features);
             (self.layout, self.pipeline, self.converge) =
-                integrator_pipeline(&self.ctx, precision, features, self.group_size)?;
+                integrator_pipeline(&self.ctx, precision, features, &overrides, self.group_size)?;
         }
         if settings.adaptive.is_some() != old.adaptive.is_some() {
             self.converged_counter = converged_counter(&self.ctx, &settings)?;
@@ -1619,7 +1634,7 @@ mod tests {
         assert!(source.contains("trace_stats.nodes += 1u;"));
         assert!(!bare.contains("trace_stats.nodes +=") && !bare.contains("trace_stats.triangles +="));
         assert!(!bare.contains("trace_stats.max_depth = max"));
-        let wide = ProfilingOverrides { group_size: Some(1024), ..Default::default() }.apply(source.clone());
+        let wide = with_group_size(&source, 1024);
         assert!(wide.contains("const GROUP_SIZE: u32 = 1024u;") && !wide.contains("GROUP_SIZE: u32 = 256u"));
         assert_eq!(tile_of(1024, 4), (16, 16));
         // What `group_size_for` weighs against half of a device's workgroup memory (48 KiB on
@@ -1628,6 +1643,11 @@ mod tests {
         assert_eq!(workgroup_bytes(HARDWARE_GROUP_SIZE, SceneFeatures::default()), 16 * 1024);
         assert_eq!(workgroup_bytes(HARDWARE_GROUP_SIZE, aovs), 48 * 1024);
         assert_eq!(workgroup_bytes(GROUP_SIZE, aovs), 12 * 1024);
+        let plain = SceneFeatures::default();
+        assert_eq!(default_group_size(true, 1024, 48 * 1024, plain), HARDWARE_GROUP_SIZE);
+        assert_eq!(default_group_size(true, 1024, 48 * 1024, aovs), GROUP_SIZE);
+        assert_eq!(default_group_size(true, 256, 48 * 1024, plain), GROUP_SIZE);
+        assert_eq!(default_group_size(false, 1024, 48 * 1024, plain), GROUP_SIZE);
     }
 
     /// Loop counters are off on software adapters and for kernels that sample no lights; every
