@@ -19,12 +19,9 @@ for sc in "${scenes[@]}"; do
   python3 -c "import json; d=json.load(open('$W/c.json')); print('${sc%%|*} counted', {k: d[k] for k in d if any(w in k for w in ('ray', 'node', 'triangle', 'stack', 'fallback', 'msamples'))})"
 done
 echo "== Mitsuba and furnace (new) at equal samples, random sampler"
-for v in "cbox|256x256|cbox|64|4|4" "cbox|1920x1080|cbox|64|4|4" "cbox_area|1920x1080|/tmp/sc/cbox_area.gltf|64|4|4" \
-         "cbox_many_lights|1920x1080|/tmp/sc/cbox_many_lights.gltf|64|4|4" "envmap_spheres|1920x1080|/tmp/sc/envmap_spheres.gltf|64|4|4" \
-         "interior_19880|1920x1440|$I|32|4|6"; do
+for v in "${equal[@]}"; do
   IFS='|' read -r s size path spp passes b <<< "$v"
-  ORACLE_SIZE=$size mi $s cuda_ad_rgb $spp $passes
-  python3 -c "import json; d=json.load(open('/tmp/mr/${s}_cuda_ad_rgb_$((spp*passes))spp.json')); print('mitsuba $s $size', round(d['Msamples_per_s'],1), 'render_s', round(d['render_s'],3))"
+  mitsuba_at $s $size $spp $passes
   bench "furnace $s $size" fnew --scene $path --width ${size%x*} --height ${size#*x} --bounces $b --sampler random --spp $((spp*passes))
   case $s in cbox_area|cbox_many_lights) bench "furnace $s $size power+area" fnew --scene $path --width ${size%x*} --height ${size#*x} --sampler random --spp $((spp*passes)) --light-selection power --triangle-sampling area;; esac
 done

@@ -10,14 +10,9 @@
 xz -dc .dev/furnace-new.xz > /tmp/fnew; chmod +x /tmp/fnew
 source docs/device/speed-env.sh
 echo "== Mitsuba and furnace at equal samples, random sampler"
-for v in "cbox|256x256|cbox|64|4|4" "cbox|1920x1080|cbox|64|4|4" "cbox_area|1920x1080|/tmp/sc/cbox_area.gltf|64|4|4" \
-         "cbox_many_lights|1920x1080|/tmp/sc/cbox_many_lights.gltf|64|4|4" "envmap_spheres|1920x1080|/tmp/sc/envmap_spheres.gltf|64|4|4" \
-         "interior_19880|1920x1440|$I|32|4|6"; do
+for v in "${equal[@]}"; do
   IFS='|' read -r s size path spp passes b <<< "$v"
-  # Twice, the second quoted: the first runs on a GPU whose clocks dropped during the load.
-  ORACLE_SIZE=$size mi $s cuda_ad_rgb $spp $passes
-  ORACLE_SIZE=$size mi $s cuda_ad_rgb $spp $passes
-  python3 -c "import json; d=json.load(open('/tmp/mr/${s}_cuda_ad_rgb_$((spp*passes))spp.json')); print('mitsuba $s $size', round(d['Msamples_per_s'],1), 'render_s', round(d['render_s'],3))"
+  mitsuba_at $s $size $spp $passes
   args="--scene $path --width ${size%x*} --height ${size#*x} --bounces $b --sampler random --spp $((spp*passes))"
   bench "furnace $s $size" fnew $args
   for g in ${GROUP_SIZES:-256}; do FURNACE_GROUP_SIZE=$g bench "furnace $s $size group $g" fnew $args; done
