@@ -267,6 +267,17 @@ impl Bvh {
         self.layout
     }
 
+    /// The number of node levels of the tree: 0 for an empty tree, 1 for a root whose children
+    /// are all leaves. A stack traversal that pushes one node group per level below the root
+    /// (furnace-gpu's) needs `depth() - 1` entries at most.
+    pub fn depth(&self) -> usize {
+        match &self.tree {
+            Tree::Empty => 0,
+            Tree::Cwbvh(b, _) => cwbvh_depth(b),
+            Tree::Bvh2(b) => bvh2_depth(b),
+        }
+    }
+
     /// CWBVH nodes for the GPU, root first ([`GpuCwbvhNode`]); empty for [`Layout::Bvh2`] and
     /// for an empty tree.
     pub fn gpu_nodes(&self) -> &[GpuCwbvhNode] {

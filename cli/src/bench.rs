@@ -63,6 +63,10 @@ struct GpuProfile {
     gpu_seconds: Option<f64>,
     /// Invocations per pixel in a workgroup.
     group_samples: u32,
+    /// Invocations per workgroup.
+    group_size: u32,
+    /// Node groups of the traversal stack.
+    traversal_stack: u32,
     /// Traversal counters of the measured passes (`None` with `--no-rays`).
     counts: Option<furnace_gpu::integrator::TraceCounts>,
 }
@@ -233,6 +237,8 @@ impl Report {
             "gpu_scene_bytes": g.map(|g| g.scene_bytes),
             "gpu_bvh_bytes": g.map(|g| g.bvh_bytes),
             "gpu_group_samples": p.map(|p| p.group_samples),
+            "gpu_group_size": p.map(|p| p.group_size),
+            "gpu_traversal_stack": p.map(|p| p.traversal_stack),
             "gpu_timestamp_seconds": finite(p.and_then(|p| p.gpu_seconds)),
             "gpu_timestamp_ms_per_frame":
                 finite(p.and_then(|p| p.gpu_seconds).map(|g| g * 1e3 / f64::from(self.spp.max(1)))),
@@ -356,6 +362,8 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
             let profile = GpuProfile {
                 gpu_seconds: timing.then_some(gpu_seconds),
                 group_samples: r.group_samples(per_pass),
+                group_size: r.group_size(),
+                traversal_stack: r.traversal_stack_size(),
                 counts: (!a.no_rays).then_some(counts),
             };
             let rays =

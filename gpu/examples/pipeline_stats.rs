@@ -14,10 +14,11 @@
 //! [`ShaderChecks`] (default: what a hardware adapter gets for the scene,
 //! `ShaderChecks::for_adapter(false, features)`: `noloop` for kernels that sample no lights,
 //! else `checked` — local arrays' indices clamped, loops bounded by a counter, integer division
-//! guarded). The profiling overrides `FURNACE_TRV_STACK`, `FURNACE_NO_TRACE_COUNTERS` and
-//! `FURNACE_GROUP_SIZE` apply as when furnace builds the pipeline ([`ProfilingOverrides`]); the
+//! guarded). The profiling overrides `FURNACE_TRV_STACK`, `FURNACE_NO_TRACE_COUNTERS`,
+//! `FURNACE_GROUP_SIZE` and `FURNACE_SHADER_EDIT` apply as when furnace builds the pipeline ([`ProfilingOverrides`]); the
 //! workgroup size is otherwise what a hardware adapter with NVIDIA's limits gets
-//! ([`furnace_gpu::integrator::default_group_size`]). The pipeline is created on the first
+//! ([`furnace_gpu::integrator::default_group_size`]), and the traversal stack the scene's tree
+//! gets ([`furnace_gpu::traverse::stack_size_for`]). The pipeline is created on the first
 //! Vulkan device that has the extension (NVIDIA's driver has it; Mesa 22's lavapipe does not:
 //! then on the first device, for its compile time only — which for lavapipe leaves the LLVM
 //! compile to the first dispatch), with its bindings from
@@ -28,11 +29,13 @@ use std::error::Error;
 use std::ffi::CStr;
 
 use ash::vk;
+use furnace_accel::{BuildOptions, Bvh};
 use furnace_gpu::film::FilmPrecision;
 use furnace_gpu::integrator::{
     ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table, default_group_size, shader_source,
     with_group_size,
 };
+use furnace_gpu::traverse::with_stack_size;
 use furnace_render::RenderSettings;
 use furnace_scene::Scene;
 
@@ -116,7 +119,13 @@ fn main() -> Result<(), Box<dyn Error>> {
     // invocations, 48 KiB of workgroup memory), unless FURNACE_GROUP_SIZE says otherwise.
     let overrides = ProfilingOverrides::from_env()?;
     let group = overrides.group_size.unwrap_or(default_group_size(true, 1024, 48 * 1024, features));
-    let wgsl = with_group_size(&overrides.apply(shader_source(o.precision, features)), group);
+    // The traversal stack sized by the scene's tree, as GpuRenderer sizes it.
+    let g = &scene.geometry;
+    let depth = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default()).depth();
+    let wgsl = with_stack_size(
+        &with_group_size(&overrides.apply(shader_source(o.precision, features))?, group),
+        overrides.stack_size(depth),
+    );
     let checks = o.checks.unwrap_or(ShaderChecks::for_adapter(false, features));
     let words = spirv(&wgsl, checks)?;
     if let Some(path) = &o.spirv {

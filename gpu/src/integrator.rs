@@ -393,7 +393,8 @@ pub fn tile(group_samples: u32) -> (u32, u32) {
     tile_of(GROUP_SIZE, group_samples)
 }
 
-/// [`tile`] for workgroups of `group_size` invocations (a power of two; see
+/// [`tile`] for workgroups of `group_size` invocations (a multiple of 32: the width is a power of
+/// two, the height what is left; see
 /// [`ProfilingOverrides::group_size`]).
 pub fn tile_of(group_size: u32, group_samples: u32) -> (u32, u32) {
     let pixels = group_size / group_samples;
@@ -449,6 +450,9 @@ pub struct GpuRenderer {
     group_samples: Option<u32>,
     /// Invocations per workgroup ([`group_size_for`]).
     group_size: u32,
+    /// Node groups of the traversal stack ([`ProfilingOverrides::stack_size`] for the uploaded
+    /// tree's depth).
+    stack_size: u32,
     timer: Option<Timer>,
     /// Triangles uploaded (what [`GpuRenderer::reconfigure`] checks a scene against).
     triangles: usize,
@@ -771,10 +775,11 @@ impl ShaderChecks {
 /// | variable | effect |
 /// |---|---|
 /// | `FURNACE_SHADER_CHECKS=checked\|noloop\|unchecked` | [`ShaderChecks`] instead of the adapter's default |
-/// | `FURNACE_TRV_STACK=N` | a traversal stack of N node groups ([`crate::traverse::module_with_stack_size`]) |
+/// | `FURNACE_TRV_STACK=N` | a traversal stack of N node groups instead of the tree's depth's ([`ProfilingOverrides::stack_size`]) |
 /// | `FURNACE_NO_TRACE_COUNTERS=1` | no per-invocation node/triangle/depth counters in the traversal (`furnace bench` then counts 0 nodes and triangles) |
-/// | `FURNACE_GROUP_SIZE=N` | workgroups of N invocations (a power of two, 32 to 1024, within the adapter's limit) instead of [`group_size_for`]'s choice |
-#[derive(Debug, Clone, Copy, Default)]
+/// | `FURNACE_GROUP_SIZE=N` | workgroups of N invocations (a multiple of 32 — whole warps — from 32 to 1024, within the adapter's limit) instead of [`group_size_for`]'s choice |
+/// | `FURNACE_SHADER_EDIT=FILE` | text edits of the composed shader, for timing variants (a part left out, a cheaper form): FILE holds blocks `<<<` line, the text, `===` line, its replacement, `>>>` line; each text must occur in the shader |
+#[derive(Debug, Clone, Default)]
 pub struct ProfilingOverrides {
     /// `FURNACE_SHADER_CHECKS`.
     pub checks: Option<ShaderChecks>,
@@ -784,6 +789,28 @@ pub struct ProfilingOverrides {
     pub no_trace_counters: bool,
     /// `FURNACE_GROUP_SIZE`.
     pub group_size: Option<u32>,
+    /// `FURNACE_SHADER_EDIT`: (text, replacement) pairs, applied in order.
+    pub edits: Vec<(String, String)>,
+}
+
+/// The (text, replacement) blocks of a `FURNACE_SHADER_EDIT` file (see [`ProfilingOverrides`]).
+fn parse_shader_edits(path: &str, text: &str) -> Result<Vec<(String, String)>, GpuError> {
+    let bad = |k: usize, what: &str| {
+        GpuError::Unsupported(format!("FURNACE_SHADER_EDIT={path}: block {k}: {what}"))
+    };
+    let mut edits = Vec::new();
+    for (k, block) in text.split("<<<\n").skip(1).enumerate() {
+        let (old, rest) = block.split_once("\n===\n").ok_or_else(|| bad(k + 1, "no `===` line"))?;
+        let (new, _) = rest.split_once("\n>>>").ok_or_else(|| bad(k + 1, "no `>>>` line"))?;
+        if old.is_empty() {
+            return Err(bad(k + 1, "empty text"));
+        }
+        edits.push((old.to_string(), new.to_string()));
+    }
+    if edits.is_empty() {
+        return Err(GpuError::Unsupported(format!("FURNACE_SHADER_EDIT={path}: no `<<<` block")));
+    }
+    Ok(edits)
 }
 
 impl ProfilingOverrides {
@@ -812,30 +839,49 @@ impl ProfilingOverrides {
         };
         let group_size = match var("FURNACE_GROUP_SIZE") {
             None => None,
-            Some(v) => Some(
-                v.parse::<u32>().ok().filter(|n| n.is_power_of_two() && (32..=1024).contains(n)).ok_or_else(
+            Some(v) => {
+                Some(v.parse::<u32>().ok().filter(|n| n % 32 == 0 && (32..=1024).contains(n)).ok_or_else(
                     || {
                         GpuError::Unsupported(format!(
-                            "FURNACE_GROUP_SIZE={v}: expected a power of two, 32 to 1024"
+                            "FURNACE_GROUP_SIZE={v}: expected a multiple of 32, 32 to 1024"
                         ))
                     },
-                )?,
-            ),
+                )?)
+            }
+        };
+        let edits = match var("FURNACE_SHADER_EDIT") {
+            None => Vec::new(),
+            Some(path) => {
+                let text = std::fs::read_to_string(&path)
+                    .map_err(|e| GpuError::Unsupported(format!("FURNACE_SHADER_EDIT={path}: {e}")))?;
+                parse_shader_edits(&path, &text)?
+            }
         };
         Ok(Self {
             checks,
             stack,
             no_trace_counters: var("FURNACE_NO_TRACE_COUNTERS").is_some_and(|v| v == "1"),
             group_size,
+            edits,
         })
     }
 
-    /// `source` (a [`shader_source`]) with the stack and counter overrides applied (the workgroup
-    /// size is [`group_size_for`]'s, applied with [`with_group_size`]).
-    pub fn apply(&self, source: String) -> String {
+    /// `source` (a [`shader_source`]) with the counter override and the edits applied (the
+    /// workgroup size is [`group_size_for`]'s, applied with [`with_group_size`]; the stack size
+    /// [`ProfilingOverrides::stack_size`]'s, applied with [`crate::traverse::with_stack_size`]).
+    ///
+    /// # Errors
+    /// [`GpuError::Unsupported`] when an edit's text does not occur in the shader.
+    pub fn apply(&self, source: String) -> Result<String, GpuError> {
         let mut s = source;
-        if let Some(n) = self.stack {
-            s = s.replace(crate::wgsl::TRAVERSE, &crate::traverse::module_with_stack_size(n));
+        for (k, (old, new)) in self.edits.iter().enumerate() {
+            if !s.contains(old.as_str()) {
+                return Err(GpuError::Unsupported(format!(
+                    "FURNACE_SHADER_EDIT: block {} does not occur in the shader: {old:?}",
+                    k + 1
+                )));
+            }
+            s = s.replace(old.as_str(), new);
         }
         if self.no_trace_counters {
             for counter in [
@@ -846,7 +892,13 @@ impl ProfilingOverrides {
                 s = s.replace(counter, "");
             }
         }
-        s
+        Ok(s)
+    }
+
+    /// The traversal stack for a tree of `depth` node levels ([`furnace_accel::Bvh::depth`]):
+    /// `FURNACE_TRV_STACK` when set, else [`crate::traverse::stack_size_for`]'s.
+    pub fn stack_size(&self, depth: usize) -> u32 {
+        self.stack.unwrap_or_else(|| crate::traverse::stack_size_for(depth))
     }
 }
 
@@ -859,6 +911,7 @@ fn integrator_pipeline(
     features: SceneFeatures,
     overrides: &ProfilingOverrides,
     group_size: u32,
+    stack_size: u32,
 ) -> Result<(wgpu::BindGroupLayout, wgpu::ComputePipeline, Option<wgpu::ComputePipeline>), GpuError> {
     let entries = binding_table(precision, features).layout_entries();
     let device = &ctx.device;
@@ -877,7 +930,11 @@ fn integrator_pipeline(
     let desc = wgpu::ShaderModuleDescriptor {
         label: Some("integrator"),
         source: wgpu::ShaderSource::Wgsl(
-            with_group_size(&overrides.apply(shader_source(precision, features)), group_size).into(),
+            crate::traverse::with_stack_size(
+                &with_group_size(&overrides.apply(shader_source(precision, features))?, group_size),
+                stack_size,
+            )
+            .into(),
         ),
     };
     let module = match checks {
@@ -934,6 +991,7 @@ impl GpuRenderer {
         let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
+        let bvh_depth = bvh.depth();
         let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
         let bvh_words = BvhBuffers::new(&bvh, limit)?;
         let [nodes, tris] = bvh_words.extra();
@@ -963,8 +1021,9 @@ impl GpuRenderer {
                 "FURNACE_GROUP_SIZE={group_size}: the adapter's workgroups hold at most {limit} invocations"
             )));
         }
+        let stack_size = overrides.stack_size(bvh_depth);
         let (layout, pipeline, converge) =
-            integrator_pipeline(&ctx, precision, features, &overrides, group_size)?;
+            integrator_pipeline(&ctx, precision, features, &overrides, group_size, stack_size)?;
         let converged_counter = converged_counter(&ctx, &settings)?;
         // Software adapters (lavapipe) run ~1 Msample/s and end any shader loop after 65535
         // iterations per invocation (all loops together): one sample per invocation there.
@@ -999,6 +1058,7 @@ impl GpuRenderer {
             max_samples_per_invocation,
             group_samples: None,
             group_size,
+            stack_size,
             timer: None,
             triangles: scene.geometry.triangles.len(),
             display: false,
@@ -1079,8 +1139,14 @@ impl GpuRenderer {
             // The workgroup size follows the features (AOVs' arrays).
             let overrides = ProfilingOverrides::from_env()?;
             self.group_size = group_size_for(&self.ctx, &overrides, features);
-            (self.layout, self.pipeline, self.converge) =
-                integrator_pipeline(&self.ctx, precision, features, &overrides, self.group_size)?;
+            (self.layout, self.pipeline, self.converge) = integrator_pipeline(
+                &self.ctx,
+                precision,
+                features,
+                &overrides,
+                self.group_size,
+                self.stack_size,
+            )?;
         }
         if settings.adaptive.is_some() != old.adaptive.is_some() {
             self.converged_counter = converged_counter(&self.ctx, &settings)?;
@@ -1119,6 +1185,18 @@ impl GpuRenderer {
     /// Bytes of the BVH on the GPU (nodes and triangle references).
     pub fn bvh_bytes(&self) -> u64 {
         self.bvh_bytes
+    }
+
+    /// Node groups the traversal stack holds: as many as the uploaded tree has levels below its
+    /// root, at most [`crate::traverse::DEFAULT_STACK_SIZE`] ([`crate::traverse::stack_size_for`];
+    /// `FURNACE_TRV_STACK` overrides it).
+    pub fn traversal_stack_size(&self) -> u32 {
+        self.stack_size
+    }
+
+    /// Invocations per workgroup of the integrator ([`group_size_for`]).
+    pub fn group_size(&self) -> u32 {
+        self.group_size
     }
 
     /// Bytes of the scene buffers on the GPU (geometry, materials, textures; BVH excluded).
@@ -1168,10 +1246,11 @@ impl GpuRenderer {
 
     /// Invocations per pixel in a workgroup: `None` (the default) chooses — on hardware, up to
     /// 16 by image size ([`hardware_group_samples`]), 1 on software adapters;
-    /// `Some(n)` forces `n` (rounded down to a power of two up to the workgroup size). The film
+    /// `Some(n)` forces `n` (rounded down to a power of two that divides the workgroup size). The film
     /// does not depend on it, bit for bit.
     pub fn set_group_samples(&mut self, n: Option<u32>) {
-        self.group_samples = n.map(|n| 1 << n.clamp(1, self.group_size).ilog2());
+        self.group_samples =
+            n.map(|n| 1 << n.clamp(1, self.group_size).ilog2().min(self.group_size.trailing_zeros()));
     }
 
     /// The invocations per pixel the next pass of `samples_per_pixel` samples uses.
@@ -1620,17 +1699,21 @@ mod tests {
         }
     }
 
-    /// The stack override rewrites the traversal's stack size; the counters override removes
+    /// The stack override decides the traversal's stack size; the counters override removes
     /// every counter update; no override leaves the shader as composed.
     #[test]
     fn profiling_overrides_rewrite_the_shader() {
         let source = shader_source(FilmPrecision::F64, SceneFeatures::default());
-        assert_eq!(ProfilingOverrides::default().apply(source.clone()), source);
-        let stack = ProfilingOverrides { stack: Some(8), ..Default::default() }.apply(source.clone());
+        assert_eq!(ProfilingOverrides::default().apply(source.clone()).unwrap(), source);
+        let stack = crate::traverse::with_stack_size(&source, 8);
         assert!(
             stack.contains("const TRV_STACK_SIZE: u32 = 8u;") && !stack.contains("TRV_STACK_SIZE: u32 = 16u")
         );
-        let bare = ProfilingOverrides { no_trace_counters: true, ..Default::default() }.apply(source.clone());
+        assert_eq!(ProfilingOverrides { stack: Some(8), ..Default::default() }.stack_size(3), 8);
+        assert_eq!(ProfilingOverrides::default().stack_size(3), 2);
+        let bare = ProfilingOverrides { no_trace_counters: true, ..Default::default() }
+            .apply(source.clone())
+            .unwrap();
         assert!(source.contains("trace_stats.nodes += 1u;"));
         assert!(!bare.contains("trace_stats.nodes +=") && !bare.contains("trace_stats.triangles +="));
         assert!(!bare.contains("trace_stats.max_depth = max"));
@@ -1648,6 +1731,34 @@ mod tests {
         assert_eq!(default_group_size(true, 1024, 48 * 1024, aovs), GROUP_SIZE);
         assert_eq!(default_group_size(true, 256, 48 * 1024, plain), GROUP_SIZE);
         assert_eq!(default_group_size(false, 1024, 48 * 1024, plain), GROUP_SIZE);
+    }
+
+    /// A shader-edit file's blocks replace their text in order; a text the shader lacks, a block
+    /// without its `===` or `>>>` line, or a file without blocks is an error naming it.
+    #[test]
+    fn shader_edits_replace_text_or_say_why_not() {
+        let source = shader_source(FilmPrecision::F64, SceneFeatures::default());
+        let file = "<<<\nconst SHADOW_EPSILON: f32\n===\nconst SHADOW_EPSILON_X: f32\n>>>\n";
+        let edits = parse_shader_edits("e.txt", file).unwrap();
+        assert_eq!(
+            edits,
+            [("const SHADOW_EPSILON: f32".to_string(), "const SHADOW_EPSILON_X: f32".to_string())]
+        );
+        let edited = ProfilingOverrides { edits, ..Default::default() }.apply(source.clone()).unwrap();
+        assert!(
+            edited.contains("const SHADOW_EPSILON_X: f32") && !edited.contains("const SHADOW_EPSILON: f32")
+        );
+        let missing = parse_shader_edits("e.txt", "<<<\nno such text\n===\nx\n>>>\n").unwrap();
+        let err = ProfilingOverrides { edits: missing, ..Default::default() }.apply(source).unwrap_err();
+        assert!(err.to_string().contains("block 1 does not occur"), "{err}");
+        for (bad, why) in [
+            ("<<<\nx\n>>>\n", "no `===` line"),
+            ("<<<\nx\n===\ny\n", "no `>>>` line"),
+            ("x", "no `<<<` block"),
+        ] {
+            let err = parse_shader_edits("e.txt", bad).unwrap_err().to_string();
+            assert!(err.contains("e.txt") && err.contains(why), "{bad:?}: {err}");
+        }
     }
 
     /// Loop counters are off on software adapters and for kernels that sample no lights; every

@@ -32,11 +32,11 @@ use crate::GpuError;
 use crate::shared::{Binding, BindingTable, GpuStruct, Member, WgslType, wgsl_struct};
 use std::mem::offset_of;
 
-/// Node groups the WGSL traversal stack holds (`TRV_STACK_SIZE` in `traverse.wgsl`): one per
-/// tree level below the root at most, so trees up to this depth never overflow (deeper ones
-/// finish with the fallback sweep, same hits). Half of obvhs's (and `furnace-accel`'s CPU) 32:
-/// the smaller stack made the megakernel 7–15 % faster on the H200, and real scenes stay below
-/// depth 11 (10^7 triangles).
+/// Node groups the WGSL traversal stack holds (`TRV_STACK_SIZE` in `traverse.wgsl`) at most: one
+/// per tree level below the root, so trees up to this depth never overflow (deeper ones finish
+/// with the fallback sweep, same hits). Half of obvhs's (and `furnace-accel`'s CPU) 32: the
+/// smaller stack made the megakernel 7–15 % faster on the H200, and real scenes stay below depth
+/// 11 (10^7 triangles). Shallower trees get a stack of their own depth ([`stack_size_for`]).
 pub const DEFAULT_STACK_SIZE: u32 = 16;
 
 /// The line of `traverse.wgsl` that declares a stack of `size` node groups (the module's own is
@@ -50,17 +50,35 @@ pub const NODE_WORDS: usize = size_of::<GpuCwbvhNode>() / 4;
 /// `u32` words per triangle (48 bytes).
 pub const TRIANGLE_WORDS: usize = size_of::<GpuTriangle>() / 4;
 
-/// [`crate::wgsl::TRAVERSE`] with a traversal stack of `size` node groups instead of
-/// [`DEFAULT_STACK_SIZE`]: a smaller stack uses less private memory per invocation, and a tiny
-/// one makes ordinary trees overflow (how the tests exercise the fallback).
+/// The traversal stack for a tree of `depth` node levels ([`Bvh::depth`]): `depth − 1` node
+/// groups (the most the traversal pushes, so it never overflows), at least 1, at most
+/// [`DEFAULT_STACK_SIZE`]. The stack is per-invocation private memory, and its size, not only
+/// its use, costs: on the H200 the 1080p Cornell box (a tree of a few levels) ran 22 % faster
+/// with 6 entries than with 16 (BENCHMARKS.md, "Speed").
+pub fn stack_size_for(depth: usize) -> u32 {
+    u32::try_from(depth.saturating_sub(1)).unwrap_or(u32::MAX).clamp(1, DEFAULT_STACK_SIZE)
+}
+
+/// `source`, a shader that composes [`crate::wgsl::TRAVERSE`] unchanged, with a traversal stack
+/// of `size` node groups instead of [`DEFAULT_STACK_SIZE`]: a smaller stack uses less private
+/// memory per invocation, and a tiny one makes ordinary trees overflow (how the tests exercise
+/// the fallback).
+///
+/// # Panics
+/// If `size` is 0, or `source` lacks the module's stack-size line.
+pub fn with_stack_size(source: &str, size: u32) -> String {
+    assert!(size > 0, "the traversal stack needs at least one entry");
+    let line = stack_line(DEFAULT_STACK_SIZE);
+    assert!(source.contains(&line), "the shader lacks traverse.wgsl's stack-size line");
+    source.replace(&line, &stack_line(size))
+}
+
+/// [`crate::wgsl::TRAVERSE`] with a traversal stack of `size` node groups ([`with_stack_size`]).
 ///
 /// # Panics
 /// If `size` is 0.
 pub fn module_with_stack_size(size: u32) -> String {
-    assert!(size > 0, "the traversal stack needs at least one entry");
-    let line = stack_line(DEFAULT_STACK_SIZE);
-    assert!(crate::wgsl::TRAVERSE.contains(&line), "traverse.wgsl lost its stack-size line");
-    crate::wgsl::TRAVERSE.replace(&line, &stack_line(size))
+    with_stack_size(crate::wgsl::TRAVERSE, size)
 }
 
 /// The declarations of the two storage buffers the traversal reads, at `@group(group)`,
@@ -236,6 +254,17 @@ mod tests {
             e => panic!("unexpected {e:?}"),
         }
         assert!(BvhBuffers::new(&bvh, 192).is_ok());
+    }
+
+    /// One group per level below the root; a root alone still gets one entry; deep trees are
+    /// capped.
+    #[test]
+    fn stack_size_follows_the_depth() {
+        assert_eq!(stack_size_for(0), 1);
+        assert_eq!(stack_size_for(1), 1);
+        assert_eq!(stack_size_for(4), 3);
+        assert_eq!(stack_size_for(17), 16);
+        assert_eq!(stack_size_for(100), DEFAULT_STACK_SIZE);
     }
 
     #[test]
