@@ -801,7 +801,11 @@ fn parse_shader_edits(path: &str, text: &str) -> Result<Vec<(String, String)>, G
     let mut edits = Vec::new();
     for (k, block) in text.split("<<<\n").skip(1).enumerate() {
         let (old, rest) = block.split_once("\n===\n").ok_or_else(|| bad(k + 1, "no `===` line"))?;
-        let (new, _) = rest.split_once("\n>>>").ok_or_else(|| bad(k + 1, "no `>>>` line"))?;
+        // An empty replacement: `>>>` right after the `===` line.
+        let new = match rest.strip_prefix(">>>") {
+            Some(_) => "",
+            None => rest.split_once("\n>>>").ok_or_else(|| bad(k + 1, "no `>>>` line"))?.0,
+        };
         if old.is_empty() {
             return Err(bad(k + 1, "empty text"));
         }
@@ -1748,6 +1752,8 @@ mod tests {
         assert!(
             edited.contains("const SHADOW_EPSILON_X: f32") && !edited.contains("const SHADOW_EPSILON: f32")
         );
+        let removal = parse_shader_edits("e.txt", "<<<\nconst SHADOW_EPSILON: f32\n===\n>>>\n").unwrap();
+        assert_eq!(removal, [("const SHADOW_EPSILON: f32".to_string(), String::new())]);
         let missing = parse_shader_edits("e.txt", "<<<\nno such text\n===\nx\n>>>\n").unwrap();
         let err = ProfilingOverrides { edits: missing, ..Default::default() }.apply(source).unwrap_err();
         assert!(err.to_string().contains("block 1 does not occur"), "{err}");
