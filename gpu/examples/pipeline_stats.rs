@@ -32,10 +32,8 @@ use ash::vk;
 use furnace_accel::{BuildOptions, Bvh};
 use furnace_gpu::film::FilmPrecision;
 use furnace_gpu::integrator::{
-    ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table, default_group_size, shader_source,
-    with_group_size,
+    ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table, default_group_size, pipeline_source,
 };
-use furnace_gpu::traverse::with_stack_size;
 use furnace_render::RenderSettings;
 use furnace_scene::Scene;
 
@@ -122,10 +120,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     // The traversal stack sized by the scene's tree, as GpuRenderer sizes it.
     let g = &scene.geometry;
     let depth = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default()).depth();
-    let wgsl = with_stack_size(
-        &with_group_size(&overrides.apply(shader_source(o.precision, features))?, group),
-        overrides.stack_size(depth),
-    );
+    let wgsl = pipeline_source(o.precision, features, &overrides, group, overrides.stack_size(depth))?;
     let checks = o.checks.unwrap_or(ShaderChecks::for_adapter(false, features));
     let words = spirv(&wgsl, checks)?;
     if let Some(path) = &o.spirv {

@@ -359,6 +359,23 @@ pub fn workgroup_bytes(group_size: u32, features: SceneFeatures) -> u32 {
     group_size * 16 * if features.aovs { 3 } else { 1 }
 }
 
+/// The integrator's shader as a pipeline compiles it: [`shader_source`] with the profiling
+/// `overrides` applied, workgroups of `group_size` invocations and a traversal stack of
+/// `stack_size` node groups.
+///
+/// # Errors
+/// [`GpuError::Unsupported`] when a shader edit's text does not occur in the shader.
+pub fn pipeline_source(
+    precision: FilmPrecision,
+    features: SceneFeatures,
+    overrides: &ProfilingOverrides,
+    group_size: u32,
+    stack_size: u32,
+) -> Result<String, GpuError> {
+    let source = overrides.apply(shader_source(precision, features))?;
+    Ok(crate::traverse::with_stack_size(&with_group_size(&source, group_size), stack_size))
+}
+
 /// `source` (a [`shader_source`]) with workgroups of `n` invocations instead of [`GROUP_SIZE`].
 pub fn with_group_size(source: &str, n: u32) -> String {
     source.replace(
@@ -934,11 +951,7 @@ fn integrator_pipeline(
     let desc = wgpu::ShaderModuleDescriptor {
         label: Some("integrator"),
         source: wgpu::ShaderSource::Wgsl(
-            crate::traverse::with_stack_size(
-                &with_group_size(&overrides.apply(shader_source(precision, features))?, group_size),
-                stack_size,
-            )
-            .into(),
+            pipeline_source(precision, features, overrides, group_size, stack_size)?.into(),
         ),
     };
     let module = match checks {

@@ -594,11 +594,32 @@ fn soup(n: usize, seed: u64) -> Vec<[Vec3; 3]> {
         .collect()
 }
 
+/// A camera looking at the soup's unit cube from outside it.
+fn soup_camera() -> furnace_scene::Camera {
+    furnace_scene::Camera::look_at(Vec3::new(0.5, 0.6, 2.5), Vec3::splat(0.5), Vec3::Y, 0.7)
+}
+
 #[test]
 fn triangle_soup_parity() {
     let tris = soup(30_000, 3);
-    let camera = furnace_scene::Camera::look_at(Vec3::new(0.5, 0.6, 2.5), Vec3::splat(0.5), Vec3::Y, 0.7);
-    scene_parity("random soup", &tris, &camera, 4);
+    scene_parity("random soup", &tris, &soup_camera(), 4);
+}
+
+/// `rays` traced on the GPU with a traversal stack of `size` node groups, compared with the CPU
+/// tree's answers (pattern filter).
+fn trace_with_stack(ctx: &GpuContext, tris: &[[Vec3; 3]], bvh: &Bvh, rays: &[TestRay], size: u32) -> Tally {
+    let buffers = BvhBuffers::new(bvh, ctx.max_storage_binding()).unwrap();
+    let module = traverse::module_with_stack_size(size);
+    let gpu = trace_gpu(ctx, &buffers, &module, Filter::Pattern, rays);
+    let mask = |id: u32, b: Vec2| Filter::Pattern.accepts(id, b);
+    compare(
+        tris,
+        Filter::Pattern,
+        rays,
+        &gpu,
+        |r| bvh.closest_hit_masked(r.o, r.d, r.t_max, mask).map(|h| (h.triangle, h.t, h.barycentrics)),
+        |r| bvh.occluded_masked(r.o, r.d, r.t_any, mask),
+    )
 }
 
 /// The overflow fallback: with stacks of 1 and 2 node groups, ordinary trees overflow on most
@@ -610,23 +631,12 @@ fn stack_overflow_falls_back_without_losing_hits() {
     let scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
     let tris = scene_triangles(&scene);
     let bvh = Bvh::build(&tris);
-    let buffers = BvhBuffers::new(&bvh, ctx.max_storage_binding()).unwrap();
     let sets = ray_sets(&tris, &bvh, &scene.cameras[0], 5);
     // A slice of each set: the fallback sweeps every node, so keep the ray count small.
     let rays: Vec<TestRay> = sets.iter().flat_map(|s| s.1.iter().step_by(40).copied()).collect();
     print_header();
     for size in [1u32, 2] {
-        let module = traverse::module_with_stack_size(size);
-        let gpu = trace_gpu(&ctx, &buffers, &module, Filter::Pattern, &rays);
-        let mask = |id: u32, b: Vec2| Filter::Pattern.accepts(id, b);
-        let t = compare(
-            &tris,
-            Filter::Pattern,
-            &rays,
-            &gpu,
-            |r| bvh.closest_hit_masked(r.o, r.d, r.t_max, mask).map(|h| (h.triangle, h.t, h.barycentrics)),
-            |r| bvh.occluded_masked(r.o, r.d, r.t_any, mask),
-        );
+        let t = trace_with_stack(&ctx, &tris, &bvh, &rays, size);
         print_row(&format!("cornell box, stack {size}"), Filter::Pattern, &t);
         assert_tally(&format!("stack of {size}"), Filter::Pattern, &t);
         // Stack 1 overflows wherever two inner children are hit, stack 2 where three levels are.
@@ -641,31 +651,18 @@ fn stack_overflow_falls_back_without_losing_hits() {
 fn stack_sized_by_the_depth_never_overflows() {
     let Some(ctx) = test_context() else { return };
     let scene = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
-    let cases = [("cornell box", scene_triangles(&scene)), ("random soup", soup(30_000, 3))];
+    let cases = [
+        ("cornell box", scene_triangles(&scene), scene.cameras[0]),
+        ("random soup", soup(30_000, 3), soup_camera()),
+    ];
     print_header();
-    for (name, tris) in cases {
+    for (name, tris, camera) in cases {
         let bvh = Bvh::build(&tris);
         let size = traverse::stack_size_for(bvh.depth());
         assert!(size < traverse::DEFAULT_STACK_SIZE, "{name}: depth {} is not below the cap", bvh.depth());
-        let buffers = BvhBuffers::new(&bvh, ctx.max_storage_binding()).unwrap();
-        let camera = if name == "cornell box" {
-            scene.cameras[0]
-        } else {
-            furnace_scene::Camera::look_at(Vec3::new(0.5, 0.6, 2.5), Vec3::splat(0.5), Vec3::Y, 0.7)
-        };
         let sets = ray_sets(&tris, &bvh, &camera, 5);
         let rays: Vec<TestRay> = sets.iter().flat_map(|s| s.1.iter().step_by(4).copied()).collect();
-        let module = traverse::module_with_stack_size(size);
-        let gpu = trace_gpu(&ctx, &buffers, &module, Filter::Pattern, &rays);
-        let mask = |id: u32, b: Vec2| Filter::Pattern.accepts(id, b);
-        let t = compare(
-            &tris,
-            Filter::Pattern,
-            &rays,
-            &gpu,
-            |r| bvh.closest_hit_masked(r.o, r.d, r.t_max, mask).map(|h| (h.triangle, h.t, h.barycentrics)),
-            |r| bvh.occluded_masked(r.o, r.d, r.t_any, mask),
-        );
+        let t = trace_with_stack(&ctx, &tris, &bvh, &rays, size);
         print_row(&format!("{name}, depth {}, stack {size}", bvh.depth()), Filter::Pattern, &t);
         assert_tally(name, Filter::Pattern, &t);
         assert_eq!(t.fallbacks, 0, "{name}: a stack of {size} overflowed");
