@@ -580,9 +580,21 @@ impl SceneFeatures {
         }
     }
 
-    /// The `HAS_POINT_LIGHTS` constant, as WGSL.
+    /// The `HAS_POINT_LIGHTS` and `SHADOW_SLOTS` constants, as WGSL.
     pub fn wgsl(self) -> String {
-        format!("const HAS_POINT_LIGHTS: bool = {};\n", self.point_lights)
+        format!(
+            "const HAS_POINT_LIGHTS: bool = {};\nconst SHADOW_SLOTS: u32 = {}u;\n",
+            self.point_lights,
+            self.shadow_slots()
+        )
+    }
+
+    /// The shadow rays a scattering event queues at most (integrator.wgsl's `defer_shadow`):
+    /// one per light kind sampled there besides the point lights (the delta sun, the emitters,
+    /// the sun disc, the environment); at least 1, the size of a WGSL array.
+    pub fn shadow_slots(self) -> u32 {
+        let kinds = [self.delta_sun, self.emitters, self.sun_disc, self.enabled("SAMPLES_ENVIRONMENT")];
+        kinds.iter().filter(|&&k| k).count().max(1) as u32
     }
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:

@@ -178,6 +178,36 @@ fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32
     // #endif
 }
 
+// The shadow rays of the light samples taken at a scattering event (the delta sun, an emitter,
+// the sun disc, the environment), traced later by the path loop itself, before the path's
+// next ray and through the same `trace_query` call: the driver inlines the traversal once
+// instead of once more for the shadow rays, and lanes of a warp tracing either kind of ray
+// traverse together. `value` is what the light adds if the ray is not blocked (throughput,
+// BSDF, light and MIS weight, the vertex's volume absorption). SHADOW_SLOTS (generated) is the
+// number of light kinds the scene samples, at least 1. Point lights, one ray per light, keep
+// `shadow`.
+struct ShadowRay {
+    origin: vec3<f32>,
+    t_max: f32,
+    dir: vec3<f32>,
+    value: vec3<f32>,
+}
+
+var<private> shadow_rays: array<ShadowRay, SHADOW_SLOTS>;
+var<private> shadow_queued: u32 = 0u;
+
+// Queues a shadow ray from `origin` along `dir` over t_max carrying `value` if unblocked.
+fn defer_shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32, value: vec3<f32>) {
+    var carried = value;
+    // #if TRANSMISSION
+    if any(b.medium != vec3<f32>(0.0)) {
+        carried *= absorption(b.medium, t_max);
+    }
+    // #endif
+    shadow_rays[shadow_queued] = ShadowRay(origin, t_max, dir, carried);
+    shadow_queued += 1u;
+}
+
 // furnace_scene::PointLight::intensity_towards: the intensity sent along unit `direction` (from
 // the light) to a point at `distance`, the spot cone and the range window applied.
 fn point_light_intensity(light: PointLight, direction: vec3<f32>, distance: f32) -> vec3<f32> {
@@ -318,7 +348,7 @@ fn triangle_solid_angle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
 }
 
 fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: HitBsdf,
-                  wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
+                  wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) {
     let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event;
     // The bin's bits and the coin: one pair (LIGHT_EMITTER_COIN = LIGHT_EMITTER_BIN + 1).
     let bin_coin = sampler_bits_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_BIN);
@@ -327,7 +357,7 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     let choice = light_bvh_sample(params.emitter_count, leave, receiver_normal(bsdf, surface),
                                   to_unit_f32(bin_coin.x));
     if !(choice.pmf > 0.0) {
-        return vec3<f32>(0.0);
+        return;
     }
     let t = emitters[choice.item].x;
     // #else
@@ -343,7 +373,7 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     let b_rel = v1 - leave;
     let c = v2 - leave;
     if !(scene_dot(a, scene_cross(v1 - v0, v2 - v0)) < 0.0) {
-        return vec3<f32>(0.0);
+        return;
     }
     let u = sampler_value_2d(params.sampler, pixel, index, dim + LIGHT_EMITTER_POINT);
     let omega = triangle_solid_angle(a, b_rel, c);
@@ -351,7 +381,7 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     if omega > 0.0 {
         let st = warp_spherical_triangle(u, a, b_rel, c, omega);
         if !st.valid {
-            return vec3<f32>(0.0);
+            return;
         }
         b = st.bary;
     } else {
@@ -361,17 +391,17 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     let to_light = y - leave;
     let d2 = scene_dot(to_light, to_light);
     if !(d2 > 0.0) {
-        return vec3<f32>(0.0);
+        return;
     }
     let d = sqrt(d2);
     let wi = to_light / d;
     let cos_light = -scene_dot(scene_geometric_normal(v0, v1, v2), wi);
     let o = shadow_origin(bsdf, surface, leave, wi);
     if !(cos_light > 0.0 && o.w != 0.0) {
-        return vec3<f32>(0.0);
+        return;
     }
     if (params.flags & FRAME_ANY_MASKED) != 0u && !scene_alpha_passes(t, b.x, b.y) {
-        return vec3<f32>(0.0);
+        return;
     }
     let material = scene_triangle_material(t);
     var uv = vec2<f32>(0.0);
@@ -382,7 +412,7 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     let wi_local = frame_to_local(frame, wi);
     let f = hit_eval(bsdf, wo, wi_local);
     if all(emission == vec3<f32>(0.0)) || all(f == vec3<f32>(0.0)) {
-        return vec3<f32>(0.0);
+        return;
     }
     let area = triangle_area(v0, v1, v2);
     // #if LIGHT_BVH
@@ -399,9 +429,9 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
     let w = light_weight(pdf, hit_pdf(bsdf, wo, wi_local));
     let contribution = throughput * f * emission * (w / pdf);
     if !(film_is_finite(contribution) && any(contribution != vec3<f32>(0.0))) {
-        return vec3<f32>(0.0);
+        return;
     }
-    return contribution * shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON));
+    defer_shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON), contribution);
 }
 
 // CpuRenderer::emission_weight: the MIS weight of emission reached by a BSDF sample of pdf
@@ -444,28 +474,28 @@ fn emission_weight(bsdf_pdf_value: f32, origin: vec3<f32>, normal: vec3<f32>, ma
 // #if HAS_SUN_DISC
 // CpuRenderer::sample_sun_discs for the one sun: a direction uniform in its cone, a shadow ray.
 fn sample_sun_disc(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: HitBsdf,
-                   wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
+                   wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) {
     let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event + LIGHT_SUN_DISC;
     let u = sampler_value_2d(params.sampler, pixel, index, dim);
     let t = params.sun_direction.w;
     let wi = frame_to_world(frame_new(-params.sun_direction.xyz), warp_uniform_cone(u, t));
     let o = shadow_origin(bsdf, surface, leave, wi);
     if o.w == 0.0 {
-        return vec3<f32>(0.0);
+        return;
     }
     let wi_local = frame_to_local(frame, wi);
     let f = hit_eval(bsdf, wo, wi_local);
     if all(f == vec3<f32>(0.0)) {
-        return vec3<f32>(0.0);
+        return;
     }
     let w = light_weight(uniform_cone_pdf(t), hit_pdf(bsdf, wo, wi_local));
     // Sun::cone_estimate: E · 2 / (2 − t).
     let estimate = params.sun_irradiance.xyz * (2.0 / (2.0 - t));
     let contribution = throughput * f * estimate * w;
     if all(contribution == vec3<f32>(0.0)) {
-        return vec3<f32>(0.0);
+        return;
     }
-    return contribution * shadow(bsdf, o.xyz, wi, bitcast<f32>(0x7f800000u));
+    defer_shadow(bsdf, o.xyz, wi, bitcast<f32>(0x7f800000u), contribution);
 }
 
 // CpuRenderer::sun_discs_seen for the one sun: its radiance along an escaping ray.
@@ -493,25 +523,25 @@ fn frame_env() -> EnvMap {
 // CpuRenderer::sample_environment: one light sample of the environment map (throughput
 // included): a direction from its importance distribution, a shadow ray to infinity.
 fn sample_environment(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: HitBsdf,
-                      wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
+                      wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) {
     let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * event + LIGHT_ENVIRONMENT;
     let u = sampler_value_2d(params.sampler, pixel, index, dim);
     let s = env_sample(frame_env(), u);
     let o = shadow_origin(bsdf, surface, leave, s.direction);
     if !(s.pdf > 0.0) || o.w == 0.0 || all(s.radiance == vec3<f32>(0.0)) {
-        return vec3<f32>(0.0);
+        return;
     }
     let wi_local = frame_to_local(frame, s.direction);
     let f = hit_eval(bsdf, wo, wi_local);
     if all(f == vec3<f32>(0.0)) {
-        return vec3<f32>(0.0);
+        return;
     }
     let w = light_weight(s.pdf, hit_pdf(bsdf, wo, wi_local));
     let contribution = throughput * f * s.radiance * (w / s.pdf);
     if !(film_is_finite(contribution) && any(contribution != vec3<f32>(0.0))) {
-        return vec3<f32>(0.0);
+        return;
     }
-    return contribution * shadow(bsdf, o.xyz, s.direction, bitcast<f32>(0x7f800000u));
+    defer_shadow(bsdf, o.xyz, s.direction, bitcast<f32>(0x7f800000u), contribution);
 }
 // #endif
 // #endif
@@ -557,9 +587,57 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
     var carried_uc = -1.0;
     // #endif
     let inf = bitcast<f32>(0x7f800000u);
+    // The loop traces one ray per iteration: the path's next ray, or one of the shadow rays
+    // queued at its last scattering event (`defer_shadow`). A path that goes on takes
+    // SHADOW_SLOTS shadow iterations after each event, empty ones for light samples it did not
+    // take, so that the lanes of a warp stay in step (the same kind of work in each iteration);
+    // one that ends takes those of its queued rays. `shadow_next`: the next shadow iteration.
+    var shadow_runs = 0u;
+    var shadow_next = 0u;
+    var alive = true;
     loop {
-        rays_traced += 1u;
-        let hit = trace_closest(origin, direction, inf);
+        var query_origin = origin;
+        var query_dir = direction;
+        var query_t = inf;
+        let shadowing = shadow_next < shadow_runs;
+        let queued = shadow_next < shadow_queued;
+        if shadowing {
+            if queued {
+                let q = shadow_rays[shadow_next];
+                query_origin = q.origin;
+                query_dir = q.dir;
+                query_t = q.t_max;
+                // #if THIN_WALLED
+                shadow_carried = q.value;
+                shadow_direction = q.dir;
+                shadow_query = true;
+                // #endif
+            } else {
+                // An empty iteration: t_max 0 traces nothing.
+                query_t = 0.0;
+            }
+        } else if !alive {
+            break;
+        }
+        rays_traced += select(0u, 1u, query_t > 0.0);
+        let hit = trace_query(query_origin, query_dir, query_t, shadowing);
+        if shadowing {
+            if queued {
+                var carried = shadow_rays[shadow_next].value;
+                // #if THIN_WALLED
+                shadow_query = false;
+                carried = shadow_carried;
+                // #endif
+                if !hit.hit {
+                    radiance += carried;
+                }
+            }
+            shadow_next += 1u;
+            continue;
+        }
+        shadow_queued = 0u;
+        shadow_next = 0u;
+        shadow_runs = 0u;
         if !hit.hit {
             // #if TRANSMISSION
             if any(medium != vec3<f32>(0.0)) {
@@ -675,7 +753,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
                 if o.w != 0.0 {
                     let f = hit_eval(bsdf, wo, frame_to_local(frame, to_sun));
                     if any(f != vec3<f32>(0.0)) {
-                        radiance += throughput * f * params.sun_irradiance.xyz * shadow(bsdf, o.xyz, to_sun, inf);
+                        defer_shadow(bsdf, o.xyz, to_sun, inf, throughput * f * params.sun_irradiance.xyz);
                     }
                 }
             }
@@ -691,13 +769,13 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // Emitters and the sun disc: one light sample each (next-event estimation).
             if (params.flags & FRAME_NO_LIGHT_SAMPLES) == 0u {
                 // #if HAS_EMITTERS
-                radiance += sample_emitter(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+                sample_emitter(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
                 // #endif
                 // #if HAS_SUN_DISC
-                radiance += sample_sun_disc(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+                sample_sun_disc(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
                 // #endif
                 // #if SAMPLES_ENVIRONMENT
-                radiance += sample_environment(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
+                sample_environment(pixel, index, event, throughput, bsdf, wo, frame, surface, leave);
                 // #endif
             }
             // #endif
@@ -721,7 +799,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             s = ScatterSample(o.wi, o.pdf, o.weight, 0.0, false, false, o.lobe != BSDF_LOBE_NONE);
         }
         if !s.valid {
-            break;
+            alive = false;
+            shadow_runs = shadow_queued;
+            continue;
         }
         let wi = frame_to_world(frame, s.wi);
         // Reflections leave on the side the ray came from, transmissions on the other (at a
@@ -729,7 +809,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         let side = dot(wi, surface.geometric);
         let crosses = select(s.transmitted, side < 0.0, volume);
         if !select(side > 0.0, side < 0.0, crosses) {
-            break;
+            alive = false;
+            shadow_runs = shadow_queued;
+            continue;
         }
         if s.delta && s.transmitted && straight {
             // Straight through a sheet or an invisible interface: no event, the MIS state of the
@@ -739,7 +821,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             }
             passes += 1u;
             if passes > MAX_SHEET_PASSES {
-                break;
+                alive = false;
+                shadow_runs = shadow_queued;
+                continue;
             }
             throughput *= s.weight;
             carried_uc = s.rest;
@@ -752,7 +836,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             continue;
         }
         if last {
-            break;
+            alive = false;
+            shadow_runs = shadow_queued;
+            continue;
         }
         throughput *= s.weight;
         // #if SAMPLES_LIGHTS
@@ -768,12 +854,16 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         uc = sampler_value(params.sampler, pixel, index, dim + BOUNCE_BSDF_LOBE);
         let s = bsdf_sample(bsdf.m, wo, uc, u);
         if s.lobe == BSDF_LOBE_NONE {
-            break;
+            alive = false;
+            shadow_runs = shadow_queued;
+            continue;
         }
         let wi = frame_to_world(frame, s.wi);
         if !(dot(wi, surface.geometric) > 0.0) {
             // Above the shading normal's horizon but below the surface: the path ends.
-            break;
+            alive = false;
+            shadow_runs = shadow_queued;
+            continue;
         }
         throughput *= s.weight;
         // #if SAMPLES_LIGHTS
@@ -784,7 +874,9 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         if (params.flags & FRAME_RUSSIAN_ROULETTE) != 0u && event >= 3u {
             let survive = russian_roulette_survival(throughput);
             if !(sampler_value(params.sampler, pixel, index, dim + BOUNCE_RUSSIAN_ROULETTE) < survive) {
-                break;
+                alive = false;
+                shadow_runs = shadow_queued;
+                continue;
             }
             throughput /= survive;
         }
@@ -805,6 +897,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         origin = leave;
         // #endif
         direction = wi;
+        shadow_runs = SHADOW_SLOTS;
     }
     return radiance;
 }

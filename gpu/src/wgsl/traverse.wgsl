@@ -393,16 +393,17 @@ fn trv_valid_ray(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
     return trv_is_finite3(o) && trv_is_finite3(d) && any(d != vec3<f32>(0.0)) && t_max > 0.0;
 }
 
-/// The closest triangle hit by `origin + t · dir`, 0 < t < t_max, that `hit_filter` accepts:
-/// twin of `furnace_accel::Bvh::closest_hit_masked`. `dir` need not be normalised; a
-/// non-finite origin or direction, a zero direction or t_max ≤ 0 hit nothing.
-fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> Hit {
+/// One query of either kind, for a caller that traces both through one call site (the driver
+/// inlines a copy of the traversal per call site): `any` false is [`trace_closest`]; `any`
+/// true is [`trace_any`], the result's `hit` telling whether the ray is blocked (its t, u, v
+/// and triangle are then those of the first blocking hit found, not the closest).
+fn trace_query(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any: bool) -> Hit {
     var miss = Hit(t_max, 0.0, 0.0, 0xffffffffu, false);
     if !trv_valid_ray(origin, dir, t_max) {
         return miss;
     }
     let tm = min(t_max, TRV_F32_MAX);
-    var st = TrvState(TrvTriHit(-1.0, 0.0, 0.0), 0xffffffffu, tm, min(tm * TRV_CULL_SLACK, TRV_F32_MAX), false, false);
+    var st = TrvState(TrvTriHit(-1.0, 0.0, 0.0), 0xffffffffu, tm, min(tm * TRV_CULL_SLACK, TRV_F32_MAX), any, false);
     trv_traverse(&st, origin, dir);
     if st.best.t > 0.0 {
         return Hit(st.best.t, st.best.u, st.best.v, st.best_id, true);
@@ -410,14 +411,15 @@ fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> Hit {
     return miss;
 }
 
+/// The closest triangle hit by `origin + t · dir`, 0 < t < t_max, that `hit_filter` accepts:
+/// twin of `furnace_accel::Bvh::closest_hit_masked`. `dir` need not be normalised; a
+/// non-finite origin or direction, a zero direction or t_max ≤ 0 hit nothing.
+fn trace_closest(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> Hit {
+    return trace_query(origin, dir, t_max, false);
+}
+
 /// Whether a triangle that `hit_filter` accepts intersects `origin + t · dir` at 0 < t < t_max
 /// (a shadow ray); stops at the first such hit. Twin of `furnace_accel::Bvh::occluded_masked`.
 fn trace_any(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> bool {
-    if !trv_valid_ray(origin, dir, t_max) {
-        return false;
-    }
-    let tm = min(t_max, TRV_F32_MAX);
-    var st = TrvState(TrvTriHit(-1.0, 0.0, 0.0), 0xffffffffu, tm, min(tm * TRV_CULL_SLACK, TRV_F32_MAX), true, false);
-    trv_traverse(&st, origin, dir);
-    return st.done;
+    return trace_query(origin, dir, t_max, true).hit;
 }
