@@ -580,21 +580,23 @@ impl SceneFeatures {
         }
     }
 
-    /// The `HAS_POINT_LIGHTS` and `SHADOW_SLOTS` constants, as WGSL.
+    /// The `HAS_POINT_LIGHTS`, `SHADOW_KINDS` and `SHADOW_SLOTS` constants, as WGSL.
     pub fn wgsl(self) -> String {
+        let kinds = self.shadow_kinds();
         format!(
-            "const HAS_POINT_LIGHTS: bool = {};\nconst SHADOW_SLOTS: u32 = {}u;\n",
+            "const HAS_POINT_LIGHTS: bool = {};\nconst SHADOW_KINDS: u32 = {kinds}u;\nconst SHADOW_SLOTS: u32 = {}u;\n",
             self.point_lights,
-            self.shadow_slots()
+            kinds.max(1)
         )
     }
 
-    /// The shadow rays a scattering event queues at most (integrator.wgsl's `defer_shadow`):
-    /// one per light kind sampled there besides the point lights (the delta sun, the emitters,
-    /// the sun disc, the environment); at least 1, the size of a WGSL array.
-    pub fn shadow_slots(self) -> u32 {
+    /// The shadow rays a scattering event queues at most (integrator.wgsl's `defer_shadow`;
+    /// `SHADOW_SLOTS`, the size of a WGSL array, is this but at least 1): one per light kind
+    /// sampled there besides the point lights (the delta sun, the emitters, the sun disc, the
+    /// environment).
+    pub fn shadow_kinds(self) -> u32 {
         let kinds = [self.delta_sun, self.emitters, self.sun_disc, self.enabled("SAMPLES_ENVIRONMENT")];
-        kinds.iter().filter(|&&k| k).count().max(1) as u32
+        kinds.iter().filter(|&&k| k).count() as u32
     }
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:

@@ -181,11 +181,10 @@ fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32
 // The shadow rays of the light samples taken at a scattering event (the delta sun, an emitter,
 // the sun disc, the environment), traced later by the path loop itself, before the path's
 // next ray and through the same `trace_query` call: the driver inlines the traversal once
-// instead of once more for the shadow rays, and lanes of a warp tracing either kind of ray
-// traverse together. `value` is what the light adds if the ray is not blocked (throughput,
-// BSDF, light and MIS weight, the vertex's volume absorption). SHADOW_SLOTS (generated) is the
-// number of light kinds the scene samples, at least 1. Point lights, one ray per light, keep
-// `shadow`.
+// instead of once more for the shadow rays. `value` is what the light adds if the ray is not
+// blocked (throughput, BSDF, light and MIS weight, the vertex's volume absorption).
+// SHADOW_KINDS (generated) is the number of light kinds the scene samples at an event,
+// SHADOW_SLOTS the same but at least 1. Point lights, one ray per light, keep `shadow`.
 struct ShadowRay {
     origin: vec3<f32>,
     t_max: f32,
@@ -553,15 +552,17 @@ var<private> aov_albedo_depth: vec4<f32>;
 var<private> aov_normal_hit: vec4<f32>;
 // #endif
 
-// Renderer::trace: radiance arriving at `origin` from −`direction`.
-fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f32>) -> vec3<f32> {
-    // #if AOVS
-    // AovSample::MISS: albedo 1, no normal, no depth.
-    aov_albedo_depth = vec4<f32>(1.0, 1.0, 1.0, 0.0);
-    aov_normal_hit = vec4<f32>(0.0);
-    // #endif
-    var origin = origin_in;
-    var direction = direction_in;
+// Renderer::trace for `count` samples of `pixel` at (x, y) from sample `first` on, each a camera
+// ray jittered inside the pixel: with `to_film`, each sample is added to the film as it ends
+// (in index order); the last sample's value is returned. The samples run in one loop: a lane
+// whose path ends starts its next sample in the next iteration instead of waiting for the
+// warp's other paths to end (path regeneration), and no two copies of the path's code are
+// composed.
+fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bool) -> vec3<f32> {
+    var index = first;
+    var started = 0u;
+    var origin = vec3<f32>(0.0);
+    var direction = vec3<f32>(0.0);
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
     var event = 0u;
@@ -581,20 +582,22 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
     // The absorption coefficient of the volume the ray travels in (0: air), and the surface
     // point the ray left (its offset origin would shorten the path by the offset).
     var medium = vec3<f32>(0.0);
-    var left_from = origin_in;
+    var left_from = vec3<f32>(0.0);
     // Passes through sheets since the last event, and the lobe number they left (< 0: none).
     var passes = 0u;
     var carried_uc = -1.0;
     // #endif
     let inf = bitcast<f32>(0x7f800000u);
-    // The loop traces one ray per iteration: the path's next ray, or one of the shadow rays
-    // queued at its last scattering event (`defer_shadow`). A path that goes on takes
-    // SHADOW_SLOTS shadow iterations after each event, empty ones for light samples it did not
-    // take, so that the lanes of a warp stay in step (the same kind of work in each iteration);
-    // one that ends takes those of its queued rays. `shadow_next`: the next shadow iteration.
+    // The loop traces one ray per iteration: a path's next ray, or one of the shadow rays
+    // queued at its last scattering event (`defer_shadow`). Every path ray is followed by
+    // SHADOW_KINDS shadow iterations, empty ones for light samples not taken (none taken when
+    // the path ended there), so that the lanes of a warp stay in step, each iteration running
+    // the same kind of work in all of them, also across the start of a lane's next sample.
+    // `shadow_next`: the next shadow iteration.
     var shadow_runs = 0u;
     var shadow_next = 0u;
-    var alive = true;
+    // Whether the current sample's path goes on (false before the first sample).
+    var alive = false;
     loop {
         var query_origin = origin;
         var query_dir = direction;
@@ -617,7 +620,44 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
                 query_t = 0.0;
             }
         } else if !alive {
-            break;
+            // The sample ended (or none started yet): add it, start the next one.
+            if started > 0u && to_film {
+                film_add_sample(pixel, clamp_sample(radiance));
+            }
+            if started == count {
+                break;
+            }
+            index = first + started;
+            started += 1u;
+            let u = sampler_value_2d(params.sampler, pixel, index, DIM_PIXEL);
+            let ray = camera_ray(vec2<f32>(f32(x) + u.x, f32(y) + u.y));
+            origin = ray.origin;
+            direction = ray.direction;
+            radiance = vec3<f32>(0.0);
+            throughput = vec3<f32>(1.0);
+            event = 0u;
+            // #if SAMPLES_LIGHTS
+            ray_pdf = -1.0;
+            // #endif
+            // #if HAS_EMITTERS
+            normal = vec3<f32>(0.0);
+            // #endif
+            // #if TRANSMISSION
+            mis_origin = vec3<f32>(0.0);
+            mis_moved = false;
+            medium = vec3<f32>(0.0);
+            left_from = ray.origin;
+            passes = 0u;
+            carried_uc = -1.0;
+            // #endif
+            // #if AOVS
+            // AovSample::MISS: albedo 1, no normal, no depth.
+            aov_albedo_depth = vec4<f32>(1.0, 1.0, 1.0, 0.0);
+            aov_normal_hit = vec4<f32>(0.0);
+            // #endif
+            alive = true;
+            query_origin = origin;
+            query_dir = direction;
         }
         rays_traced += select(0u, 1u, query_t > 0.0);
         let hit = trace_query(query_origin, query_dir, query_t, shadowing);
@@ -637,7 +677,7 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         }
         shadow_queued = 0u;
         shadow_next = 0u;
-        shadow_runs = 0u;
+        shadow_runs = SHADOW_KINDS;
         if !hit.hit {
             // #if TRANSMISSION
             if any(medium != vec3<f32>(0.0)) {
@@ -664,7 +704,8 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             // #if HAS_SUN_DISC
             radiance += throughput * sun_disc_seen(direction, ray_pdf);
             // #endif
-            break;
+            alive = false;
+            continue;
         }
         let material = scene_triangle_material(hit.triangle);
         var uv = vec2<f32>(0.0);
@@ -685,7 +726,8 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         // #endif
         if surface.valid == 0u {
             // The back of a single-sided surface: black.
-            break;
+            alive = false;
+            continue;
         }
         // #if TRANSMISSION
         if any(medium != vec3<f32>(0.0)) {
@@ -716,7 +758,8 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         let last = event == params.bounces;
         // #if !TRANSMISSION
         if last {
-            break;
+            alive = false;
+            continue;
         }
         // #endif
         var bsdf = hit_bsdf(ms, material, uv);
@@ -726,7 +769,8 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         let volume = (bsdf.kind & SCENE_VOLUME) != 0u;
         let straight = bsdf.kind != 0u && dielectric_is_straight(bsdf.t.d);
         if last && !straight {
-            break;
+            alive = false;
+            continue;
         }
         // A solid's interface is shaded in its outward frame (wo may be inside).
         if volume && surface.back_face != 0u {
@@ -800,7 +844,6 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         }
         if !s.valid {
             alive = false;
-            shadow_runs = shadow_queued;
             continue;
         }
         let wi = frame_to_world(frame, s.wi);
@@ -810,7 +853,6 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         let crosses = select(s.transmitted, side < 0.0, volume);
         if !select(side > 0.0, side < 0.0, crosses) {
             alive = false;
-            shadow_runs = shadow_queued;
             continue;
         }
         if s.delta && s.transmitted && straight {
@@ -822,7 +864,6 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             passes += 1u;
             if passes > MAX_SHEET_PASSES {
                 alive = false;
-                shadow_runs = shadow_queued;
                 continue;
             }
             throughput *= s.weight;
@@ -837,7 +878,6 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         }
         if last {
             alive = false;
-            shadow_runs = shadow_queued;
             continue;
         }
         throughput *= s.weight;
@@ -855,14 +895,12 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         let s = bsdf_sample(bsdf.m, wo, uc, u);
         if s.lobe == BSDF_LOBE_NONE {
             alive = false;
-            shadow_runs = shadow_queued;
             continue;
         }
         let wi = frame_to_world(frame, s.wi);
         if !(dot(wi, surface.geometric) > 0.0) {
             // Above the shading normal's horizon but below the surface: the path ends.
             alive = false;
-            shadow_runs = shadow_queued;
             continue;
         }
         throughput *= s.weight;
@@ -875,7 +913,6 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
             let survive = russian_roulette_survival(throughput);
             if !(sampler_value(params.sampler, pixel, index, dim + BOUNCE_RUSSIAN_ROULETTE) < survive) {
                 alive = false;
-                shadow_runs = shadow_queued;
                 continue;
             }
             throughput /= survive;
@@ -897,16 +934,8 @@ fn trace_path(pixel: u32, index: u32, origin_in: vec3<f32>, direction_in: vec3<f
         origin = leave;
         // #endif
         direction = wi;
-        shadow_runs = SHADOW_SLOTS;
     }
     return radiance;
-}
-
-// One sample of `pixel` at (x, y): a camera ray jittered inside the pixel, traced.
-fn pixel_sample(x: u32, y: u32, pixel: u32, index: u32) -> vec3<f32> {
-    let u = sampler_value_2d(params.sampler, pixel, index, DIM_PIXEL);
-    let ray = camera_ray(vec2<f32>(f32(x) + u.x, f32(y) + u.y));
-    return trace_path(pixel, index, ray.origin, ray.direction);
 }
 
 // Adds `v` to the 64-bit counter in words `k`, `k + 1` (the carry goes to word k + 1).
@@ -979,17 +1008,22 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
         inside = film_converged[pixel] == 0u;
     }
     // #endif
-    if sg == 1u {
-        if inside {
-            for (var k = 0u; k < params.samples; k++) {
-                film_add_sample(pixel, clamp_sample(pixel_sample(x, y, pixel, params.first_sample + k)));
-            }
-        }
-    } else {
-        var value = vec4<f32>(0.0);
-        if inside && sub < params.samples {
-            value = vec4<f32>(pixel_sample(x, y, pixel, params.first_sample + sub), 0.0);
-        }
+    // One call of the path code (the driver inlines each call site): with one invocation per
+    // pixel, all of the pixel's samples, added to the film as they end; with several, sample
+    // `sub` alone, added below.
+    let solo = sg == 1u;
+    var first = params.first_sample;
+    var count = params.samples;
+    if !solo {
+        first += sub;
+        count = select(0u, 1u, sub < params.samples);
+    }
+    if !inside {
+        count = 0u;
+    }
+    let sample_value = trace_samples(x, y, pixel, first, count, solo);
+    if !solo {
+        let value = vec4<f32>(sample_value, 0.0);
         group_values[l] = value;
         // #if AOVS
         group_aov_albedo_depth[l] = aov_albedo_depth;
