@@ -4,11 +4,13 @@
 # (`furnace bench --spp` the same total, random sampler like Mitsuba's independent one) with the
 # defaults, with the profiling overrides in BEFORE (e.g. BEFORE=FURNACE_TRV_STACK=16: the shader
 # before a change), at each workgroup size in GROUP_SIZES (FURNACE_GROUP_SIZE; none by default),
-# and for the emitter scenes furnace with Mitsuba's light sampling (power-proportional choice,
-# area sampling). Then the film with BEFORE and at each size against the default's.
+# with the binary .dev/furnace-old.xz when it travelled (the code before a change), and for the
+# emitter scenes furnace with Mitsuba's light sampling (power-proportional choice, area
+# sampling). Then the film with BEFORE and at each size against the default's.
 # Needs Mitsuba unpacked to /root/site (a first command carrying .mi), .gl/,
 # .dev/furnace-new.xz, .dev/sc/{cbox,interior_19880}.*, .dev/oracle/.
 xz -dc .dev/furnace-new.xz > /tmp/fnew; chmod +x /tmp/fnew
+if [ -f .dev/furnace-old.xz ]; then xz -dc .dev/furnace-old.xz > /tmp/fold; chmod +x /tmp/fold; fi
 source docs/device/speed-env.sh
 echo "== Mitsuba and furnace at equal samples, random sampler"
 for v in "${equal[@]}"; do
@@ -17,8 +19,12 @@ for v in "${equal[@]}"; do
   args="--scene $path --width ${size%x*} --height ${size#*x} --bounces $b --sampler random --spp $((spp*passes))"
   bench "furnace $s $size" fnew $args
   if [ -n "$BEFORE" ]; then (export $BEFORE; bench "furnace $s $size before ($BEFORE)" fnew $args); fi
+  if [ -x /tmp/fold ]; then bench "furnace $s $size before (furnace-old)" fold $args; fi
   for g in $GROUP_SIZES; do FURNACE_GROUP_SIZE=$g bench "furnace $s $size group $g" fnew $args; done
-  case $s in cbox_area|cbox_many_lights) bench "furnace $s $size power+area" fnew $args --light-selection power --triangle-sampling area;; esac
+  case $s in cbox_area|cbox_many_lights)
+    bench "furnace $s $size power+area" fnew $args --light-selection power --triangle-sampling area
+    if [ -x /tmp/fold ]; then bench "furnace $s $size power+area before (furnace-old)" fold $args --light-selection power --triangle-sampling area; fi;;
+  esac
 done
 echo "== the film with BEFORE and at each workgroup size against the default's"
 for sc in "" /tmp/sc/cbox_area.gltf $I; do

@@ -178,13 +178,13 @@ fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32
     // #endif
 }
 
-// The shadow rays of the light samples taken at a scattering event (the delta sun, an emitter,
-// the sun disc, the environment), traced later by the path loop itself, before the path's
-// next ray and through the same `trace_query` call: the driver inlines the traversal once
-// instead of once more for the shadow rays. `value` is what the light adds if the ray is not
-// blocked (throughput, BSDF, light and MIS weight, the vertex's volume absorption).
-// SHADOW_KINDS (generated) is the number of light kinds the scene samples at an event,
-// SHADOW_SLOTS the same but at least 1. Point lights, one ray per light, keep `shadow`.
+// The shadow rays of the light samples taken at a scattering event (one per light kind the
+// scene samples, furnace_gpu's SceneFeatures::shadow_kinds), traced later by the path loop
+// itself, before the path's next ray and through the same `trace_query` call: the driver
+// inlines the traversal once instead of once more for the shadow rays. `value` is what the
+// light adds if the ray is not blocked (throughput, BSDF, light and MIS weight, the vertex's
+// volume absorption). SHADOW_KINDS (generated) is that number of kinds, SHADOW_SLOTS the same
+// but at least 1. Point lights, one ray per light, keep `shadow`.
 struct ShadowRay {
     origin: vec3<f32>,
     t_max: f32,
