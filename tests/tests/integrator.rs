@@ -205,6 +205,48 @@ fn absent_light_features_compose_no_code() {
     }
 }
 
+/// The driver inlines a copy of the traversal at each call site and of the path code at each
+/// call of it: the integrator calls the path code once and traces every ray of a path and of its
+/// sampled lights through one `trace_query` call (point lights, a shadow ray per light, keep a
+/// second one, `shadow`). Measured on the H200 (BENCHMARKS.md, "One trace call per iteration"), two
+/// copies cost 10–14 % on the box and the emitter scenes.
+#[test]
+fn one_traversal_and_one_path_code_per_shader() {
+    let calls = |source: &str, call: &str| source.matches(call).count();
+    let every = SceneFeatures {
+        emitters: true,
+        delta_sun: true,
+        sun_disc: true,
+        environment: true,
+        env_sampling: true,
+        transmission: true,
+        thin_walled: true,
+        aovs: true,
+        adaptive: true,
+        ..Default::default()
+    };
+    for (name, features) in [
+        ("bare", SceneFeatures::default()),
+        ("delta sun", SceneFeatures { delta_sun: true, ..Default::default() }),
+        ("emitters, light BVH", SceneFeatures { emitters: true, light_bvh: true, ..Default::default() }),
+        ("every sampled light, glass, AOVs", every),
+    ] {
+        let s = shader_source(FilmPrecision::F64, features);
+        // traverse.wgsl's own wrappers call trace_query twice; the integrator once more.
+        assert_eq!(calls(&s, "trace_query("), 4, "{name}: trace_query's definition and calls");
+        assert_eq!(calls(&s, "trace_query(query_origin"), 1, "{name}: the integrator's one trace call");
+        // trace_closest: defined, never called; trace_any: defined and called by `shadow` alone,
+        // which runs only for point lights (behind the HAS_POINT_LIGHTS constant).
+        assert_eq!(calls(&s, "trace_closest("), 1, "{name}: trace_closest called");
+        assert_eq!(calls(&s, "trace_any("), 2, "{name}: trace_any called outside `shadow`");
+        assert_eq!(calls(&s, "* shadow(bsdf"), 1, "{name}: `shadow` called outside the point lights' loop");
+        assert_eq!(calls(&s, "trace_samples("), 2, "{name}: the path code's definition and one call");
+        let kinds = features.shadow_kinds();
+        assert!(s.contains(&format!("const SHADOW_KINDS: u32 = {kinds}u;")), "{name}: SHADOW_KINDS");
+    }
+    assert_eq!(every.shadow_kinds(), 4, "delta sun, emitters, sun disc, environment");
+}
+
 #[test]
 fn frame_params_layout_matches_wgsl() {
     furnace_tests::layout::assert_gpu_struct::<FrameParams>(&shader_source(
