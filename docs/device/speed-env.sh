@@ -6,7 +6,8 @@
 #   mi ARGS...              the oracle's render_ref.py (ORACLE_* folders under /tmp);
 #   mitsuba_at S WxH SPP P  Mitsuba's Msamples/s (run twice, the second quoted); `equal`: the
 #                           configurations furnace is compared at equal samples;
-#   scenes                  the seven benchmark configurations, "name|furnace arguments".
+#   scenes                  the benchmark configurations, "name|furnace arguments": the seven
+#                           of the speed sections, then the point-light and sun-disc boxes.
 for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 if [ ! -d /root/site/mitsuba ] && [ -f .mi/mitsuba-cuda.tar.xz ]; then
@@ -36,11 +37,14 @@ mitsuba_at() {
 # The equal-samples configurations against Mitsuba, "scene|WxH|furnace scene|spp|passes|bounces".
 equal=("cbox|256x256|cbox|64|4|4" "cbox|1920x1080|cbox|64|4|4" "cbox_area|1920x1080|/tmp/sc/cbox_area.gltf|64|4|4"
        "cbox_many_lights|1920x1080|/tmp/sc/cbox_many_lights.gltf|64|4|4"
-       "envmap_spheres|1920x1080|/tmp/sc/envmap_spheres.gltf|64|4|4" "interior_19880|1920x1440|$I|32|4|6")
+       "envmap_spheres|1920x1080|/tmp/sc/envmap_spheres.gltf|64|4|4" "interior_19880|1920x1440|$I|32|4|6"
+       "cbox_point|1920x1080|/tmp/sc/cbox_point.gltf|64|4|4" "cbox_sun_disc|1920x1080|/tmp/sc/cbox_sun_disc.gltf|64|4|4")
 scenes=("cbox256|--scene cbox --width 256 --height 256"
         "cbox1080|--scene cbox --width 1920 --height 1080"
         "area1080|--scene /tmp/sc/cbox_area.gltf --width 1920 --height 1080"
         "many1080|--scene /tmp/sc/cbox_many_lights.gltf --width 1920 --height 1080"
         "env1080|--scene /tmp/sc/envmap_spheres.gltf --width 1920 --height 1080"
         "int1080b4|--scene $I --width 1920 --height 1080"
-        "int1440b6|--scene $I --width 1920 --height 1440 --bounces 6")
+        "int1440b6|--scene $I --width 1920 --height 1440 --bounces 6"
+        "point1080|--scene /tmp/sc/cbox_point.gltf --width 1920 --height 1080"
+        "disc1080|--scene /tmp/sc/cbox_sun_disc.gltf --width 1920 --height 1080")
