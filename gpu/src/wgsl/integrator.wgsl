@@ -150,16 +150,21 @@ fn absorption(sigma: vec3<f32>, t: f32) -> vec3<f32> {
 var<private> shadow_direction: vec3<f32>;
 // #endif
 
+// The absorption of the volume the vertex is in over a shadow ray's t_max (1 in air).
+fn vertex_absorption(b: HitBsdf, t_max: f32) -> vec3<f32> {
+    // #if TRANSMISSION
+    if any(b.medium != vec3<f32>(0.0)) {
+        return absorption(b.medium, t_max);
+    }
+    // #endif
+    return vec3<f32>(1.0);
+}
+
 // CpuRenderer::transmittance: what a shadow ray from `origin` along `dir` carries over t_max
 // (0 where blocked; the sheets' T′ and the vertex's volume absorption otherwise).
 fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32> {
     rays_traced += 1u;
-    var carried = vec3<f32>(1.0);
-    // #if TRANSMISSION
-    if any(b.medium != vec3<f32>(0.0)) {
-        carried = absorption(b.medium, t_max);
-    }
-    // #endif
+    let carried = vertex_absorption(b, t_max);
     // #if THIN_WALLED
     shadow_carried = carried;
     shadow_direction = dir;
@@ -197,13 +202,7 @@ var<private> shadow_queued: u32 = 0u;
 
 // Queues a shadow ray from `origin` along `dir` over t_max carrying `value` if unblocked.
 fn defer_shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32, value: vec3<f32>) {
-    var carried = value;
-    // #if TRANSMISSION
-    if any(b.medium != vec3<f32>(0.0)) {
-        carried *= absorption(b.medium, t_max);
-    }
-    // #endif
-    shadow_rays[shadow_queued] = ShadowRay(origin, t_max, dir, carried);
+    shadow_rays[shadow_queued] = ShadowRay(origin, t_max, dir, value * vertex_absorption(b, t_max));
     shadow_queued += 1u;
 }
 
@@ -561,31 +560,33 @@ var<private> aov_normal_hit: vec4<f32>;
 fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bool) -> vec3<f32> {
     var index = first;
     var started = 0u;
-    var origin = vec3<f32>(0.0);
-    var direction = vec3<f32>(0.0);
-    var radiance = vec3<f32>(0.0);
-    var throughput = vec3<f32>(1.0);
-    var event = 0u;
+    // The path's state, set where each sample starts (zero until then: an invocation with no
+    // samples returns a zero radiance).
+    var origin: vec3<f32>;
+    var direction: vec3<f32>;
+    var radiance: vec3<f32>;
+    var throughput: vec3<f32>;
+    var event: u32;
     // #if SAMPLES_LIGHTS
     // The pdf of the BSDF sample that made the ray (−1: the camera's or a delta event's), for
     // MIS weights.
-    var ray_pdf = -1.0;
+    var ray_pdf: f32;
     // #endif
     // #if HAS_EMITTERS
     // The receiving side (geometric normal) of the vertex the ray left, for the light BVH.
-    var normal = vec3<f32>(0.0);
+    var normal: vec3<f32>;
     // #endif
     // #if TRANSMISSION
     // Where that vertex took its light samples (when the ray has since crossed a surface).
-    var mis_origin = vec3<f32>(0.0);
-    var mis_moved = false;
+    var mis_origin: vec3<f32>;
+    var mis_moved: bool;
     // The absorption coefficient of the volume the ray travels in (0: air), and the surface
     // point the ray left (its offset origin would shorten the path by the offset).
-    var medium = vec3<f32>(0.0);
-    var left_from = vec3<f32>(0.0);
+    var medium: vec3<f32>;
+    var left_from: vec3<f32>;
     // Passes through sheets since the last event, and the lobe number they left (< 0: none).
-    var passes = 0u;
-    var carried_uc = -1.0;
+    var passes: u32;
+    var carried_uc: f32;
     // #endif
     let inf = bitcast<f32>(0x7f800000u);
     // The loop traces one ray per iteration: a path's next ray, or one of the shadow rays
