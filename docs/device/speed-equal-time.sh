@@ -8,7 +8,8 @@ xz -dc .dev/furnace-new.xz > /tmp/fn; chmod +x /tmp/fn
 source docs/device/speed-env.sh
 for v in "cbox|$R/cbox/cbox_ref_bounces4.exr|" "cbox_area|$R/lights/cbox_area_ref_bounces4.exr|--light-selection power,bvh" \
          "cbox_many_lights|$R/lights/cbox_many_lights_ref_bounces4.exr|--light-selection power,bvh" \
-         "envmap_spheres|$R/envmap/envmap_spheres_ref_bounces4.exr|"; do
+         "envmap_spheres|$R/envmap/envmap_spheres_ref_bounces4.exr|" \
+         "cbox_point|$R/lights/cbox_point_ref_bounces4.exr|" "cbox_sun_disc|$R/lights/cbox_sun_disc_ref_bounces4.exr|"; do
   IFS='|' read -r s ref opts <<< "$v"
   # SCENES="a b": only those.
   if [ -n "$SCENES" ] && [[ " $SCENES " != *" $s "* ]]; then continue; fi

@@ -6,16 +6,15 @@
 //! ```sh
 //! cargo run --release -p furnace-gpu --features pipeline-stats --example pipeline_stats -- \
 //!     [SCENE.gltf|cbox|interior:N] [--checks checked|noloop|unchecked] [--aovs] [--f32-film] \
-//!     [--spirv OUT.spv]
+//!     [--counters] [--spirv OUT.spv]
 //! ```
 //!
 //! The SPIR-V is naga's, written with the options wgpu 30's Vulkan backend uses on a device with
 //! `robustBufferAccess2` (buffer accesses left to the driver) and the runtime checks of
-//! [`ShaderChecks`] (default: what a hardware adapter gets for the scene,
-//! `ShaderChecks::for_adapter(false, features)`: `noloop` for kernels that sample no lights,
-//! else `checked` — local arrays' indices clamped, loops bounded by a counter, integer division
-//! guarded). The profiling overrides `FURNACE_TRV_STACK`, `FURNACE_NO_TRACE_COUNTERS`,
-//! `FURNACE_GROUP_SIZE` and `FURNACE_SHADER_EDIT` apply as when furnace builds the pipeline ([`ProfilingOverrides`]); the
+//! [`ShaderChecks`] (default: what every adapter gets, `noloop`; `checked` also bounds loops by a
+//! counter). `--counters` compiles the counting kernel (`GpuRenderer::set_count_rays`) instead of
+//! the rendering one. The profiling overrides `FURNACE_TRV_STACK`, `FURNACE_GROUP_SIZE` and
+//! `FURNACE_SHADER_EDIT` apply as when furnace builds the pipeline ([`ProfilingOverrides`]); the
 //! workgroup size is otherwise what a hardware adapter with NVIDIA's limits gets
 //! ([`furnace_gpu::integrator::default_group_size`]), and the traversal stack the scene's tree
 //! gets ([`furnace_gpu::traverse::stack_size_for`]). The pipeline is created on the first
@@ -39,9 +38,11 @@ use furnace_scene::Scene;
 
 struct Options {
     scene: String,
-    /// None: what a hardware adapter gets for the scene.
+    /// None: the default (`ShaderChecks::default`).
     checks: Option<ShaderChecks>,
     aovs: bool,
+    /// The counting kernel.
+    counters: bool,
     precision: FilmPrecision,
     spirv: Option<String>,
 }
@@ -51,6 +52,7 @@ fn parse() -> Result<Options, String> {
         scene: "cbox".into(),
         checks: None,
         aovs: false,
+        counters: false,
         precision: FilmPrecision::F64,
         spirv: None,
     };
@@ -64,6 +66,7 @@ fn parse() -> Result<Options, String> {
                 other => return Err(format!("--checks takes checked, noloop or unchecked, not {other:?}")),
             },
             "--aovs" => o.aovs = true,
+            "--counters" => o.counters = true,
             "--f32-film" => o.precision = FilmPrecision::F32Pass,
             "--spirv" => o.spirv = Some(args.next().ok_or("--spirv needs a path")?),
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
@@ -112,7 +115,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let o = parse()?;
     let scene = load(&o.scene)?;
     let settings = RenderSettings { aovs: o.aovs, ..Default::default() };
-    let features = SceneFeatures::of(&scene, &settings);
+    let features = SceneFeatures { trace_counters: o.counters, ..SceneFeatures::of(&scene, &settings) };
     // The workgroup size furnace would choose on a hardware adapter with NVIDIA's limits (1024
     // invocations, 48 KiB of workgroup memory), unless FURNACE_GROUP_SIZE says otherwise.
     let overrides = ProfilingOverrides::from_env()?;
@@ -121,7 +124,7 @@ fn main() -> Result<(), Box<dyn Error>> {
     let g = &scene.geometry;
     let depth = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default()).depth();
     let wgsl = pipeline_source(o.precision, features, &overrides, group, overrides.stack_size(depth))?;
-    let checks = o.checks.unwrap_or(ShaderChecks::for_adapter(false, features));
+    let checks = o.checks.unwrap_or_default();
     let words = spirv(&wgsl, checks)?;
     if let Some(path) = &o.spirv {
         std::fs::write(path, bytemuck::cast_slice::<u32, u8>(&words))?;

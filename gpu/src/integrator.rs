@@ -55,16 +55,11 @@ crate::wgsl_consts! {
     pub const FRAME_ANY_MASKED: u32 = 4;
     /// `FrameParams.flags`: the scene has a sun.
     pub const FRAME_HAS_SUN: u32 = 8;
-    /// `FrameParams.flags`: add the rays traced to the ray counter.
-    pub const FRAME_COUNT_RAYS: u32 = 16;
     /// `FrameParams.flags`: no light samples of emitters and sun discs (`LightSampling::Bsdf`).
     pub const FRAME_NO_LIGHT_SAMPLES: u32 = 32;
     /// `FrameParams.flags`: BSDF-sampled rays that reach an emitter or a sun disc add nothing
     /// (`LightSampling::Nee`).
     pub const FRAME_NO_BSDF_LIGHT: u32 = 64;
-    /// `FrameParams.flags`: emissive triangles are sampled by solid angle where it is precise
-    /// (`TriangleSampling::SolidAngle`), else by area.
-    pub const FRAME_SOLID_ANGLE_TRIANGLES: u32 = 128;
 }
 
 crate::gpu_struct! {
@@ -555,6 +550,14 @@ pub struct SceneFeatures {
     pub transmission: bool,
     /// A material shadow rays cross (a thin-walled sheet, multiplied by its T′; an η = 1 solid).
     pub thin_walled: bool,
+    /// Emissive triangles are sampled by solid angle where that is precise
+    /// ([`TriangleSampling::SolidAngle`]; with `emitters` only), else by area: the spherical
+    /// triangle's code is composed only then.
+    pub solid_angle_triangles: bool,
+    /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
+    /// triangles per invocation, added to the ray counter at its end). Not a property of the
+    /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
+    pub trace_counters: bool,
 }
 
 impl SceneFeatures {
@@ -577,6 +580,8 @@ impl SceneFeatures {
             adaptive: settings.adaptive.is_some(),
             transmission: scene.materials.iter().any(|m| m.is_transmissive()),
             thin_walled: scene.materials.iter().any(|m| m.passes_shadow_rays()),
+            solid_angle_triangles: emitters && settings.triangle_sampling == TriangleSampling::SolidAngle,
+            trace_counters: false,
         }
     }
 
@@ -601,8 +606,8 @@ impl SceneFeatures {
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
     /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
-    /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `AOVS`, `ADAPTIVE`,
-    /// `TRANSMISSION` and `THIN_WALLED`
+    /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
+    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED` and `TRACE_COUNTERS`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
         match name {
@@ -618,6 +623,8 @@ impl SceneFeatures {
             "ADAPTIVE" => self.adaptive,
             "TRANSMISSION" => self.transmission,
             "THIN_WALLED" => self.transmission && self.thin_walled,
+            "SOLID_ANGLE_TRIANGLES" => self.emitters && self.solid_angle_triangles,
+            "TRACE_COUNTERS" => self.trace_counters,
             _ => panic!("no scene feature {name} (integrator.wgsl's #if)"),
         }
     }
@@ -666,7 +673,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         wgsl::BRDF,
         if features.transmission { wgsl::DIELECTRIC } else { "" },
         wgsl::SCENE,
-        wgsl::TRAVERSE,
+        &wgsl::select(wgsl::TRAVERSE, |name| features.enabled(name)),
         &light_bvh,
         &environment,
         precision.wgsl(),
@@ -762,28 +769,28 @@ fn environment_buffers(
 pub enum ShaderChecks {
     /// wgpu's defaults: local arrays' indices clamped, every loop bounded by a 64-bit counter,
     /// integer division guarded (buffer accesses: by the driver's robustBufferAccess2 where it
-    /// has it). Hardware adapters, for kernels that sample lights: the driver unrolls the node
-    /// test's loop over eight children only without a counter, and on the H200 (workgroups of
-    /// 1024) the unrolled test made the emitter scenes 9 % slower (BENCHMARKS.md, "Speed").
+    /// has it).
     Checked,
-    /// No loop counters (the other checks kept). Software adapters: lavapipe compiles the
-    /// megakernel 3–4 times faster without them (a test's first frame 35.6 s instead of 52.7 s).
-    /// Hardware adapters, for kernels whose lights are all delta lights (sun, point and spot
-    /// lights, or none): the unrolled node test ran the sunlit interior 17 % faster on the H200
-    /// (1920×1440, 6 bounces, 21 nodes per ray) and the Cornell box as fast or 2 % faster.
+    /// No loop counters (the other checks kept): the default. Every loop of the integrator ends
+    /// (the traversal's and the light BVH's on the trees furnace builds, the path's at the bounce
+    /// limit). Without the counters the driver unrolls the node test's loop over eight children:
+    /// on the H200 the sunlit interior ran 17 % faster (1920×1440, 6 bounces, 21 nodes per ray),
+    /// and, once the kernel traced every ray through one call site, the emitter and
+    /// environment-map scenes 7–18 % faster (BENCHMARKS.md, "Speed"). Lavapipe compiles the
+    /// megakernel 3–4 times faster without them.
     NoLoopBounding,
     /// None of the checks (profiling only).
     Unchecked,
 }
 
-impl ShaderChecks {
-    /// The default: [`ShaderChecks::NoLoopBounding`] on a software adapter and, on hardware, for
-    /// a kernel that samples no lights (no emitters, sun disc or environment sampling: the
-    /// `SAMPLES_LIGHTS` blocks left out); [`ShaderChecks::Checked`] for the others on hardware.
-    pub fn for_adapter(software: bool, features: SceneFeatures) -> Self {
-        if software || !features.enabled("SAMPLES_LIGHTS") { Self::NoLoopBounding } else { Self::Checked }
+impl Default for ShaderChecks {
+    /// [`ShaderChecks::NoLoopBounding`], on every adapter and for every kernel.
+    fn default() -> Self {
+        Self::NoLoopBounding
     }
+}
 
+impl ShaderChecks {
     /// wgpu's runtime checks for this choice.
     pub fn runtime_checks(self) -> wgpu::ShaderRuntimeChecks {
         match self {
@@ -807,7 +814,6 @@ impl ShaderChecks {
 /// |---|---|
 /// | `FURNACE_SHADER_CHECKS=checked\|noloop\|unchecked` | [`ShaderChecks`] instead of the adapter's default |
 /// | `FURNACE_TRV_STACK=N` | a traversal stack of N node groups instead of the tree's depth's ([`ProfilingOverrides::stack_size`]) |
-/// | `FURNACE_NO_TRACE_COUNTERS=1` | no per-invocation node/triangle/depth counters in the traversal (`furnace bench` then counts 0 nodes and triangles) |
 /// | `FURNACE_GROUP_SIZE=N` | workgroups of N invocations (a multiple of 32 — whole warps — from 32 to 1024, within the adapter's limit) instead of [`group_size_for`]'s choice |
 /// | `FURNACE_SHADER_EDIT=FILE` | text edits of the composed shader, for timing variants (a part left out, a cheaper form): FILE holds blocks `<<<` line, the text, `===` line, its replacement, `>>>` line; each text must occur in the shader |
 #[derive(Debug, Clone, Default)]
@@ -816,8 +822,6 @@ pub struct ProfilingOverrides {
     pub checks: Option<ShaderChecks>,
     /// `FURNACE_TRV_STACK`.
     pub stack: Option<u32>,
-    /// `FURNACE_NO_TRACE_COUNTERS`.
-    pub no_trace_counters: bool,
     /// `FURNACE_GROUP_SIZE`.
     pub group_size: Option<u32>,
     /// `FURNACE_SHADER_EDIT`: (text, replacement) pairs, applied in order.
@@ -892,16 +896,10 @@ impl ProfilingOverrides {
                 parse_shader_edits(&path, &text)?
             }
         };
-        Ok(Self {
-            checks,
-            stack,
-            no_trace_counters: var("FURNACE_NO_TRACE_COUNTERS").is_some_and(|v| v == "1"),
-            group_size,
-            edits,
-        })
+        Ok(Self { checks, stack, group_size, edits })
     }
 
-    /// `source` (a [`shader_source`]) with the counter override and the edits applied (the
+    /// `source` (a [`shader_source`]) with the edits applied (the
     /// workgroup size is [`group_size_for`]'s, applied with [`with_group_size`]; the stack size
     /// [`ProfilingOverrides::stack_size`]'s, applied with [`crate::traverse::with_stack_size`]).
     ///
@@ -917,15 +915,6 @@ impl ProfilingOverrides {
                 )));
             }
             s = s.replace(old.as_str(), new);
-        }
-        if self.no_trace_counters {
-            for counter in [
-                "trace_stats.nodes += 1u;",
-                "trace_stats.triangles += 1u;",
-                "trace_stats.max_depth = max(trace_stats.max_depth, depth);",
-            ] {
-                s = s.replace(counter, "");
-            }
         }
         Ok(s)
     }
@@ -960,8 +949,7 @@ fn integrator_pipeline(
         bind_group_layouts: &[Some(&layout)],
         immediate_size: 0,
     });
-    let software = !crate::context::is_hardware(&ctx.info);
-    let checks = overrides.checks.unwrap_or(ShaderChecks::for_adapter(software, features));
+    let checks = overrides.checks.unwrap_or_default();
     let desc = wgpu::ShaderModuleDescriptor {
         label: Some("integrator"),
         source: wgpu::ShaderSource::Wgsl(
@@ -1155,29 +1143,22 @@ impl GpuRenderer {
         let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
         let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
         let scene_emitters = Emitters::new(scene);
-        let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
-        let old = &self.settings;
+        let features = SceneFeatures {
+            trace_counters: self.features.trace_counters,
+            ..SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some())
+        };
+        let old = self.settings;
         if features.light_bvh != self.features.light_bvh || features.emitters != self.features.emitters {
             self.emitters = emitter_buffer(&self.ctx, scene, scene_emitters.as_ref(), features)?;
         }
         let env_samples = |s: &RenderSettings| s.env_sampling.light_samples(s.light_sampling);
-        if env_samples(old) != env_samples(&settings) || features.environment != self.features.environment {
+        if env_samples(&old) != env_samples(&settings) || features.environment != self.features.environment {
             let limit = self.ctx.max_storage_binding().min(self.ctx.device.limits().max_buffer_size);
             self.environment = environment_buffers(&self.ctx, scene, &settings, limit)?;
         }
         let precision = self.film.precision();
         if features != self.features {
-            // The workgroup size follows the features (AOVs' arrays).
-            let overrides = ProfilingOverrides::from_env()?;
-            self.group_size = group_size_for(&self.ctx, &overrides, features);
-            (self.layout, self.pipeline, self.converge) = integrator_pipeline(
-                &self.ctx,
-                precision,
-                features,
-                &overrides,
-                self.group_size,
-                self.stack_size,
-            )?;
+            self.rebuild_pipeline(features)?;
         }
         if settings.adaptive.is_some() != old.adaptive.is_some() {
             self.converged_counter = converged_counter(&self.ctx, &settings)?;
@@ -1194,11 +1175,8 @@ impl GpuRenderer {
         } else {
             self.film.clear(&self.ctx)?;
         }
-        let counting = self.base.flags & FRAME_COUNT_RAYS;
         self.base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
-        self.base.flags |= counting;
         self.sampler = sampler;
-        self.features = features;
         self.settings = settings;
         Ok(())
     }
@@ -1235,14 +1213,35 @@ impl GpuRenderer {
         self.scene_bytes
     }
 
-    /// Whether the passes that follow count the rays they trace (off by default: counting costs
-    /// one atomic per invocation).
-    pub fn set_count_rays(&mut self, on: bool) {
-        if on {
-            self.base.flags |= FRAME_COUNT_RAYS;
-        } else {
-            self.base.flags &= !FRAME_COUNT_RAYS;
+    /// Whether the passes that follow count what they trace ([`GpuRenderer::take_trace_counts`];
+    /// off by default). Counting runs a kernel of its own, built here when the choice changes
+    /// (the counters cost the H200 1.5–3 % of throughput, so the rendering kernel has none).
+    ///
+    /// # Errors
+    /// A pipeline error.
+    pub fn set_count_rays(&mut self, on: bool) -> Result<(), GpuError> {
+        if on != self.features.trace_counters {
+            self.rebuild_pipeline(SceneFeatures { trace_counters: on, ..self.features })?;
         }
+        Ok(())
+    }
+
+    /// Builds the integrator's pipeline for `features` (and the workgroup size they get: AOVs'
+    /// arrays need a smaller one) and keeps them.
+    fn rebuild_pipeline(&mut self, features: SceneFeatures) -> Result<(), GpuError> {
+        let overrides = ProfilingOverrides::from_env()?;
+        let group_size = group_size_for(&self.ctx, &overrides, features);
+        (self.layout, self.pipeline, self.converge) = integrator_pipeline(
+            &self.ctx,
+            self.film.precision(),
+            features,
+            &overrides,
+            group_size,
+            self.stack_size,
+        )?;
+        self.group_size = group_size;
+        self.features = features;
+        Ok(())
     }
 
     /// The rays (closest-hit and shadow) traced by the counting passes since the last call, which
@@ -1636,9 +1635,6 @@ fn frame_params_with(
         LightSampling::Nee => FRAME_NO_BSDF_LIGHT,
         LightSampling::Mis => 0,
     };
-    if s.triangle_sampling == TriangleSampling::SolidAngle {
-        flags |= FRAME_SOLID_ANGLE_TRIANGLES;
-    }
     let (sun_direction, sun_irradiance) = match scene.sun() {
         Some(sun) => {
             flags |= FRAME_HAS_SUN;
@@ -1730,8 +1726,8 @@ mod tests {
         }
     }
 
-    /// The stack override decides the traversal's stack size; the counters override removes
-    /// every counter update; no override leaves the shader as composed.
+    /// The stack override decides the traversal's stack size; no override leaves the shader as
+    /// composed. The trace counters are composed only into the counting kernel.
     #[test]
     fn profiling_overrides_rewrite_the_shader() {
         let source = shader_source(FilmPrecision::F64, SceneFeatures::default());
@@ -1742,12 +1738,18 @@ mod tests {
         );
         assert_eq!(ProfilingOverrides { stack: Some(8), ..Default::default() }.stack_size(3), 8);
         assert_eq!(ProfilingOverrides::default().stack_size(3), 2);
-        let bare = ProfilingOverrides { no_trace_counters: true, ..Default::default() }
-            .apply(source.clone())
-            .unwrap();
-        assert!(source.contains("trace_stats.nodes += 1u;"));
-        assert!(!bare.contains("trace_stats.nodes +=") && !bare.contains("trace_stats.triangles +="));
-        assert!(!bare.contains("trace_stats.max_depth = max"));
+        let counting =
+            shader_source(FilmPrecision::F64, SceneFeatures { trace_counters: true, ..Default::default() });
+        for update in [
+            "trace_stats.nodes += 1u;",
+            "trace_stats.triangles += 1u;",
+            "trace_stats.fallbacks += 1u;",
+            "trace_stats.max_depth = max(trace_stats.max_depth, depth);",
+            "rays_traced += ",
+            "counter_add(0u, rays_traced);",
+        ] {
+            assert!(counting.contains(update) && !source.contains(update), "{update}");
+        }
         let wide = with_group_size(&source, 1024);
         assert!(wide.contains("const GROUP_SIZE: u32 = 1024u;") && !wide.contains("GROUP_SIZE: u32 = 256u"));
         assert_eq!(tile_of(1024, 4), (16, 16));
@@ -1794,21 +1796,10 @@ mod tests {
         }
     }
 
-    /// Loop counters are off on software adapters and for kernels that sample no lights; every
-    /// choice keeps the other checks as documented.
+    /// Loop counters are off by default; every choice keeps the other checks as documented.
     #[test]
-    fn shader_checks_by_adapter() {
-        let sun = SceneFeatures { delta_sun: true, point_lights: true, ..Default::default() };
-        let emitters = SceneFeatures { emitters: true, ..sun };
-        let env = SceneFeatures { environment: true, env_sampling: true, ..sun };
-        let env_unsampled = SceneFeatures { environment: true, ..sun };
-        assert_eq!(ShaderChecks::for_adapter(false, sun), ShaderChecks::NoLoopBounding);
-        assert_eq!(ShaderChecks::for_adapter(false, env_unsampled), ShaderChecks::NoLoopBounding);
-        assert_eq!(ShaderChecks::for_adapter(false, emitters), ShaderChecks::Checked);
-        assert_eq!(ShaderChecks::for_adapter(false, env), ShaderChecks::Checked);
-        for f in [sun, emitters, env] {
-            assert_eq!(ShaderChecks::for_adapter(true, f), ShaderChecks::NoLoopBounding);
-        }
+    fn shader_checks() {
+        assert_eq!(ShaderChecks::default(), ShaderChecks::NoLoopBounding);
         let c = ShaderChecks::NoLoopBounding.runtime_checks();
         assert!(!c.force_loop_bounding && c.bounds_checks && c.int_div_checks);
         let c = ShaderChecks::Checked.runtime_checks();

@@ -176,6 +176,18 @@ fn absent_light_features_compose_no_code() {
         },
     );
     assert!(bvh.contains("fn light_bvh_sample") && !bvh.contains("fn emitter_select"));
+    // Triangles sampled by area: the spherical triangle is never formed; by solid angle it is.
+    let solid_angle = |s: &str| s.contains("let omega = spherical_triangle_solid_angle(");
+    assert!(!solid_angle(&all) && !solid_angle(&bvh));
+    let by_solid_angle = shader_source(
+        FilmPrecision::F64,
+        SceneFeatures { emitters: true, solid_angle_triangles: true, ..Default::default() },
+    );
+    assert!(solid_angle(&by_solid_angle));
+    // Nothing is counted but in the counting kernel.
+    for shader in [&bare, &sun, &all, &bvh, &by_solid_angle] {
+        assert!(!shader.contains("rays_traced") && !shader.contains("trace_stats.nodes +="));
+    }
     // Transmission: the dielectric and its records; sheets' shadow-ray filter only with sheets.
     let glass = shader_source(FilmPrecision::F64, SceneFeatures { transmission: true, ..Default::default() });
     for present in ["fn dielectric_sample", "var<storage, read> scene_transmission", "fn absorption"] {
@@ -270,6 +282,8 @@ fn frame_params_layout_matches_wgsl() {
                 adaptive: light_bvh,
                 transmission: true,
                 thin_walled: light_bvh,
+                solid_angle_triangles: light_bvh,
+                trace_counters: !light_bvh,
             },
         ));
     }
@@ -554,7 +568,7 @@ fn traversal_counters_are_exact_for_primary_rays_and_plausible() {
     let camera = scene.default_camera();
     let s = RenderSettings { width: 16, height: 16, bounces: 0, ..RenderSettings::default() };
     let mut gpu = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
-    gpu.set_count_rays(true);
+    gpu.set_count_rays(true).unwrap();
     gpu.set_group_samples(Some(2));
     gpu.render_pass(0, 2).unwrap();
     let c = gpu.take_trace_counts().unwrap();
@@ -567,8 +581,11 @@ fn traversal_counters_are_exact_for_primary_rays_and_plausible() {
     assert_eq!(gpu.take_trace_counts().unwrap(), Default::default(), "taking the counts resets them");
 }
 
+/// Counting is a kernel of its own: off by default, on when asked, off again, and the films of
+/// the two kernels are the same bits (counting changes what is recorded, never a path).
 #[test]
 fn ray_counter_counts_every_ray_only_when_asked() {
+    use furnace_render::{Film, Integrator};
     let Some(ctx) = test_context() else { return };
     let scene = builtin::cornell_box().unwrap();
     let camera = scene.default_camera();
@@ -577,10 +594,19 @@ fn ray_counter_counts_every_ray_only_when_asked() {
     let mut gpu = GpuRenderer::new(ctx, &scene, &camera, s).unwrap();
     gpu.render_pass(0, 2).unwrap();
     assert_eq!(gpu.take_ray_count().unwrap(), 0, "counting is off by default");
-    gpu.set_count_rays(true);
+    gpu.render_pass(2, 3).unwrap();
+    let rendered = gpu.film().unwrap();
+    gpu.set_film(&Film::new(s.width, s.height)).unwrap();
+    gpu.set_count_rays(true).unwrap();
+    gpu.render_pass(0, 2).unwrap();
+    assert_eq!(gpu.take_ray_count().unwrap(), 16 * 16 * 2);
     gpu.render_pass(2, 3).unwrap();
     assert_eq!(gpu.take_ray_count().unwrap(), 16 * 16 * 3);
     assert_eq!(gpu.take_ray_count().unwrap(), 0, "taking the count resets it");
+    assert_eq!(gpu.film().unwrap().sums(), rendered.sums(), "the counting kernel's film");
+    gpu.set_count_rays(false).unwrap();
+    gpu.render_pass(5, 1).unwrap();
+    assert_eq!(gpu.take_ray_count().unwrap(), 0, "counting is off again");
     assert!(gpu.bvh_bytes() > 0 && gpu.scene_bytes() > 0);
 }
 

@@ -12,9 +12,11 @@
 // FRAME_* flags, FrameParams and the bindings are declared by the composing shader, generated
 // from furnace_gpu::integrator (frame_flags_wgsl, FrameParams, binding_table).
 
-// Rays this invocation traced (closest-hit and shadow); added to `ray_counter` at its end when
-// FRAME_COUNT_RAYS is set.
+// #if TRACE_COUNTERS
+// Rays this invocation traced (closest-hit and shadow); added to `ray_counter` at its end (the
+// counting kernel only).
 var<private> rays_traced: u32 = 0u;
+// #endif
 
 
 // #if THIN_WALLED
@@ -163,7 +165,9 @@ fn vertex_absorption(b: HitBsdf, t_max: f32) -> vec3<f32> {
 // CpuRenderer::transmittance: what a shadow ray from `origin` along `dir` carries over t_max
 // (0 where blocked; the sheets' T′ and the vertex's volume absorption otherwise).
 fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32> {
+    // #if TRACE_COUNTERS
     rays_traced += 1u;
+    // #endif
     let carried = vertex_absorption(b, t_max);
     // #if THIN_WALLED
     shadow_carried = carried;
@@ -335,14 +339,15 @@ fn emitter_index_of(triangle: u32) -> u32 {
 // TriangleSampling::solid_angle: the solid angle of the triangle a, b, c (relative to the
 // shading point) when it is sampled by solid angle from there, else −1 (sampled by area).
 fn triangle_solid_angle(a: vec3<f32>, b: vec3<f32>, c: vec3<f32>) -> f32 {
-    if (params.flags & FRAME_SOLID_ANGLE_TRIANGLES) == 0u {
-        return -1.0;
-    }
+    // #if !SOLID_ANGLE_TRIANGLES
+    return -1.0;
+    // #else
     let omega = spherical_triangle_solid_angle(a, b, c);
     if omega >= SPHERICAL_TRIANGLE_MIN_SOLID_ANGLE && omega <= SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE {
         return omega;
     }
     return -1.0;
+    // #endif
 }
 
 fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: HitBsdf,
@@ -660,7 +665,9 @@ fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bo
             query_origin = origin;
             query_dir = direction;
         }
+        // #if TRACE_COUNTERS
         rays_traced += select(0u, 1u, query_t > 0.0);
+        // #endif
         let hit = trace_query(query_origin, query_dir, query_t, shadowing);
         if shadowing {
             if queued {
@@ -939,6 +946,7 @@ fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bo
     return radiance;
 }
 
+// #if TRACE_COUNTERS
 // Adds `v` to the 64-bit counter in words `k`, `k + 1` (the carry goes to word k + 1).
 fn counter_add(k: u32, v: u32) {
     if v == 0u {
@@ -949,6 +957,7 @@ fn counter_add(k: u32, v: u32) {
         atomicAdd(&ray_counter[k + 1u], 1u);
     }
 }
+// #endif
 
 // Invocations of a workgroup (FrameParams.group_samples × pixels of a tile); integrator.rs's
 // GROUP_SIZE (checked by its tests).
@@ -1041,13 +1050,13 @@ fn main(@builtin(workgroup_id) wg: vec3<u32>, @builtin(local_invocation_index) l
             }
         }
     }
-    if (params.flags & FRAME_COUNT_RAYS) != 0u {
-        counter_add(0u, rays_traced);
-        counter_add(2u, trace_stats.nodes);
-        counter_add(4u, trace_stats.triangles);
-        atomicAdd(&ray_counter[6], trace_stats.fallbacks);
-        atomicMax(&ray_counter[7], trace_stats.max_depth);
-    }
+    // #if TRACE_COUNTERS
+    counter_add(0u, rays_traced);
+    counter_add(2u, trace_stats.nodes);
+    counter_add(4u, trace_stats.triangles);
+    atomicAdd(&ray_counter[6], trace_stats.fallbacks);
+    atomicMax(&ray_counter[7], trace_stats.max_depth);
+    // #endif
 }
 
 // #if ADAPTIVE_ON_GPU

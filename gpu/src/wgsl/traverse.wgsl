@@ -233,7 +233,9 @@ fn trv_byte(w: vec2<u32>, k: u32) -> f32 {
 /// octant) for an inner child, the unary triangle count shifted by the leaf's triangle offset
 /// for a leaf child. `leaves_only` drops inner children (the fallback sweep).
 fn trv_intersect_node(node: CwbvhNode, r: TrvRay, t_cull: f32, leaves_only: bool) -> u32 {
+    // #if TRACE_COUNTERS
     trace_stats.nodes += 1u;
+    // #endif
     let e = node.e_imask;
     let extent = vec3<f32>(
         bitcast<f32>((e & 0xffu) << 23u),
@@ -294,7 +296,9 @@ struct TrvState {
 
 /// Tests triangle slot `slot` and updates the state (accel's `visit` closures).
 fn trv_leaf(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>, slot: u32) {
+    // #if TRACE_COUNTERS
     trace_stats.triangles += 1u;
+    // #endif
     let tri = bvh_triangles[slot];
     let h = trv_intersect_triangle(o, d, tri.v0, tri.v1, tri.v2, (*st).t_tri);
     if h.t > 0.0 && hit_filter(tri.id, h.u, h.v) {
@@ -325,7 +329,9 @@ fn trv_leaves(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>, base: u32
 /// The fallback after a stack overflow: every node's leaf children, tested with the current cull
 /// distance (see the top of this file).
 fn trv_sweep(st: ptr<function, TrvState>, r: TrvRay, o: vec3<f32>, d: vec3<f32>) {
+    // #if TRACE_COUNTERS
     trace_stats.fallbacks += 1u;
+    // #endif
     let n = arrayLength(&bvh_nodes);
     for (var i = 0u; i < n; i++) {
         let node = bvh_nodes[i];
@@ -364,7 +370,9 @@ fn trv_traverse(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>) {
                 }
                 stack[depth] = current;
                 depth += 1u;
+                // #if TRACE_COUNTERS
                 trace_stats.max_depth = max(trace_stats.max_depth, depth);
+                // #endif
             }
             let slot_index = (child_index_offset - 24u) ^ (r.oct_inv4 & 0xffu);
             let relative_index = countOneBits(hits_imask & ~(0xffffffffu << slot_index));
