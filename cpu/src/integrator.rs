@@ -570,8 +570,9 @@ impl CpuRenderer {
 
     /// What the point and spot lights add at a scattering event (throughput included): a
     /// shadow ray to each, stopping `SHADOW_EPSILON·d` short of it; a contribution that is not
-    /// finite (a light on the surface, d → 0) adds nothing. Summed over the lights first, as
-    /// the WGSL twin does.
+    /// finite (a light on the surface, d → 0) adds nothing. Summed over the lights first (the
+    /// WGSL twin does so for many lights; for a few it adds each light's share after its queued
+    /// shadow ray: the same to float rounding).
     fn gather_point_lights(&self, v: &Vertex<'_>) -> Vec3 {
         let mut sum = Vec3::ZERO;
         for light in &self.point_lights {

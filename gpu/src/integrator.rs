@@ -521,12 +521,22 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     BindingTable::new(0, 0, bindings)
 }
 
+/// Point and spot lights whose shadow rays are queued, at most: each takes a slot of the
+/// per-event shadow queue (40 bytes of private memory) and a shadow iteration of the path loop
+/// after every path ray, also where it is not taken; more lights are traced where they are
+/// gathered, through a second traversal call.
+pub const MAX_QUEUED_POINT_LIGHTS: u32 = 4;
+
 /// The light and material features a scene uses that the integrator shader is composed for:
 /// code for a feature the scene lacks is left out at compile time (no GPU work, no registers).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct SceneFeatures {
     /// Point or spot lights (the shadow-ray loop over `point_lights`).
     pub point_lights: bool,
+    /// The number of point and spot lights when it is at most [`MAX_QUEUED_POINT_LIGHTS`] (else
+    /// 0): their shadow rays are then queued like the other light samples' (a slot each, traced
+    /// through the path loop's one traversal call) instead of traced where they are gathered.
+    pub queued_point_lights: u32,
     /// Emissive triangles (their light samples and the MIS weights of their emission).
     pub emitters: bool,
     /// A sun without a disc, a delta light (its shadow ray at each scattering event).
@@ -569,6 +579,10 @@ impl SceneFeatures {
     fn with_emitters(scene: &Scene, settings: &RenderSettings, emitters: bool) -> Self {
         Self {
             point_lights: scene.point_lights().next().is_some(),
+            queued_point_lights: match scene.point_lights().count() {
+                n if n <= MAX_QUEUED_POINT_LIGHTS as usize => n as u32,
+                _ => 0,
+            },
             emitters,
             delta_sun: scene.sun().is_some_and(|s| !s.is_disc()),
             sun_disc: scene.sun().is_some_and(|s| s.is_disc()),
@@ -597,17 +611,23 @@ impl SceneFeatures {
 
     /// The shadow rays a scattering event queues at most (integrator.wgsl's `defer_shadow`;
     /// `SHADOW_SLOTS`, the size of a WGSL array, is this but at least 1): one per light kind
-    /// sampled there besides the point lights (the delta sun, the emitters, the sun disc, the
-    /// environment).
+    /// sampled there (the delta sun, the emitters, the sun disc, the environment) and one per
+    /// point light when they are queued ([`SceneFeatures::queued_point_lights`]).
     pub fn shadow_kinds(self) -> u32 {
         let kinds = [self.delta_sun, self.emitters, self.sun_disc, self.enabled("SAMPLES_ENVIRONMENT")];
-        kinds.iter().filter(|&&k| k).count() as u32
+        kinds.iter().filter(|&&k| k).count() as u32 + self.point_lights_queued()
+    }
+
+    /// [`SceneFeatures::queued_point_lights`] where the scene has point lights, else 0.
+    fn point_lights_queued(self) -> u32 {
+        if self.point_lights { self.queued_point_lights } else { 0 }
     }
 
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
     /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
-    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED` and `TRACE_COUNTERS`
+    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `TRACE_COUNTERS` and
+    /// `QUEUED_POINT_LIGHTS`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
         match name {
@@ -625,6 +645,7 @@ impl SceneFeatures {
             "THIN_WALLED" => self.transmission && self.thin_walled,
             "SOLID_ANGLE_TRIANGLES" => self.emitters && self.solid_angle_triangles,
             "TRACE_COUNTERS" => self.trace_counters,
+            "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             _ => panic!("no scene feature {name} (integrator.wgsl's #if)"),
         }
     }

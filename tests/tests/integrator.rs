@@ -220,8 +220,9 @@ fn absent_light_features_compose_no_code() {
 /// The driver inlines a copy of the traversal at each call site and of the path code at each
 /// call of it: the integrator calls the path code once and traces every ray of a path and of its
 /// sampled lights through one `trace_query` call (point lights, a shadow ray per light, keep a
-/// second one, `shadow`). Measured on the H200 (BENCHMARKS.md, "One trace call per iteration"), two
-/// copies cost 10–14 % on the box and the emitter scenes.
+/// second one, `shadow`, only when there are more than the queue holds). Measured on the H200
+/// (BENCHMARKS.md, "One trace call per iteration"), two copies cost 10–14 % on the box and the
+/// emitter scenes.
 #[test]
 fn one_traversal_and_one_path_code_per_shader() {
     let calls = |source: &str, call: &str| source.matches(call).count();
@@ -257,6 +258,23 @@ fn one_traversal_and_one_path_code_per_shader() {
         assert!(s.contains(&format!("const SHADOW_KINDS: u32 = {kinds}u;")), "{name}: SHADOW_KINDS");
     }
     assert_eq!(every.shadow_kinds(), 4, "delta sun, emitters, sun disc, environment");
+    // Point lights: queued, a slot each, up to MAX_QUEUED_POINT_LIGHTS; more are traced where
+    // they are gathered, through `shadow` (a second traversal call).
+    let queued = SceneFeatures { point_lights: true, queued_point_lights: 2, ..every };
+    let s = shader_source(FilmPrecision::F64, queued);
+    assert_eq!(queued.shadow_kinds(), 6);
+    assert!(s.contains("const SHADOW_KINDS: u32 = 6u;") && s.contains("const SHADOW_SLOTS: u32 = 6u;"));
+    assert_eq!(calls(&s, "trace_query("), 4, "queued point lights: trace_query's definition and calls");
+    assert_eq!(calls(&s, "trace_any("), 1, "queued point lights: trace_any called");
+    assert!(
+        !s.contains("fn shadow(")
+            && s.contains("defer_shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON), contribution);")
+    );
+    let many = SceneFeatures { point_lights: true, queued_point_lights: 0, ..every };
+    let s = shader_source(FilmPrecision::F64, many);
+    assert_eq!(many.shadow_kinds(), 4);
+    assert_eq!(calls(&s, "* shadow(bsdf"), 1, "many point lights: `shadow` in their loop");
+    assert_eq!(calls(&s, "trace_any("), 2, "many point lights: trace_any called by `shadow`");
 }
 
 #[test]
@@ -284,6 +302,7 @@ fn frame_params_layout_matches_wgsl() {
                 thin_walled: light_bvh,
                 solid_angle_triangles: light_bvh,
                 trace_counters: !light_bvh,
+                queued_point_lights: if light_bvh { 3 } else { 0 },
             },
         ));
     }
@@ -308,7 +327,8 @@ fn same_samples_give_the_same_image() {
 }
 
 /// The point-light box with a spot light added (cone and range window): the point-light loop,
-/// the spot cone and the range on both sides.
+/// the spot cone and the range on both sides; then with two more lights, more than the shadow
+/// queue's slots (the GPU's other path).
 #[test]
 fn same_samples_give_the_same_image_with_point_and_spot_lights() {
     let path = furnace_tests::data::reference("lights/cbox_point.gltf");
@@ -324,6 +344,17 @@ fn same_samples_give_the_same_image_with_point_and_spot_lights() {
         }),
     }));
     assert_eq!(scene.point_lights().count(), 3);
+    same_samples(&scene);
+    // Past the shadow queue's point-light slots: traced where they are gathered.
+    for x in [-0.6f32, 0.6] {
+        scene.lights.push(furnace_scene::Light::Point(furnace_scene::PointLight {
+            position: glam::Vec3::new(x, 1.2, 0.4),
+            intensity: glam::Vec3::new(0.4, 0.5, 0.6),
+            range: None,
+            spot: None,
+        }));
+    }
+    assert!(scene.point_lights().count() as u32 > furnace_gpu::integrator::MAX_QUEUED_POINT_LIGHTS);
     same_samples(&scene);
 }
 

@@ -162,8 +162,10 @@ fn vertex_absorption(b: HitBsdf, t_max: f32) -> vec3<f32> {
     return vec3<f32>(1.0);
 }
 
+// #if !QUEUED_POINT_LIGHTS
 // CpuRenderer::transmittance: what a shadow ray from `origin` along `dir` carries over t_max
-// (0 where blocked; the sheets' T′ and the vertex's volume absorption otherwise).
+// (0 where blocked; the sheets' T′ and the vertex's volume absorption otherwise). Traced here,
+// through a second traversal call: for more point lights than the queue holds.
 fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32> {
     // #if TRACE_COUNTERS
     rays_traced += 1u;
@@ -186,14 +188,16 @@ fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32
     return carried;
     // #endif
 }
+// #endif
 
 // The shadow rays of the light samples taken at a scattering event (one per light kind the
 // scene samples, furnace_gpu's SceneFeatures::shadow_kinds), traced later by the path loop
 // itself, before the path's next ray and through the same `trace_query` call: the driver
 // inlines the traversal once instead of once more for the shadow rays. `value` is what the
 // light adds if the ray is not blocked (throughput, BSDF, light and MIS weight, the vertex's
-// volume absorption). SHADOW_KINDS (generated) is that number of kinds, SHADOW_SLOTS the same
-// but at least 1. Point lights, one ray per light, keep `shadow`.
+// volume absorption). SHADOW_KINDS (generated) is that number of kinds, plus one per point light
+// where the scene has few of them (QUEUED_POINT_LIGHTS), SHADOW_SLOTS the same but at least 1.
+// More point lights keep `shadow`.
 struct ShadowRay {
     origin: vec3<f32>,
     t_max: f32,
@@ -227,7 +231,8 @@ fn point_light_intensity(light: PointLight, direction: vec3<f32>, distance: f32)
 }
 
 // furnace-cpu's loop over the point and spot lights at a scattering event: what they add to
-// the path's radiance (throughput included).
+// the path's radiance (throughput included); with QUEUED_POINT_LIGHTS nothing here, their
+// shadow rays queued with what each adds.
 fn gather_point_lights(throughput: vec3<f32>, bsdf: HitBsdf, wo: vec3<f32>, frame: Frame,
                        surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
     var sum = vec3<f32>(0.0);
@@ -248,7 +253,11 @@ fn gather_point_lights(throughput: vec3<f32>, bsdf: HitBsdf, wo: vec3<f32>, fram
                 let contribution = throughput * f * li / d2;
                 // A light on the surface (d → 0) would add ∞: it adds nothing instead.
                 if any(f != vec3<f32>(0.0)) && film_is_finite(contribution) {
+                    // #if QUEUED_POINT_LIGHTS
+                    defer_shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON), contribution);
+                    // #else
                     sum += contribution * shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON));
+                    // #endif
                 }
             }
         }
