@@ -331,20 +331,26 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         r.set_count_rays(true).map_err(|e| e.to_string())?;
         engine.render_pass(0, 1).map_err(|e| e.to_string())?;
     }
+    if let Some(r) = engine.gpu() {
+        r.set_group_samples(a.group_samples);
+    }
+    let per_pass = engine.pass_samples().max(1);
     if engine.gpu().is_some_and(|r| furnace_gpu::context::is_hardware(&r.context().info)) {
+        // Passes of the measured size where the sampler allows (a fixed-N sampler's N counts
+        // only the measured samples): the renderer's choice of invocations per pixel, made by
+        // timing its first passes of that size, is then made here.
+        let warm_spp = if a.sampler.needs_sample_count() { 1 } else { per_pass };
         let warm = Instant::now();
         while warm.elapsed().as_secs_f64() < WARM_UP_SECONDS {
-            engine.render_pass(0, 1).map_err(|e| e.to_string())?;
+            engine.render_pass(0, warm_spp).map_err(|e| e.to_string())?;
         }
     }
 
     let mut timing = false;
     if let Some(r) = engine.gpu() {
         r.take_trace_counts().map_err(|e| e.to_string())?;
-        r.set_group_samples(a.group_samples);
         timing = r.set_timing(true);
     }
-    let per_pass = engine.pass_samples().max(1);
     let timer = Instant::now();
     // Passes from sample 1 (after the warm-up frame): exactly --spp, or until --min-seconds.
     let budget = match a.spp {

@@ -15,7 +15,9 @@
 //! pixel's first invocation adds them, after a barrier, in index order — the same additions in
 //! the same order, so the film does not depend on the grouping (nor on the workgroup size), bit
 //! for bit. Grouping keeps a large GPU busy on small images and lets short invocations replace
-//! each other (measured in BENCHMARKS.md, "GPU integrator").
+//! each other (measured in BENCHMARKS.md, "GPU integrator"); one invocation per pixel runs a
+//! pixel's samples one after another, which wins where path lengths differ a lot. The renderer
+//! times both on its first passes and keeps the faster ([`GroupTuner`]).
 //!
 //! Bindings (group 0): 0 the [`FrameParams`] uniform (dynamic offset, one slot per dispatch),
 //! 1–2 the film, 3–4 the BVH, 5–10 the scene, 11 the Turquin table, 12 the ray counter — twelve
@@ -414,6 +416,87 @@ pub fn tile_of(group_size: u32, group_samples: u32) -> (u32, u32) {
     (width, pixels / width)
 }
 
+/// Chooses between the image-size rule's invocations per pixel ([`hardware_group_samples`]) and
+/// one per pixel by timing passes, as a render's first passes alternate them. The rule fills the
+/// GPU with several samples of a pixel side by side; one invocation per pixel runs all of a
+/// pixel's samples one after another, a lane whose path ends starting the next (path
+/// regeneration), which wins where path lengths differ a lot. Which one is faster depends on
+/// the scene, not on a size or a bounce count that could be read beforehand: on the H200 the
+/// sunlit interior ran 2–20 % faster at one per pixel and the Cornell box of as many triangles
+/// 4–16 % slower at 4 and 6 bounces (BENCHMARKS.md, "Invocations per pixel against path
+/// length"). The film does not depend on the choice, bit for bit, so trying both costs no
+/// image; after one pass left unmeasured (the GPU's clocks may still be rising), each candidate
+/// is measured [`GroupTuner::TRIALS`] times, in turn, and its fastest pass counts.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroupTuner {
+    /// The rule's choice and the alternative, 1.
+    candidates: [u32; 2],
+    /// Per candidate: its fastest pass so far, in seconds per sample of every pixel, and the
+    /// number of its passes measured.
+    best: [f64; 2],
+    measured: [u32; 2],
+    /// Whether the first pass, left unmeasured, has run.
+    settled: bool,
+    /// The decision, once both candidates have had their trials.
+    chosen: Option<u32>,
+}
+
+impl GroupTuner {
+    /// Timed passes per candidate before the choice.
+    pub const TRIALS: u32 = 2;
+
+    /// One invocation per pixel is chosen only if its fastest pass beats the rule's by this
+    /// fraction (otherwise the rule's choice stays): a margin above the ~0.3 % run-to-run
+    /// spread of one configuration on the H200.
+    pub const MARGIN: f64 = 0.02;
+
+    /// A tuner between `rule` invocations per pixel and 1; `None` when the rule already gives 1.
+    pub fn new(rule: u32) -> Option<Self> {
+        (rule > 1).then_some(Self {
+            candidates: [rule, 1],
+            best: [f64::INFINITY; 2],
+            measured: [0; 2],
+            settled: false,
+            chosen: None,
+        })
+    }
+
+    /// The invocations per pixel the next pass should use: the choice once made, else the
+    /// candidate with fewer measured passes (the alternative first, then in turn).
+    pub fn next(&self) -> u32 {
+        match self.chosen {
+            Some(n) => n,
+            None if self.measured[1] <= self.measured[0] => self.candidates[1],
+            None => self.candidates[0],
+        }
+    }
+
+    /// Whether the choice is made.
+    pub fn chosen(&self) -> Option<u32> {
+        self.chosen
+    }
+
+    /// Records a pass rendered at `group_samples` invocations per pixel that took `seconds` for
+    /// `samples` samples of every pixel; passes at another value (a pass of fewer samples than
+    /// the rule's choice is capped) are not the candidates' and are ignored.
+    pub fn record(&mut self, group_samples: u32, samples: u32, seconds: f64) {
+        if self.chosen.is_some() || samples == 0 || !(seconds > 0.0) {
+            return;
+        }
+        let Some(k) = self.candidates.iter().position(|&c| c == group_samples) else { return };
+        if !self.settled {
+            self.settled = true;
+            return;
+        }
+        self.best[k] = self.best[k].min(seconds / f64::from(samples));
+        self.measured[k] += 1;
+        if self.measured.iter().all(|&m| m >= Self::TRIALS) {
+            let one_wins = self.best[1] < self.best[0] * (1.0 - Self::MARGIN);
+            self.chosen = Some(if one_wins { self.candidates[1] } else { self.candidates[0] });
+        }
+    }
+}
+
 /// Counters of the traversal, summed over the counting passes (see [`GpuRenderer::set_count_rays`]).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct TraceCounts {
@@ -460,6 +543,9 @@ pub struct GpuRenderer {
     samples_per_dispatch: u64,
     max_samples_per_invocation: u32,
     group_samples: Option<u32>,
+    /// The choice of invocations per pixel by timing, where the renderer chooses
+    /// ([`GpuRenderer::tuner_for`]).
+    tuner: Option<GroupTuner>,
     /// Invocations per workgroup ([`group_size_for`]).
     group_size: u32,
     /// Node groups of the traversal stack ([`ProfilingOverrides::stack_size`] for the uploaded
@@ -1070,7 +1156,7 @@ impl GpuRenderer {
         let software = !crate::context::is_hardware(&ctx.info);
         let (samples_per_dispatch, max_samples_per_invocation) =
             if software { (1 << 16, 1) } else { (1 << 23, 8) };
-        Ok(Self {
+        let mut renderer = Self {
             bytes_per_triangle: gpu_scene.bytes_per_triangle(),
             bvh_bytes,
             scene_bytes: gpu_scene.bytes
@@ -1097,12 +1183,15 @@ impl GpuRenderer {
             samples_per_dispatch,
             max_samples_per_invocation,
             group_samples: None,
+            tuner: None,
             group_size,
             stack_size,
             timer: None,
             triangles: scene.geometry.triangles.len(),
             display: false,
-        })
+        };
+        renderer.tuner = renderer.tuner_for();
+        Ok(renderer)
     }
 
     /// The device.
@@ -1199,6 +1288,8 @@ impl GpuRenderer {
         self.base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
         self.sampler = sampler;
         self.settings = settings;
+        // Another scene or size: the invocations per pixel are chosen again.
+        self.tuner = self.tuner_for();
         Ok(())
     }
 
@@ -1296,12 +1387,33 @@ impl GpuRenderer {
     }
 
     /// Invocations per pixel in a workgroup: `None` (the default) chooses — on hardware, up to
-    /// 16 by image size ([`hardware_group_samples`]), 1 on software adapters;
+    /// 16 by image size ([`hardware_group_samples`]) or 1, whichever its first passes ran faster
+    /// ([`GroupTuner`]; by image size alone with adaptive sampling), 1 on software adapters;
     /// `Some(n)` forces `n` (rounded down to a power of two that divides the workgroup size). The film
     /// does not depend on it, bit for bit.
     pub fn set_group_samples(&mut self, n: Option<u32>) {
         self.group_samples =
             n.map(|n| 1 << n.clamp(1, self.group_size).ilog2().min(self.group_size.trailing_zeros()));
+        self.tuner = self.tuner_for();
+    }
+
+    /// The timing choice between the image-size rule and one invocation per pixel
+    /// ([`GroupTuner`]): on hardware adapters, where [`GpuRenderer::set_group_samples`] has not
+    /// fixed it, without adaptive sampling (whose passes are cut into blocks at its test
+    /// points), and where the rule gives more than one.
+    fn tuner_for(&self) -> Option<GroupTuner> {
+        let software = self.max_samples_per_invocation == 1;
+        if software || self.group_samples.is_some() || self.settings.adaptive.is_some() {
+            return None;
+        }
+        let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
+        GroupTuner::new(hardware_group_samples(pixels, self.samples_per_dispatch))
+    }
+
+    /// The timing choice of invocations per pixel, where the renderer makes one: the candidate
+    /// the next pass tries, or the one chosen.
+    pub fn group_tuner(&self) -> Option<&GroupTuner> {
+        self.tuner.as_ref()
     }
 
     /// The invocations per pixel the next pass of `samples_per_pixel` samples uses.
@@ -1311,6 +1423,8 @@ impl GpuRenderer {
         let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
         let n = self.group_samples.unwrap_or(if software {
             1
+        } else if let Some(t) = &self.tuner {
+            t.next()
         } else {
             hardware_group_samples(pixels, self.samples_per_dispatch)
         });
@@ -1412,7 +1526,12 @@ impl GpuRenderer {
         self.sampler.check_index(first_sample.saturating_add(samples_per_pixel - 1))?;
         let end = first_sample.saturating_add(samples_per_pixel);
         let Some(rule) = self.settings.adaptive else {
+            let group_samples = self.group_samples(samples_per_pixel);
+            let start = std::time::Instant::now();
             self.render_blocks(&[Block { first: first_sample, end, converge: false }])?;
+            if let Some(t) = &mut self.tuner {
+                t.record(group_samples, samples_per_pixel, start.elapsed().as_secs_f64());
+            }
             return self.film.fold(&self.ctx);
         };
         // Adaptive sampling tests pixels at multiples of ADAPTIVE_STEP: blocks that end there,
@@ -1815,6 +1934,44 @@ mod tests {
             let err = parse_shader_edits("e.txt", bad).unwrap_err().to_string();
             assert!(err.contains("e.txt") && err.contains(why), "{bad:?}: {err}");
         }
+    }
+
+    /// The tuner tries the alternative first, then each candidate in turn, ignores the first pass
+    /// and passes at other values, and keeps the rule's choice unless one invocation per pixel is
+    /// faster by more than the margin.
+    #[test]
+    fn group_tuner_times_both_and_keeps_the_rule_unless_one_wins() {
+        assert_eq!(GroupTuner::new(1), None, "nothing to choose");
+        let run = |rule_s: f64, one_s: f64| {
+            let mut t = GroupTuner::new(4).unwrap();
+            let mut order = Vec::new();
+            while t.chosen().is_none() {
+                let n = t.next();
+                order.push(n);
+                // A pass of 8 samples; a capped pass (2 per pixel) in between changes nothing.
+                t.record(n, 8, 8.0 * if n == 1 { one_s } else { rule_s });
+                t.record(2, 2, 1e-9);
+                assert!(order.len() <= 5, "{order:?}");
+            }
+            (order, t.chosen().unwrap(), t.next())
+        };
+        // The first pass (at 1) unmeasured, then 1, 4, 1, 4.
+        assert_eq!(run(1.0, 0.5), (vec![1, 1, 4, 1, 4], 1, 1));
+        assert_eq!(run(1.0, 0.99), (vec![1, 1, 4, 1, 4], 4, 4), "within the margin: the rule");
+        assert_eq!(run(0.5, 1.0).1, 4);
+        // The fastest pass of each counts; nothing is recorded once chosen.
+        let mut t = GroupTuner::new(2).unwrap();
+        for (n, s) in [(1, 100.0), (1, 3.0), (2, 2.0), (1, 9.0), (2, 2.5)] {
+            t.record(n, 1, s);
+        }
+        assert_eq!(t.chosen(), Some(2));
+        t.record(1, 1, 0.1);
+        assert_eq!(t.chosen(), Some(2));
+        let mut t = GroupTuner::new(2).unwrap();
+        for (n, s) in [(1, 100.0), (1, 1.0), (2, 2.0), (1, 9.0), (2, 2.5)] {
+            t.record(n, 1, s);
+        }
+        assert_eq!(t.chosen(), Some(1));
     }
 
     /// Loop counters are off by default; every choice keeps the other checks as documented.
