@@ -1400,14 +1400,21 @@ impl GpuRenderer {
     /// The timing choice between the image-size rule and one invocation per pixel
     /// ([`GroupTuner`]): on hardware adapters, where [`GpuRenderer::set_group_samples`] has not
     /// fixed it, without adaptive sampling (whose passes are cut into blocks at its test
-    /// points), and where the rule gives more than one.
+    /// points), and on images large enough that the rule chose fewer than
+    /// [`HARDWARE_GROUP_SAMPLES`] (more than 1): a smaller image at one invocation per pixel
+    /// leaves most of the GPU idle (the box at 256² ran at half speed on the H100), and its
+    /// passes are short enough for the host's part of a pass to blur the timing.
     fn tuner_for(&self) -> Option<GroupTuner> {
         let software = self.max_samples_per_invocation == 1;
         if software || self.group_samples.is_some() || self.settings.adaptive.is_some() {
             return None;
         }
         let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
-        GroupTuner::new(hardware_group_samples(pixels, self.samples_per_dispatch))
+        let rule = hardware_group_samples(pixels, self.samples_per_dispatch);
+        if rule >= HARDWARE_GROUP_SAMPLES {
+            return None;
+        }
+        GroupTuner::new(rule)
     }
 
     /// The timing choice of invocations per pixel, where the renderer makes one: the candidate
