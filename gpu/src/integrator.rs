@@ -235,11 +235,9 @@ crate::wgsl_consts! {
 /// The `emitters` buffer when light samples choose by the [`LightBvh`] `bvh` of `e`
 /// ([`LightSelection::Bvh`]), as `u32` words read by the shader as `vec4<u32>`: per emitter
 /// its triangle, its path from the root (two words, levels 0–31 then 32–63) and a pad —
-/// `4·n` words — then the nodes, depth first, [`LIGHT_BVH_NODE_WORDS`] each (the bounding
-/// sphere's `centre.xyz`, `φ`, its squared radius, `cos θo`, `sin θo`, a pad, `axis.xyz`,
-/// `child`, the floats as bits: [`furnace_scene::LightBounds::sphere`] and `sin_theta_o`, the
-/// values the CPU's importance forms from the box at each evaluation): 16 bytes per emitter and
-/// 48 per node, `2n − 1` nodes. 16-byte records let a node be three 16-byte loads (twelve 4-byte
+/// `4·n` words — then the nodes, depth first, [`LIGHT_BVH_NODE_WORDS`] each (`lo.xyz`, `φ`,
+/// `hi.xyz`, `cos θo`, `axis.xyz`, `child`, the floats as bits): 16 bytes per emitter and 48
+/// per node, `2n − 1` nodes. 16-byte records let a node be three 16-byte loads (twelve 4-byte
 /// ones cost more on the H200, BENCHMARKS.md).
 pub fn light_bvh_words(e: &Emitters, bvh: &LightBvh) -> Vec<u32> {
     let mut words = Vec::with_capacity(4 * e.len() + LIGHT_BVH_NODE_WORDS as usize * bvh.nodes().len());
@@ -248,11 +246,10 @@ pub fn light_bvh_words(e: &Emitters, bvh: &LightBvh) -> Vec<u32> {
     }
     for node in bvh.nodes() {
         let b = &node.bounds;
-        let (centre, r2) = b.sphere();
-        words.extend(centre.to_array().map(f32::to_bits));
+        words.extend(b.lo.to_array().map(f32::to_bits));
         words.push(b.phi.to_bits());
-        words.extend([r2, b.cos_theta_o, b.sin_theta_o()].map(f32::to_bits));
-        words.push(0);
+        words.extend(b.hi.to_array().map(f32::to_bits));
+        words.push(b.cos_theta_o.to_bits());
         words.extend(b.axis.to_array().map(f32::to_bits));
         words.push(node.child);
     }

@@ -80,27 +80,14 @@ impl LightBounds {
         Some(Self { lo: v0.min(v1).min(v2), hi: v0.max(v1).max(v2), phi, axis, cos_theta_o: 1.0 })
     }
 
-    /// The box's bounding sphere: its centre and squared radius (what
-    /// [`LightBounds::importance`] uses of the box; the GPU's node records hold these rather
-    /// than the corners, so that its importance does not form them at every evaluation).
-    pub fn sphere(&self) -> (Vec3, f32) {
-        let centre = 0.5 * (self.lo + self.hi);
-        let half = 0.5 * (self.hi - self.lo);
-        (centre, half.dot(half))
-    }
-
-    /// `sin θo` of the cone's half-angle (0 for a single normal, `cos θo` = 1).
-    pub fn sin_theta_o(&self) -> f32 {
-        // A leaf's cone is one normal (cos θo = 1): no square root.
-        if self.cos_theta_o >= 1.0 { 0.0 } else { safe_sqrt(1.0 - self.cos_theta_o * self.cos_theta_o) }
-    }
-
     /// A bound of the power these emitters send to `p`, a point whose receiving side is
     /// `n` (unit; [`Vec3::ZERO`]: any side), up to a constant shared by every node; 0 when none
     /// of them can light `p` (see the [module docs](self)). The WGSL twin is
     /// `light_bvh_importance` in furnace-gpu's `light_bvh.wgsl`.
     pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
-        let (centre, r2) = self.sphere();
+        let centre = 0.5 * (self.lo + self.hi);
+        let half = 0.5 * (self.hi - self.lo);
+        let r2 = half.dot(half);
         let to_p = p - centre;
         let dist2 = to_p.dot(to_p);
         if !(dist2 > r2) {
@@ -117,7 +104,9 @@ impl LightBounds {
         // θ′ = max(0, θw − θo − θb): the emitters' normals against the direction to p.
         let cos_w = self.axis.dot(wi);
         let sin_w = safe_sqrt(1.0 - cos_w * cos_w);
-        let sin_o = self.sin_theta_o();
+        // A leaf's cone is one normal (cos θo = 1): no square root.
+        let sin_o =
+            if self.cos_theta_o >= 1.0 { 0.0 } else { safe_sqrt(1.0 - self.cos_theta_o * self.cos_theta_o) };
         let cos_x = cos_sub_clamped(sin_w, cos_w, sin_o, self.cos_theta_o);
         let sin_x = sin_sub_clamped(sin_w, cos_w, sin_o, self.cos_theta_o);
         let cos_p = cos_sub_clamped(sin_x, cos_x, sin_b, cos_b);

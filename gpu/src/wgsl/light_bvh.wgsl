@@ -2,18 +2,15 @@
 // LightBounds::importance, the same f32 arithmetic in the same order.
 //
 // Requires: `emitters: array<vec4<u32>>` holding the nodes from element `base` on, three
-// vec4 each (furnace_gpu::integrator::light_bvh_words: centre.xyz, phi | r2, cos_theta_o,
-// sin_theta_o, pad | axis.xyz, child; 16-byte loads), and LIGHT_BVH_LEAF (generated from
-// furnace_scene::LIGHT_BVH_LEAF). Nothing else: it composes alone (the parity tests run it so).
+// vec4 each (furnace_gpu::integrator::light_bvh_words: lo.xyz, phi | hi.xyz, cos_theta_o |
+// axis.xyz, child; 16-byte loads), and LIGHT_BVH_LEAF (generated from furnace_scene::LIGHT_BVH_LEAF). Nothing
+// else: it composes alone (the parity tests run it so).
 
-// LightBounds as the importance uses it: the box's bounding sphere (LightBounds::sphere) and
-// the cone's sine (LightBounds::sin_theta_o) formed once on the host.
 struct LightBvhBounds {
-    centre: vec3<f32>,
+    lo: vec3<f32>,
     phi: f32,
-    r2: f32,
+    hi: vec3<f32>,
     cos_theta_o: f32,
-    sin_theta_o: f32,
     axis: vec3<f32>,
     child: u32,
 }
@@ -23,7 +20,7 @@ fn light_bvh_node(base: u32, index: u32) -> LightBvhBounds {
     let a = bitcast<vec4<f32>>(emitters[k]);
     let b = bitcast<vec4<f32>>(emitters[k + 1u]);
     let c = emitters[k + 2u];
-    return LightBvhBounds(a.xyz, a.w, b.x, b.y, b.z, bitcast<vec3<f32>>(c.xyz), c.w);
+    return LightBvhBounds(a.xyz, a.w, b.xyz, b.w, bitcast<vec3<f32>>(c.xyz), c.w);
 }
 
 // Vec3::dot: (x·x' + y·y') + z·z' (scene.wgsl's scene_dot, repeated so the module stands alone).
@@ -53,8 +50,10 @@ fn light_bvh_sin_sub(sin_a: f32, cos_a: f32, sin_b: f32, cos_b: f32) -> f32 {
 
 // LightBounds::importance.
 fn light_bvh_importance(b: LightBvhBounds, p: vec3<f32>, n: vec3<f32>) -> f32 {
-    let r2 = b.r2;
-    let to_p = p - b.centre;
+    let centre = 0.5 * (b.lo + b.hi);
+    let half = 0.5 * (b.hi - b.lo);
+    let r2 = light_bvh_dot(half, half);
+    let to_p = p - centre;
     let dist2 = light_bvh_dot(to_p, to_p);
     if !(dist2 > r2) {
         if r2 > 0.0 {
@@ -69,8 +68,12 @@ fn light_bvh_importance(b: LightBvhBounds, p: vec3<f32>, n: vec3<f32>) -> f32 {
     let cos_b = light_bvh_safe_sqrt(1.0 - sin2_b);
     let cos_w = light_bvh_dot(b.axis, wi);
     let sin_w = light_bvh_safe_sqrt(1.0 - cos_w * cos_w);
-    let cos_x = light_bvh_cos_sub(sin_w, cos_w, b.sin_theta_o, b.cos_theta_o);
-    let sin_x = light_bvh_sin_sub(sin_w, cos_w, b.sin_theta_o, b.cos_theta_o);
+    var sin_o = 0.0;
+    if b.cos_theta_o < 1.0 {
+        sin_o = light_bvh_safe_sqrt(1.0 - b.cos_theta_o * b.cos_theta_o);
+    }
+    let cos_x = light_bvh_cos_sub(sin_w, cos_w, sin_o, b.cos_theta_o);
+    let sin_x = light_bvh_sin_sub(sin_w, cos_w, sin_o, b.cos_theta_o);
     let cos_p = light_bvh_cos_sub(sin_x, cos_x, sin_b, cos_b);
     if !(cos_p > 0.0) {
         return 0.0;
