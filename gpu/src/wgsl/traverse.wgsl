@@ -67,8 +67,8 @@ struct Hit {
 
 /// Counters of the traces run so far by this invocation (private memory: zero at the start of
 /// each invocation, summed over its traces). Tests and profiling read them; the tracer does not,
-/// and the integrator's rendering kernel composes none of their updates (`// #if
-/// TRACE_COUNTERS`: the counting kernel only).
+/// and the integrator's rendering kernel composes none of their updates (they are in
+/// TRACE_COUNTERS blocks: the counting kernel only).
 struct TraceStats {
     /// Nodes whose 8 child boxes were tested (fallback sweeps included).
     nodes: u32,
