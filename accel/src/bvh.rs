@@ -13,7 +13,7 @@ use obvhs::{
 
 use crate::gpu::{GpuCwbvhNode, GpuTriangle};
 use crate::traverse::{self, WideNode};
-use crate::triangle::{TriangleHit, intersect_triangle};
+use crate::triangle::{EdgeTriangle, TriangleHit, intersect_triangle};
 
 /// Which tree obvhs builds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -145,6 +145,9 @@ pub struct Bvh {
     triangles: Vec<GpuTriangle>,
     /// `triangles[i].id`, as its own buffer.
     ids: Vec<u32>,
+    /// `triangles` with their edges formed, for the CPU traversal over [`WideNode`]s (empty
+    /// where the tree has none: large trees are memory-bound and keep 48 bytes per triangle).
+    edges: Vec<EdgeTriangle>,
     /// `2^-m`: obvhs traverses with `dir · dir_scale`, see [`Bvh::obvhs_ray`].
     dir_scale: f32,
     input_count: usize,
@@ -234,10 +237,17 @@ impl Bvh {
             })
             .collect();
         let ids = gpu.iter().map(|t| t.id).collect();
+        let edges = match &tree {
+            Tree::Cwbvh(_, wide) if !wide.is_empty() => {
+                gpu.iter().map(|t| EdgeTriangle::new(t.vertices())).collect()
+            }
+            _ => Vec::new(),
+        };
         Bvh {
             tree,
             triangles: gpu,
             ids,
+            edges,
             dir_scale: direction_scale(max_abs),
             input_count: triangles.len(),
             skipped,
@@ -320,10 +330,32 @@ impl Bvh {
         t_max: f32,
         mut mask: impl FnMut(u32, Vec2) -> bool,
     ) -> Option<Hit> {
-        let ray = self.obvhs_ray(origin, dir, t_max)?;
+        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let ray = self.obvhs_ray(o, d, t_max)?;
+        let cull_scale = CULL_SLACK / self.dir_scale;
+        if let Tree::Cwbvh(_, wide) = &self.tree
+            && !wide.is_empty()
+        {
+            // The CPU's own traversal, over the edge triangles.
+            let mut best: Option<(usize, TriangleHit)> = None;
+            let mut current = t_max;
+            traverse::closest(wide, &ray, |slot| match self.edges[slot].intersect(o, d, current) {
+                Some(h) if mask(self.ids[slot], h.barycentrics) => {
+                    best = Some((slot, h));
+                    current = h.t;
+                    // Cull boxes entered slightly beyond the hit, see CULL_SLACK.
+                    h.t * cull_scale
+                }
+                _ => f32::INFINITY,
+            });
+            return best.map(|(slot, h)| Hit {
+                triangle: self.ids[slot],
+                t: h.t,
+                barycentrics: h.barycentrics,
+            });
+        }
         let mut best: Option<(u32, TriangleHit)> = None;
         let mut current = t_max;
-        let cull_scale = CULL_SLACK / self.dir_scale;
         let mut visit = |_: &Ray, slot: usize| -> f32 {
             let tri = &self.triangles[slot];
             match intersect_triangle(origin, dir, tri.vertices(), current) {
@@ -339,10 +371,9 @@ impl Bvh {
         };
         match &self.tree {
             Tree::Empty => {}
-            Tree::Cwbvh(b, wide) if wide.is_empty() => {
+            Tree::Cwbvh(b, _) => {
                 b.ray_traverse(ray, &mut RayHit::none(), &mut visit);
             }
-            Tree::Cwbvh(_, wide) => traverse::closest(wide, &ray, |slot| visit(&ray, slot)),
             Tree::Bvh2(b) => {
                 b.ray_traverse(ray, &mut RayHit::none(), &mut visit);
             }
@@ -367,10 +398,18 @@ impl Bvh {
         t_max: f32,
         mut mask: impl FnMut(u32, Vec2) -> bool,
     ) -> bool {
-        let Some(ray) = self.obvhs_ray(origin, dir, t_max) else {
+        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let Some(ray) = self.obvhs_ray(o, d, t_max) else {
             return false;
         };
-        let mut visit = |_: &Ray, slot: usize| -> f32 {
+        if let Tree::Cwbvh(_, wide) = &self.tree
+            && !wide.is_empty()
+        {
+            return traverse::any(wide, &ray, |slot| {
+                self.edges[slot].intersect(o, d, t_max).is_some_and(|h| mask(self.ids[slot], h.barycentrics))
+            });
+        }
+        let visit = |_: &Ray, slot: usize| -> f32 {
             let tri = &self.triangles[slot];
             match intersect_triangle(origin, dir, tri.vertices(), t_max) {
                 // Any finite t below the scaled t_max stops traversal; 0 always is.
@@ -380,8 +419,7 @@ impl Bvh {
         };
         match &self.tree {
             Tree::Empty => false,
-            Tree::Cwbvh(b, wide) if wide.is_empty() => !b.ray_traverse_miss(ray, visit),
-            Tree::Cwbvh(_, wide) => traverse::any(wide, &ray, |slot| visit(&ray, slot) == 0.0),
+            Tree::Cwbvh(b, _) => !b.ray_traverse_miss(ray, visit),
             Tree::Bvh2(b) => !b.ray_traverse_miss(ray, visit),
         }
     }
@@ -401,13 +439,13 @@ impl Bvh {
     /// components; that would be wrong for the scaled direction, so the inverse is formed here
     /// with a clamp at `2^100`.
     #[inline(always)]
-    fn obvhs_ray(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<Ray> {
-        if !(origin.is_finite() && dir.is_finite() && dir != Vec3::ZERO && t_max > 0.0) {
+    fn obvhs_ray(&self, origin: Vec3A, dir: Vec3A, t_max: f32) -> Option<Ray> {
+        if !(origin.is_finite() && dir.is_finite() && dir != Vec3A::ZERO && t_max > 0.0) {
             return None;
         }
-        let d = Vec3A::from(dir * self.dir_scale);
+        let d = dir * self.dir_scale;
         Some(Ray {
-            origin: origin.into(),
+            origin,
             direction: d,
             inv_direction: safe_recip3(d),
             tmin: 0.0,

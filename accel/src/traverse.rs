@@ -5,8 +5,12 @@
 //! every visit, one byte at a time (48 scalar loads and int-to-float conversions per node), then
 //! walks the 8 children with a branch each; under callgrind that was ~60% of the instructions of
 //! an incoherent closest-hit query on the Cornell box (`BENCHMARKS.md`). [`WideNode`] keeps the
-//! same quantised planes as exact `f32` (224 bytes per node instead of 80) and builds the hit
-//! mask without branches. The arithmetic per child and axis is obvhs's, in the same order
+//! same quantised planes as exact `f32` (256 bytes per node instead of 80), tests the boxes
+//! without branches and loops only over the hit leaf children (inner children's mask bits come
+//! from a table). A branch-free mask of the leaf children (lane masks selecting precomputed
+//! bits, summed) ran ~7% slower with about as many instructions: a ray's traversal is a chain
+//! of dependent node visits, and the select-and-sum lengthened each link, where the loop's
+//! predicted branches do not. The arithmetic per child and axis is obvhs's, in the same order
 //! (`q · (extent / d) + (p − o) / d`, then max/min), so box decisions are the same except for
 //! the entry cut-off: obvhs clamps entry distances to an absolute `1e-4`, this test to `0` (it
 //! visits a superset of obvhs's boxes).
@@ -21,17 +25,23 @@ use obvhs::{cwbvh::node::CwBvhNode, ray::Ray};
 /// test is 4-wide `f32` arithmetic with no per-node decoding.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct WideNode {
-    // 256 bytes: 192 of planes, 2 x 16 of `Vec3A`, 8 + 3 x 4, padded to 16-byte alignment.
     /// `[axis][lo, hi][children 0-3, 4-7]`, in the node's quantised grid units.
     planes: [[[Vec4; 2]; 2]; 3],
     /// Node grid origin `p` and cell size `2^e` per axis.
     origin: Vec3A,
     extent: Vec3A,
-    child_meta: u64,
+    /// obvhs's per-child metadata: for a leaf child, its unary triangle count in the high 3
+    /// bits and its first triangle's offset from `primitive_base` in the low 5 (0 for an
+    /// empty child); inner child `i` sits in slot `24 + i` (`bvh2_to_cwbvh`), which
+    /// `INNER_BITS` assumes.
+    child_meta: [u8; 8],
     imask: u32,
     child_base: u32,
     primitive_base: u32,
 }
+
+// 192 + 32 + 8 + 12, padded to the 16-byte alignment of its vectors.
+const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
 impl WideNode {
     pub(crate) fn from_cwbvh(node: &CwBvhNode) -> Self {
@@ -41,6 +51,10 @@ impl WideNode {
                 Vec4::new(q[4] as f32, q[5] as f32, q[6] as f32, q[7] as f32),
             ]
         };
+        for (i, &meta) in node.child_meta.iter().enumerate() {
+            let inner = node.imask & (1 << i) != 0;
+            debug_assert!(!inner || meta == 0b0010_0000 | (24 + i as u8), "inner child {i} off its slot");
+        }
         WideNode {
             planes: [
                 [f(node.child_min_x), f(node.child_max_x)],
@@ -49,66 +63,79 @@ impl WideNode {
             ],
             origin: Vec3A::from(node.p),
             extent: node.compute_extent(),
-            child_meta: u64::from_le_bytes(node.child_meta),
+            child_meta: node.child_meta,
             imask: node.imask as u32,
             child_base: node.child_base_idx,
             primitive_base: node.primitive_base_idx,
         }
     }
 
-    /// obvhs's `CwBvhNode::get_child_and_index_bits`, on the stored `child_meta`.
-    #[inline(always)]
-    fn child_and_index_bits(&self, oct_inv4: u32) -> (u64, u64) {
-        let mut oct_inv8 = oct_inv4 as u64;
-        oct_inv8 |= oct_inv8 << 32;
-        let meta8 = self.child_meta;
-        let is_inner8 = (meta8 & (meta8 << 1)) & 0x1010_1010_1010_1010;
-        let inner_mask8 = (is_inner8 >> 4) * 0xff;
-        let bit_index8 = (meta8 ^ (oct_inv8 & inner_mask8)) & 0x1f1f_1f1f_1f1f_1f1f;
-        let child_bits8 = (meta8 >> 5) & 0x0707_0707_0707_0707;
-        (child_bits8, bit_index8)
-    }
-
     /// obvhs's per-node hit mask (`CwBvhNode::intersect_ray`'s result: inner children hit in
     /// the top byte, in traversal order; leaf triangles hit in the low 24 bits) for children
     /// entered at some `t ∈ [0, t_max]`. Same arithmetic, in the same order, as obvhs's SSE
     /// test: `q · (extent / d) + (p − o) / d`, then `maxps`/`minps` (glam's `Vec4::max`/`min`
-    /// are those instructions), `cmpleps`.
+    /// are those instructions), `cmpleps`. Inner children's bits come from a table (their
+    /// slots XOR the ray's octant), so the loop runs over hit leaf children only.
     #[inline(always)]
-    fn intersect(&self, ray: &NodeRay, t_max: f32, oct_inv4: u32) -> u32 {
+    fn intersect(&self, ray: &NodeRay, t_max: f32) -> u32 {
         let scale = self.extent * ray.inv_direction;
         let offset = (self.origin - ray.origin) * ray.inv_direction;
         let (s, o) = (scale.to_array(), offset.to_array());
-        let mut hit8 = 0u32;
-        for half in 0..2 {
+        let half = |half: usize| {
             let t = |axis: usize, far: bool| {
                 let side = ray.negative[axis] != far;
                 self.planes[axis][side as usize][half] * s[axis] + Vec4::splat(o[axis])
             };
             let enter = t(0, false).max(t(1, false).max(t(2, false))).max(Vec4::ZERO);
             let leave = t(0, true).min(t(1, true).min(t(2, true))).min(Vec4::splat(t_max));
-            hit8 |= enter.cmple(leave).bitmask() << (4 * half);
-        }
-        let (child_bits8, bit_index8) = self.child_and_index_bits(oct_inv4);
-        let mut mask = 0u32;
+            enter.cmple(leave)
+        };
+        let (lo, hi) = (half(0), half(1));
+        let mut hit8 = lo.bitmask() | (hi.bitmask() << 4);
+        let mut mask = u32::from(INNER_BITS[ray.octant][(hit8 & self.imask) as usize]) << 24;
+        hit8 &= !self.imask;
         while hit8 != 0 {
-            let shift = 8 * hit8.trailing_zeros();
+            let child = hit8.trailing_zeros() as usize;
             hit8 &= hit8 - 1;
-            let bits = (child_bits8 >> shift) as u32 & 0xff;
-            let index = (bit_index8 >> shift) as u32 & 31;
-            mask |= bits << index;
+            let meta = u32::from(self.child_meta[child]);
+            mask |= (meta >> 5) << (meta & 0x1f);
         }
         mask
     }
 }
+
+/// `INNER_BITS[octant][m]`: the byte with bit `i ^ octant` set for each bit `i` of `m`, i.e.
+/// the top byte of obvhs's hit mask for hit inner children `m` (child `i` in slot `24 + i`,
+/// whose bit is `24 + (i ^ octant)`: children in the ray's traversal order).
+const INNER_BITS: [[u8; 256]; 8] = {
+    let mut table = [[0u8; 256]; 8];
+    let mut octant = 0;
+    while octant < 8 {
+        let mut m = 0;
+        while m < 256 {
+            let mut bits = 0u8;
+            let mut i = 0;
+            while i < 8 {
+                if m & (1 << i) != 0 {
+                    bits |= 1 << (i ^ octant);
+                }
+                i += 1;
+            }
+            table[octant][m] = bits;
+            m += 1;
+        }
+        octant += 1;
+    }
+    table
+};
 
 /// The per-ray constants of the node test.
 pub(crate) struct NodeRay {
     origin: Vec3A,
     inv_direction: Vec3A,
     negative: [bool; 3],
-    /// obvhs's `ray_get_octant_inv4`.
-    oct_inv4: u32,
+    /// obvhs's `ray_get_octant_inv4` in one byte: 4, 2, 1 for a non-negative x, y, z.
+    octant: usize,
 }
 
 impl NodeRay {
@@ -117,18 +144,19 @@ impl NodeRay {
         // Sign bits, not `d < 0`: a `-0.0` component has the reciprocal `-2^100`
         // (`Bvh::obvhs_ray`), so it must enter through the far plane like any negative one;
         // with `d < 0` it took the near plane and the ray missed every box.
-        let d = ray.direction;
-        let negative = [d.x.is_sign_negative(), d.y.is_sign_negative(), d.z.is_sign_negative()];
+        let signs = ray.direction.is_negative_bitmask();
         NodeRay {
             origin: ray.origin,
             inv_direction: ray.inv_direction,
-            negative,
-            oct_inv4: (if negative[0] { 0 } else { 0x0404_0404 })
-                | (if negative[1] { 0 } else { 0x0202_0202 })
-                | (if negative[2] { 0 } else { 0x0101_0101 }),
+            negative: [signs & 1 != 0, signs & 2 != 0, signs & 4 != 0],
+            octant: OCTANT_INV[signs as usize],
         }
     }
 }
+
+/// obvhs's inverted octant of a ray from its direction's sign bits (x in bit 0): bit 2 for a
+/// non-negative x, bit 1 for y, bit 0 for z.
+const OCTANT_INV: [usize; 8] = [7, 3, 5, 1, 6, 2, 4, 0];
 
 /// The CWBVH traversal of Ylitie et al. 2017 as obvhs's `traverse!` macro does it (node groups
 /// and triangle groups as `(base, mask)` pairs), over [`WideNode`]s.
@@ -180,7 +208,7 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
                 stack[top % STACK] = current;
                 top += 1;
             }
-            let slot_index = (child_index_offset - 24) ^ (r.oct_inv4 & 0xff);
+            let slot_index = (child_index_offset - 24) ^ r.octant as u32;
             // `slot_index < 8`: only the low byte (`imask`) counts; a table, as baseline x86-64
             // has no `popcnt` instruction.
             let relative_index =
@@ -200,7 +228,7 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
         } else {
             return;
         }
-        let hitmask = node.intersect(&r, t_max, r.oct_inv4);
+        let hitmask = node.intersect(&r, t_max);
         current = (node.child_base, (hitmask & follow_inner) | node.imask);
         let mut primitives = hitmask & 0x00ff_ffff;
         while primitives != 0 {
@@ -239,8 +267,6 @@ pub(crate) fn any(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize) ->
     });
     found
 }
-
-const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
 /// Node groups [`traverse`] keeps in its fixed array before spilling to the heap (obvhs's
 /// CWBVH stack size; the test scenes and glTF samples stay well below it).

@@ -12,7 +12,7 @@ use furnace_render::{
     ADAPTIVE_STEP, AovSample, Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings,
 };
 use furnace_sampling::{AnySampler, Sampler};
-use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, MaterialSample, Scene, oct_decode};
+use furnace_scene::{AlphaMode, Camera, CameraRays, Emitters, LightBvh, MaterialSample, Scene, oct_decode};
 use furnace_scene::{Environment, EnvironmentSampler};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -34,6 +34,8 @@ pub struct CpuRenderer {
     bvh: Bvh,
     sampler: AnySampler,
     camera: Camera,
+    /// The camera's rays for the settings' image size.
+    rays: CameraRays,
     /// Material index of each triangle, clamped into `scene.materials`.
     triangle_materials: Vec<u32>,
     /// Per material, its emission and BSDF when they do not vary over the surface (no
@@ -143,6 +145,7 @@ impl CpuRenderer {
             .as_ref()
             .zip(settings.env_sampling.light_samples(settings.light_sampling))
             .and_then(|(e, compensated)| e.sampler(compensated));
+        let rays = camera.rays(settings.width, settings.height);
         Ok(Self {
             env_rotation: environment
                 .as_ref()
@@ -162,6 +165,7 @@ impl CpuRenderer {
             bvh,
             sampler,
             camera: *camera,
+            rays,
             triangle_materials,
             constant_materials,
             normals,
@@ -296,7 +300,7 @@ impl CpuRenderer {
         let pixel = y.wrapping_mul(self.settings.width).wrapping_add(x);
         let [ux, uy] = self.sampler.value_2d(pixel, index, DIM_PIXEL);
         let film_point = Vec2::new(x as f32 + ux, y as f32 + uy);
-        let ray = self.camera.generate_ray(film_point, self.settings.width, self.settings.height);
+        let ray = self.rays.generate(film_point);
         self.trace(pixel, index, ray.origin, ray.direction, aov)
     }
 

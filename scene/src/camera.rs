@@ -77,23 +77,49 @@ impl Camera {
     /// The ray through the film point `pixel` (in pixels, jitter included: pixel `(i, j)` is
     /// `[i, i+1] × [j, j+1]`, row 0 at the top) of a `width × height` image.
     pub fn generate_ray(&self, pixel: Vec2, width: u32, height: u32) -> Ray {
+        self.rays(width, height).generate(pixel)
+    }
+
+    /// [`Camera::generate_ray`] for a `width × height` image with the per-image constants
+    /// (the field of view's tangent, the aspect ratio) formed once: a renderer generating
+    /// every pixel's rays keeps one. The rays are the same to the bit.
+    pub fn rays(&self, width: u32, height: u32) -> CameraRays {
         let (w, h) = (width.max(1) as f32, height.max(1) as f32);
         let aspect = w / h;
+        let scale = match self.projection {
+            Projection::Perspective { yfov, .. } => (yfov * 0.5).tan(),
+            Projection::Orthographic { ymag, .. } => ymag,
+        };
+        CameraRays { camera: *self, w, h, aspect, scale }
+    }
+}
+
+/// A [`Camera`] with the constants of one image size formed: [`Camera::rays`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CameraRays {
+    camera: Camera,
+    w: f32,
+    h: f32,
+    aspect: f32,
+    /// `tan(yfov / 2)` (perspective) or `ymag` (orthographic).
+    scale: f32,
+}
+
+impl CameraRays {
+    /// The ray through the film point `pixel`, as [`Camera::generate_ray`].
+    #[inline]
+    pub fn generate(&self, pixel: Vec2) -> Ray {
+        let (w, h, t, aspect) = (self.w, self.h, self.scale, self.aspect);
         // Normalised device coordinates: x right in [−1, 1], y up in [−1, 1].
         let x = 2.0 * pixel.x / w - 1.0;
         let y = 1.0 - 2.0 * pixel.y / h;
-        let (o, d) = match self.projection {
-            Projection::Perspective { yfov, .. } => {
-                let t = (yfov * 0.5).tan();
-                (Vec3::ZERO, Vec3::new(x * t * aspect, y * t, -1.0))
-            }
-            Projection::Orthographic { ymag, .. } => {
-                (Vec3::new(x * ymag * aspect, y * ymag, 0.0), Vec3::NEG_Z)
-            }
+        let (o, d) = match self.camera.projection {
+            Projection::Perspective { .. } => (Vec3::ZERO, Vec3::new(x * t * aspect, y * t, -1.0)),
+            Projection::Orthographic { .. } => (Vec3::new(x * t * aspect, y * t, 0.0), Vec3::NEG_Z),
         };
         Ray {
-            origin: self.world_from_camera.transform_point3(o),
-            direction: self.world_from_camera.transform_vector3(d).normalize(),
+            origin: self.camera.world_from_camera.transform_point3(o),
+            direction: self.camera.world_from_camera.transform_vector3(d).normalize(),
         }
     }
 }
