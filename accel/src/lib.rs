@@ -30,8 +30,8 @@
 //! ## Presets
 //!
 //! [`BuildQuality`] names obvhs's six presets; [`BuildQuality::for_triangle_count`] picks one
-//! when [`BuildOptions::quality`] is `None`: `Slow` (spatial splits, best trees) up to 300 k
-//! triangles, `Medium` up to 3 M, `Fast` beyond.
+//! when [`BuildOptions::quality`] is `None`: `VerySlow` (spatial splits, every node reinserted:
+//! the best trees) up to 300 k triangles, `Medium` up to 3 M, `Fast` beyond.
 //!
 //! ## GPU buffers
 //!
