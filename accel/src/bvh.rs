@@ -65,9 +65,9 @@ impl BuildQuality {
     /// * `n ≤ 300 000` → [`VerySlow`](Self::VerySlow): reinsertion on every node. On the
     ///   procedural interiors (a room of furniture and large walls) its trees render 1.5–1.7×
     ///   faster than `Slow`'s (20% of the nodes reinserted) on the H200 and on the CPU; on the
-    ///   reference boxes 0–4%. It builds 20 k triangles in ~50 ms instead of ~20 ms, 287 k in
-    ///   ~1.6 s instead of ~0.5 s on one core of the development VM (`BENCHMARKS.md`): paid
-    ///   once, against renders of seconds to minutes.
+    ///   reference boxes 0–4%. It builds 287 k triangles in ~0.9 s instead of ~0.5 s on the
+    ///   development VM's two cores (obvhs builds on the current rayon pool; 1.6 s on one
+    ///   core; `BENCHMARKS.md`): paid once, against renders of seconds to minutes.
     /// * `n ≤ 3 000 000` → [`Medium`](Self::Medium): builds 1.04 M triangles in 0.9 s on one
     ///   core (`BENCHMARKS.md`); `Slow` adds spatial splits and 128-bit Morton codes on top, a
     ///   cost that grows with the scene while the first frame does not.

@@ -9,6 +9,8 @@ mod common;
 mod deep_trees;
 #[path = "degenerate.rs"]
 mod degenerate;
+#[path = "determinism.rs"]
+mod determinism;
 #[path = "queries.rs"]
 mod queries;
 #[path = "self_intersection.rs"]
