@@ -63,13 +63,14 @@ impl BuildQuality {
     /// The preset chosen when none is given, by triangle count `n`:
     ///
     /// * `n ≤ 300 000` → [`VerySlow`](Self::VerySlow): reinsertion on every node. On the
-    ///   procedural interiors (a room of furniture and large walls) its trees render 1.5–1.7×
+    ///   procedural interiors (a room of furniture and large walls) its trees render 1.4–1.8×
     ///   faster than `Slow`'s (20% of the nodes reinserted) on the H200 and on the CPU; on the
     ///   reference boxes 0–4%. It builds 287 k triangles in ~0.9 s instead of ~0.5 s on the
     ///   development VM's two cores (obvhs builds on the current rayon pool; 1.6 s on one
     ///   core; `BENCHMARKS.md`): paid once, against renders of seconds to minutes.
     /// * `n ≤ 3 000 000` → [`Medium`](Self::Medium): builds 1.04 M triangles in 0.9 s on one
-    ///   core (`BENCHMARKS.md`); `Slow` adds spatial splits and 128-bit Morton codes on top, a
+    ///   core (`BENCHMARKS.md`; `VerySlow` takes ~5 s on two cores at 1 M for 1.6× the speed,
+    ///   a trade for the user, not a threshold); `Slow` adds spatial splits and 128-bit Morton codes on top, a
     ///   cost that grows with the scene while the first frame does not.
     /// * larger → [`Fast`](Self::Fast).
     ///
