@@ -69,9 +69,10 @@ impl BuildQuality {
     ///   development VM's two cores (obvhs builds on the current rayon pool; 1.6 s on one
     ///   core; `BENCHMARKS.md`): paid once, against renders of seconds to minutes.
     /// * `n ≤ 3 000 000` → [`Medium`](Self::Medium): builds 1.04 M triangles in 0.9 s on one
-    ///   core (`BENCHMARKS.md`; `VerySlow` takes ~5 s on two cores at 1 M for 1.6× the speed,
-    ///   a trade for the user, not a threshold); `Slow` adds spatial splits and 128-bit Morton codes on top, a
-    ///   cost that grows with the scene while the first frame does not.
+    ///   core (`BENCHMARKS.md`); `Slow` adds spatial splits and 128-bit Morton codes on top, a
+    ///   cost that grows with the scene while the first frame does not. (`VerySlow` takes ~5 s
+    ///   on two cores at 1 M triangles for 1.6× the speed: a trade for the user, not for a
+    ///   threshold.)
     /// * larger → [`Fast`](Self::Fast).
     ///
     /// The thresholds come from `cargo bench -p furnace-accel` (build time against Mrays/s)
