@@ -289,17 +289,6 @@ mod tests {
     use crate::triangle::intersect_triangle;
     use glam::Vec3;
 
-    /// A tiny xorshift generator: the tests need reproducible rays, not good randomness.
-    struct Rng(u64);
-    impl Rng {
-        fn range(&mut self, lo: f32, hi: f32) -> f32 {
-            self.0 ^= self.0 << 13;
-            self.0 ^= self.0 >> 7;
-            self.0 ^= self.0 << 17;
-            lo + (hi - lo) * ((self.0 >> 40) as f32 / (1u64 << 24) as f32)
-        }
-    }
-
     /// A hand-built chain of `levels` CWBVH nodes (the tree of
     /// `tests/tests/traversal_parity.rs`'s deep-tree test): chain node k has two inner children
     /// whose boxes cover the whole scene, a leaf holder with triangles 3k..3k+3 and chain node
@@ -356,7 +345,7 @@ mod tests {
             })
             .collect();
         let nodes = chain(LEVELS, &tris);
-        let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+        let mut rng = furnace_tests::Rng::new(0x9e37_79b9_7f4a_7c15);
         let (mut hits, mut deep) = (0, 0);
         for _ in 0..4096 {
             let o = Vec3::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), rng.range(-1.0, 4.0));
