@@ -3,7 +3,9 @@
 use clap::{Args, Parser, Subcommand, ValueEnum};
 use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
-use furnace_render::{EnvSampling, LightSampling, LightSelection, SampleRange, TriangleSampling};
+use furnace_render::{
+    EnvSampling, LightSampling, LightSelection, PointLightSampling, SampleRange, TriangleSampling,
+};
 use furnace_sampling::SamplerKind;
 use furnace_scene::Camera;
 use glam::Vec3;
@@ -142,6 +144,11 @@ pub struct RenderArgs {
     /// Kulla 2018), power picks in proportion to power by an alias table.
     #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
     pub light_selection: LightSelectionArg,
+    /// How a scattering event gathers the point and spot lights: all (default: a shadow ray to
+    /// each) or one (one light chosen in proportion to its power: one shadow ray per event
+    /// whatever the number of lights, more noise per sample).
+    #[arg(long, value_enum, default_value_t = PointLightsArg::All)]
+    pub point_lights: PointLightsArg,
     /// Clamp each sample so that its largest channel is at most X (firefly suppression; off by
     /// default because it is biased: it darkens caustics and small bright lights).
     #[arg(long, value_name = "X", value_parser = parse_clamp)]
@@ -460,6 +467,10 @@ pub struct BenchArgs {
     /// shading point) or power (in proportion to power; as `furnace render`).
     #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
     pub light_selection: LightSelectionArg,
+    /// How a scattering event gathers the point and spot lights: all (a shadow ray to each) or
+    /// one (one chosen by power; as `furnace render`).
+    #[arg(long, value_enum, default_value_t = PointLightsArg::All)]
+    pub point_lights: PointLightsArg,
     // The environment map and how it is placed (as `furnace render`).
     #[command(flatten)]
     pub environment: EnvArgs,
@@ -772,6 +783,24 @@ impl From<LightSelectionArg> for LightSelection {
         match m {
             LightSelectionArg::Power => LightSelection::Power,
             LightSelectionArg::Bvh => LightSelection::Bvh,
+        }
+    }
+}
+
+/// `--point-lights`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum PointLightsArg {
+    /// A shadow ray to every point and spot light at every scattering event.
+    All,
+    /// One light per event, chosen in proportion to its power.
+    One,
+}
+
+impl From<PointLightsArg> for PointLightSampling {
+    fn from(m: PointLightsArg) -> Self {
+        match m {
+            PointLightsArg::All => PointLightSampling::All,
+            PointLightsArg::One => PointLightSampling::One,
         }
     }
 }

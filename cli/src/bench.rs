@@ -47,6 +47,7 @@ struct Report {
     light_sampling: &'static str,
     triangle_sampling: &'static str,
     light_selection: &'static str,
+    point_lights: &'static str,
     env_sampling: &'static str,
     spp: u32,
     seconds: f64,
@@ -224,6 +225,7 @@ impl Report {
             "light_sampling": self.light_sampling,
             "triangle_sampling": self.triangle_sampling,
             "light_selection": self.light_selection,
+            "point_lights": self.point_lights,
             "env_sampling": self.env_sampling,
             "spp": self.spp,
             "seconds": finite(Some(self.seconds)),
@@ -296,6 +298,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         light_sampling: a.light_sampling.into(),
         triangle_sampling: a.triangle_sampling.into(),
         light_selection: a.light_selection.into(),
+        point_lights: a.point_lights.into(),
         env_sampling: a.env_sampling.map_or_else(Default::default, Into::into),
         ..RenderSettings::default()
     };
@@ -399,6 +402,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         light_sampling: settings.light_sampling.name(),
         triangle_sampling: settings.triangle_sampling.name(),
         light_selection: settings.light_selection.name(),
+        point_lights: settings.point_lights.name(),
         env_sampling: settings.env_sampling.effective(settings.light_sampling).name(),
         spp: done,
         seconds,

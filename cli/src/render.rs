@@ -1,6 +1,6 @@
 //! `furnace render`: load, render in passes with a progress bar, write EXR + PNG.
 
-use crate::args::{DenoiseDeviceArg, RenderArgs, Switch};
+use crate::args::{DenoiseDeviceArg, PointLightsArg, RenderArgs, Switch};
 use crate::interrupt::Interrupt;
 use crate::resume;
 use crate::shared::{Outcome, image_size};
@@ -53,6 +53,7 @@ impl Job {
                 (resume::LIGHT_SAMPLING, resume::cli_name(&a.light_sampling)),
                 (resume::TRIANGLE_SAMPLING, resume::cli_name(&a.triangle_sampling)),
                 (resume::LIGHT_SELECTION, resume::cli_name(&a.light_selection)),
+                (resume::POINT_LIGHTS, resume::cli_name(&a.point_lights)),
                 (resume::ENV_SAMPLING, resume::cli_name(&a.env_sampling)),
                 (resume::TARGET_SPP, a.spp.to_string()),
                 (resume::TONEMAP, a.tonemap.to_string()),
@@ -138,6 +139,8 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
     }
     crate::env::apply(&mut scene, &args.environment)?;
     let samples_lights = scene.samples_lights();
+    let chooses_point_lights =
+        args.point_lights == PointLightsArg::One && scene.point_lights().next().is_some();
     let scene_hash = scene.content_hash();
     let (camera, view) = select_camera(&scene, &args)?;
     let (width, height) = image_size(&view, args.width, args.height)?;
@@ -157,6 +160,7 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         light_sampling: args.light_sampling.into(),
         triangle_sampling: args.triangle_sampling.into(),
         light_selection: args.light_selection.into(),
+        point_lights: args.point_lights.into(),
         env_sampling: args.env_sampling.into(),
         clamp: args.clamp,
         // The file's AOVs are kept when resuming; they cannot be added to a file without them
@@ -187,7 +191,7 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
             let path = a.resume.clone().unwrap_or_default();
             let recorded = resume::identity(&file.metadata, file.width, file.height);
             let now = resume::identity(&job.metadata(0, 0.0, 0), width, height);
-            resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights)?;
+            resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights, chooses_point_lights)?;
             let saved = restore(&path, file)?;
             Some(saved)
         }

@@ -24,8 +24,8 @@
 //! record keeps every backend that added samples, and `--resume` says when it changes.
 
 use crate::args::{
-    EnvArgs, EnvSamplingArg, LightSamplingArg, LightSelectionArg, LookAt, MaskingArg, RenderArgs,
-    SamplingArg, Switch, TriangleSamplingArg,
+    EnvArgs, EnvSamplingArg, LightSamplingArg, LightSelectionArg, LookAt, MaskingArg, PointLightsArg,
+    RenderArgs, SamplingArg, Switch, TriangleSamplingArg,
 };
 use clap::ValueEnum;
 use furnace_post::Metadata;
@@ -66,6 +66,11 @@ pub const LIGHT_SELECTION: &str = "furnace.light_selection";
 /// The light selection of files that do not record one (made before the light BVH existed,
 /// when every light sample chose its triangle in proportion to power).
 pub const OLD_LIGHT_SELECTION: &str = "power";
+/// `--point-lights`.
+pub const POINT_LIGHTS: &str = "furnace.point_lights";
+/// The point-light sampling of files that do not record one (made before the choice existed,
+/// when every event gathered every point light).
+pub const OLD_POINT_LIGHTS: &str = "all";
 /// The `--clamp` given (absent: no sample clamp).
 pub const CLAMP: &str = "furnace.clamp";
 /// The `--noise-threshold` given (absent: no adaptive sampling).
@@ -168,6 +173,7 @@ pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, 
         ("light sampling", extra(LIGHT_SAMPLING).or_else(|| Some("mis".into()))),
         ("triangle sampling", extra(TRIANGLE_SAMPLING).or_else(|| Some(OLD_TRIANGLE_SAMPLING.into()))),
         ("light selection", extra(LIGHT_SELECTION).or_else(|| Some(OLD_LIGHT_SELECTION.into()))),
+        ("point lights", extra(POINT_LIGHTS).or_else(|| Some(OLD_POINT_LIGHTS.into()))),
         ("sun angle", extra(SUN_ANGLE)),
         ("sample clamp", extra(CLAMP)),
         ("noise threshold", extra(NOISE_THRESHOLD)),
@@ -206,10 +212,15 @@ pub fn check_same(
     recorded: &[(&'static str, Option<String>)],
     now: &[(&'static str, Option<String>)],
     samples_lights: bool,
+    chooses_point_lights: bool,
 ) -> Result<(), String> {
-    resume::check_layout(meta.extra.get(SAMPLER_LAYOUT).map(String::as_str), samples_lights)
-        .and_then(|()| resume::check_same(recorded, now))
-        .map_err(|e| format!("{}: {e}", file.display()))
+    resume::check_layout(
+        meta.extra.get(SAMPLER_LAYOUT).map(String::as_str),
+        samples_lights,
+        chooses_point_lights,
+    )
+    .and_then(|()| resume::check_same(recorded, now))
+    .map_err(|e| format!("{}: {e}", file.display()))
 }
 
 /// Fills every film-deciding argument that was not given on the command line from the file's
@@ -297,6 +308,10 @@ pub fn apply_recorded(
     if !a.given("light_selection") {
         let v = meta.extra.get(LIGHT_SELECTION).map_or(OLD_LIGHT_SELECTION, String::as_str);
         a.light_selection = enum_value::<LightSelectionArg>(v).ok_or_else(|| invalid(LIGHT_SELECTION, v))?;
+    }
+    if !a.given("point_lights") {
+        let v = meta.extra.get(POINT_LIGHTS).map_or(OLD_POINT_LIGHTS, String::as_str);
+        a.point_lights = enum_value::<PointLightsArg>(v).ok_or_else(|| invalid(POINT_LIGHTS, v))?;
     }
     if !a.given("clamp")
         && let Some(v) = meta.extra.get(CLAMP)
@@ -419,8 +434,8 @@ mod tests {
         n.bounces = Some(2);
         n.extra.insert(CAMERA.into(), "1".into());
         let file = Path::new("dir/r.exr");
-        assert!(check_same(file, &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false).is_ok());
-        let e = check_same(file, &m, &identity(&m, 8, 8), &identity(&n, 8, 6), false).unwrap_err();
+        assert!(check_same(file, &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false, false).is_ok());
+        let e = check_same(file, &m, &identity(&m, 8, 8), &identity(&n, 8, 6), false, false).unwrap_err();
         assert_eq!(
             e,
             "dir/r.exr: cannot resume with different settings: height is 8 in the file but 6 now; \
@@ -445,16 +460,23 @@ mod tests {
     #[test]
     fn another_sampler_layout_is_refused() {
         let mut m = Metadata { bounces: Some(4), ..Metadata::default() };
-        m.extra.insert(SAMPLER_LAYOUT.into(), "3".into());
-        let e = check_same(Path::new("old.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false)
+        m.extra.insert(SAMPLER_LAYOUT.into(), "4".into());
+        let e = check_same(Path::new("old.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false, false)
             .unwrap_err();
-        assert!(e.starts_with("old.exr: its samples were drawn with sampler dimension layout 3"), "{e}");
+        assert!(e.starts_with("old.exr: its samples were drawn with sampler dimension layout 4"), "{e}");
         // Layout 1 (or none recorded) continues a scene that samples no light, not one that does.
         m.extra.insert(SAMPLER_LAYOUT.into(), "1".into());
-        assert!(check_same(Path::new("v1.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false).is_ok());
-        let e =
-            check_same(Path::new("v1.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8), true).unwrap_err();
-        assert!(e.contains("layout 1, this furnace traces layout 2"), "{e}");
+        let same = |m: &Metadata, lights: bool, one: bool| {
+            check_same(Path::new("v1.exr"), m, &identity(m, 8, 8), &identity(m, 8, 8), lights, one)
+        };
+        assert!(same(&m, false, false).is_ok());
+        let e = same(&m, true, false).unwrap_err();
+        assert!(e.contains("layout 1, this furnace traces layout 3"), "{e}");
+        // Layout 2 continues any render that chooses no point light.
+        m.extra.insert(SAMPLER_LAYOUT.into(), "2".into());
+        assert!(same(&m, true, false).is_ok());
+        let e = same(&m, false, true).unwrap_err();
+        assert!(e.contains("layout 2, this furnace traces layout 3"), "{e}");
     }
 
     #[test]
@@ -463,8 +485,8 @@ mod tests {
         m.extra.insert(TARGET_SPP.into(), "64".into());
         let mut n = m.clone();
         n.extra.insert(TARGET_SPP.into(), "128".into());
-        let e =
-            check_same(Path::new("h.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4), false).unwrap_err();
+        let e = check_same(Path::new("h.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4), false, false)
+            .unwrap_err();
         assert!(
             e.contains("sample count N of the fixed-N sampler (--spp) is 64 in the file but 128 now"),
             "{e}"
@@ -472,7 +494,10 @@ mod tests {
         // A progressive sampler's target may change.
         m.sampler = Some("sobol".into());
         n.sampler = Some("sobol".into());
-        assert!(check_same(Path::new("s.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4), false).is_ok());
+        assert!(
+            check_same(Path::new("s.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4), false, false)
+                .is_ok()
+        );
     }
 
     #[test]
@@ -491,8 +516,9 @@ mod tests {
         let mut power = old.clone();
         power.extra.insert(LIGHT_SELECTION.into(), "power".into());
         let file = Path::new("old.exr");
-        assert!(check_same(file, &old, &identity(&old, 2, 2), &identity(&power, 2, 2), false).is_ok());
-        let e = check_same(file, &old, &identity(&old, 2, 2), &identity(&bvh, 2, 2), false).unwrap_err();
+        assert!(check_same(file, &old, &identity(&old, 2, 2), &identity(&power, 2, 2), false, false).is_ok());
+        let e =
+            check_same(file, &old, &identity(&old, 2, 2), &identity(&bvh, 2, 2), false, false).unwrap_err();
         assert!(e.ends_with("light selection is power in the file but bvh now"), "{e}");
     }
 }

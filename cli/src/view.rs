@@ -2,7 +2,7 @@
 //! saves what `furnace render` writes, resumable with `furnace render --resume`.
 
 use crate::args::{
-    EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, SamplingArg, Switch,
+    EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, PointLightsArg, SamplingArg, Switch,
     TriangleSamplingArg, ViewArgs,
 };
 use crate::interrupt::Interrupt;
@@ -11,7 +11,9 @@ use crate::resume;
 use crate::shared::Outcome;
 use furnace_brdf::{Masking, SpecularSampling};
 use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
-use furnace_render::{EnvSampling, LightSampling, LightSelection, RenderSettings, TriangleSampling};
+use furnace_render::{
+    EnvSampling, LightSampling, LightSelection, PointLightSampling, RenderSettings, TriangleSampling,
+};
 use furnace_scene::Scene;
 use furnace_view::{CameraPose, SaveRequest, ScriptSource, ViewConfig, ViewHost};
 
@@ -187,6 +189,10 @@ fn apply_settings(job: &mut Job, r: &SaveRequest) -> Result<(), String> {
     a.light_selection = match s.light_selection {
         LightSelection::Power => LightSelectionArg::Power,
         LightSelection::Bvh => LightSelectionArg::Bvh,
+    };
+    a.point_lights = match s.point_lights {
+        PointLightSampling::All => PointLightsArg::All,
+        PointLightSampling::One => PointLightsArg::One,
     };
     a.env_sampling = match s.env_sampling {
         EnvSampling::Off => EnvSamplingArg::Off,

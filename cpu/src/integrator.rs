@@ -9,10 +9,14 @@ use furnace_render::layout::{
     self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
 };
 use furnace_render::{
-    ADAPTIVE_STEP, AovSample, Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings,
+    ADAPTIVE_STEP, AovSample, Film, Integrator, LightSampling, LightSelection, PointLightSampling,
+    RenderError, RenderSettings,
 };
 use furnace_sampling::{AnySampler, Sampler};
-use furnace_scene::{AlphaMode, Camera, CameraRays, Emitters, LightBvh, MaterialSample, Scene, oct_decode};
+use furnace_scene::{
+    AlphaMode, Camera, CameraRays, Emitters, LightBvh, MaterialSample, PointLightDistribution, Scene,
+    oct_decode,
+};
 use furnace_scene::{Environment, EnvironmentSampler};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
@@ -62,6 +66,8 @@ pub struct CpuRenderer {
     light_bvh: Option<LightBvh>,
     /// Point and spot lights ([`Scene::point_lights`]).
     point_lights: Vec<furnace_scene::PointLight>,
+    /// Their choice by power (`None`: no light has power).
+    point_choice: Option<PointLightDistribution>,
     /// Radiance of an escaping ray ([`Scene::sky`]).
     sky: Vec3,
     /// The environment map ([`Scene::environment`]).
@@ -158,6 +164,7 @@ impl CpuRenderer {
             emitters,
             light_bvh,
             point_lights: scene.point_lights().copied().collect(),
+            point_choice: PointLightDistribution::new(&scene.point_lights().copied().collect::<Vec<_>>()),
             sky: scene.sky(),
             film: Film::for_settings(&settings),
             scene,
@@ -530,9 +537,13 @@ impl CpuRenderer {
             }
         }
 
-        // Point and spot lights, delta lights too: a shadow ray to each.
+        // Point and spot lights, delta lights too: a shadow ray to each, or to one chosen by
+        // power (`--point-lights one`; none to choose when no light has power).
         if !self.point_lights.is_empty() {
-            *radiance += self.gather_point_lights(v);
+            *radiance += match self.settings.point_lights {
+                PointLightSampling::All => self.gather_point_lights(v),
+                PointLightSampling::One => self.sample_point_light(pixel, index, event, v),
+            };
         }
 
         // Emitters, sun discs and the environment: one light sample each.
@@ -580,26 +591,48 @@ impl CpuRenderer {
     fn gather_point_lights(&self, v: &Vertex<'_>) -> Vec3 {
         let mut sum = Vec3::ZERO;
         for light in &self.point_lights {
-            let to_light = light.position - v.surface.position;
-            let d2 = to_light.length_squared();
-            if !(d2 > 0.0) {
-                continue;
-            }
-            let d = d2.sqrt();
-            let wi = to_light / d;
-            if let Some(origin) = v.origin_towards(wi) {
-                let li = light.intensity_towards(-wi, d);
-                if li != Vec3::ZERO {
-                    let f = v.bsdf.eval(v.wo, v.frame.to_local(wi));
-                    let contribution = v.throughput * f * li / d2;
-                    if f != Vec3::ZERO && contribution.is_finite() {
-                        let t_max = d * (1.0 - furnace_render::SHADOW_EPSILON);
-                        sum += contribution * self.transmittance(origin, wi, t_max, v.medium);
-                    }
+            sum += self.point_light(light, v);
+        }
+        sum
+    }
+
+    /// What one point or spot light, chosen by power with the sampler's dimension
+    /// [`layout::point_light`] of event `event`, adds at a scattering event: its share divided
+    /// by the probability of the choice (`--point-lights one`; the WGSL twin chooses with the
+    /// same table and comparisons).
+    fn sample_point_light(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>) -> Vec3 {
+        let Some(choice) = &self.point_choice else {
+            return Vec3::ZERO;
+        };
+        let u = self.sampler.value(pixel, index, layout::point_light(self.settings.bounces, event));
+        let (k, pmf) = choice.sample(u);
+        self.point_light(&self.point_lights[k], v) / pmf
+    }
+
+    /// What `light` adds at a scattering event (throughput included): its shadow ray stops
+    /// `SHADOW_EPSILON·d` short of it; a contribution that is not finite (a light on the
+    /// surface, d → 0) adds nothing.
+    #[inline]
+    fn point_light(&self, light: &furnace_scene::PointLight, v: &Vertex<'_>) -> Vec3 {
+        let to_light = light.position - v.surface.position;
+        let d2 = to_light.length_squared();
+        if !(d2 > 0.0) {
+            return Vec3::ZERO;
+        }
+        let d = d2.sqrt();
+        let wi = to_light / d;
+        if let Some(origin) = v.origin_towards(wi) {
+            let li = light.intensity_towards(-wi, d);
+            if li != Vec3::ZERO {
+                let f = v.bsdf.eval(v.wo, v.frame.to_local(wi));
+                let contribution = v.throughput * f * li / d2;
+                if f != Vec3::ZERO && contribution.is_finite() {
+                    let t_max = d * (1.0 - furnace_render::SHADOW_EPSILON);
+                    return contribution * self.transmittance(origin, wi, t_max, v.medium);
                 }
             }
         }
-        sum
+        Vec3::ZERO
     }
 
     /// The fraction of light a shadow ray from `origin` along `direction` carries over

@@ -41,10 +41,11 @@ use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
 use furnace_render::ADAPTIVE_STEP;
 use furnace_render::{
-    Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings, TriangleSampling,
+    Film, Integrator, LightSampling, LightSelection, PointLightSampling, RenderError, RenderSettings,
+    TriangleSampling,
 };
 use furnace_sampling::AnySampler;
-use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, Projection, Scene};
+use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, PointLightDistribution, Projection, Scene};
 
 crate::wgsl_consts! {
     /// The `FRAME_*` flags as WGSL `const` declarations (composed into the integrator shader).
@@ -164,8 +165,13 @@ crate::gpu_struct! {
         pub cos_inner: f32 => WgslType::F32,
         /// `cos(outerConeAngle)`.
         pub cos_outer: f32 => WgslType::F32,
+        /// [`PointLightDistribution::cdf`] of this light (`--point-lights one`; 0 where no
+        /// light has power).
+        pub choice_cdf: f32 => WgslType::F32,
+        /// [`PointLightDistribution::pmf`] of this light.
+        pub choice_pmf: f32 => WgslType::F32,
         /// Rust-only padding to 64 bytes.
-        pub pad: [u32; 3] => WgslType::PAD,
+        pub pad: u32 => WgslType::PAD,
     }
 }
 
@@ -181,7 +187,7 @@ crate::wgsl_consts! {
 }
 
 impl GpuPointLight {
-    /// The record of `light`.
+    /// The record of `light` (its choice by power left 0: [`point_light_records`] fills it).
     pub fn new(light: &furnace_scene::PointLight) -> Self {
         let (spot_direction, cos_inner, cos_outer) =
             light.spot.map_or(([0.0; 3], 1.0, 0.0), |c| (c.direction.to_array(), c.cos_inner, c.cos_outer));
@@ -195,15 +201,25 @@ impl GpuPointLight {
             spot_direction,
             cos_inner,
             cos_outer,
-            pad: [0; 3],
+            choice_cdf: 0.0,
+            choice_pmf: 0.0,
+            pad: 0,
         }
     }
 }
 
-/// The records of the scene's point and spot lights; one zero record when there are none (a
-/// binding cannot be empty; `FrameParams::point_light_count` stays 0 and no shader work is done).
+/// The records of the scene's point and spot lights with their choice by power; one zero
+/// record when there are none (a binding cannot be empty; `FrameParams::point_light_count`
+/// stays 0 and no shader work is done).
 pub fn point_light_records(scene: &Scene) -> Vec<GpuPointLight> {
-    let mut v: Vec<GpuPointLight> = scene.point_lights().map(GpuPointLight::new).collect();
+    let lights: Vec<furnace_scene::PointLight> = scene.point_lights().copied().collect();
+    let mut v: Vec<GpuPointLight> = lights.iter().map(GpuPointLight::new).collect();
+    if let Some(choice) = PointLightDistribution::new(&lights) {
+        for ((record, &cdf), &pmf) in v.iter_mut().zip(choice.cdf()).zip(choice.pmf()) {
+            record.choice_cdf = cdf;
+            record.choice_pmf = pmf;
+        }
+    }
     if v.is_empty() {
         v.push(GpuPointLight::zeroed());
     }
@@ -620,9 +636,13 @@ pub struct SceneFeatures {
     /// Point or spot lights (the shadow-ray loop over `point_lights`).
     pub point_lights: bool,
     /// The number of point and spot lights when it is at most [`MAX_QUEUED_POINT_LIGHTS`] (else
-    /// 0): their shadow rays are then queued like the other light samples' (a slot each, traced
-    /// through the path loop's one traversal call) instead of traced where they are gathered.
+    /// 0), or 1 when one is chosen per event (`one_point_light`): their shadow rays are then
+    /// queued like the other light samples' (a slot each, traced through the path loop's one
+    /// traversal call) instead of traced where they are gathered.
     pub queued_point_lights: u32,
+    /// One point or spot light per event, chosen by power ([`PointLightSampling::One`]; with
+    /// `point_lights` only).
+    pub one_point_light: bool,
     /// Emissive triangles (their light samples and the MIS weights of their emission).
     pub emitters: bool,
     /// A sun without a disc, a delta light (its shadow ray at each scattering event).
@@ -666,9 +686,12 @@ impl SceneFeatures {
         Self {
             point_lights: scene.point_lights().next().is_some(),
             queued_point_lights: match scene.point_lights().count() {
+                0 => 0,
+                _ if settings.point_lights == PointLightSampling::One => 1,
                 n if n <= MAX_QUEUED_POINT_LIGHTS as usize => n as u32,
                 _ => 0,
             },
+            one_point_light: settings.point_lights == PointLightSampling::One,
             emitters,
             delta_sun: scene.sun().is_some_and(|s| !s.is_disc()),
             sun_disc: scene.sun().is_some_and(|s| s.is_disc()),
@@ -712,8 +735,8 @@ impl SceneFeatures {
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
     /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
-    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `TRACE_COUNTERS` and
-    /// `QUEUED_POINT_LIGHTS`
+    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `TRACE_COUNTERS`,
+    /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
         match name {
@@ -732,6 +755,7 @@ impl SceneFeatures {
             "SOLID_ANGLE_TRIANGLES" => self.emitters && self.solid_angle_triangles,
             "TRACE_COUNTERS" => self.trace_counters,
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
+            "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,
             _ => panic!("no scene feature {name} (integrator.wgsl's #if)"),
         }
     }

@@ -12,11 +12,14 @@
 //! | `L + 3 + 8k` | the alias table's coin ([`LIGHT_EMITTER_COIN`]) |
 //! | `L + 4 + 8k`, `L + 5 + 8k` | direction in the sun's disc ([`LIGHT_SUN_DISC`]) |
 //! | `L + 6 + 8k`, `L + 7 + 8k` | the environment map's light sample: row, then column ([`LIGHT_ENVIRONMENT`]) |
+//! | `P + k` | the point or spot light chosen at event `k` (`--point-lights one`; [`point_light`]) |
 //!
 //! where `L = 4·(bounces + 1)` ([`light_block`]) is the first group of four after every
-//! event's BSDF dimensions. The light dimensions come after the whole BSDF block, not
-//! interleaved with it, so that a scene that samples no light (no emitters, no sun disc) reads
-//! exactly the dimensions it read before they existed: its images are the same bits.
+//! event's BSDF dimensions and `P = L + 8·bounces` ([`point_light_block`]) the first after the
+//! light block (light samples are taken at events `0 … bounces − 1`). The light dimensions come
+//! after the whole BSDF block, not interleaved with it, so that a scene that samples no light
+//! (no emitters, no sun disc) reads exactly the dimensions it read before they existed: its
+//! images are the same bits; the point-light choices come after both, for the same reason.
 //!
 //! Pairs start on even dimensions, so the 2-D samplers (Hammersley, CMJ, PMJ02) stratify the
 //! pixel position and each BSDF direction jointly; Owen-Sobol's groups of four put the first
@@ -30,10 +33,10 @@
 
 /// The version of the layout below. Version 1 is the layout of every furnace before the version
 /// was recorded, so a saved render without a recorded version is of version 1. Version 2 added
-/// the light block; it changed no dimension of version 1, so a version-1 render of a scene
-/// that reads no light dimension is a version-2 render too
-/// ([`crate::resume::check_layout`]).
-pub const SAMPLER_LAYOUT_VERSION: u32 = 2;
+/// the light block, version 3 the point-light choices; neither changed a dimension of the
+/// versions before, so a render of an earlier version that reads none of the added dimensions
+/// is a render of this one too ([`crate::resume::check_layout`]).
+pub const SAMPLER_LAYOUT_VERSION: u32 = 3;
 
 /// First of the two dimensions of the camera ray's position inside the pixel.
 pub const DIM_PIXEL: u32 = 0;
@@ -92,6 +95,22 @@ pub const fn light(bounces: u32, event: u32) -> u32 {
     light_block(bounces).wrapping_add(LIGHT_DIMS_PER_EVENT.wrapping_mul(event))
 }
 
+/// The first dimension of the point-light choices of a render of `bounces` scattering events:
+/// `4·(bounces + 1) + 8·bounces`, past the light dimensions of the last event that takes light
+/// samples (event `bounces − 1`). Wraps like the GPU's `u32`.
+#[inline]
+pub const fn point_light_block(bounces: u32) -> u32 {
+    light_block(bounces).wrapping_add(LIGHT_DIMS_PER_EVENT.wrapping_mul(bounces))
+}
+
+/// The dimension that chooses the point or spot light of scattering event `event` of a render
+/// of `bounces` events (one dimension per event: consecutive events share Owen-Sobol's groups
+/// of four and the 2-D samplers' pairs, as independent dimensions of one point).
+#[inline]
+pub const fn point_light(bounces: u32, event: u32) -> u32 {
+    point_light_block(bounces).wrapping_add(event)
+}
+
 /// The layout as WGSL `const` declarations (`DIM_PIXEL`, `DIM_FIRST_BOUNCE`, `DIMS_PER_BOUNCE`,
 /// `BOUNCE_*`, `LIGHT_*`; the light block's start is `4u * (bounces + 1u)`), for shaders that trace the same paths: the GPU integrator composes this instead
 /// of declaring its own copy.
@@ -135,6 +154,16 @@ mod tests {
             assert!(light_block(bounces) > last_bsdf);
             assert!(light_block(bounces).is_multiple_of(4));
             assert_eq!(light(bounces, 1) - light(bounces, 0), LIGHT_DIMS_PER_EVENT);
+        }
+    }
+
+    #[test]
+    fn the_point_light_choices_follow_every_light_dimension() {
+        for bounces in [1, 4, 100] {
+            let last_light = light(bounces, bounces - 1) + LIGHT_DIMS_PER_EVENT - 1;
+            assert_eq!(point_light_block(bounces), last_light + 1);
+            assert!(point_light_block(bounces).is_multiple_of(4));
+            assert_eq!(point_light(bounces, bounces - 1), point_light_block(bounces) + bounces - 1);
         }
     }
 }

@@ -79,16 +79,23 @@ pub fn check_same(
 
 /// `Err` unless the recorded sampler layout (`None`: not recorded, which is layout 1, the layout
 /// before the version was recorded) traces the paths [`SAMPLER_LAYOUT_VERSION`] traces now: the
-/// same version, or layout 1 for a scene that samples no light (`samples_lights` false: no
-/// emitters, no sun disc), whose paths version 2 left unchanged.
+/// same version; or layout 2 for a render that chooses no point light (`chooses_point_lights`
+/// false: `--point-lights all`, or no point lights), whose paths version 3 left unchanged; or
+/// layout 1 where, besides, the scene samples no light (`samples_lights` false: no emitters,
+/// no sun disc), whose paths version 2 left unchanged.
 ///
 /// # Errors
 /// [`ResumeError::Layout`].
-pub fn check_layout(recorded: Option<&str>, samples_lights: bool) -> Result<(), ResumeError> {
+pub fn check_layout(
+    recorded: Option<&str>,
+    samples_lights: bool,
+    chooses_point_lights: bool,
+) -> Result<(), ResumeError> {
     let recorded = recorded.unwrap_or("1");
     match recorded.trim().parse::<u32>() {
         Ok(SAMPLER_LAYOUT_VERSION) => Ok(()),
-        Ok(1) if !samples_lights => Ok(()),
+        Ok(2) if !chooses_point_lights => Ok(()),
+        Ok(1) if !samples_lights && !chooses_point_lights => Ok(()),
         _ => Err(ResumeError::Layout { recorded: recorded.to_string(), now: SAMPLER_LAYOUT_VERSION }),
     }
 }
@@ -124,12 +131,15 @@ mod tests {
 
     #[test]
     fn another_layout_is_refused() {
-        assert!(check_layout(None, false).is_ok(), "files without a version are layout 1");
-        assert!(check_layout(None, true).is_err(), "layout 1 never sampled lights");
-        assert!(check_layout(Some(&SAMPLER_LAYOUT_VERSION.to_string()), true).is_ok());
-        let e = check_layout(Some("3"), false).unwrap_err();
-        assert!(e.to_string().contains("layout 3"), "{e}");
-        assert!(check_layout(Some("two"), false).is_err());
+        assert!(check_layout(None, false, false).is_ok(), "files without a version are layout 1");
+        assert!(check_layout(None, true, false).is_err(), "layout 1 never sampled lights");
+        assert!(check_layout(None, false, true).is_err(), "layout 1 never chose point lights");
+        assert!(check_layout(Some("2"), true, false).is_ok(), "layout 3 added only the point-light choices");
+        assert!(check_layout(Some("2"), false, true).is_err(), "layout 2 never chose point lights");
+        assert!(check_layout(Some(&SAMPLER_LAYOUT_VERSION.to_string()), true, true).is_ok());
+        let e = check_layout(Some("4"), false, false).unwrap_err();
+        assert!(e.to_string().contains("layout 4"), "{e}");
+        assert!(check_layout(Some("two"), false, false).is_err());
     }
 
     #[test]

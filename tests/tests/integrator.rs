@@ -303,6 +303,7 @@ fn frame_params_layout_matches_wgsl() {
                 solid_angle_triangles: light_bvh,
                 trace_counters: !light_bvh,
                 queued_point_lights: if light_bvh { 3 } else { 0 },
+                one_point_light: !light_bvh,
             },
         ));
     }
@@ -345,6 +346,12 @@ fn same_samples_give_the_same_image_with_point_and_spot_lights() {
     }));
     assert_eq!(scene.point_lights().count(), 3);
     same_samples(&scene);
+    // One light per event, chosen by power (the choice's table and bisection on both sides).
+    let one = RenderSettings {
+        point_lights: furnace_render::PointLightSampling::One,
+        ..settings(SamplerKind::Sobol, 3)
+    };
+    same_samples_with(&scene, one);
     // Past the shadow queue's point-light slots: traced where they are gathered.
     for x in [-0.6f32, 0.6] {
         scene.lights.push(furnace_scene::Light::Point(furnace_scene::PointLight {
@@ -356,6 +363,7 @@ fn same_samples_give_the_same_image_with_point_and_spot_lights() {
     }
     assert!(scene.point_lights().count() as u32 > furnace_gpu::integrator::MAX_QUEUED_POINT_LIGHTS);
     same_samples(&scene);
+    same_samples_with(&scene, one);
 }
 
 /// The emissive-quad box, the 64-emitter box and the sun-disc box: emitter selection (alias

@@ -258,7 +258,7 @@
 //! the z image are written to `target/test-output/mitsuba/`, with the table.
 
 use furnace_brdf::SpecularOptions;
-use furnace_render::RenderSettings;
+use furnace_render::{PointLightSampling, RenderSettings};
 use furnace_sampling::SamplerKind;
 use furnace_tests::backends::Backend;
 use furnace_tests::cbox::{self, Comparison, Estimate, Image, Reference};
@@ -359,7 +359,7 @@ fn render(
     scene: &furnace_scene::Scene,
     (width, height): (u32, u32),
     bounces: u32,
-    specular: SpecularOptions,
+    (specular, point_lights): (SpecularOptions, PointLightSampling),
     passes: u32,
     spp_per_pass: u32,
 ) -> Option<Estimate> {
@@ -370,6 +370,7 @@ fn render(
         sampler: SamplerKind::Random,
         seed: SEED,
         specular,
+        point_lights,
         ..Default::default()
     };
     let mut integrator = backend.open_default(scene, settings)?;
@@ -431,7 +432,12 @@ impl Outcome {
 
 /// Renders `stem`'s configuration on `backend` with `specular` and compares it with the
 /// reference; `None` when GPU tests are skipped.
-fn evaluate(backend: Backend, stem: &str, specular: SpecularOptions, model: &str) -> Option<Outcome> {
+fn evaluate(
+    backend: Backend,
+    stem: &str,
+    model: (SpecularOptions, PointLightSampling),
+    model_name: &str,
+) -> Option<Outcome> {
     let plan = plan(backend, stem);
     let (bounces, passes) = (plan.bounces, plan.passes);
     let (folder, scene) = case(stem);
@@ -439,20 +445,28 @@ fn evaluate(backend: Backend, stem: &str, specular: SpecularOptions, model: &str
     let reference = reference(folder, stem, plan.size);
     let height = reference.mean.height as u32;
     let start = Instant::now();
-    let candidate =
-        render(backend, &scene, (plan.size, height), bounces, specular, passes, plan.spp_per_pass)?;
+    let candidate = render(backend, &scene, (plan.size, height), bounces, model, passes, plan.spp_per_pass)?;
     let seconds = start.elapsed().as_secs_f64();
     let mask = cbox::pixels_without_visible_emitters(&scene, plan.size);
     let comparison = cbox::compare_masked(&candidate, &reference, mask.as_deref());
     let shape = (plan.size, height, full_width / plan.size);
-    let table = table(backend, stem, model, shape, (passes, plan.spp_per_pass), &comparison, seconds);
+    let table = table(backend, stem, model_name, shape, (passes, plan.spp_per_pass), &comparison, seconds);
     println!("{table}");
-    let name = format!("{stem}_{backend}_{}_{model}", plan.size).replace(' ', "_");
+    let name = format!("{stem}_{backend}_{}_{model_name}", plan.size).replace(' ', "_");
     Some(Outcome { name, reference, candidate, comparison, table })
 }
 
 fn compare(backend: Backend, stem: &str) {
-    let Some(o) = evaluate(backend, stem, SpecularOptions::mitsuba(), "Mitsuba") else { return };
+    compare_with(backend, stem, PointLightSampling::All);
+}
+
+/// [`compare`] with the point lights gathered by `point_lights`.
+fn compare_with(backend: Backend, stem: &str, point_lights: PointLightSampling) {
+    let model = match point_lights {
+        PointLightSampling::All => "Mitsuba",
+        PointLightSampling::One => "Mitsuba, one point light per event",
+    };
+    let Some(o) = evaluate(backend, stem, (SpecularOptions::mitsuba(), point_lights), model) else { return };
     let c = &o.comparison;
     if !passes_bar(c) {
         let dir = o.write();
@@ -472,7 +486,11 @@ fn compare(backend: Backend, stem: &str) {
 /// for red, ±0.0015, on the GPU), not just the noisier z part.
 fn gltf_default_model_fails(backend: Backend) {
     let stem = "cbox_ref_bounces4";
-    let Some(o) = evaluate(backend, stem, SpecularOptions::default(), "glTF default") else { return };
+    let Some(o) =
+        evaluate(backend, stem, (SpecularOptions::default(), PointLightSampling::All), "glTF default")
+    else {
+        return;
+    };
     let c = &o.comparison;
     let worst = (c.ratio() - 1.0).abs().max_element();
     if worst < MAX_RATIO_ERROR {
@@ -537,6 +555,19 @@ fn point_lights_match_mitsuba_cpu() {
 #[test]
 fn point_lights_match_mitsuba_gpu() {
     compare(Backend::Gpu, "cbox_point_ref_bounces4");
+}
+
+/// One point light per event, chosen by power (`--point-lights one`), as Mitsuba chooses one
+/// emitter per event (uniformly there): the same expectation, more noise per sample, which z
+/// measures against the candidate's own standard error.
+#[test]
+fn point_lights_one_per_event_match_mitsuba_cpu() {
+    compare_with(Backend::Cpu, "cbox_point_ref_bounces4", PointLightSampling::One);
+}
+
+#[test]
+fn point_lights_one_per_event_match_mitsuba_gpu() {
+    compare_with(Backend::Gpu, "cbox_point_ref_bounces4", PointLightSampling::One);
 }
 
 #[test]

@@ -230,39 +230,82 @@ fn point_light_intensity(light: PointLight, direction: vec3<f32>, distance: f32)
     return light.intensity * k;
 }
 
-// furnace-cpu's loop over the point and spot lights at a scattering event: what they add to
+// furnace-cpu's gathering of the point and spot lights at a scattering event: what they add to
 // the path's radiance (throughput included); with QUEUED_POINT_LIGHTS nothing here, their
-// shadow rays queued with what each adds.
-fn gather_point_lights(throughput: vec3<f32>, bsdf: HitBsdf, wo: vec3<f32>, frame: Frame,
-                       surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
+// shadow rays queued with what each adds. With ONE_POINT_LIGHT one light, chosen by power with
+// the event's dimension furnace_render::layout::point_light, its share divided by the choice's
+// probability; else every light.
+fn gather_point_lights(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsdf: HitBsdf,
+                       wo: vec3<f32>, frame: Frame, surface: SceneSurfacePoint,
+                       leave: vec3<f32>) -> vec3<f32> {
+    // #if ONE_POINT_LIGHT
+    let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * params.bounces + event;
+    let choice = choose_point_light(sampler_value(params.sampler, pixel, index, dim));
+    if !(choice.pmf > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    return point_light_share(point_lights[choice.index], throughput / choice.pmf, bsdf, wo, frame,
+                             surface, leave);
+    // #else
     var sum = vec3<f32>(0.0);
     for (var i = 0u; i < params.point_light_count; i++) {
-        let light = point_lights[i];
-        let to_light = light.position - surface.position;
-        let d2 = dot(to_light, to_light);
-        if !(d2 > 0.0) {
-            continue;
+        sum += point_light_share(point_lights[i], throughput, bsdf, wo, frame, surface, leave);
+    }
+    return sum;
+    // #endif
+}
+
+// #if ONE_POINT_LIGHT
+struct PointLightChoice {
+    index: u32,
+    pmf: f32,
+}
+
+// furnace_scene::PointLightDistribution::sample: the first light with u < its cdf (bisection,
+// the same comparisons), and its probability (0 where no light has power: every cdf is 0).
+fn choose_point_light(u: f32) -> PointLightChoice {
+    var lo = 0u;
+    var hi = params.point_light_count - 1u;
+    while lo < hi {
+        let mid = (lo + hi) / 2u;
+        if u < point_lights[mid].choice_cdf {
+            hi = mid;
+        } else {
+            lo = mid + 1u;
         }
-        let d = sqrt(d2);
-        let wi = to_light / d;
-        let o = shadow_origin(bsdf, surface, leave, wi);
-        if o.w != 0.0 {
-            let li = point_light_intensity(light, -wi, d);
-            if any(li != vec3<f32>(0.0)) {
-                let f = hit_eval(bsdf, wo, frame_to_local(frame, wi));
-                let contribution = throughput * f * li / d2;
-                // A light on the surface (d → 0) would add ∞: it adds nothing instead.
-                if any(f != vec3<f32>(0.0)) && film_is_finite(contribution) {
-                    // #if QUEUED_POINT_LIGHTS
-                    defer_shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON), contribution);
-                    // #else
-                    sum += contribution * shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON));
-                    // #endif
-                }
+    }
+    return PointLightChoice(lo, point_lights[lo].choice_pmf);
+}
+// #endif
+
+// CpuRenderer::point_light: what `light` adds (`throughput` included) if its shadow ray, queued
+// (QUEUED_POINT_LIGHTS) or traced here, is not blocked. A light on the surface (d → 0) would add
+// ∞: it adds nothing instead.
+fn point_light_share(light: PointLight, throughput: vec3<f32>, bsdf: HitBsdf, wo: vec3<f32>,
+                     frame: Frame, surface: SceneSurfacePoint, leave: vec3<f32>) -> vec3<f32> {
+    let to_light = light.position - surface.position;
+    let d2 = dot(to_light, to_light);
+    if !(d2 > 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let d = sqrt(d2);
+    let wi = to_light / d;
+    let o = shadow_origin(bsdf, surface, leave, wi);
+    if o.w != 0.0 {
+        let li = point_light_intensity(light, -wi, d);
+        if any(li != vec3<f32>(0.0)) {
+            let f = hit_eval(bsdf, wo, frame_to_local(frame, wi));
+            let contribution = throughput * f * li / d2;
+            if any(f != vec3<f32>(0.0)) && film_is_finite(contribution) {
+                // #if QUEUED_POINT_LIGHTS
+                defer_shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON), contribution);
+                // #else
+                return contribution * shadow(bsdf, o.xyz, wi, d * (1.0 - SHADOW_EPSILON));
+                // #endif
             }
         }
     }
-    return sum;
+    return vec3<f32>(0.0);
 }
 
 // #if SAMPLES_LIGHTS
@@ -823,7 +866,8 @@ fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bo
             // Point and spot lights, delta lights too: a shadow ray to each (composed only for a
             // scene that has them: HAS_POINT_LIGHTS is a generated constant).
             if HAS_POINT_LIGHTS {
-                radiance += gather_point_lights(throughput, bsdf, wo, frame, surface, leave);
+                radiance += gather_point_lights(pixel, index, event, throughput, bsdf, wo, frame, surface,
+                                                leave);
             }
 
             // #if SAMPLES_LIGHTS
