@@ -144,10 +144,11 @@ pub struct RenderArgs {
     /// Kulla 2018), power picks in proportion to power by an alias table.
     #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
     pub light_selection: LightSelectionArg,
-    /// How a scattering event gathers the point and spot lights: all (default: a shadow ray to
-    /// each) or one (one light chosen in proportion to its power: one shadow ray per event
-    /// whatever the number of lights, more noise per sample).
-    #[arg(long, value_enum, default_value_t = PointLightsArg::All)]
+    /// How a scattering event gathers the point and spot lights: all (a shadow ray to each),
+    /// one (one light chosen in proportion to its power: one shadow ray per event whatever the
+    /// number of lights, more noise per sample) or auto (all up to 4 lights, one beyond: the
+    /// faster to a given noise, measured).
+    #[arg(long, value_enum, default_value_t = PointLightsArg::Auto)]
     pub point_lights: PointLightsArg,
     /// Clamp each sample so that its largest channel is at most X (firefly suppression; off by
     /// default because it is biased: it darkens caustics and small bright lights).
@@ -467,9 +468,9 @@ pub struct BenchArgs {
     /// shading point) or power (in proportion to power; as `furnace render`).
     #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
     pub light_selection: LightSelectionArg,
-    /// How a scattering event gathers the point and spot lights: all (a shadow ray to each) or
-    /// one (one chosen by power; as `furnace render`).
-    #[arg(long, value_enum, default_value_t = PointLightsArg::All)]
+    /// How a scattering event gathers the point and spot lights: auto, all (a shadow ray to
+    /// each) or one (one chosen by power; as `furnace render`).
+    #[arg(long, value_enum, default_value_t = PointLightsArg::Auto)]
     pub point_lights: PointLightsArg,
     // The environment map and how it is placed (as `furnace render`).
     #[command(flatten)]
@@ -790,6 +791,8 @@ impl From<LightSelectionArg> for LightSelection {
 /// `--point-lights`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum PointLightsArg {
+    /// All up to 4 lights, one beyond.
+    Auto,
     /// A shadow ray to every point and spot light at every scattering event.
     All,
     /// One light per event, chosen in proportion to its power.
@@ -799,6 +802,7 @@ pub enum PointLightsArg {
 impl From<PointLightsArg> for PointLightSampling {
     fn from(m: PointLightsArg) -> Self {
         match m {
+            PointLightsArg::Auto => PointLightSampling::Auto,
             PointLightsArg::All => PointLightSampling::All,
             PointLightsArg::One => PointLightSampling::One,
         }

@@ -303,6 +303,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         ..RenderSettings::default()
     };
     let triangles = scene.geometry.triangle_count() as u64;
+    let scene_point_lights = scene.point_lights().count();
     let scene_name = match &a.scene {
         SceneArg::Cbox => "cbox".to_string(),
         SceneArg::Interior(n) => format!("interior:{n}"),
@@ -402,7 +403,8 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         light_sampling: settings.light_sampling.name(),
         triangle_sampling: settings.triangle_sampling.name(),
         light_selection: settings.light_selection.name(),
-        point_lights: settings.point_lights.name(),
+        // The method used: `auto` resolved by the scene's number of lights.
+        point_lights: settings.point_lights.effective(scene_point_lights).name(),
         env_sampling: settings.env_sampling.effective(settings.light_sampling).name(),
         spp: done,
         seconds,

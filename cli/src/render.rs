@@ -1,6 +1,6 @@
 //! `furnace render`: load, render in passes with a progress bar, write EXR + PNG.
 
-use crate::args::{DenoiseDeviceArg, PointLightsArg, RenderArgs, Switch};
+use crate::args::{DenoiseDeviceArg, RenderArgs, Switch};
 use crate::interrupt::Interrupt;
 use crate::resume;
 use crate::shared::{Outcome, image_size};
@@ -140,7 +140,7 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
     crate::env::apply(&mut scene, &args.environment)?;
     let samples_lights = scene.samples_lights();
     let chooses_point_lights =
-        args.point_lights == PointLightsArg::One && scene.point_lights().next().is_some();
+        furnace_render::PointLightSampling::from(args.point_lights).chooses(scene.point_lights().count());
     let scene_hash = scene.content_hash();
     let (camera, view) = select_camera(&scene, &args)?;
     let (width, height) = image_size(&view, args.width, args.height)?;

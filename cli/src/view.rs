@@ -191,6 +191,7 @@ fn apply_settings(job: &mut Job, r: &SaveRequest) -> Result<(), String> {
         LightSelection::Bvh => LightSelectionArg::Bvh,
     };
     a.point_lights = match s.point_lights {
+        PointLightSampling::Auto => PointLightsArg::Auto,
         PointLightSampling::All => PointLightsArg::All,
         PointLightSampling::One => PointLightsArg::One,
     };

@@ -301,6 +301,9 @@ fn resume_two_plus_two_is_bit_identical_to_four() {
     // Its light selection too (power, not the default light BVH).
     resume_matches_one_render(&dir, "area_by_power", &[area.to_str().unwrap(), "--light-selection", "power"]);
     resume_matches_one_render(&dir, "sun_disc", &["--sun-angle", "5"]);
+    // One point light per event (the point-light box's two lights are gathered by `auto`).
+    let point = furnace_tests::data::reference("lights/cbox_point.gltf");
+    resume_matches_one_render(&dir, "point_one", &[point.to_str().unwrap(), "--point-lights", "one"]);
 }
 
 /// A render of 2 spp resumed to 4 equals a render of 4 (the f64 sums, bit for bit).
@@ -364,6 +367,7 @@ fn resume_refuses_other_settings_naming_both_values() {
         (&["--light-sampling", "bsdf"][..], "light sampling is mis in the file but bsdf now"),
         (&["--triangle-sampling", "area"][..], "triangle sampling is solid-angle in the file but area now"),
         (&["--light-selection", "power"][..], "light selection is bvh in the file but power now"),
+        (&["--point-lights", "one"][..], "point lights is auto in the file but one now"),
         (&["--sun-angle", "1"][..], "sun angle is (not recorded) in the file but 1 now"),
         (&[cbox.as_str()][..], "scene is <built-in cbox> in the file but cbox.gltf now"),
     ] {

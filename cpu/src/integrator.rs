@@ -9,8 +9,7 @@ use furnace_render::layout::{
     self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
 };
 use furnace_render::{
-    ADAPTIVE_STEP, AovSample, Film, Integrator, LightSampling, LightSelection, PointLightSampling,
-    RenderError, RenderSettings,
+    ADAPTIVE_STEP, AovSample, Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings,
 };
 use furnace_sampling::{AnySampler, Sampler};
 use furnace_scene::{
@@ -68,6 +67,8 @@ pub struct CpuRenderer {
     point_lights: Vec<furnace_scene::PointLight>,
     /// Their choice by power (`None`: no light has power).
     point_choice: Option<PointLightDistribution>,
+    /// One of them per event ([`furnace_render::PointLightSampling::effective`] is `One`), else all.
+    one_point_light: bool,
     /// Radiance of an escaping ray ([`Scene::sky`]).
     sky: Vec3,
     /// The environment map ([`Scene::environment`]).
@@ -165,6 +166,7 @@ impl CpuRenderer {
             light_bvh,
             point_lights: scene.point_lights().copied().collect(),
             point_choice: PointLightDistribution::new(&scene.point_lights().copied().collect::<Vec<_>>()),
+            one_point_light: settings.point_lights.chooses(scene.point_lights().count()),
             sky: scene.sky(),
             film: Film::for_settings(&settings),
             scene,
@@ -540,9 +542,10 @@ impl CpuRenderer {
         // Point and spot lights, delta lights too: a shadow ray to each, or to one chosen by
         // power (`--point-lights one`; none to choose when no light has power).
         if !self.point_lights.is_empty() {
-            *radiance += match self.settings.point_lights {
-                PointLightSampling::All => self.gather_point_lights(v),
-                PointLightSampling::One => self.sample_point_light(pixel, index, event, v),
+            *radiance += if self.one_point_light {
+                self.sample_point_light(pixel, index, event, v)
+            } else {
+                self.gather_point_lights(v)
             };
         }
 

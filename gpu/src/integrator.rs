@@ -41,8 +41,7 @@ use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
 use furnace_render::ADAPTIVE_STEP;
 use furnace_render::{
-    Film, Integrator, LightSampling, LightSelection, PointLightSampling, RenderError, RenderSettings,
-    TriangleSampling,
+    Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings, TriangleSampling,
 };
 use furnace_sampling::AnySampler;
 use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, PointLightDistribution, Projection, Scene};
@@ -640,8 +639,8 @@ pub struct SceneFeatures {
     /// queued like the other light samples' (a slot each, traced through the path loop's one
     /// traversal call) instead of traced where they are gathered.
     pub queued_point_lights: u32,
-    /// One point or spot light per event, chosen by power ([`PointLightSampling::One`]; with
-    /// `point_lights` only).
+    /// One point or spot light per event, chosen by power ([`furnace_render::PointLightSampling::effective`]
+    /// is `One`; with `point_lights` only).
     pub one_point_light: bool,
     /// Emissive triangles (their light samples and the MIS weights of their emission).
     pub emitters: bool,
@@ -686,12 +685,11 @@ impl SceneFeatures {
         Self {
             point_lights: scene.point_lights().next().is_some(),
             queued_point_lights: match scene.point_lights().count() {
-                0 => 0,
-                _ if settings.point_lights == PointLightSampling::One => 1,
+                n if settings.point_lights.chooses(n) => 1,
                 n if n <= MAX_QUEUED_POINT_LIGHTS as usize => n as u32,
                 _ => 0,
             },
-            one_point_light: settings.point_lights == PointLightSampling::One,
+            one_point_light: settings.point_lights.chooses(scene.point_lights().count()),
             emitters,
             delta_sun: scene.sun().is_some_and(|s| !s.is_disc()),
             sun_disc: scene.sun().is_some_and(|s| s.is_disc()),

@@ -74,8 +74,8 @@ pub use integrator::{Integrator, RenderError};
 pub use layout::SAMPLER_LAYOUT_VERSION;
 pub use session::{Budget, Progress, Session, Stop, Timing, process_cpu_seconds};
 pub use settings::{
-    EnvSampling, LightSampling, LightSelection, PointLightSampling, RenderSettings, TriangleSampling,
-    power_heuristic,
+    EnvSampling, LightSampling, LightSelection, POINT_LIGHTS_ALL_UP_TO, PointLightSampling, RenderSettings,
+    TriangleSampling, power_heuristic,
 };
 pub use split::{Coverage, SampleRange, merge_bound};
 

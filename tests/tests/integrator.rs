@@ -328,8 +328,9 @@ fn same_samples_give_the_same_image() {
 }
 
 /// The point-light box with a spot light added (cone and range window): the point-light loop,
-/// the spot cone and the range on both sides; then with two more lights, more than the shadow
-/// queue's slots (the GPU's other path).
+/// the spot cone and the range on both sides, every light gathered and one chosen per event;
+/// then with two more lights, more than the shadow queue's slots (the GPU's other path when
+/// all are gathered).
 #[test]
 fn same_samples_give_the_same_image_with_point_and_spot_lights() {
     let path = furnace_tests::data::reference("lights/cbox_point.gltf");
@@ -361,9 +362,16 @@ fn same_samples_give_the_same_image_with_point_and_spot_lights() {
             spot: None,
         }));
     }
+    // Five lights: `auto` (the default) chooses one per event; every light's shadow ray is
+    // traced where it is gathered only when all are asked for.
     assert!(scene.point_lights().count() as u32 > furnace_gpu::integrator::MAX_QUEUED_POINT_LIGHTS);
+    assert!(furnace_render::PointLightSampling::Auto.chooses(scene.point_lights().count()));
     same_samples(&scene);
-    same_samples_with(&scene, one);
+    let all = RenderSettings {
+        point_lights: furnace_render::PointLightSampling::All,
+        ..settings(SamplerKind::Sobol, 3)
+    };
+    same_samples_with(&scene, all);
 }
 
 /// The emissive-quad box, the 64-emitter box and the sun-disc box: emitter selection (alias

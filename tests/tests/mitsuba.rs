@@ -457,14 +457,14 @@ fn evaluate(
 }
 
 fn compare(backend: Backend, stem: &str) {
-    compare_with(backend, stem, PointLightSampling::All);
+    compare_with(backend, stem, PointLightSampling::default());
 }
 
 /// [`compare`] with the point lights gathered by `point_lights`.
 fn compare_with(backend: Backend, stem: &str, point_lights: PointLightSampling) {
     let model = match point_lights {
-        PointLightSampling::All => "Mitsuba",
         PointLightSampling::One => "Mitsuba, one point light per event",
+        _ => "Mitsuba",
     };
     let Some(o) = evaluate(backend, stem, (SpecularOptions::mitsuba(), point_lights), model) else { return };
     let c = &o.comparison;
