@@ -572,6 +572,10 @@ pub struct ChartArgs {
     /// `furnace render --light-selection`).
     #[arg(long, value_enum, value_delimiter = ',', default_value = "bvh")]
     pub light_selection: Vec<LightSelectionArg>,
+    /// How the point and spot lights are gathered, comma-separated: auto, all, one (as
+    /// `furnace render --point-lights`).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = "auto")]
+    pub point_lights: Vec<PointLightsArg>,
     /// How light samples gather the environment map, comma-separated: off, importance,
     /// compensated (as `furnace render --env-sampling`; compensated is not combined with
     /// --light-sampling nee).

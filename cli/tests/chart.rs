@@ -99,16 +99,18 @@ fn a_tiny_study_writes_csv_json_png_and_svg() {
     assert_eq!(
         lines[0],
         "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,cpu_seconds,\
-         light_sampling,triangle_sampling,light_selection,env_sampling,noise_threshold,denoise,mean_spp"
+         light_sampling,triangle_sampling,light_selection,env_sampling,noise_threshold,denoise,mean_spp,point_lights"
     );
     // 4 configurations × checkpoints 1, 2, 4, 8.
     assert_eq!(lines.len(), 1 + 16, "{csv}");
     let mut seen = Vec::new();
     for line in &lines[1..] {
         let f: Vec<&str> = line.split(',').collect();
-        assert_eq!(f.len(), 18, "{line}");
-        // The default light sampling, triangle sampling and light selection: mis, solid-angle, bvh.
+        assert_eq!(f.len(), 19, "{line}");
+        // The default light sampling, triangle sampling, light selection and point lights: mis,
+        // solid-angle, bvh, auto.
         assert_eq!((f[11], f[12], f[13], f[14]), ("mis", "solid-angle", "bvh", "compensated"), "{line}");
+        assert_eq!(f[18], "auto", "{line}");
         assert_eq!(
             f[0],
             format!("{}/{}/{}/{}/{}/comp-{}/{}", f[1], f[2], f[11], f[12], f[13], f[3], f[4]),
@@ -307,7 +309,13 @@ fn a_study_resumes_and_refuses_other_settings() {
 /// A 4-spp study of the emissive-quad box at 16×16 with `axes`, against a 256-spp CPU render of
 /// our own (seed 7); the study's folder.
 fn area_box_study(dir: &Path, axes: &[&str]) -> PathBuf {
-    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/../tests/data/references/lights/cbox_area.gltf");
+    box_study(dir, "cbox_area", axes)
+}
+
+/// [`area_box_study`] of the light box `lights/NAME.gltf`.
+fn box_study(dir: &Path, name: &str, axes: &[&str]) -> PathBuf {
+    let scene = format!("{}/../tests/data/references/lights/{name}.gltf", env!("CARGO_MANIFEST_DIR"));
+    let scene = scene.as_str();
     let reference = dir.join("ref");
     let o = furnace(&[
         "render",
@@ -438,6 +446,34 @@ fn triangle_sampling_is_an_axis() {
     }
 }
 
+/// `--point-lights auto,one` on the point-light box: one configuration each, `auto` (all of its
+/// two lights) under the name of before the axis, `one` with its part, each recorded and
+/// rendered with it (one light per event has more noise per sample: their errors differ).
+#[test]
+fn point_lights_is_an_axis() {
+    let dir = temp_dir("point_lights");
+    let out = box_study(&dir, "cbox_point", &["--point-lights", "auto,one"]);
+    let doc = json(&out.join("chart.json"));
+    assert_eq!(doc["settings"]["point_lights"], serde_json::json!(["auto", "one"]));
+    let configs: Vec<&str> =
+        doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
+    assert_eq!(
+        configs,
+        [
+            "sobol/caps/mis/solid-angle/bvh/comp-on/cpu",
+            "sobol/caps/mis/solid-angle/bvh/comp-on/cpu/points-one"
+        ]
+    );
+    let rows = doc["rows"].as_array().unwrap();
+    assert_eq!(rows.len(), 2 * 3);
+    let error = |points: &str| {
+        rows.iter().find(|r| r["point_lights"] == points && r["spp"] == 4).unwrap()["rmse"].as_f64().unwrap()
+    };
+    assert!(error("auto") > 0.0 && error("one") > 0.0 && error("auto") != error("one"));
+    let svg = std::fs::read_to_string(out.join("rmse_vs_spp.svg")).unwrap();
+    assert!(svg.contains("sobol points one") && svg.contains("navy"), "the legend and its note");
+}
+
 /// `--light-selection power,bvh` with `--triangle-sampling solid-angle,area`: the configurations
 /// are the product of the two axes (light selection the inner one), each named and recorded with
 /// its light selection, against a 256-spp render of our own at 16×16. (Whether the two
@@ -485,10 +521,9 @@ fn light_selection_is_an_axis() {
     let csv = std::fs::read_to_string(out.join("chart.csv")).unwrap();
     assert_eq!(csv.lines().count(), 1 + 4 * 3, "{csv}");
     assert!(
-        csv.lines()
-            .next()
-            .unwrap()
-            .ends_with(",triangle_sampling,light_selection,env_sampling,noise_threshold,denoise,mean_spp"),
+        csv.lines().next().unwrap().ends_with(
+            ",triangle_sampling,light_selection,env_sampling,noise_threshold,denoise,mean_spp,point_lights"
+        ),
         "{csv}"
     );
     assert!(

@@ -5,8 +5,8 @@ use super::data::{self, ExternalPoint, Row, rows_of, slope};
 use super::plot::{self, Labels, Marker, Series, Style};
 use super::study::{Config, Study, dedup};
 use crate::args::{
-    ChartBackend, ChartTime, EnvSamplingArg, LightSamplingArg, LightSelectionArg, SamplingArg, Switch,
-    TriangleSamplingArg,
+    ChartBackend, ChartTime, EnvSamplingArg, LightSamplingArg, LightSelectionArg, PointLightsArg,
+    SamplingArg, Switch, TriangleSamplingArg,
 };
 use crate::resume;
 use furnace_sampling::SamplerKind;
@@ -79,6 +79,16 @@ fn tint_env(c: RGBColor, env: EnvSamplingArg) -> RGBColor {
     }
 }
 
+/// `c` tinted by point-light gathering: towards olive for all, towards navy for one, as is for
+/// auto.
+fn tint_points(c: RGBColor, points: PointLightsArg) -> RGBColor {
+    match points {
+        PointLightsArg::Auto => c,
+        PointLightsArg::All => mix(c, RGBColor(128, 128, 0), 0.45),
+        PointLightsArg::One => mix(c, RGBColor(0, 0, 128), 0.45),
+    }
+}
+
 fn fmt_slope(k: f64) -> String {
     format!("{k:.2}").replace('-', "−")
 }
@@ -92,6 +102,7 @@ struct Varying {
     triangle_sampling: usize,
     light_selection: usize,
     env_sampling: usize,
+    point_lights: usize,
     compensations: usize,
     backends: usize,
     thresholds: usize,
@@ -107,6 +118,7 @@ impl Varying {
             triangle_sampling: dedup(&study.args.triangle_sampling).len(),
             light_selection: dedup(&study.args.light_selection).len(),
             env_sampling: dedup(&study.args.env_sampling).len(),
+            point_lights: dedup(&study.args.point_lights).len(),
             compensations: study.compensations().len(),
             backends: dedup(&study.args.backends).len(),
             thresholds: dedup(&study.args.noise_threshold).len(),
@@ -132,6 +144,9 @@ impl Varying {
         }
         if vary(self.env_sampling) {
             parts.push(format!("env {}", resume::cli_name(&c.env_sampling)));
+        }
+        if vary(self.point_lights) {
+            parts.push(format!("points {}", resume::cli_name(&c.point_lights)));
         }
         if vary(self.compensations) {
             parts.push(format!("comp {}", resume::cli_name(&c.compensation)));
@@ -221,6 +236,9 @@ fn config_series(
         }
         if varying.env_sampling > 1 {
             color = tint_env(color, c.env_sampling);
+        }
+        if varying.point_lights > 1 {
+            color = tint_points(color, c.point_lights);
         }
         if c.noise_threshold.value().is_some() {
             // Adaptive configurations: mixed with a colour of their own per threshold.
@@ -346,6 +364,12 @@ fn note(study: &Study, varying: &Varying, metric: &Metric, by_time: bool) -> Str
         note.push_str(
             " Environment sampling: importance (light samples by the map's luminance), off (BSDF rays \
              only, tinted teal), compensated (MIS compensation, tinted crimson).",
+        );
+    }
+    if varying.point_lights > 1 {
+        note.push_str(
+            " Point lights: auto (all up to 4 lights, one beyond), all (a shadow ray to each, tinted olive), \
+             one (one chosen by power per event, tinted navy).",
         );
     }
     if study.configs.iter().any(|c| c.compensation == Switch::On) {

@@ -32,6 +32,7 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
         triangle_sampling: c.triangle_sampling.into(),
         light_selection: c.light_selection.into(),
         env_sampling: c.env_sampling.into(),
+        point_lights: c.point_lights.into(),
         aovs: c.denoise == Switch::On,
         adaptive: c.noise_threshold.value().map(|threshold| furnace_render::AdaptiveSampling {
             threshold,

@@ -74,18 +74,21 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
                                 for sampler in dedup(&a.samplers) {
                                     for noise_threshold in dedup(&a.noise_threshold) {
                                         for denoise in dedup(&a.denoise) {
-                                            study.configs.push(Config {
-                                                sampler,
-                                                sampling,
-                                                light_sampling,
-                                                triangle_sampling,
-                                                light_selection,
-                                                env_sampling,
-                                                compensation,
-                                                backend,
-                                                noise_threshold,
-                                                denoise,
-                                            });
+                                            for point_lights in dedup(&a.point_lights) {
+                                                study.configs.push(Config {
+                                                    sampler,
+                                                    sampling,
+                                                    light_sampling,
+                                                    triangle_sampling,
+                                                    light_selection,
+                                                    env_sampling,
+                                                    point_lights,
+                                                    compensation,
+                                                    backend,
+                                                    noise_threshold,
+                                                    denoise,
+                                                });
+                                            }
                                         }
                                     }
                                 }

@@ -94,6 +94,7 @@ fn configs_json(study: &Study, rows: &[Row]) -> Vec<Value> {
                 "triangle_sampling": resume::cli_name(&c.triangle_sampling),
                 "light_selection": resume::cli_name(&c.light_selection),
                 "env_sampling": resume::cli_name(&c.env_sampling),
+                "point_lights": resume::cli_name(&c.point_lights),
                 "compensation": resume::cli_name(&c.compensation),
                 "backend": resume::cli_name(&c.backend),
                 "reference": r.path.display().to_string(),

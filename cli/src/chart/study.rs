@@ -5,8 +5,8 @@
 use super::data::{Row, config_name, rows_of};
 use super::reference::Reference;
 use crate::args::{
-    ChartArgs, ChartBackend, EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, SamplingArg,
-    Switch, Threshold, TriangleSamplingArg,
+    ChartArgs, ChartBackend, EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, PointLightsArg,
+    SamplingArg, Switch, Threshold, TriangleSamplingArg,
 };
 use crate::resume;
 use furnace_render::{RenderSettings, Timing};
@@ -23,6 +23,7 @@ pub(super) struct Config {
     pub(super) triangle_sampling: TriangleSamplingArg,
     pub(super) light_selection: LightSelectionArg,
     pub(super) env_sampling: EnvSamplingArg,
+    pub(super) point_lights: PointLightsArg,
     pub(super) compensation: Switch,
     pub(super) backend: ChartBackend,
     pub(super) noise_threshold: Threshold,
@@ -31,10 +32,14 @@ pub(super) struct Config {
 
 impl Config {
     /// `sobol/caps/mis/solid-angle/bvh/comp-off/cpu` (`…/bvh/env-off/comp-off/cpu` for an
-    /// environment sampling other than importance), then `/adaptive-T` with adaptive sampling
-    /// and `/denoised` when denoised (absent otherwise: older studies' names stay valid).
+    /// environment sampling other than importance), then `/points-all` or `/points-one` for a
+    /// point-light gathering other than auto, `/adaptive-T` with adaptive sampling and
+    /// `/denoised` when denoised (absent otherwise: older studies' names stay valid).
     pub(super) fn name(&self) -> String {
         let mut name = self.base_name();
+        if self.point_lights != PointLightsArg::Auto {
+            name.push_str(&format!("/points-{}", resume::cli_name(&self.point_lights)));
+        }
         if let Some(t) = self.noise_threshold.value() {
             name.push_str(&format!("/adaptive-{t}"));
         }
@@ -75,6 +80,7 @@ impl Config {
             triangle_sampling: resume::cli_name(&self.triangle_sampling),
             light_selection: resume::cli_name(&self.light_selection),
             env_sampling: resume::cli_name(&self.env_sampling),
+            point_lights: resume::cli_name(&self.point_lights),
             compensation: resume::cli_name(&self.compensation),
             backend: resume::cli_name(&self.backend),
             spp,
@@ -172,6 +178,14 @@ impl Study {
         let thresholds = dedup(&self.args.noise_threshold);
         if thresholds != [Threshold(None)] {
             v["noise_threshold"] = names(thresholds.iter().map(|t| t.name()).collect());
+        }
+        // The point-light axis too, and wherever `auto` is not what a study from before it did
+        // (gather every light): there such a study is not resumed as `auto`.
+        let points = dedup(&self.args.point_lights);
+        if points != [PointLightsArg::Auto]
+            || self.scene.point_lights().count() > furnace_render::POINT_LIGHTS_ALL_UP_TO
+        {
+            v["point_lights"] = names(points.iter().map(resume::cli_name).collect());
         }
         let denoise = dedup(&self.args.denoise);
         if denoise != [Switch::Off] {
