@@ -706,14 +706,10 @@ impl SceneFeatures {
         }
     }
 
-    /// The `HAS_POINT_LIGHTS`, `SHADOW_KINDS` and `SHADOW_SLOTS` constants, as WGSL.
+    /// The `SHADOW_KINDS` and `SHADOW_SLOTS` constants, as WGSL.
     pub fn wgsl(self) -> String {
         let kinds = self.shadow_kinds();
-        format!(
-            "const HAS_POINT_LIGHTS: bool = {};\nconst SHADOW_KINDS: u32 = {kinds}u;\nconst SHADOW_SLOTS: u32 = {}u;\n",
-            self.point_lights,
-            kinds.max(1)
-        )
+        format!("const SHADOW_KINDS: u32 = {kinds}u;\nconst SHADOW_SLOTS: u32 = {}u;\n", kinds.max(1))
     }
 
     /// The shadow rays a scattering event queues at most (integrator.wgsl's `defer_shadow`;

@@ -248,11 +248,11 @@ fn one_traversal_and_one_path_code_per_shader() {
         // traverse.wgsl's own wrappers call trace_query twice; the integrator once more.
         assert_eq!(calls(&s, "trace_query("), 4, "{name}: trace_query's definition and calls");
         assert_eq!(calls(&s, "trace_query(query_origin"), 1, "{name}: the integrator's one trace call");
-        // trace_closest: defined, never called; trace_any: defined and called by `shadow` alone,
-        // which runs only for point lights (behind the HAS_POINT_LIGHTS constant).
+        // trace_closest and trace_any: defined, never called (trace_any is called by `shadow`
+        // alone, composed only for point lights past the queue); no point-light code at all.
         assert_eq!(calls(&s, "trace_closest("), 1, "{name}: trace_closest called");
-        assert_eq!(calls(&s, "trace_any("), 2, "{name}: trace_any called outside `shadow`");
-        assert_eq!(calls(&s, "* shadow(bsdf"), 1, "{name}: `shadow` called outside the point lights' loop");
+        assert_eq!(calls(&s, "trace_any("), 1, "{name}: trace_any called");
+        assert!(!s.contains("fn shadow(") && !s.contains("gather_point_lights("), "{name}: point-light code");
         assert_eq!(calls(&s, "trace_samples("), 2, "{name}: the path code's definition and one call");
         let kinds = features.shadow_kinds();
         assert!(s.contains(&format!("const SHADOW_KINDS: u32 = {kinds}u;")), "{name}: SHADOW_KINDS");

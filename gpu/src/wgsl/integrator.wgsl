@@ -162,6 +162,7 @@ fn vertex_absorption(b: HitBsdf, t_max: f32) -> vec3<f32> {
     return vec3<f32>(1.0);
 }
 
+// #if HAS_POINT_LIGHTS
 // #if !QUEUED_POINT_LIGHTS
 // CpuRenderer::transmittance: what a shadow ray from `origin` along `dir` carries over t_max
 // (0 where blocked; the sheets' T′ and the vertex's volume absorption otherwise). Traced here,
@@ -189,6 +190,7 @@ fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32
     // #endif
 }
 // #endif
+// #endif
 
 // The shadow rays of the light samples taken at a scattering event (one per light kind the
 // scene samples, furnace_gpu's SceneFeatures::shadow_kinds), traced later by the path loop
@@ -214,6 +216,7 @@ fn defer_shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32, value
     shadow_queued += 1u;
 }
 
+// #if HAS_POINT_LIGHTS
 // furnace_scene::PointLight::intensity_towards: the intensity sent along unit `direction` (from
 // the light) to a point at `distance`, the spot cone and the range window applied.
 fn point_light_intensity(light: PointLight, direction: vec3<f32>, distance: f32) -> vec3<f32> {
@@ -307,6 +310,7 @@ fn point_light_share(light: PointLight, throughput: vec3<f32>, bsdf: HitBsdf, wo
     }
     return vec3<f32>(0.0);
 }
+// #endif
 
 // #if SAMPLES_LIGHTS
 // furnace_render::power_heuristic: a² / (a² + b²) as 1 / (1 + (b/a)²); 0 for a <= 0 or NaN.
@@ -863,12 +867,12 @@ fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bo
             }
             // #endif
 
-            // Point and spot lights, delta lights too: a shadow ray to each (composed only for a
-            // scene that has them: HAS_POINT_LIGHTS is a generated constant).
-            if HAS_POINT_LIGHTS {
-                radiance += gather_point_lights(pixel, index, event, throughput, bsdf, wo, frame, surface,
-                                                leave);
-            }
+            // #if HAS_POINT_LIGHTS
+            // Point and spot lights, delta lights too: a shadow ray to each, or to one chosen by
+            // power (composed only for a scene that has them).
+            radiance += gather_point_lights(pixel, index, event, throughput, bsdf, wo, frame, surface,
+                                            leave);
+            // #endif
 
             // #if SAMPLES_LIGHTS
             // Emitters and the sun disc: one light sample each (next-event estimation).
