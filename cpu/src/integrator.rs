@@ -152,6 +152,7 @@ impl CpuRenderer {
             .as_ref()
             .zip(settings.env_sampling.light_samples(settings.light_sampling))
             .and_then(|(e, compensated)| e.sampler(compensated));
+        let point_lights: Vec<furnace_scene::PointLight> = scene.point_lights().copied().collect();
         let rays = camera.rays(settings.width, settings.height);
         Ok(Self {
             env_rotation: environment
@@ -164,9 +165,9 @@ impl CpuRenderer {
             sun_discs: scene.suns().filter(|s| s.is_disc()).map(SunDisc::new).collect(),
             emitters,
             light_bvh,
-            point_lights: scene.point_lights().copied().collect(),
-            point_choice: PointLightDistribution::new(&scene.point_lights().copied().collect::<Vec<_>>()),
-            one_point_light: settings.point_lights.chooses(scene.point_lights().count()),
+            point_choice: PointLightDistribution::new(&point_lights),
+            one_point_light: settings.point_lights.chooses(point_lights.len()),
+            point_lights,
             sky: scene.sky(),
             film: Film::for_settings(&settings),
             scene,

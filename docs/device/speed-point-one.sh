@@ -5,7 +5,7 @@
 #     spp; random sampler), Mitsuba first, then ROUNDS (2) interleaved rounds of both
 #     strategies, at 1080p and 256²;
 #  2. the same on a box with 32 point lights (cbox_point's two and 30 dim ones under the
-#     ceiling, written here), where `all` traces 32 shadow rays per event and `one` one;
+#     ceiling, make_point_box.py), where `all` traces 32 shadow rays per event and `one` one;
 #  3. error per sample: RMSE against the 256² reference after 64, 256 and 1024 spp for both
 #     strategies (Owen-Sobol, the default, and random) and for Mitsuba; with the 256² rates of
 #     step 1 that gives the seconds each needs for an error (furnace: spp·pixels / rate,
@@ -14,21 +14,7 @@
 # unpacked to /root/site by a first command carrying .mi (speed-env.sh).
 xz -dc .dev/furnace-new.xz > /tmp/fn; chmod +x /tmp/fn
 source docs/device/speed-env.sh
-python3 - <<'PY'
-import json, shutil
-g = json.load(open('/tmp/sc/cbox_point.gltf'))
-lights = g['extensions']['KHR_lights_punctual']['lights']
-scene = g['scenes'][0]
-for i in range(30):
-    x, z = -0.8 + 0.4 * (i % 5), -0.75 + 0.3 * (i // 5)
-    lights.append({'name': f'dim{i}', 'type': 'point', 'intensity': 0.02 + 0.01 * (i % 7),
-                   'color': [0.6 + 0.4 * ((i * 3) % 5) / 4, 0.7, 0.6 + 0.4 * ((i * 2) % 5) / 4]})
-    g['nodes'].append({'name': f'dim{i}', 'translation': [x, 1.55, z],
-                       'extensions': {'KHR_lights_punctual': {'light': len(lights) - 1}}})
-    scene['nodes'].append(len(g['nodes']) - 1)
-scene['name'] = 'cbox_point32'
-json.dump(g, open('/tmp/sc/cbox_point32.gltf', 'w'))
-PY
+python3 docs/device/make_point_box.py 32 /tmp/sc/cbox_point.gltf /tmp/sc/cbox_point32.gltf
 echo "== 1, 2: Msamples/s at equal samples (random sampler)"
 mitsuba_at cbox_point 1920x1080 64 4
 mitsuba_at cbox_point32 1920x1080 64 4

@@ -196,33 +196,37 @@ fn check_lights(
 
 #[test]
 fn point_light_lights_the_floor_by_the_inverse_square_law() {
-    check(
-        "point",
-        PointLight {
-            position: Vec3::new(0.3, 1.0, -0.2),
-            intensity: Vec3::new(2.0, 1.0, 0.5),
-            range: None,
-            spot: None,
-        },
-    );
+    check("point", point());
+}
+
+/// The point light of the tests: (2, 1, 0.5) W/sr one metre above the floor.
+fn point() -> PointLight {
+    PointLight {
+        position: Vec3::new(0.3, 1.0, -0.2),
+        intensity: Vec3::new(2.0, 1.0, 0.5),
+        range: None,
+        spot: None,
+    }
+}
+
+/// The spot light of the tests: (1, 2, 3) W/sr, cone 20° to 35°, tilted.
+fn spot() -> PointLight {
+    let (inner, outer) = (20f32.to_radians(), 35f32.to_radians());
+    PointLight {
+        position: Vec3::new(-0.2, 1.5, 0.1),
+        intensity: Vec3::new(1.0, 2.0, 3.0),
+        range: None,
+        spot: Some(SpotCone {
+            direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
+            cos_inner: inner.cos(),
+            cos_outer: outer.cos(),
+        }),
+    }
 }
 
 #[test]
 fn spot_light_cone_falls_off_between_its_angles() {
-    let (inner, outer) = (20f32.to_radians(), 35f32.to_radians());
-    check(
-        "spot",
-        PointLight {
-            position: Vec3::new(-0.2, 1.5, 0.1),
-            intensity: Vec3::new(1.0, 2.0, 3.0),
-            range: None,
-            spot: Some(SpotCone {
-                direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
-                cos_inner: inner.cos(),
-                cos_outer: outer.cos(),
-            }),
-        },
-    );
+    check("spot", spot());
 }
 
 #[test]
@@ -268,24 +272,9 @@ fn a_light_on_the_surface_gives_no_infinity_or_nan() {
 /// past the bars.
 #[test]
 fn one_light_per_event_converges_to_the_sum_of_the_lights() {
-    let (inner, outer) = (20f32.to_radians(), 35f32.to_radians());
     let lights = [
-        PointLight {
-            position: Vec3::new(0.3, 1.0, -0.2),
-            intensity: Vec3::new(2.0, 1.0, 0.5),
-            range: None,
-            spot: None,
-        },
-        PointLight {
-            position: Vec3::new(-0.2, 1.5, 0.1),
-            intensity: Vec3::new(1.0, 2.0, 3.0),
-            range: None,
-            spot: Some(SpotCone {
-                direction: Vec3::new(0.2, -1.0, 0.1).normalize(),
-                cos_inner: inner.cos(),
-                cos_outer: outer.cos(),
-            }),
-        },
+        point(),
+        spot(),
         PointLight {
             position: Vec3::new(-1.0, 0.8, 1.0),
             intensity: Vec3::new(0.1, 0.2, 0.4),
@@ -299,13 +288,7 @@ fn one_light_per_event_converges_to_the_sum_of_the_lights() {
 /// With one light, choosing one light per event is gathering all: the same image, bit for bit.
 #[test]
 fn one_light_of_one_is_all_of_them() {
-    let light = PointLight {
-        position: Vec3::new(0.3, 1.0, -0.2),
-        intensity: Vec3::new(2.0, 1.0, 0.5),
-        range: None,
-        spot: None,
-    };
-    let scene = floor_scene(light);
+    let scene = floor_scene(point());
     for backend in Backend::ALL {
         let Some(all) = render_with(backend, &scene, PointLightSampling::All) else { return };
         let one = render_with(backend, &scene, PointLightSampling::One).unwrap();
