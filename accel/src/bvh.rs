@@ -13,7 +13,7 @@ use obvhs::{
 
 use crate::gpu::{GpuCwbvhNode, GpuTriangle};
 use crate::traverse::{self, WideNode};
-use crate::triangle::{EdgeTriangle, TriangleHit, intersect_triangle};
+use crate::triangle::{Tri4, TriangleHit, intersect_triangle};
 
 /// Which tree obvhs builds.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -151,9 +151,10 @@ pub struct Bvh {
     triangles: Vec<GpuTriangle>,
     /// `triangles[i].id`, as its own buffer.
     ids: Vec<u32>,
-    /// `triangles` with their edges formed, for the CPU traversal over [`WideNode`]s (empty
-    /// where the tree has none: large trees are memory-bound and keep 48 bytes per triangle).
-    edges: Vec<EdgeTriangle>,
+    /// The leaf children's triangles with their edges formed, 4 lanes per leaf child, for the
+    /// CPU traversal over [`WideNode`]s (empty where the tree has none: large trees are
+    /// memory-bound and keep 48 bytes per triangle).
+    blocks: Vec<Tri4>,
     /// `2^-m`: obvhs traverses with `dir · dir_scale`, see [`Bvh::obvhs_ray`].
     dir_scale: f32,
     input_count: usize,
@@ -212,12 +213,7 @@ impl Bvh {
                     // obvhs's own traversal (used above the limit) has a fixed 32-entry stack
                     // that overwrites its top entry when full and so loses hits below that
                     // depth; a tree that deep is traversed by `traverse`, whose stack spills.
-                    let wide = if b.nodes.len() <= WIDE_NODE_LIMIT || cwbvh_depth(&b) >= OBVHS_STACK {
-                        b.nodes.iter().map(WideNode::from_cwbvh).collect()
-                    } else {
-                        Vec::new()
-                    };
-                    Tree::Cwbvh(b, wide)
+                    Tree::Cwbvh(b, Vec::new())
                 }
                 Layout::Bvh2 => Tree::Bvh2(build_bvh2(&valid, quality.params())),
             }
@@ -243,17 +239,21 @@ impl Bvh {
             })
             .collect();
         let ids = gpu.iter().map(|t| t.id).collect();
-        let edges = match &tree {
-            Tree::Cwbvh(_, wide) if !wide.is_empty() => {
-                gpu.iter().map(|t| EdgeTriangle::new(t.vertices())).collect()
-            }
-            _ => Vec::new(),
-        };
+        let mut tree = tree;
+        let mut blocks = Vec::new();
+        if let Tree::Cwbvh(b, wide) = &mut tree
+            && (b.nodes.len() <= WIDE_NODE_LIMIT || cwbvh_depth(b) >= OBVHS_STACK)
+        {
+            // obvhs's own traversal (used above the limit) has a fixed 32-entry stack that
+            // overwrites its top entry when full and so loses hits below that depth; a tree
+            // that deep is traversed by `traverse`, whose stack spills.
+            (*wide, blocks) = traverse::wide_tree(&b.nodes, |slot| gpu[slot].vertices());
+        }
         Bvh {
             tree,
             triangles: gpu,
             ids,
-            edges,
+            blocks,
             dir_scale: direction_scale(max_abs),
             input_count: triangles.len(),
             skipped,
@@ -345,14 +345,24 @@ impl Bvh {
             // The CPU's own traversal, over the edge triangles.
             let mut best: Option<(usize, TriangleHit)> = None;
             let mut current = t_max;
-            traverse::closest(wide, &ray, |slot| match self.edges[slot].intersect(o, d, current) {
-                Some(h) if mask(self.ids[slot], h.barycentrics) => {
-                    best = Some((slot, h));
-                    current = h.t;
-                    // Cull boxes entered slightly beyond the hit, see CULL_SLACK.
-                    h.t * cull_scale
+            traverse::closest(wide, &ray, |block, first| {
+                let hits = self.blocks[block].intersect(o, d, current);
+                let mut cull = f32::INFINITY;
+                let mut lanes = hits.mask;
+                // Highest lane first, each against the best hit so far: the order and test of
+                // one triangle at a time.
+                while lanes != 0 {
+                    let lane = (31 - lanes.leading_zeros()) as usize;
+                    lanes &= !(1 << lane);
+                    let (t, uv) = (hits.t[lane], Vec2::new(hits.u[lane], hits.v[lane]));
+                    if t < current && mask(self.ids[first + lane], uv) {
+                        best = Some((first + lane, TriangleHit { t, barycentrics: uv }));
+                        current = t;
+                        // Cull boxes entered slightly beyond the hit, see CULL_SLACK.
+                        cull = t * cull_scale;
+                    }
                 }
-                _ => f32::INFINITY,
+                cull
             });
             return best.map(|(slot, h)| Hit {
                 triangle: self.ids[slot],
@@ -411,8 +421,17 @@ impl Bvh {
         if let Tree::Cwbvh(_, wide) = &self.tree
             && !wide.is_empty()
         {
-            return traverse::any(wide, &ray, |slot| {
-                self.edges[slot].intersect(o, d, t_max).is_some_and(|h| mask(self.ids[slot], h.barycentrics))
+            return traverse::any(wide, &ray, |block, first| {
+                let hits = self.blocks[block].intersect(o, d, t_max);
+                let mut lanes = hits.mask;
+                while lanes != 0 {
+                    let lane = (31 - lanes.leading_zeros()) as usize;
+                    lanes &= !(1 << lane);
+                    if mask(self.ids[first + lane], Vec2::new(hits.u[lane], hits.v[lane])) {
+                        return true;
+                    }
+                }
+                false
             });
         }
         let visit = |_: &Ray, slot: usize| -> f32 {

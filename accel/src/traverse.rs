@@ -17,7 +17,9 @@
 
 use std::ops::ControlFlow;
 
-use glam::{Vec3A, Vec4};
+use glam::{Vec3, Vec3A, Vec4};
+
+use crate::triangle::Tri4;
 use obvhs::{cwbvh::node::CwBvhNode, ray::Ray};
 
 /// A CWBVH node for CPU traversal: obvhs's [`CwBvhNode`] with the 48 quantised child planes
@@ -38,13 +40,19 @@ pub(crate) struct WideNode {
     imask: u32,
     child_base: u32,
     primitive_base: u32,
+    /// The first of the node's leaf blocks ([`crate::triangle::Tri4`]): its leaf children, in
+    /// slot order, have blocks `block_base ..`.
+    block_base: u32,
+    /// The slots of its non-empty leaf children.
+    leaf_mask: u8,
 }
 
-// 192 + 32 + 8 + 12, padded to the 16-byte alignment of its vectors.
+// 192 + 32 + 8 + 17, padded to the 16-byte alignment of its vectors.
 const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
 impl WideNode {
-    pub(crate) fn from_cwbvh(node: &CwBvhNode) -> Self {
+    /// `node`, whose leaf children's blocks start at `block_base`.
+    pub(crate) fn from_cwbvh(node: &CwBvhNode, block_base: u32) -> Self {
         let f = |q: [u8; 8]| {
             [
                 Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32),
@@ -67,17 +75,27 @@ impl WideNode {
             imask: node.imask as u32,
             child_base: node.child_base_idx,
             primitive_base: node.primitive_base_idx,
+            block_base,
+            leaf_mask: leaf_mask(node),
         }
     }
 
-    /// obvhs's per-node hit mask (`CwBvhNode::intersect_ray`'s result: inner children hit in
-    /// the top byte, in traversal order; leaf triangles hit in the low 24 bits) for children
-    /// entered at some `t ∈ [0, t_max]`. Same arithmetic, in the same order, as obvhs's SSE
+    /// The leaf block of leaf child `child` and the leaf slot of its first triangle.
+    #[inline(always)]
+    fn leaf(&self, child: usize) -> (usize, usize) {
+        let rank = POPCOUNT_8[usize::from(self.leaf_mask) & ((1 << child) - 1)];
+        let first = self.primitive_base + u32::from(self.child_meta[child] & 0x1f);
+        ((self.block_base + u32::from(rank)) as usize, first as usize)
+    }
+
+    /// The children entered at some `t ∈ [0, t_max]`: obvhs's mask of the inner ones (the top
+    /// byte of `CwBvhNode::intersect_ray`'s result: inner children in traversal order) and a
+    /// mask of the leaf children by slot. Same arithmetic, in the same order, as obvhs's SSE
     /// test: `q · (extent / d) + (p − o) / d`, then `maxps`/`minps` (glam's `Vec4::max`/`min`
     /// are those instructions), `cmpleps`. Inner children's bits come from a table (their
-    /// slots XOR the ray's octant), so the loop runs over hit leaf children only.
+    /// slots XOR the ray's octant).
     #[inline(always)]
-    fn intersect(&self, ray: &NodeRay, t_max: f32) -> u32 {
+    fn intersect(&self, ray: &NodeRay, t_max: f32) -> (u32, u32) {
         let scale = self.extent * ray.inv_direction;
         let offset = (self.origin - ray.origin) * ray.inv_direction;
         let (s, o) = (scale.to_array(), offset.to_array());
@@ -91,17 +109,45 @@ impl WideNode {
             enter.cmple(leave)
         };
         let (lo, hi) = (half(0), half(1));
-        let mut hit8 = lo.bitmask() | (hi.bitmask() << 4);
-        let mut mask = u32::from(INNER_BITS[ray.octant][(hit8 & self.imask) as usize]) << 24;
-        hit8 &= !self.imask;
-        while hit8 != 0 {
-            let child = hit8.trailing_zeros() as usize;
-            hit8 &= hit8 - 1;
-            let meta = u32::from(self.child_meta[child]);
-            mask |= (meta >> 5) << (meta & 0x1f);
-        }
-        mask
+        let hit8 = lo.bitmask() | (hi.bitmask() << 4);
+        let inner = u32::from(INNER_BITS[ray.octant][(hit8 & self.imask) as usize]) << 24;
+        (inner, hit8 & u32::from(self.leaf_mask))
     }
+}
+
+/// The slots of `node`'s non-empty leaf children (obvhs gives an empty child metadata 0).
+pub(crate) fn leaf_mask(node: &CwBvhNode) -> u8 {
+    (0..8).filter(|&i| node.imask & (1 << i) == 0 && node.child_meta[i] != 0).fold(0, |m, i| m | (1 << i))
+}
+
+/// The triangle count of leaf child `child` of `node` (its unary count in the metadata's top
+/// 3 bits).
+pub(crate) fn leaf_count(node: &CwBvhNode, child: usize) -> usize {
+    (node.child_meta[child] >> 5).count_ones() as usize
+}
+
+/// The CPU form of a CWBVH: its nodes as [`WideNode`]s and the triangles of each leaf child as
+/// one [`Tri4`] block, blocks in node order and, within a node, in slot order.
+/// `triangle(slot)` gives the vertices of leaf slot `slot`.
+pub(crate) fn wide_tree(
+    nodes: &[CwBvhNode],
+    triangle: impl Fn(usize) -> [Vec3; 3],
+) -> (Vec<WideNode>, Vec<Tri4>) {
+    let mut blocks = Vec::new();
+    let mut wide = Vec::with_capacity(nodes.len());
+    let mut tris = Vec::with_capacity(3);
+    for node in nodes {
+        let base = u32::try_from(blocks.len()).expect("furnace-accel: at most 2^32 leaf blocks");
+        wide.push(WideNode::from_cwbvh(node, base));
+        let leaves = leaf_mask(node);
+        for child in (0..8).filter(|c| leaves & (1 << c) != 0) {
+            let first = node.primitive_base_idx as usize + usize::from(node.child_meta[child] & 0x1f);
+            tris.clear();
+            tris.extend((first..first + leaf_count(node, child)).map(&triangle));
+            blocks.push(Tri4::new(&tris));
+        }
+    }
+    (wide, blocks)
 }
 
 /// `INNER_BITS[octant][m]`: the byte with bit `i ^ octant` set for each bit `i` of `m`, i.e.
@@ -160,8 +206,9 @@ const OCTANT_INV: [usize; 8] = [7, 3, 5, 1, 6, 2, 4, 0];
 
 /// The CWBVH traversal of Ylitie et al. 2017 as obvhs's `traverse!` macro does it (node groups
 /// and triangle groups as `(base, mask)` pairs), over [`WideNode`]s.
-/// `leaf(slot, t_max)` tests leaf slot `slot`; it returns `Break` to stop, or the new box cull
-/// distance (`Continue(t)`, `t < t_max` lowers it).
+/// `leaf(block, first)` tests the leaf block `block` (its triangles are leaf slots `first ..`);
+/// it returns `Break` to stop, or the new box cull distance (`Continue(t)`, `t < t_max` lowers
+/// it). A node's hit leaf children are visited from the highest slot down.
 ///
 /// The stack holds [`STACK`] node groups. A group is pushed at most once per tree level, so a
 /// tree of ≤ [`STACK`] levels (every tree obvhs builds for ordinary scenes) never fills it.
@@ -175,7 +222,7 @@ const OCTANT_INV: [usize; 8] = [7, 3, 5, 1, 6, 2, 4, 0];
 /// below it; the sweep costs almost nothing on trees that never overflow, less than a heap
 /// spill (BENCHMARKS.md, "Traversal").
 #[inline(always)]
-fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> ControlFlow<(), f32>) {
+fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize, usize) -> ControlFlow<(), f32>) {
     if nodes.is_empty() {
         return;
     }
@@ -228,13 +275,13 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
         } else {
             return;
         }
-        let hitmask = node.intersect(&r, t_max);
-        current = (node.child_base, (hitmask & follow_inner) | node.imask);
-        let mut primitives = hitmask & 0x00ff_ffff;
-        while primitives != 0 {
-            let local = 31 - primitives.leading_zeros();
-            primitives &= !(1u32 << local);
-            match leaf((node.primitive_base + local) as usize) {
+        let (inner, mut leaves) = node.intersect(&r, t_max);
+        current = (node.child_base, (inner & follow_inner) | node.imask);
+        while leaves != 0 {
+            let child = 31 - leaves.leading_zeros();
+            leaves &= !(1u32 << child);
+            let (block, first) = node.leaf(child as usize);
+            match leaf(block, first) {
                 ControlFlow::Break(()) => return,
                 ControlFlow::Continue(t) => {
                     if t < t_max {
@@ -246,19 +293,21 @@ fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize) -> Contro
     }
 }
 
-/// Closest-hit traversal: `visit(slot)` tests leaf slot `slot` and returns the distance (in the
-/// traversal ray's units) beyond which boxes may be culled from now on, or `+∞` for no change.
+/// Closest-hit traversal: `visit(block, first)` tests leaf block `block` (leaf slots
+/// `first ..`) and returns the distance (in the traversal ray's units) beyond which boxes may be
+/// culled from now on, or `+∞` for no change.
 #[inline(always)]
-pub(crate) fn closest(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize) -> f32) {
-    traverse(nodes, ray, |slot| ControlFlow::Continue(visit(slot)));
+pub(crate) fn closest(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize, usize) -> f32) {
+    traverse(nodes, ray, |block, first| ControlFlow::Continue(visit(block, first)));
 }
 
-/// Any-hit traversal: stops as soon as `visit(slot)` returns `true`; returns whether it did.
+/// Any-hit traversal: stops as soon as `visit(block, first)` returns `true`; returns whether it
+/// did.
 #[inline(always)]
-pub(crate) fn any(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize) -> bool) -> bool {
+pub(crate) fn any(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize, usize) -> bool) -> bool {
     let mut found = false;
-    traverse(nodes, ray, |slot| {
-        if visit(slot) {
+    traverse(nodes, ray, |block, first| {
+        if visit(block, first) {
             found = true;
             ControlFlow::Break(())
         } else {
@@ -295,7 +344,7 @@ mod tests {
     /// k + 1. Rays whose octant visits the chain child first push one group per level, so the
     /// stack reaches `levels` groups; a fixed 32-entry stack that overwrote its top entry would
     /// lose the holders' triangles from there on.
-    fn chain(levels: usize, tris: &[[Vec3; 3]]) -> Vec<WideNode> {
+    fn chain(levels: usize, tris: &[[Vec3; 3]]) -> (Vec<WideNode>, Vec<Tri4>) {
         let (lo, hi) = tris
             .iter()
             .flatten()
@@ -329,7 +378,7 @@ mod tests {
             // Holder k: one leaf of 3 triangles (unary count 0b111) at offset 0 from 3k.
             nodes.push(node(0, 0, 3 * k as u32, [0b111 << 5, 0, 0, 0, 0, 0, 0, 0]));
         }
-        nodes.iter().map(WideNode::from_cwbvh).collect()
+        wide_tree(&nodes, |slot| tris[slot])
     }
 
     #[test]
@@ -344,7 +393,7 @@ mod tests {
                 [Vec3::new(-s, -s, z), Vec3::new(s, -s * 0.5, z), Vec3::new(0.0, s, z)]
             })
             .collect();
-        let nodes = chain(LEVELS, &tris);
+        let (nodes, blocks) = chain(LEVELS, &tris);
         let mut rng = furnace_tests::Rng::new(0x9e37_79b9_7f4a_7c15);
         let (mut hits, mut deep) = (0, 0);
         for _ in 0..4096 {
@@ -367,23 +416,26 @@ mod tests {
                 }
             });
             let mut got: Option<(usize, f32)> = None;
-            closest(&nodes, &ray, |slot| {
-                match intersect_triangle(o, d, tris[slot], got.map_or(f32::INFINITY, |b| b.1)) {
-                    Some(h) => {
-                        got = Some((slot, h.t));
+            closest(&nodes, &ray, |block, first| {
+                let hits = blocks[block].intersect(o.into(), d.into(), got.map_or(f32::INFINITY, |b| b.1));
+                let mut cull = f32::INFINITY;
+                for lane in (0..4).rev() {
+                    if hits.mask & (1 << lane) != 0 && hits.t[lane] < got.map_or(f32::INFINITY, |b| b.1) {
+                        got = Some((first + lane, hits.t[lane]));
                         // Cull slightly beyond the hit, as `Bvh` does (CULL_SLACK, 2^-12).
-                        h.t * (1.0 + 1.0 / 4096.0)
+                        cull = hits.t[lane] * (1.0 + 1.0 / 4096.0);
                     }
-                    None => f32::INFINITY,
                 }
+                cull
             });
             assert_eq!(got, brute, "closest hit, ray {o} {d}");
             // Any-hit up to a distance short of and past the closest hit.
             for t_any in [1.0f32, 3.0] {
                 let brute_any = tris.iter().any(|t| intersect_triangle(o, d, *t, t_any).is_some());
                 let any_ray = Ray { tmax: t_any * (1.0 + 1.0 / 4096.0), ..ray };
-                let got_any =
-                    any(&nodes, &any_ray, |slot| intersect_triangle(o, d, tris[slot], t_any).is_some());
+                let got_any = any(&nodes, &any_ray, |block, _| {
+                    blocks[block].intersect(o.into(), d.into(), t_any).mask != 0
+                });
                 assert_eq!(got_any, brute_any, "any hit, ray {o} {d} t_max {t_any}");
             }
             if let Some((slot, _)) = brute {
