@@ -329,14 +329,30 @@ impl Bvh {
     ///
     /// The mask is called only for candidates closer than the closest accepted hit so far, in
     /// no particular order, possibly more than once per triangle.
+    #[inline]
     pub fn closest_hit_masked(
         &self,
         origin: Vec3,
         dir: Vec3,
         t_max: f32,
+        mask: impl FnMut(u32, Vec2) -> bool,
+    ) -> Option<Hit> {
+        // The query proper takes 16-byte vectors: built here in the caller's registers, they
+        // reach it as whole 16-byte stores that its 16-byte loads forward from. `Vec3`
+        // arguments were stored as 8 + 4 bytes and read back as 4 + 8, a store-forwarding
+        // stall at every query.
+        self.closest_hit_a(origin.into(), dir.into(), t_max, mask)
+    }
+
+    /// [`closest_hit_masked`](Self::closest_hit_masked) on `Vec3A`s.
+    fn closest_hit_a(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        t_max: f32,
         mut mask: impl FnMut(u32, Vec2) -> bool,
     ) -> Option<Hit> {
-        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        let (origin, dir) = (Vec3::from(o), Vec3::from(d));
         let ray = self.obvhs_ray(o, d, t_max)?;
         let cull_scale = CULL_SLACK / self.dir_scale;
         if let Tree::Cwbvh(_, wide) = &self.tree
@@ -346,29 +362,9 @@ impl Bvh {
             let mut best: Option<(usize, TriangleHit)> = None;
             let mut current = t_max;
             traverse::closest(wide, &ray, |block, first| {
-                let hits = self.blocks[block].intersect(o, d, current);
-                let mut cull = f32::INFINITY;
-                let mut lanes = hits.mask;
-                // Highest lane first, each against the best hit so far: the order and test of
-                // one triangle at a time.
-                while lanes != 0 {
-                    let lane = (31 - lanes.leading_zeros()) as usize;
-                    lanes &= !(1 << lane);
-                    let (t, uv) = (hits.t[lane], Vec2::new(hits.u[lane], hits.v[lane]));
-                    if t < current && mask(self.ids[first + lane], uv) {
-                        best = Some((first + lane, TriangleHit { t, barycentrics: uv }));
-                        current = t;
-                        // Cull boxes entered slightly beyond the hit, see CULL_SLACK.
-                        cull = t * cull_scale;
-                    }
-                }
-                cull
+                self.closest_leaf(block, first, o, d, (&mut best, &mut current), cull_scale, &mut mask)
             });
-            return best.map(|(slot, h)| Hit {
-                triangle: self.ids[slot],
-                t: h.t,
-                barycentrics: h.barycentrics,
-            });
+            return self.hit_of(best);
         }
         let mut best: Option<(u32, TriangleHit)> = None;
         let mut current = t_max;
@@ -407,14 +403,21 @@ impl Bvh {
 
     /// [`occluded`](Self::occluded) where a hit counts only if `mask(triangle, barycentrics)`
     /// returns `true`.
+    #[inline]
     pub fn occluded_masked(
         &self,
         origin: Vec3,
         dir: Vec3,
         t_max: f32,
-        mut mask: impl FnMut(u32, Vec2) -> bool,
+        mask: impl FnMut(u32, Vec2) -> bool,
     ) -> bool {
-        let (o, d) = (Vec3A::from(origin), Vec3A::from(dir));
+        // As `closest_hit_masked`: 16-byte vectors to the query proper.
+        self.occluded_a(origin.into(), dir.into(), t_max, mask)
+    }
+
+    /// [`occluded_masked`](Self::occluded_masked) on `Vec3A`s.
+    fn occluded_a(&self, o: Vec3A, d: Vec3A, t_max: f32, mut mask: impl FnMut(u32, Vec2) -> bool) -> bool {
+        let (origin, dir) = (Vec3::from(o), Vec3::from(d));
         let Some(ray) = self.obvhs_ray(o, d, t_max) else {
             return false;
         };
@@ -422,16 +425,7 @@ impl Bvh {
             && !wide.is_empty()
         {
             return traverse::any(wide, &ray, |block, first| {
-                let hits = self.blocks[block].intersect(o, d, t_max);
-                let mut lanes = hits.mask;
-                while lanes != 0 {
-                    let lane = (31 - lanes.leading_zeros()) as usize;
-                    lanes &= !(1 << lane);
-                    if mask(self.ids[first + lane], Vec2::new(hits.u[lane], hits.v[lane])) {
-                        return true;
-                    }
-                }
-                false
+                self.any_leaf(block, first, o, d, t_max, &mut mask)
             });
         }
         let visit = |_: &Ray, slot: usize| -> f32 {
@@ -447,6 +441,69 @@ impl Bvh {
             Tree::Cwbvh(b, _) => !b.ray_traverse_miss(ray, visit),
             Tree::Bvh2(b) => !b.ray_traverse_miss(ray, visit),
         }
+    }
+
+    /// A closest-hit query's test of leaf block `block` (leaf slots `first ..`): its hit lanes
+    /// from the highest down, each against the best hit so far (`state`: that hit and its
+    /// `t`), which is the order and test of one triangle at a time. Returns the new box cull
+    /// distance (`+∞`: unchanged).
+    #[inline(always)]
+    #[allow(clippy::too_many_arguments)]
+    fn closest_leaf(
+        &self,
+        block: usize,
+        first: usize,
+        o: Vec3A,
+        d: Vec3A,
+        (best, current): (&mut Option<(usize, TriangleHit)>, &mut f32),
+        cull_scale: f32,
+        mask: &mut impl FnMut(u32, Vec2) -> bool,
+    ) -> f32 {
+        let hits = self.blocks[block].intersect(o, d, *current);
+        let mut cull = f32::INFINITY;
+        let mut lanes = hits.mask;
+        while lanes != 0 {
+            let lane = (31 - lanes.leading_zeros()) as usize;
+            lanes &= !(1 << lane);
+            let (t, uv) = (hits.t[lane], Vec2::new(hits.u[lane], hits.v[lane]));
+            if t < *current && mask(self.ids[first + lane], uv) {
+                *best = Some((first + lane, TriangleHit { t, barycentrics: uv }));
+                *current = t;
+                // Cull boxes entered slightly beyond the hit, see CULL_SLACK.
+                cull = t * cull_scale;
+            }
+        }
+        cull
+    }
+
+    /// An any-hit query's test of leaf block `block` (leaf slots `first ..`): whether some
+    /// lane hits at `t < t_max` and passes `mask`.
+    #[inline(always)]
+    fn any_leaf(
+        &self,
+        block: usize,
+        first: usize,
+        o: Vec3A,
+        d: Vec3A,
+        t_max: f32,
+        mask: &mut impl FnMut(u32, Vec2) -> bool,
+    ) -> bool {
+        let hits = self.blocks[block].intersect(o, d, t_max);
+        let mut lanes = hits.mask;
+        while lanes != 0 {
+            let lane = (31 - lanes.leading_zeros()) as usize;
+            lanes &= !(1 << lane);
+            if mask(self.ids[first + lane], Vec2::new(hits.u[lane], hits.v[lane])) {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// The [`Hit`] of a closest-hit query's best leaf slot.
+    #[inline(always)]
+    fn hit_of(&self, best: Option<(usize, TriangleHit)>) -> Option<Hit> {
+        best.map(|(slot, h)| Hit { triangle: self.ids[slot], t: h.t, barycentrics: h.barycentrics })
     }
 
     /// The ray obvhs traverses: the direction scaled by `dir_scale = 2^-m`, so that obvhs's

@@ -223,73 +223,110 @@ const OCTANT_INV: [usize; 8] = [7, 3, 5, 1, 6, 2, 4, 0];
 /// spill (BENCHMARKS.md, "Traversal").
 #[inline(always)]
 fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize, usize) -> ControlFlow<(), f32>) {
-    if nodes.is_empty() {
-        return;
-    }
-    let r = NodeRay::new(ray);
-    let mut t_max = ray.tmax;
-    let mut stack = [(0u32, 0u32); STACK];
-    // A ring buffer: groups `bottom..top` are on the stack, group `i` in `stack[i % STACK]`;
-    // `bottom` stays 0 unless the stack overflows (no copying when it does).
-    let (mut top, mut bottom) = (0usize, 0usize);
-    // Whether a group was dropped from the full stack (then the sweep runs at the end).
-    let mut overflowed = false;
-    // The sweep's next node, and the inner-child mask: all of them, none in the sweep. The sweep
-    // runs in this loop rather than in a function of its own: a second call site of `leaf` keeps
-    // the caller's closure state (the best hit so far) in memory on the common path too.
-    let mut sweep_next = 0usize;
-    let mut follow_inner = 0xff00_0000u32;
-    let mut current = (0u32, 0x8000_0000u32);
-    loop {
-        let node;
-        if current.1 & 0xff00_0000 != 0 {
-            let hits_imask = current.1;
-            let child_index_offset = 31 - hits_imask.leading_zeros();
-            current.1 &= !(1u32 << child_index_offset);
-            if current.1 & 0xff00_0000 != 0 {
-                if top - bottom == STACK {
-                    // Full: drop the bottom (shallowest) group; the sweep covers it.
-                    bottom += 1;
-                    overflowed = true;
-                }
-                stack[top % STACK] = current;
-                top += 1;
-            }
-            let slot_index = (child_index_offset - 24) ^ r.octant as u32;
-            // `slot_index < 8`: only the low byte (`imask`) counts; a table, as baseline x86-64
-            // has no `popcnt` instruction.
-            let relative_index =
-                u32::from(POPCOUNT_8[(hits_imask & !(0xffff_ffffu32 << slot_index)) as usize & 0xff]);
-            node = &nodes[(current.0 + relative_index) as usize];
-        } else if top != bottom {
-            top -= 1;
-            current = stack[top % STACK];
-            continue;
-        } else if overflowed && sweep_next < nodes.len() {
-            // The fallback: every node's leaf children, box-tested with the current cull
-            // distance. Leaves already tested are tested again, which changes no result.
-            node = &nodes[sweep_next];
-            sweep_next += 1;
-            // The sweep follows no inner child: every leaf is some node's child.
-            follow_inner = 0;
-        } else {
-            return;
+    let mut walk = Walk::new(ray);
+    while walk.step(nodes, &mut leaf) {}
+}
+
+/// One ray's traversal ([`traverse`]) as a state that advances one node visit at a time.
+/// (Interleaving several rays' walks, a node of each in turn, was measured on the Cornell box
+/// and gained nothing for closest hits: the traversal is bound by instructions and branches
+/// more than by the wait for nodes; see `BENCHMARKS.md`.)
+struct Walk {
+    r: NodeRay,
+    /// The box cull distance.
+    t_max: f32,
+    /// A ring buffer: groups `bottom..top` are on the stack, group `i` in `stack[i % STACK]`;
+    /// `bottom` stays 0 unless the stack overflows (no copying when it does).
+    stack: [(u32, u32); STACK],
+    top: usize,
+    bottom: usize,
+    /// Whether a group was dropped from the full stack (then the sweep runs at the end).
+    overflowed: bool,
+    /// The sweep's next node, and the inner-child mask: all of them, none in the sweep.
+    sweep_next: usize,
+    follow_inner: u32,
+    /// The node group being visited: `(child base, hit mask)`.
+    current: (u32, u32),
+}
+
+impl Walk {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        Walk {
+            r: NodeRay::new(ray),
+            t_max: ray.tmax,
+            stack: [(0, 0); STACK],
+            top: 0,
+            bottom: 0,
+            overflowed: false,
+            sweep_next: 0,
+            follow_inner: 0xff00_0000,
+            current: (0, 0x8000_0000),
         }
-        let (inner, mut leaves) = node.intersect(&r, t_max);
-        current = (node.child_base, (inner & follow_inner) | node.imask);
+    }
+
+    /// Visits the next node, testing its hit leaf children with `leaf` (see [`traverse`]);
+    /// `false` when the traversal has ended (no node left, or `leaf` returned `Break`).
+    #[inline(always)]
+    fn step(
+        &mut self,
+        nodes: &[WideNode],
+        leaf: &mut impl FnMut(usize, usize) -> ControlFlow<(), f32>,
+    ) -> bool {
+        let node = loop {
+            if self.current.1 & 0xff00_0000 != 0 {
+                let hits_imask = self.current.1;
+                let child_index_offset = 31 - hits_imask.leading_zeros();
+                self.current.1 &= !(1u32 << child_index_offset);
+                if self.current.1 & 0xff00_0000 != 0 {
+                    if self.top - self.bottom == STACK {
+                        // Full: drop the bottom (shallowest) group; the sweep covers it.
+                        self.bottom += 1;
+                        self.overflowed = true;
+                    }
+                    self.stack[self.top % STACK] = self.current;
+                    self.top += 1;
+                }
+                let slot_index = (child_index_offset - 24) ^ self.r.octant as u32;
+                // `slot_index < 8`: only the low byte (`imask`) counts; a table, as baseline
+                // x86-64 has no `popcnt` instruction.
+                let relative_index =
+                    u32::from(POPCOUNT_8[(hits_imask & !(0xffff_ffffu32 << slot_index)) as usize & 0xff]);
+                match nodes.get((self.current.0 + relative_index) as usize) {
+                    Some(node) => break node,
+                    // An empty tree (the root group points at node 0).
+                    None => return false,
+                }
+            } else if self.top != self.bottom {
+                self.top -= 1;
+                self.current = self.stack[self.top % STACK];
+            } else if self.overflowed && self.sweep_next < nodes.len() {
+                // The fallback: every node's leaf children, box-tested with the current cull
+                // distance. Leaves already tested are tested again, which changes no result.
+                self.sweep_next += 1;
+                // The sweep follows no inner child: every leaf is some node's child.
+                self.follow_inner = 0;
+                break &nodes[self.sweep_next - 1];
+            } else {
+                return false;
+            }
+        };
+        let (inner, mut leaves) = node.intersect(&self.r, self.t_max);
+        self.current = (node.child_base, (inner & self.follow_inner) | node.imask);
         while leaves != 0 {
             let child = 31 - leaves.leading_zeros();
             leaves &= !(1u32 << child);
             let (block, first) = node.leaf(child as usize);
             match leaf(block, first) {
-                ControlFlow::Break(()) => return,
+                ControlFlow::Break(()) => return false,
                 ControlFlow::Continue(t) => {
-                    if t < t_max {
-                        t_max = t;
+                    if t < self.t_max {
+                        self.t_max = t;
                     }
                 }
             }
         }
+        true
     }
 }
 
