@@ -389,7 +389,9 @@ impl CpuRenderer {
                     depth: Some(hit.t),
                 };
             }
-            let Some(surface) = surface else {
+            // Borrowed, not moved out of the `Option`: the move copied it through memory in
+            // pieces that did not match the stores that wrote it (a store-forwarding stall).
+            let Some(surface) = &surface else {
                 // The back of a single-sided surface: black, like a one-sided BSDF.
                 break;
             };
@@ -446,7 +448,7 @@ impl CpuRenderer {
                 bsdf,
                 wo,
                 frame,
-                surface: &surface,
+                surface,
                 leave,
                 leave_behind: bsdf.transmits_light_samples().then(behind),
                 medium,
