@@ -120,6 +120,7 @@ impl Bsdf for GgxSpecular {
         f * self.ggx.eval_cos(wo, wi, wm, self.options.masking) * self.compensation(wo.z)
     }
 
+    #[inline]
     fn sample(&self, wo: Vec3, _uc: f32, u: Vec2) -> Option<Sample> {
         if !above(wo) {
             return None;
