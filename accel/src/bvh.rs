@@ -207,15 +207,13 @@ impl Bvh {
         }
         let skipped = triangles.len() - valid.len();
         let quality = options.quality.unwrap_or_else(|| BuildQuality::for_triangle_count(valid.len()));
-        let tree = if valid.is_empty() {
+        let mut tree = if valid.is_empty() {
             Tree::Empty
         } else {
             match options.layout {
                 Layout::Cwbvh => {
                     let b = build_cwbvh(&valid, quality.params());
-                    // obvhs's own traversal (used above the limit) has a fixed 32-entry stack
-                    // that overwrites its top entry when full and so loses hits below that
-                    // depth; a tree that deep is traversed by `traverse`, whose stack spills.
+                    // Its CPU form is added below, once the triangles are in leaf order.
                     Tree::Cwbvh(b, Vec::new())
                 }
                 Layout::Bvh2 => Tree::Bvh2(build_bvh2(&valid, quality.params())),
@@ -242,7 +240,6 @@ impl Bvh {
             })
             .collect();
         let ids = gpu.iter().map(|t| t.id).collect();
-        let mut tree = tree;
         let mut blocks = Vec::new();
         if let Tree::Cwbvh(b, wide) = &mut tree
             && (b.nodes.len() <= WIDE_NODE_LIMIT || cwbvh_depth(b) >= OBVHS_STACK)
@@ -363,7 +360,7 @@ impl Bvh {
         if let Tree::Cwbvh(_, wide) = &self.tree
             && !wide.is_empty()
         {
-            // The CPU's own traversal, over the edge triangles.
+            // The CPU's own traversal, over the leaf blocks.
             let mut best: Option<(usize, TriangleHit)> = None;
             let mut current = t_max;
             traverse::closest(wide, &ray, |block, first| {
