@@ -157,9 +157,6 @@ pub struct Bvh {
     blocks: Vec<Tri4>,
     /// `2^-m`: obvhs traverses with `dir · dir_scale`, see [`Bvh::obvhs_ray`].
     dir_scale: f32,
-    /// `CULL_SLACK / dir_scale`: a distance along the caller's ray times this is the box cull
-    /// distance of the traversal ray (formed once, not divided per query).
-    cull_scale: f32,
     input_count: usize,
     skipped: usize,
     quality: Option<BuildQuality>,
@@ -249,14 +246,12 @@ impl Bvh {
             // that deep is traversed by `traverse`, whose stack spills.
             (*wide, blocks) = traverse::wide_tree(&b.nodes, |slot| gpu[slot].vertices());
         }
-        let dir_scale = direction_scale(max_abs);
         Bvh {
             tree,
             triangles: gpu,
             ids,
             blocks,
-            dir_scale,
-            cull_scale: CULL_SLACK / dir_scale,
+            dir_scale: direction_scale(max_abs),
             input_count: triangles.len(),
             skipped,
             quality: if valid.is_empty() { None } else { Some(quality) },
@@ -356,7 +351,7 @@ impl Bvh {
     ) -> Option<Hit> {
         let (origin, dir) = (Vec3::from(o), Vec3::from(d));
         let ray = self.obvhs_ray(o, d, t_max)?;
-        let cull_scale = self.cull_scale;
+        let cull_scale = CULL_SLACK / self.dir_scale;
         if let Tree::Cwbvh(_, wide) = &self.tree
             && !wide.is_empty()
         {
@@ -533,7 +528,7 @@ impl Bvh {
             direction: d,
             inv_direction: safe_recip3(d),
             tmin: 0.0,
-            tmax: t_max * self.cull_scale,
+            tmax: t_max * (CULL_SLACK / self.dir_scale),
         })
     }
 }

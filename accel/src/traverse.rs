@@ -56,7 +56,7 @@ const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
 
 impl WideNode {
     /// `node`, whose leaf children's blocks start at `block_base`.
-    pub(crate) fn from_cwbvh(node: &CwBvhNode, block_base: u32) -> Self {
+    fn from_cwbvh(node: &CwBvhNode, block_base: u32) -> Self {
         let f = |q: [u8; 8]| {
             [
                 Vec4::new(q[0] as f32, q[1] as f32, q[2] as f32, q[3] as f32),

@@ -32,6 +32,11 @@ fn reference(dir: &Path, side: u32, spp: u32) -> PathBuf {
     dir.join("ref.exr")
 }
 
+/// The names of a chart's configurations, in its order.
+fn config_names(doc: &serde_json::Value) -> Vec<&str> {
+    doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect()
+}
+
 fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
@@ -368,8 +373,7 @@ fn light_sampling_is_an_axis() {
     let out = area_box_study(&dir, &["--light-sampling", "bsdf,nee,mis"]);
     let doc = json(&out.join("chart.json"));
     assert_eq!(doc["settings"]["light_sampling"], serde_json::json!(["bsdf", "nee", "mis"]));
-    let configs: Vec<&str> =
-        doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
+    let configs = config_names(&doc);
     assert_eq!(
         configs,
         [
@@ -408,8 +412,7 @@ fn triangle_sampling_is_an_axis() {
         area_box_study(&dir, &["--light-sampling", "nee,mis", "--triangle-sampling", "solid-angle,area"]);
     let doc = json(&out.join("chart.json"));
     assert_eq!(doc["settings"]["triangle_sampling"], serde_json::json!(["solid-angle", "area"]));
-    let configs: Vec<&str> =
-        doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
+    let configs = config_names(&doc);
     assert_eq!(
         configs,
         [
@@ -455,8 +458,7 @@ fn point_lights_is_an_axis() {
     let out = box_study(&dir, "cbox_point", &["--point-lights", "auto,one"]);
     let doc = json(&out.join("chart.json"));
     assert_eq!(doc["settings"]["point_lights"], serde_json::json!(["auto", "one"]));
-    let configs: Vec<&str> =
-        doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
+    let configs = config_names(&doc);
     assert_eq!(
         configs,
         [
@@ -485,8 +487,7 @@ fn light_selection_is_an_axis() {
         area_box_study(&dir, &["--triangle-sampling", "solid-angle,area", "--light-selection", "power,bvh"]);
     let doc = json(&out.join("chart.json"));
     assert_eq!(doc["settings"]["light_selection"], serde_json::json!(["power", "bvh"]));
-    let configs: Vec<&str> =
-        doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
+    let configs = config_names(&doc);
     assert_eq!(
         configs,
         [
@@ -729,8 +730,7 @@ fn env_sampling_is_an_axis() {
     );
     let doc = json(&out.join("chart.json"));
     assert_eq!(doc["settings"]["env_sampling"], serde_json::json!(["off", "importance", "compensated"]));
-    let configs: Vec<&str> =
-        doc["configs"].as_array().unwrap().iter().map(|c| c["config"].as_str().unwrap()).collect();
+    let configs = config_names(&doc);
     assert_eq!(
         configs,
         [
