@@ -157,6 +157,9 @@ pub struct Bvh {
     blocks: Vec<Tri4>,
     /// `2^-m`: obvhs traverses with `dir · dir_scale`, see [`Bvh::obvhs_ray`].
     dir_scale: f32,
+    /// Whether the CPU has the features the queries' AVX2 versions are compiled for
+    /// ([`wide_node_test_available`]).
+    avx2: bool,
     input_count: usize,
     skipped: usize,
     quality: Option<BuildQuality>,
@@ -252,6 +255,7 @@ impl Bvh {
             ids,
             blocks,
             dir_scale: direction_scale(max_abs),
+            avx2: wide_node_test_available(),
             input_count: triangles.len(),
             skipped,
             quality: if valid.is_empty() { None } else { Some(quality) },
@@ -347,6 +351,38 @@ impl Bvh {
         o: Vec3A,
         d: Vec3A,
         t_max: f32,
+        mask: impl FnMut(u32, Vec2) -> bool,
+    ) -> Option<Hit> {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: `avx2` is true only where the CPU has every feature `closest_hit_avx2` is
+            // compiled for (`wide_node_test_available`).
+            #[allow(unsafe_code)]
+            return unsafe { self.closest_hit_avx2(o, d, t_max, mask) };
+        }
+        self.closest_hit_with::<false>(o, d, t_max, mask)
+    }
+
+    /// [`closest_hit_with`](Self::closest_hit_with) compiled for AVX2, with the 8-lane node test.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    fn closest_hit_avx2(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        t_max: f32,
+        mask: impl FnMut(u32, Vec2) -> bool,
+    ) -> Option<Hit> {
+        self.closest_hit_with::<true>(o, d, t_max, mask)
+    }
+
+    /// The closest-hit query; `WIDE` picks the node test (`traverse::traverse`).
+    #[inline(always)]
+    fn closest_hit_with<const WIDE: bool>(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        t_max: f32,
         mut mask: impl FnMut(u32, Vec2) -> bool,
     ) -> Option<Hit> {
         let (origin, dir) = (Vec3::from(o), Vec3::from(d));
@@ -358,7 +394,7 @@ impl Bvh {
             // The CPU's own traversal, over the leaf blocks.
             let mut best: Option<(usize, TriangleHit)> = None;
             let mut current = t_max;
-            traverse::closest(wide, &ray, |block, first| {
+            traverse::closest::<WIDE>(wide, &ray, |block, first| {
                 self.closest_leaf(block, first, o, d, (&mut best, &mut current), cull_scale, &mut mask)
             });
             return self.hit_of(best);
@@ -413,7 +449,32 @@ impl Bvh {
     }
 
     /// [`occluded_masked`](Self::occluded_masked) on `Vec3A`s.
-    fn occluded_a(&self, o: Vec3A, d: Vec3A, t_max: f32, mut mask: impl FnMut(u32, Vec2) -> bool) -> bool {
+    fn occluded_a(&self, o: Vec3A, d: Vec3A, t_max: f32, mask: impl FnMut(u32, Vec2) -> bool) -> bool {
+        #[cfg(target_arch = "x86_64")]
+        if self.avx2 {
+            // SAFETY: as in `closest_hit_a`.
+            #[allow(unsafe_code)]
+            return unsafe { self.occluded_avx2(o, d, t_max, mask) };
+        }
+        self.occluded_with::<false>(o, d, t_max, mask)
+    }
+
+    /// [`occluded_with`](Self::occluded_with) compiled for AVX2, with the 8-lane node test.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,bmi1,bmi2,lzcnt,popcnt")]
+    fn occluded_avx2(&self, o: Vec3A, d: Vec3A, t_max: f32, mask: impl FnMut(u32, Vec2) -> bool) -> bool {
+        self.occluded_with::<true>(o, d, t_max, mask)
+    }
+
+    /// The any-hit query; `WIDE` picks the node test.
+    #[inline(always)]
+    fn occluded_with<const WIDE: bool>(
+        &self,
+        o: Vec3A,
+        d: Vec3A,
+        t_max: f32,
+        mut mask: impl FnMut(u32, Vec2) -> bool,
+    ) -> bool {
         let (origin, dir) = (Vec3::from(o), Vec3::from(d));
         let Some(ray) = self.obvhs_ray(o, d, t_max) else {
             return false;
@@ -421,7 +482,7 @@ impl Bvh {
         if let Tree::Cwbvh(_, wide) = &self.tree
             && !wide.is_empty()
         {
-            return traverse::any(wide, &ray, |block, first| {
+            return traverse::any::<WIDE>(wide, &ray, |block, first| {
                 self.any_leaf(block, first, o, d, t_max, &mut mask)
             });
         }
@@ -531,6 +592,25 @@ impl Bvh {
             tmax: t_max * (CULL_SLACK / self.dir_scale),
         })
     }
+}
+
+/// Whether this CPU can run the queries' AVX2 versions (8-lane node test; the features LLVM may
+/// use in them: AVX2 and the bit instructions every AVX2 CPU has). Films do not depend on it:
+/// both node tests give the same masks. `FURNACE_CPU_NODE_TEST=4` turns it off (to compare).
+fn wide_node_test_available() -> bool {
+    if std::env::var_os("FURNACE_CPU_NODE_TEST").is_some_and(|v| v == "4") {
+        return false;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        std::is_x86_feature_detected!("avx2")
+            && std::is_x86_feature_detected!("bmi1")
+            && std::is_x86_feature_detected!("bmi2")
+            && std::is_x86_feature_detected!("lzcnt")
+            && std::is_x86_feature_detected!("popcnt")
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    false
 }
 
 /// The BVH2 both layouts start from: obvhs's `build_*_from_tris` helpers up to their shared
@@ -744,6 +824,45 @@ mod tests {
                 v.to_array().map(f32::to_bits),
                 [safe_recip(x), safe_recip(-x), 1.0].map(f32::to_bits)
             );
+        }
+    }
+
+    /// The queries give the same hits, bit for bit, with either node test: on this CPU's
+    /// choice (`closest_hit`, `occluded`: the AVX2 versions where the CPU has it) and with the
+    /// 4-lane test forced, over a soup of 3 000 random triangles (scales from 1e-3 to 1e3) and
+    /// 20 000 rays from inside and outside it, some with zero and `-0.0` components.
+    #[test]
+    fn node_tests_give_the_same_hits() {
+        let mut r = furnace_tests::Rng::new(0x8_1a2e);
+        for scale in [1e-3f32, 1.0, 1e3] {
+            let p = |r: &mut furnace_tests::Rng| r.vec3(Vec3::splat(-1.0), Vec3::ONE) * scale;
+            let soup: Vec<[Vec3; 3]> = (0..3000)
+                .map(|_| {
+                    let c = p(&mut r);
+                    [c, c + 0.1 * p(&mut r), c + 0.1 * p(&mut r)]
+                })
+                .collect();
+            let bvh = Bvh::build(&soup);
+            let (mut hits, mut blocked) = (0, 0);
+            for i in 0..20_000 {
+                let o = p(&mut r) * if i % 2 == 0 { 1.0 } else { 3.0 };
+                let mut d = r.vec3(Vec3::splat(-1.0), Vec3::ONE);
+                match i % 5 {
+                    0 => d.x = 0.0,
+                    1 => d.z = -0.0,
+                    _ => {}
+                }
+                let t_max = if i % 3 == 0 { f32::INFINITY } else { r.range(0.0, 2.0) * scale };
+                let (o, d) = (Vec3A::from(o), Vec3A::from(d));
+                let chosen = bvh.closest_hit_a(o, d, t_max, |_, _| true);
+                let four = bvh.closest_hit_with::<false>(o, d, t_max, |_, _| true);
+                assert_eq!(chosen, four, "scale {scale}, ray {i}: {o} {d} {t_max}");
+                let chosen = bvh.occluded_a(o, d, t_max, |_, _| true);
+                assert_eq!(chosen, bvh.occluded_with::<false>(o, d, t_max, |_, _| true), "ray {i}");
+                hits += usize::from(four.is_some());
+                blocked += usize::from(chosen);
+            }
+            assert!(hits > 2000 && blocked > 2000, "scale {scale}: {hits} hits, {blocked} blocked");
         }
     }
 

@@ -15,6 +15,10 @@
 //! the entry cut-off: obvhs clamps entry distances to an absolute `1e-4`, this test to `0` (it
 //! visits a superset of obvhs's boxes).
 //!
+//! On CPUs with AVX2, `Bvh`'s queries run a copy of the traversal compiled for it, whose node
+//! test takes the 8 children in one pass of 256-bit instructions ([`WideNode::intersect8`]:
+//! same operations, same order, same masks) and whose bit counts are `popcnt`s.
+//!
 //! Each hit leaf child's triangles (at most 3) are tested together, one 4-lane
 //! [`Tri4`] block per leaf child in leaf order, with no branch per triangle: the branches of
 //! one-at-a-time tests (determinant, `u`, `v`, `t`) were as unpredictable as the rays.
@@ -85,11 +89,12 @@ impl WideNode {
     }
 
     /// The leaf block of leaf child `child` and the leaf slot of its first triangle.
+    /// `WIDE`: compiled for AVX2 CPUs, which all have `popcnt` (see [`popcount8`]).
     #[inline(always)]
-    fn leaf(&self, child: usize) -> (usize, usize) {
-        let rank = POPCOUNT_8[usize::from(self.leaf_mask) & ((1 << child) - 1)];
+    fn leaf<const WIDE: bool>(&self, child: usize) -> (usize, usize) {
+        let rank = popcount8::<WIDE>(u32::from(self.leaf_mask) & ((1 << child) - 1));
         let first = self.primitive_base + u32::from(self.child_meta[child] & 0x1f);
-        ((self.block_base + u32::from(rank)) as usize, first as usize)
+        ((self.block_base + rank) as usize, first as usize)
     }
 
     /// The children entered at some `t ∈ [0, t_max]`: obvhs's mask of the inner ones (the top
@@ -114,6 +119,42 @@ impl WideNode {
         };
         let (lo, hi) = (half(0), half(1));
         let hit8 = lo.bitmask() | (hi.bitmask() << 4);
+        self.masks(ray, hit8)
+    }
+
+    /// [`intersect`](Self::intersect) with the 8 children in one pass of 256-bit AVX
+    /// instructions: the same operations on the same values in the same order (`mulps`,
+    /// `addps`, `maxps`, `minps`, `cmpleps`, each on 8 lanes instead of twice on 4), so the same
+    /// bits and the same masks.
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    #[inline]
+    fn intersect8(&self, ray: &NodeRay, t_max: f32) -> (u32, u32) {
+        use std::arch::x86_64::*;
+        let scale = self.extent * ray.inv_direction;
+        let offset = (self.origin - ray.origin) * ray.inv_direction;
+        let (s, o) = (scale.to_array(), offset.to_array());
+        let t = |axis: usize, far: bool| {
+            let side = ray.negative[axis] != far;
+            let [lo, hi] = self.planes[axis][side as usize];
+            let p = _mm256_set_m128(hi.into(), lo.into());
+            _mm256_add_ps(_mm256_mul_ps(p, _mm256_set1_ps(s[axis])), _mm256_set1_ps(o[axis]))
+        };
+        let enter = _mm256_max_ps(
+            _mm256_max_ps(t(0, false), _mm256_max_ps(t(1, false), t(2, false))),
+            _mm256_setzero_ps(),
+        );
+        let leave = _mm256_min_ps(
+            _mm256_min_ps(t(0, true), _mm256_min_ps(t(1, true), t(2, true))),
+            _mm256_set1_ps(t_max),
+        );
+        let hit8 = _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OS>(enter, leave)) as u32;
+        self.masks(ray, hit8)
+    }
+
+    /// The masks [`intersect`](Self::intersect) returns, from the bits of the children hit.
+    #[inline(always)]
+    fn masks(&self, ray: &NodeRay, hit8: u32) -> (u32, u32) {
         let inner = u32::from(INNER_BITS[ray.octant][(hit8 & self.imask) as usize]) << 24;
         (inner, hit8 & u32::from(self.leaf_mask))
     }
@@ -225,10 +266,17 @@ const OCTANT_INV: [usize; 8] = [7, 3, 5, 1, 6, 2, 4, 0];
 /// stack that overwrites its top entry when full (obvhs's `StackStack`) would lose every hit
 /// below it; the sweep costs almost nothing on trees that never overflow, less than a heap
 /// spill (BENCHMARKS.md, "Traversal").
+///
+/// `WIDE` picks the node test: [`WideNode::intersect8`] (for code compiled with AVX2) or
+/// [`WideNode::intersect`]; both give the same masks.
 #[inline(always)]
-fn traverse(nodes: &[WideNode], ray: &Ray, mut leaf: impl FnMut(usize, usize) -> ControlFlow<(), f32>) {
+fn traverse<const WIDE: bool>(
+    nodes: &[WideNode],
+    ray: &Ray,
+    mut leaf: impl FnMut(usize, usize) -> ControlFlow<(), f32>,
+) {
     let mut walk = Walk::new(ray);
-    while walk.step(nodes, &mut leaf) {}
+    while walk.step::<WIDE>(nodes, &mut leaf) {}
 }
 
 /// One ray's traversal ([`traverse`]) as a state that advances one node visit at a time.
@@ -272,7 +320,7 @@ impl Walk {
     /// Visits the next node, testing its hit leaf children with `leaf` (see [`traverse`]);
     /// `false` when the traversal has ended (no node left, or `leaf` returned `Break`).
     #[inline(always)]
-    fn step(
+    fn step<const WIDE: bool>(
         &mut self,
         nodes: &[WideNode],
         leaf: &mut impl FnMut(usize, usize) -> ControlFlow<(), f32>,
@@ -292,10 +340,8 @@ impl Walk {
                     self.top += 1;
                 }
                 let slot_index = (child_index_offset - 24) ^ self.r.octant as u32;
-                // `slot_index < 8`: only the low byte (`imask`) counts; a table, as baseline
-                // x86-64 has no `popcnt` instruction.
-                let relative_index =
-                    u32::from(POPCOUNT_8[(hits_imask & !(0xffff_ffffu32 << slot_index)) as usize & 0xff]);
+                // `slot_index < 8`: only the low byte (`imask`) counts.
+                let relative_index = popcount8::<WIDE>(hits_imask & !(0xffff_ffffu32 << slot_index) & 0xff);
                 match nodes.get((self.current.0 + relative_index) as usize) {
                     Some(node) => break node,
                     // An empty tree (the root group points at node 0).
@@ -315,12 +361,24 @@ impl Walk {
                 return false;
             }
         };
+        #[cfg(target_arch = "x86_64")]
+        let (inner, mut leaves) = if WIDE {
+            // SAFETY: `WIDE` is true only in `Bvh`'s AVX2 queries, which run only on CPUs with
+            // AVX2 (`wide_node_test_available`).
+            #[allow(unsafe_code)]
+            unsafe {
+                node.intersect8(&self.r, self.t_max)
+            }
+        } else {
+            node.intersect(&self.r, self.t_max)
+        };
+        #[cfg(not(target_arch = "x86_64"))]
         let (inner, mut leaves) = node.intersect(&self.r, self.t_max);
         self.current = (node.child_base, (inner & self.follow_inner) | node.imask);
         while leaves != 0 {
             let child = 31 - leaves.leading_zeros();
             leaves &= !(1u32 << child);
-            let (block, first) = node.leaf(child as usize);
+            let (block, first) = node.leaf::<WIDE>(child as usize);
             match leaf(block, first) {
                 ControlFlow::Break(()) => return false,
                 ControlFlow::Continue(t) => {
@@ -338,16 +396,24 @@ impl Walk {
 /// `first ..`) and returns the distance (in the traversal ray's units) beyond which boxes may be
 /// culled from now on, or `+∞` for no change.
 #[inline(always)]
-pub(crate) fn closest(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize, usize) -> f32) {
-    traverse(nodes, ray, |block, first| ControlFlow::Continue(visit(block, first)));
+pub(crate) fn closest<const WIDE: bool>(
+    nodes: &[WideNode],
+    ray: &Ray,
+    mut visit: impl FnMut(usize, usize) -> f32,
+) {
+    traverse::<WIDE>(nodes, ray, |block, first| ControlFlow::Continue(visit(block, first)));
 }
 
 /// Any-hit traversal: stops as soon as `visit(block, first)` returns `true`; returns whether it
 /// did.
 #[inline(always)]
-pub(crate) fn any(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize, usize) -> bool) -> bool {
+pub(crate) fn any<const WIDE: bool>(
+    nodes: &[WideNode],
+    ray: &Ray,
+    mut visit: impl FnMut(usize, usize) -> bool,
+) -> bool {
     let mut found = false;
-    traverse(nodes, ray, |block, first| {
+    traverse::<WIDE>(nodes, ray, |block, first| {
         if visit(block, first) {
             found = true;
             ControlFlow::Break(())
@@ -361,6 +427,14 @@ pub(crate) fn any(nodes: &[WideNode], ray: &Ray, mut visit: impl FnMut(usize, us
 /// Node groups [`traverse`] keeps in its fixed array before spilling to the heap (obvhs's
 /// CWBVH stack size; the test scenes and glTF samples stay well below it).
 const STACK: usize = 32;
+
+/// The number of set bits of `byte` (< 256): `count_ones` where the code is compiled for AVX2
+/// CPUs (`WIDE`; they all have `popcnt`, one instruction), else a table, as baseline x86-64 has
+/// no `popcnt` and `count_ones` would be a dozen instructions.
+#[inline(always)]
+fn popcount8<const WIDE: bool>(byte: u32) -> u32 {
+    if WIDE { byte.count_ones() } else { u32::from(POPCOUNT_8[byte as usize & 0xff]) }
+}
 
 /// The number of set bits of every byte.
 const POPCOUNT_8: [u8; 256] = {
@@ -422,6 +496,93 @@ mod tests {
         wide_tree(&nodes, |slot| tris[slot])
     }
 
+    /// The 8-lane AVX node test gives the same masks as the two 4-lane halves, bit for bit, on
+    /// random nodes and rays: random plane bytes and grids (cells from 2⁻³⁰ to 2³⁰), origins
+    /// inside and far outside the node, directions with zero, `-0.0` and tiny components (their
+    /// clamped reciprocals reach 2¹⁰⁰ and give infinite and NaN slab distances, where `maxps`
+    /// and `minps`'s operand order matters), `t_max` finite, zero and infinite.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn eight_lane_node_test_matches_two_halves() {
+        if !std::is_x86_feature_detected!("avx") {
+            // The AVX test cannot run here; the traversal never takes it on such CPUs.
+            eprintln!("eight_lane_node_test_matches_two_halves: no AVX on this CPU, not run");
+            return;
+        }
+        let mut r = furnace_tests::Rng::new(0x5eed_a5e5_0000_0008);
+        let (mut hits, mut misses) = (0, 0);
+        for case in 0..200_000 {
+            let mut q = || std::array::from_fn::<u8, 8, _>(|_| r.below(256) as u8);
+            let mut planes = [q(), q(), q(), q(), q(), q()];
+            // Mostly proper boxes (min ≤ max), every fourth node as random bytes (empty boxes).
+            if case % 4 != 0 {
+                for pair in planes.chunks_exact_mut(2) {
+                    let [min, max] = pair else { unreachable!() };
+                    for (a, b) in min.iter_mut().zip(max.iter_mut()) {
+                        (*a, *b) = ((*a).min(*b), (*a).max(*b));
+                    }
+                }
+            }
+            let node = CwBvhNode {
+                p: Vec3::ZERO,
+                e: [127; 3],
+                imask: r.below(256) as u8,
+                child_base_idx: 0,
+                primitive_base_idx: 0,
+                child_meta: [0; 8],
+                child_min_x: planes[0],
+                child_max_x: planes[1],
+                child_min_y: planes[2],
+                child_max_y: planes[3],
+                child_min_z: planes[4],
+                child_max_z: planes[5],
+            };
+            let mut wide = WideNode::from_cwbvh(&node, 0);
+            wide.leaf_mask = !node.imask;
+            // Grid cells of 2^-30 .. 2^30 (every other case), or near 1.
+            let (lo, hi) = if case % 2 == 0 { (-30, 30) } else { (-2, 2) };
+            let mut cell = || 2f32.powi(lo + r.below((hi - lo + 1) as u32) as i32);
+            wide.extent = Vec3A::new(cell(), cell(), cell());
+            let size = wide.extent * 255.0;
+            wide.origin = Vec3A::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0)) * size;
+            let reach = if case % 3 == 0 { 4.0 } else { 1.2 };
+            let o = wide.origin
+                + Vec3A::new(r.range(-0.2, reach), r.range(-0.2, reach), r.range(-0.2, reach)) * size;
+            // Every other ray aimed at a random point of the node's grid.
+            let mut d = if case % 2 == 0 {
+                let target = Vec3A::new(r.f32(), r.f32(), r.f32()) * size + wide.origin;
+                (target - o).normalize_or(Vec3A::X)
+            } else {
+                Vec3A::new(r.range(-1.0, 1.0), r.range(-1.0, 1.0), r.range(-1.0, 1.0))
+            };
+            match case % 7 {
+                0 => d.x = 0.0,
+                1 => d.y = -0.0,
+                2 => d.z = 1e-35,
+                _ => {}
+            }
+            // `Bvh::obvhs_ray`'s reciprocal: ±2^100 below 2^-100.
+            let inv = |x: f32| if x.abs() < 7.888_609e-31 { 1.267_650_6e30f32.copysign(x) } else { 1.0 / x };
+            let inv_direction = Vec3A::new(inv(d.x), inv(d.y), inv(d.z));
+            let ray = Ray { origin: o, direction: d, inv_direction, tmin: 0.0, tmax: 0.0 };
+            let node_ray = NodeRay::new(&ray);
+            let t_max = match case % 5 {
+                0 => f32::INFINITY,
+                1 => 0.0,
+                _ => r.range(0.0, 3.0) * size.max_element(),
+            };
+            let four = wide.intersect(&node_ray, t_max);
+            // SAFETY: AVX was detected above.
+            #[allow(unsafe_code)]
+            let eight = unsafe { wide.intersect8(&node_ray, t_max) };
+            assert_eq!(eight, four, "case {case}: origin {o}, direction {d}, t_max {t_max}");
+            if four.0 | four.1 != 0 { hits += 1 } else { misses += 1 }
+        }
+        // Both outcomes must be common for the comparison to mean something.
+        assert!(hits > 30_000 && misses > 30_000, "{hits} hits, {misses} misses");
+        eprintln!("eight_lane_node_test_matches_two_halves: {hits} hits, {misses} misses, all equal");
+    }
+
     #[test]
     fn deep_chain_loses_no_hits() {
         const LEVELS: usize = 100;
@@ -457,7 +618,7 @@ mod tests {
                 }
             });
             let mut got: Option<(usize, f32)> = None;
-            closest(&nodes, &ray, |block, first| {
+            closest::<false>(&nodes, &ray, |block, first| {
                 let hits = blocks[block].intersect(o.into(), d.into(), got.map_or(f32::INFINITY, |b| b.1));
                 let mut cull = f32::INFINITY;
                 for lane in (0..4).rev() {
@@ -474,7 +635,7 @@ mod tests {
             for t_any in [1.0f32, 3.0] {
                 let brute_any = tris.iter().any(|t| intersect_triangle(o, d, *t, t_any).is_some());
                 let any_ray = Ray { tmax: t_any * (1.0 + 1.0 / 4096.0), ..ray };
-                let got_any = any(&nodes, &any_ray, |block, _| {
+                let got_any = any::<false>(&nodes, &any_ray, |block, _| {
                     blocks[block].intersect(o.into(), d.into(), t_any).mask != 0
                 });
                 assert_eq!(got_any, brute_any, "any hit, ray {o} {d} t_max {t_any}");
