@@ -523,13 +523,17 @@ mod tests {
                     }
                 }
             }
+            let imask = r.below(256) as u8;
             let node = CwBvhNode {
                 p: Vec3::ZERO,
                 e: [127; 3],
-                imask: r.below(256) as u8,
+                imask,
                 child_base_idx: 0,
                 primitive_base_idx: 0,
-                child_meta: [0; 8],
+                // Inner child i in slot 24 + i (as obvhs places them), leaves of one triangle.
+                child_meta: std::array::from_fn(|i| {
+                    if imask & (1 << i) != 0 { 0b0010_0000 | (24 + i as u8) } else { 0b0010_0000 }
+                }),
                 child_min_x: planes[0],
                 child_max_x: planes[1],
                 child_min_y: planes[2],
@@ -538,7 +542,6 @@ mod tests {
                 child_max_z: planes[5],
             };
             let mut wide = WideNode::from_cwbvh(&node, 0);
-            wide.leaf_mask = !node.imask;
             // Grid cells of 2^-30 .. 2^30 (every other case), or near 1.
             let (lo, hi) = if case % 2 == 0 { (-30, 30) } else { (-2, 2) };
             let mut cell = || 2f32.powi(lo + r.below((hi - lo + 1) as u32) as i32);
