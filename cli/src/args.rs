@@ -208,6 +208,12 @@ pub struct RenderArgs {
     /// name prints; implies --backend gpu when --backend is auto.
     #[arg(long, value_name = "NAME|INDEX")]
     pub adapter: Option<String>,
+    /// Render on several GPUs at once: `all` (every hardware adapter), or a comma-separated
+    /// list of adapters as --adapter names them (a part of a name takes every adapter that
+    /// matches: `H200`). Each pass's samples are shared among them; a GPU that fails leaves its
+    /// samples to the others. Not with --adapter, --backend cpu or --noise-threshold.
+    #[arg(long, value_name = "all|LIST", conflicts_with = "adapter")]
+    pub gpus: Option<furnace_cli::backend::GpuSet>,
     /// Output path: writes PATH.png and PATH.exr (a .png or .exr extension is replaced).
     #[arg(long, default_value = "furnace")]
     pub out: PathBuf,
@@ -434,6 +440,10 @@ pub struct BenchArgs {
     /// The GPU adapter: a part of its name or its index; implies --backend gpu when auto.
     #[arg(long, value_name = "NAME|INDEX")]
     pub adapter: Option<String>,
+    /// Run on several GPUs at once (as `furnace render --gpus`): `all` or a list of adapters.
+    /// No ray counts (as --no-rays).
+    #[arg(long, value_name = "all|LIST", conflicts_with_all = ["adapter", "group_samples"])]
+    pub gpus: Option<furnace_cli::backend::GpuSet>,
     /// The scene: cbox (the built-in reference Cornell box), interior:N (the procedural sunlit
     /// interior of about N triangles, e.g. interior:1e6), or a .gltf/.glb path.
     #[arg(long, default_value = "cbox", value_parser = parse_scene)]

@@ -1,8 +1,9 @@
 //! Which integrator renders: `--backend auto|cpu|gpu` and `--adapter`, decided in one place
-//! ([`open`]) for `furnace render`, `chart`, `bench` and the tests.
+//! ([`open`]) for `furnace render`, `chart`, `bench` and the tests; `--gpus` ([`open_gpus`])
+//! for one render on several GPUs.
 
 use furnace_cpu::CpuRenderer;
-use furnace_gpu::{AdapterChoice, GpuContext, GpuError, GpuRenderer};
+use furnace_gpu::{AdapterChoice, GpuContext, GpuError, GpuRenderer, MultiGpuRenderer};
 use furnace_render::{Film, Integrator, RenderError, RenderSettings};
 use furnace_scene::{Camera, Scene};
 use std::sync::Arc;
@@ -37,13 +38,150 @@ pub fn gpu_context(choice: BackendChoice, adapter: Option<&str>) -> Result<Optio
     })
 }
 
-/// An open integrator: the CPU reference or the wgpu one, as [`gpu_context`] decides.
+/// `--gpus`: the adapters that render one image together.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum GpuSet {
+    /// Every hardware adapter (every adapter where there is none, as software ones are then
+    /// all there is).
+    All,
+    /// Adapters as `--adapter` names them: an index, a PCI address, or a part of a name, which
+    /// takes every adapter whose name contains it (`H200`: all of them).
+    List(Vec<String>),
+}
+
+impl std::str::FromStr for GpuSet {
+    type Err = String;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        if s.trim().eq_ignore_ascii_case("all") {
+            return Ok(Self::All);
+        }
+        let entries: Vec<String> = s.split(',').map(|e| e.trim().to_string()).collect();
+        if entries.iter().any(String::is_empty) {
+            return Err(format!(
+                "'{s}' is not a list of GPUs: give `all`, or adapters separated by commas (indices, \
+                 PCI addresses or parts of names, as --adapter takes them), e.g. 0,1"
+            ));
+        }
+        Ok(Self::List(entries))
+    }
+}
+
+/// The indices (in [`GpuContext::adapters`]' order, which `--adapter INDEX` uses) of the adapters
+/// `set` names, in its order; an adapter named twice is listed twice.
+///
+/// # Errors
+/// [`GpuError::NoAdapter`] for no adapter at all, or an entry that names none (with the list of
+/// adapters present).
+pub fn gpu_indices(set: &GpuSet) -> Result<Vec<usize>, GpuError> {
+    let adapters = GpuContext::adapters();
+    let indices: Vec<usize> = match set {
+        GpuSet::All => {
+            let hardware: Vec<usize> =
+                (0..adapters.len()).filter(|&i| furnace_gpu::context::is_hardware(&adapters[i])).collect();
+            if hardware.is_empty() { (0..adapters.len()).collect() } else { hardware }
+        }
+        GpuSet::List(entries) => {
+            let mut v = Vec::new();
+            for entry in entries {
+                let matched: Vec<usize> = match (entry.parse::<usize>(), furnace_gpu::pci_address(entry)) {
+                    (Ok(i), _) => (i < adapters.len()).then_some(i).into_iter().collect(),
+                    (_, Some(bus)) => (0..adapters.len())
+                        .filter(|&i| furnace_gpu::pci_address(&adapters[i].device_pci_bus_id) == Some(bus))
+                        .collect(),
+                    _ => {
+                        let n = entry.to_lowercase();
+                        (0..adapters.len())
+                            .filter(|&i| adapters[i].name.to_lowercase().contains(&n))
+                            .collect()
+                    }
+                };
+                if matched.is_empty() {
+                    // The single-adapter lookup's error lists the adapters present.
+                    GpuContext::new(&AdapterChoice::Named(entry.clone()))?;
+                    return Err(GpuError::NoAdapter(format!(" matching \"{entry}\"")));
+                }
+                v.extend(matched);
+            }
+            v
+        }
+    };
+    if indices.is_empty() {
+        // No adapter at all: the single-adapter lookup says how to install one.
+        GpuContext::new(&AdapterChoice::Best)?;
+        return Err(GpuError::NoAdapter(String::new()));
+    }
+    Ok(indices)
+}
+
+/// Opens the GPU integrator on the adapters at `indices` ([`gpu_indices`]): the plain one for a
+/// single adapter, [`MultiGpuRenderer`] for several (a device on each, the BVH built once).
+///
+/// # Errors
+/// As [`open`]; a device that fails to open among several is left out (see
+/// [`MultiGpuRenderer::take_retirements`]), an error only when none opens.
+pub fn open_gpus(
+    indices: &[usize],
+    scene: Arc<Scene>,
+    camera: &Camera,
+    settings: RenderSettings,
+) -> Result<Backend, RenderError> {
+    if let [one] = indices {
+        return open(BackendChoice::Gpu, Some(&one.to_string()), scene, camera, settings);
+    }
+    let contexts = indices
+        .iter()
+        .map(|i| GpuContext::new(&AdapterChoice::Named(i.to_string())))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(Backend::Gpus(Box::new(MultiGpuRenderer::new(contexts, &scene, camera, settings)?)))
+}
+
+/// The integrator a command's `--backend`, `--adapter` and `--gpus` ask for: [`open_gpus`] with
+/// `--gpus` (warning on stderr of an adapter listed twice: two devices then share one GPU,
+/// which tests use, but renders no faster), else [`open`].
+///
+/// # Errors
+/// `--gpus` with `--backend cpu`; [`gpu_indices`]'s and [`open`]'s errors, as text.
+pub fn open_chosen(
+    choice: BackendChoice,
+    adapter: Option<&str>,
+    gpus: Option<&GpuSet>,
+    scene: Arc<Scene>,
+    camera: &Camera,
+    settings: RenderSettings,
+) -> Result<Backend, String> {
+    let Some(set) = gpus else {
+        return open(choice, adapter, scene, camera, settings).map_err(|e| e.to_string());
+    };
+    if choice == BackendChoice::Cpu {
+        return Err("--gpus renders on GPUs: it cannot be combined with --backend cpu".into());
+    }
+    let indices = gpu_indices(set).map_err(|e| e.to_string())?;
+    for (k, i) in indices.iter().enumerate() {
+        if indices[..k].contains(i) {
+            eprintln!(
+                "warning: --gpus names adapter {i} more than once: its devices share one GPU (no faster \
+                 than one)"
+            );
+        }
+    }
+    let mut backend = open_gpus(&indices, scene, camera, settings).map_err(|e| e.to_string())?;
+    for line in backend.take_retirements() {
+        eprintln!("warning: {line}");
+    }
+    Ok(backend)
+}
+
+/// An open integrator: the CPU reference or the wgpu one, as [`gpu_context`] decides, or the
+/// wgpu one on several GPUs ([`open_gpus`]).
 #[derive(Debug)]
 pub enum Backend {
     /// The CPU reference integrator.
     Cpu(Box<CpuRenderer>),
     /// The wgpu integrator.
     Gpu(Box<GpuRenderer>),
+    /// The wgpu integrator on several devices.
+    Gpus(Box<MultiGpuRenderer>),
 }
 
 /// Opens the integrator that `choice` and `adapter` ask for on `scene` seen through `camera`,
@@ -71,6 +209,7 @@ impl Backend {
         match self {
             Self::Cpu(c) => c.as_mut(),
             Self::Gpu(g) => g.as_mut(),
+            Self::Gpus(g) => g.as_mut(),
         }
     }
 
@@ -79,6 +218,7 @@ impl Backend {
         match self {
             Self::Cpu(c) => c.as_ref(),
             Self::Gpu(g) => g.as_ref(),
+            Self::Gpus(g) => g.as_ref(),
         }
     }
 
@@ -86,7 +226,16 @@ impl Backend {
     pub fn gpu(&mut self) -> Option<&mut GpuRenderer> {
         match self {
             Self::Gpu(g) => Some(g),
-            Self::Cpu(_) => None,
+            Self::Cpu(_) | Self::Gpus(_) => None,
+        }
+    }
+
+    /// The devices that left a render on several GPUs since the last call, each said on one
+    /// line; empty for the other backends.
+    pub fn take_retirements(&mut self) -> Vec<String> {
+        match self {
+            Self::Gpus(g) => g.take_retirements().iter().map(ToString::to_string).collect(),
+            Self::Cpu(_) | Self::Gpu(_) => Vec::new(),
         }
     }
 }
@@ -104,12 +253,23 @@ impl Integrator for Backend {
         self.integrator_ref().settings()
     }
 
+    /// The integrator's pass; a device that left a render on several GPUs is reported on
+    /// stderr as it happens (the render goes on without it).
     fn render_pass(&mut self, first_sample: u32, samples_per_pixel: u32) -> Result<(), RenderError> {
-        self.integrator().render_pass(first_sample, samples_per_pixel)
+        let result = self.integrator().render_pass(first_sample, samples_per_pixel);
+        for line in self.take_retirements() {
+            eprintln!("warning: {line}");
+        }
+        result
     }
 
+    /// The integrator's film; as for a pass, a device that left is reported on stderr.
     fn film(&mut self) -> Result<Film, RenderError> {
-        self.integrator().film()
+        let result = self.integrator().film();
+        for line in self.take_retirements() {
+            eprintln!("warning: {line}");
+        }
+        result
     }
 
     fn set_film(&mut self, film: &Film) -> Result<(), RenderError> {

@@ -310,10 +310,23 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         SceneArg::File(p) => p.display().to_string(),
     };
     let scene = Arc::new(scene);
-    let mut engine = backend::open(a.backend.into(), a.adapter.as_deref(), scene.clone(), &camera, settings)
-        .map_err(|e| e.to_string())?;
+    let mut engine = backend::open_chosen(
+        a.backend.into(),
+        a.adapter.as_deref(),
+        a.gpus.as_ref(),
+        scene.clone(),
+        &camera,
+        settings,
+    )?;
     let adapter = match &mut engine {
         Backend::Gpu(g) => g.context().info.name.clone(),
+        Backend::Gpus(g) => {
+            let names: Vec<String> = g.renderers().map(|r| r.context().info.name.clone()).collect();
+            match names.first() {
+                Some(first) if names.iter().all(|n| n == first) => format!("{} × {first}", names.len()),
+                _ => names.join(" + "),
+            }
+        }
         Backend::Cpu(_) => {
             format!("{} threads", std::thread::available_parallelism().map_or(1, |n| n.get()))
         }
@@ -339,7 +352,12 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         r.set_group_samples(a.group_samples);
     }
     let per_pass = engine.pass_samples().max(1);
-    if engine.gpu().is_some_and(|r| furnace_gpu::context::is_hardware(&r.context().info)) {
+    let hardware = match &mut engine {
+        Backend::Gpu(r) => furnace_gpu::context::is_hardware(&r.context().info),
+        Backend::Gpus(g) => g.renderers().all(|r| furnace_gpu::context::is_hardware(&r.context().info)),
+        Backend::Cpu(_) => false,
+    };
+    if hardware {
         // Passes of the measured size where the sampler allows (a fixed-N sampler's N counts
         // only the measured samples): the renderer's choice of invocations per pixel, made by
         // timing its first passes of that size, is then made here.
@@ -354,6 +372,9 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     if let Some(r) = engine.gpu() {
         r.take_trace_counts().map_err(|e| e.to_string())?;
         timing = r.set_timing(true);
+    }
+    if let Backend::Gpus(g) = &mut engine {
+        timing = g.set_timing(true);
     }
     let timer = Instant::now();
     // Passes from sample 1 (after the warm-up frame): exactly --spp, or until --min-seconds.
@@ -387,6 +408,17 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
             let rays =
                 if a.no_rays { Rays::None("--no-rays".to_string()) } else { Rays::Counted(counts.rays) };
             (rays, Some(memory), Some(profile))
+        }
+        Backend::Gpus(g) => {
+            g.set_timing(false);
+            let profile = GpuProfile {
+                gpu_seconds: timing.then_some(gpu_seconds),
+                group_samples: g.renderers().next().map_or(1, |r| r.group_samples(per_pass)),
+                group_size: g.renderers().next().map_or(0, GpuRenderer::group_size),
+                traversal_stack: g.renderers().next().map_or(0, GpuRenderer::traversal_stack_size),
+                counts: None,
+            };
+            (Rays::None("no ray counts on several GPUs".to_string()), None, Some(profile))
         }
         Backend::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None, None),
         Backend::Cpu(_) => (estimate_rays(a, &scene, &camera, settings), None, None),

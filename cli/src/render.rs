@@ -263,12 +263,18 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         Some(s) => (Some(s.film), start + s.spp, s.render_time_s, s.backend),
         None => (None, start, 0.0, None),
     };
-    let mut backend = backend::open(a.backend.into(), a.adapter.as_deref(), Arc::new(scene), &view, settings)
-        .map_err(|e| e.to_string())?;
+    let mut backend = backend::open_chosen(
+        a.backend.into(),
+        a.adapter.as_deref(),
+        a.gpus.as_ref(),
+        Arc::new(scene),
+        &view,
+        settings,
+    )?;
     if let Some(film) = &film {
         backend.set_film(film).map_err(|e| e.to_string())?;
     }
-    if backend.name() == "gpu" && !a.quiet {
+    if backend.name() != "cpu" && !a.quiet {
         eprintln!("rendering on {}", backend.describe());
     }
     let (backend_record, backend_changed) =

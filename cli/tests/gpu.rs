@@ -202,6 +202,55 @@ const NO_ADAPTER: [(&str, &str); 3] = [
     ("WGPU_BACKEND", "vulkan"),
 ];
 
+/// `furnace render --gpus 0,0 …`: two devices on the one adapter lavapipe exposes (as separate
+/// as two GPUs for the code that shares the passes), against one device. Every pixel's samples
+/// are the same values summed in another order, so the `f64` sums agree to
+/// [`furnace_render::merge_bound`] and the counts exactly.
+#[test]
+fn two_devices_render_one_image_and_resume() {
+    if skip_gpu() {
+        return;
+    }
+    let dir = temp_dir("gpus");
+    let run = |name: &str, args: &[&str]| {
+        let out = dir.join(name);
+        let mut all = vec!["render", "--backend", "gpu", "--width", "16", "--height", "16", "--bounces", "3"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--out", out.to_str().unwrap()]);
+        let o = furnace(&all);
+        assert!(o.status.success(), "{all:?}: {}", stderr(&o));
+        (dir.join(format!("{name}.exr")), stderr(&o))
+    };
+    let (two, err) = run("two", &["--gpus", "0,0", "--spp", "4"]);
+    assert!(err.contains("rendering on gpus: 2 × ") && err.contains(" gpus backend: "), "{err}");
+    assert!(err.contains("warning: --gpus names adapter 0 more than once"), "{err}");
+    assert!(backend_record(&two).starts_with("gpus: 2 × "), "{}", backend_record(&two));
+    let (one, _) = run("one", &["--spp", "4"]);
+    let (resumed, _) = run("resumed", &["--gpus", "0,0", "--resume", two.to_str().unwrap(), "--spp", "8"]);
+    let (eight, _) = run("eight", &["--spp", "8"]);
+    for (a, b, n) in [(&two, &one, 4), (&resumed, &eight, 8)] {
+        let ((sa, ca), (sb, cb)) = (film(a), film(b));
+        assert_eq!(ca, cb, "{}: counts", a.display());
+        assert!(ca.iter().all(|&c| c == n));
+        let bound = furnace_render::merge_bound(n);
+        for (i, (x, y)) in sa.iter().zip(&sb).enumerate() {
+            assert!((x - y).abs() <= bound * y.abs(), "{}: value {i}: {x} vs {y}", a.display());
+        }
+    }
+    // A list entry that names no adapter: the error lists those present.
+    let o = furnace(&[
+        "render",
+        "--gpus",
+        "0,no-such-gpu",
+        "--spp",
+        "1",
+        "--out",
+        dir.join("x").to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    assert!(stderr(&o).contains("matching \"no-such-gpu\"; adapters present: 0: "), "{}", stderr(&o));
+}
+
 #[test]
 fn no_adapter_is_one_line_and_auto_falls_back_to_the_cpu() {
     let dir = temp_dir("no_adapter");

@@ -1111,6 +1111,19 @@ fn integrator_pipeline(
     Ok((layout, pipeline, converge))
 }
 
+/// What the GPU integrator renders: one directional light at most, and a sampler it can build.
+fn check_renderable(scene: &Scene, settings: &RenderSettings) -> Result<(), GpuError> {
+    let suns = scene.suns().count();
+    if suns > 1 {
+        return Err(GpuError::Unsupported(format!(
+            "the scene has {suns} directional lights; the GPU integrator renders one (the CPU \
+             integrator renders any number)"
+        )));
+    }
+    AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
+    Ok(())
+}
+
 impl GpuRenderer {
     /// Uploads `scene` (seen through `camera`) and builds the pipeline for `settings`.
     ///
@@ -1124,20 +1137,41 @@ impl GpuRenderer {
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
-        let suns = scene.suns().count();
-        if suns > 1 {
+        check_renderable(scene, &settings)?;
+        let g = &scene.geometry;
+        let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
+        Self::with_bvh(ctx, scene, &bvh, camera, settings)
+    }
+
+    /// [`GpuRenderer::new`] with the scene's BVH already built (`Bvh::from_indexed` over its
+    /// positions and triangles with the default options): several devices rendering one scene
+    /// build it once ([`crate::MultiGpuRenderer`]).
+    ///
+    /// # Errors
+    /// As [`GpuRenderer::new`]; [`GpuError::Unsupported`] if `bvh` is not a CWBVH built over the
+    /// scene's triangles.
+    pub fn with_bvh(
+        ctx: GpuContext,
+        scene: &Scene,
+        bvh: &Bvh,
+        camera: &Camera,
+        settings: RenderSettings,
+    ) -> Result<Self, GpuError> {
+        check_renderable(scene, &settings)?;
+        let g = &scene.geometry;
+        if bvh.input_count() != g.triangle_count() || bvh.layout() != furnace_accel::Layout::Cwbvh {
             return Err(GpuError::Unsupported(format!(
-                "the scene has {suns} directional lights; the GPU integrator renders one (the CPU \
-                 integrator renders any number)"
+                "a {:?} BVH over {} triangles for a scene of {} (the GPU traverses a CWBVH of the scene's triangles)",
+                bvh.layout(),
+                bvh.input_count(),
+                g.triangle_count()
             )));
         }
         let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
         let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
-        let g = &scene.geometry;
-        let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         let bvh_depth = bvh.depth();
         let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
-        let bvh_words = BvhBuffers::new(&bvh, limit)?;
+        let bvh_words = BvhBuffers::new(bvh, limit)?;
         let [nodes, tris] = bvh_words.extra();
         let bvh = [storage_buffer(&ctx, "bvh nodes", nodes)?, storage_buffer(&ctx, "bvh triangles", tris)?];
         let bvh_bytes = bvh.iter().map(wgpu::Buffer::size).sum();

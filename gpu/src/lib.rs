@@ -40,6 +40,7 @@ pub mod context;
 pub mod display;
 pub mod film;
 pub mod integrator;
+pub mod multi;
 pub mod present;
 pub mod sampling;
 pub mod scene;
@@ -49,3 +50,4 @@ pub mod wgsl;
 
 pub use context::{AdapterChoice, GpuContext, GpuError, pci_address};
 pub use integrator::GpuRenderer;
+pub use multi::MultiGpuRenderer;

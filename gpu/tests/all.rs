@@ -7,3 +7,5 @@
 mod errors;
 #[path = "film.rs"]
 mod film;
+#[path = "multi.rs"]
+mod multi;

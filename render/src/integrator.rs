@@ -13,6 +13,11 @@ use furnace_sampling::SamplerError;
 /// thus ends bit-identical to one that rendered every pass itself, and a render can be cut into
 /// passes however the caller likes ([`crate::Session`] does).
 ///
+/// One integrator keeps this contract only to rounding: `furnace_gpu::MultiGpuRenderer`, which
+/// shares each pass among several devices and adds their films, so a pixel's samples are summed
+/// in an order that depends on the pass cuts (its films equal a single device's to
+/// [`crate::split::merge_bound`]).
+///
 /// Implementors build themselves from a scene, a camera and the settings (`CpuRenderer::new`,
 /// `GpuRenderer::new`, which also takes the device); everything after that goes through this
 /// trait.

@@ -69,6 +69,7 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
     backend.set_film(&Film::for_settings(&settings)).map_err(|e| e.to_string())?;
     let adapter = match &mut backend {
         Backend::Gpu(g) => Some(g.context().describe()),
+        Backend::Gpus(g) => Some(g.describe()),
         Backend::Cpu(_) => None,
     };
     Ok((backend, adapter))

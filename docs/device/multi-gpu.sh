@@ -1,0 +1,34 @@
+#!/bin/bash
+# One render on several GPUs (`furnace render/bench --gpus`), for a machine kind with 2-8 H200s:
+# samples/s on 1, 2, 4 (8) GPUs for the Cornell box at 3840x2160 and a 10^7-triangle interior,
+# scaling efficiency (rate on N / (N x rate on 1)), time to first frame (BVH built once, uploaded
+# to each GPU in parallel), each count run twice in alternating rounds; then the film on all GPUs
+# against one GPU's at equal samples (same estimator: RMSE at f32 rounding). Needs
+# .dev/furnace-new.xz (a stripped release build) and .gl/ as docs/device/README.md says; no Mitsuba.
+# ROUNDS (2), MIN_S (10) and COUNTS ("1 2 4 8", cut to the GPUs present) shorten it.
+for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
+export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
+xz -dc .dev/furnace-new.xz > /tmp/f; chmod +x /tmp/f
+W=/tmp/w; mkdir -p $W
+nvidia-smi --query-gpu=index,name,driver_version,pci.bus_id,clocks.max.sm --format=csv,noheader
+gpus=$(nvidia-smi --query-gpu=index --format=csv,noheader | wc -l)
+/tmp/f bench --gpus all --width 8 --height 8 --spp 1 -q > /dev/null 2>&1  # driver warm-up
+list() { seq -s, 0 $(($1 - 1)); }
+bench() {
+  local label=$1 n=$2; shift 2
+  /tmp/f bench --gpus "$(list $n)" "$@" --no-rays --min-seconds ${MIN_S:-10} -q --json $W/b.json > $W/b.log 2>&1 || tail -3 $W/b.log
+  python3 -c "import json; d=json.load(open('$W/b.json')); print('$label', 'gpus=$n', round(d['msamples_per_s'],1), 'Ms/s', 'first frame', round(d['time_to_first_frame_s'],2), 's', 'gpu ms/frame', round(d.get('gpu_timestamp_ms_per_frame') or 0, 3))"
+}
+configs=("cbox2160|--scene cbox --width 3840 --height 2160" "interior1e7|--scene interior:1e7 --width 1920 --height 1080 --bounces 6")
+for round in $(seq 1 ${ROUNDS:-2}); do
+  echo "== round $round"
+  for c in "${configs[@]}"; do
+    for n in ${COUNTS:-1 2 4 8}; do
+      [ $n -le $gpus ] && bench "${c%%|*}" $n ${c#*|}
+    done
+  done
+done
+echo "== films: all GPUs against one, cbox 1920x1080, 256 spp"
+/tmp/f render --gpus 0 --width 1920 --height 1080 --spp 256 --out $W/one 2>&1 | grep Msamples
+/tmp/f render --gpus all --width 1920 --height 1080 --spp 256 --out $W/all 2>&1 | grep -E "rendering on|Msamples"
+/tmp/f compare $W/all.exr $W/one.exr | grep -E "RMSE|ratio"
