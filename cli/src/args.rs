@@ -211,7 +211,7 @@ pub struct RenderArgs {
     /// Render on several GPUs at once: `all` (every hardware adapter), or a comma-separated
     /// list of adapters as --adapter names them (a part of a name takes every adapter that
     /// matches: `H200`). Each pass's samples are shared among them; a GPU that fails leaves its
-    /// samples to the others. Not with --adapter, --backend cpu or --noise-threshold.
+    /// samples to the others. Not with --adapter or --backend cpu.
     #[arg(long, value_name = "all|LIST", conflicts_with = "adapter")]
     pub gpus: Option<furnace_cli::backend::GpuSet>,
     /// Output path: writes PATH.png and PATH.exr (a .png or .exr extension is replaced).

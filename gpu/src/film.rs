@@ -317,6 +317,31 @@ impl GpuFilm {
         ctx.check()
     }
 
+    /// With adaptive sampling: replaces the convergence marks (the host's for `F32Pass`, the
+    /// GPU's for `F64`), the sums untouched; nothing without adaptive sampling.
+    ///
+    /// # Errors
+    /// [`GpuError::Wgpu`] naming both counts unless there is one mark per pixel; a device error.
+    pub fn set_marks(&mut self, ctx: &GpuContext, marks: &[bool]) -> Result<(), GpuError> {
+        let Some(buffer) = &self.converged else { return Ok(()) };
+        if marks.len() != self.pixels() {
+            return Err(GpuError::Wgpu(format!(
+                "{} convergence marks for a {}×{} film",
+                marks.len(),
+                self.width,
+                self.height
+            )));
+        }
+        if let Some(h) = &mut self.host {
+            h.set_converged(marks).map_err(|e| GpuError::Wgpu(e.to_string()))?;
+            return self.upload_converged(ctx);
+        }
+        let words: Vec<u32> = marks.iter().map(|&c| u32::from(c)).collect();
+        ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&words));
+        ctx.queue.submit([]);
+        ctx.check()
+    }
+
     /// `F32Pass` with adaptive sampling: tests the folded film on the host and uploads the
     /// marks; returns how many pixels have converged. `None` for other films (an `F64` film is
     /// tested on the GPU by the integrator's `converge` kernel).

@@ -558,6 +558,9 @@ pub struct GpuRenderer {
     samples_per_dispatch: u64,
     max_samples_per_invocation: u32,
     group_samples: Option<u32>,
+    /// Whether adaptive sampling's test runs at its test points (off when several devices share
+    /// a render: their films are tested together, [`crate::MultiGpuRenderer`]).
+    convergence_tests: bool,
     /// The choice of invocations per pixel by timing, where the renderer chooses
     /// ([`GpuRenderer::tuner_for`]).
     tuner: Option<GroupTuner>,
@@ -1235,6 +1238,7 @@ impl GpuRenderer {
             samples_per_dispatch,
             max_samples_per_invocation,
             group_samples: None,
+            convergence_tests: true,
             tuner: None,
             group_size,
             stack_size,
@@ -1599,7 +1603,8 @@ impl GpuRenderer {
         let mut block = first_sample;
         while block < end {
             let block_end = (block / ADAPTIVE_STEP + 1).saturating_mul(ADAPTIVE_STEP).min(end);
-            blocks.push(Block { first: block, end: block_end, converge: rule.tests_at(block_end) });
+            let converge = self.convergence_tests && rule.tests_at(block_end);
+            blocks.push(Block { first: block, end: block_end, converge });
             block = block_end;
         }
         if self.converge.is_some() {
@@ -1624,6 +1629,29 @@ impl GpuRenderer {
             t.last = total;
         }
         Ok(())
+    }
+
+    /// With adaptive sampling: whether passes run its test at its test points (the default), or
+    /// only skip the pixels already marked converged — for a caller that tests the film
+    /// itself, as [`crate::MultiGpuRenderer`] tests the sum of its devices' films, then marks
+    /// them with [`GpuRenderer::set_converged`].
+    pub fn set_convergence_tests(&mut self, on: bool) {
+        self.convergence_tests = on;
+    }
+
+    /// With adaptive sampling: replaces the film's convergence marks (one per pixel, row-major;
+    /// marked pixels take no more samples), leaving its sums as they are; nothing without it.
+    ///
+    /// # Errors
+    /// As [`GpuFilm::set_marks`]: `marks` must hold one mark per pixel.
+    pub fn set_converged(&mut self, marks: &[bool]) -> Result<(), GpuError> {
+        if self.settings.adaptive.is_none() {
+            return Ok(());
+        }
+        self.film.set_marks(&self.ctx, marks)?;
+        let n = marks.iter().filter(|&&m| m).count() as u64;
+        self.converged = Some(n);
+        self.write_converged_counter(n)
     }
 
     /// The GPU's count of converged pixels (kept by the `converge` kernel).

@@ -15,13 +15,16 @@
 //! pass, are rendered again by the others, and the render goes on ([`Retirement`] says what
 //! happened). Only when every device has failed does a pass fail.
 //!
-//! Adaptive sampling is refused on more than one device: its test needs each pixel's samples
-//! of every device at every test point.
+//! Under adaptive sampling the devices do not test their own films (each holds part of a
+//! pixel's samples): passes are cut at the test points, and at each the films are collected,
+//! the sum tested on the host ([`Film::test_convergence`], the rule of every backend) and its
+//! marks given to every device. That costs a read-back of every film every
+//! [`furnace_render::ADAPTIVE_STEP`] samples per pixel.
 
 use crate::{GpuContext, GpuError, GpuRenderer};
 use furnace_accel::{BuildOptions, Bvh};
 use furnace_render::split::SampleRange;
-use furnace_render::{Film, Integrator, RenderError, RenderSettings};
+use furnace_render::{ADAPTIVE_STEP, Film, Integrator, RenderError, RenderSettings};
 use furnace_sampling::AnySampler;
 use furnace_scene::{Camera, Scene};
 use std::time::Instant;
@@ -120,8 +123,8 @@ impl MultiGpuRenderer {
     /// render goes on without it.
     ///
     /// # Errors
-    /// The sampler's (a fixed-N sampler without N); [`GpuError::Unsupported`] for no context,
-    /// or adaptive sampling on more than one; the first device's error when none opens.
+    /// The sampler's (a fixed-N sampler without N); [`GpuError::Unsupported`] for no context;
+    /// the first device's error when none opens.
     pub fn new(
         contexts: Vec<GpuContext>,
         scene: &Scene,
@@ -131,13 +134,6 @@ impl MultiGpuRenderer {
         let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
         if contexts.is_empty() {
             return Err(GpuError::Unsupported("no GPU to render on".into()));
-        }
-        if settings.adaptive.is_some() && contexts.len() > 1 {
-            return Err(GpuError::Unsupported(format!(
-                "adaptive sampling on {} GPUs: its test needs every GPU's samples of a pixel at each \
-                 test point; render adaptively on one GPU, or without a noise threshold on several",
-                contexts.len()
-            )));
         }
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
@@ -161,7 +157,10 @@ impl MultiGpuRenderer {
         let mut retired = Vec::new();
         for (index, adapter, r) in results {
             match r {
-                Ok(renderer) => members.push(Member { index, renderer, held: Vec::new(), rate: None }),
+                Ok(mut renderer) => {
+                    renderer.set_convergence_tests(false);
+                    members.push(Member { index, renderer, held: Vec::new(), rate: None });
+                }
                 Err(error) => retired.push(Retirement { index, adapter, error, rerendered: Vec::new() }),
             }
         }
@@ -320,7 +319,12 @@ impl MultiGpuRenderer {
                     let Some(f) = f else { return Ok(()) };
                     self.collected.add_film(&f).map_err(|e| GpuError::Wgpu(e.to_string()))?;
                     m.held.clear();
-                    m.renderer.clear_film()
+                    m.renderer.clear_film()?;
+                    // Clearing took the marks too: the render's are the collected film's.
+                    match self.collected.converged() {
+                        Some(marks) => m.renderer.set_converged(marks),
+                        None => Ok(()),
+                    }
                 });
                 match read {
                     Ok(()) => k += 1,
@@ -346,6 +350,35 @@ impl MultiGpuRenderer {
             let work = self.shares(&orphans);
             self.render_work(work)?;
         }
+    }
+}
+
+impl MultiGpuRenderer {
+    /// Gives every device the collected film's convergence marks (adaptive sampling; nothing
+    /// otherwise). A device that fails is retired: it holds no samples since the collection
+    /// that comes before every call, so nothing is rendered again.
+    fn share_marks(&mut self) -> Result<(), GpuError> {
+        let Some(marks) = self.collected.converged() else { return Ok(()) };
+        let mut k = 0;
+        while k < self.members.len() {
+            let m = &mut self.members[k];
+            match m.renderer.set_converged(marks) {
+                Ok(()) => k += 1,
+                Err(error) => {
+                    let m = self.members.remove(k);
+                    self.retired.push(Retirement {
+                        index: m.index,
+                        adapter: m.renderer.context().describe(),
+                        error,
+                        rerendered: m.held,
+                    });
+                }
+            }
+        }
+        if self.members.is_empty() {
+            return Err(GpuError::DeviceLost("every GPU of the render failed".into()));
+        }
+        Ok(())
     }
 }
 
@@ -377,8 +410,26 @@ impl Integrator for MultiGpuRenderer {
         else {
             return Ok(());
         };
-        let work = self.shares(&[range]);
-        Ok(self.render_work(work)?)
+        let Some(rule) = self.settings.adaptive else {
+            let work = self.shares(&[range]);
+            return Ok(self.render_work(work)?);
+        };
+        // Adaptive sampling: blocks that end at the multiples of ADAPTIVE_STEP, each shared, then
+        // the sum of the films tested where the rule tests and the marks given to every device.
+        let mut block = range.start;
+        while block < range.end {
+            let block_end = (block / ADAPTIVE_STEP + 1).saturating_mul(ADAPTIVE_STEP).min(range.end);
+            let Some(r) = SampleRange::new(block, block_end) else { break };
+            let work = self.shares(&[r]);
+            self.render_work(work)?;
+            if rule.tests_at(block_end) {
+                self.collect()?;
+                self.collected.test_convergence(&rule);
+                self.share_marks()?;
+            }
+            block = block_end;
+        }
+        Ok(())
     }
 
     /// Collects every device's film into the host's ([module docs](self)) and returns it.
@@ -395,7 +446,7 @@ impl Integrator for MultiGpuRenderer {
             m.held.clear();
         }
         self.collected = film.clone();
-        Ok(())
+        Ok(self.share_marks()?)
     }
 
     /// The sum of the devices' own pass sizes: each device's share is about its own pass.
@@ -412,8 +463,9 @@ impl Integrator for MultiGpuRenderer {
             .try_fold(0.0f64, |a, s| s.map(|s| a.max(s)))
     }
 
+    /// The collected film's count: the marks change only at a test, which collects first.
     fn converged_pixels(&self) -> Option<u64> {
-        None
+        self.collected.converged_count()
     }
 }
 

@@ -228,6 +228,25 @@ impl Film {
         self.adaptive.as_ref().is_none_or(|a| !a.converged[i])
     }
 
+    /// Replaces the convergence marks (without adaptive state: nothing). A render shared among
+    /// devices tests the sum of their films and gives each film the same marks.
+    ///
+    /// # Errors
+    /// [`FilmSizeError`] unless `marks` holds one mark per pixel.
+    pub fn set_converged(&mut self, marks: &[bool]) -> Result<(), FilmSizeError> {
+        let Some(a) = &mut self.adaptive else { return Ok(()) };
+        if marks.len() != a.converged.len() {
+            return Err(FilmSizeError {
+                width: self.width,
+                height: self.height,
+                sums: self.sum.len(),
+                counts: marks.len(),
+            });
+        }
+        a.converged.copy_from_slice(marks);
+        Ok(())
+    }
+
     /// Tests every pixel not yet converged against `rule` (call it when the film holds the
     /// samples below an index where [`crate::AdaptiveSampling::tests_at`]) and marks those below
     /// the threshold; returns how many pixels have converged (0 without adaptive state).
