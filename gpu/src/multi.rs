@@ -255,6 +255,9 @@ impl MultiGpuRenderer {
             });
             let mut orphans = Vec::new();
             let mut last_error = None;
+            // A sampler's error is the caller's (a fixed-N sampler run past N), the same on every
+            // device: no device is retired for it, and it is returned once every result is in.
+            let mut sampler_error = None;
             let mut k = self.members.len();
             for (result, ranges) in results.into_iter().zip(work).rev() {
                 k -= 1;
@@ -267,7 +270,7 @@ impl MultiGpuRenderer {
                         }
                         m.held.extend(ranges);
                     }
-                    Err(GpuError::Sampler(e)) => return Err(GpuError::Sampler(e)),
+                    Err(GpuError::Sampler(e)) => sampler_error = Some(e),
                     Err(error) => {
                         let m = self.members.remove(k);
                         let mut lost = m.held;
@@ -283,6 +286,9 @@ impl MultiGpuRenderer {
                         });
                     }
                 }
+            }
+            if let Some(e) = sampler_error {
+                return Err(GpuError::Sampler(e));
             }
             if orphans.is_empty() {
                 return Ok(());
