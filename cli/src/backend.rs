@@ -129,11 +129,30 @@ pub fn open_gpus(
     if let [one] = indices {
         return open(BackendChoice::Gpu, Some(&one.to_string()), scene, camera, settings);
     }
+    let fault = lose_gpu_from_env()?;
     let contexts = indices
         .iter()
         .map(|i| GpuContext::new(&AdapterChoice::Named(i.to_string())))
         .collect::<Result<Vec<_>, _>>()?;
-    Ok(Backend::Gpus(Box::new(MultiGpuRenderer::new(contexts, &scene, camera, settings)?)))
+    let mut multi = MultiGpuRenderer::new(contexts, &scene, camera, settings)?;
+    if let Some((index, pass)) = fault {
+        multi.lose_device_at(index, pass);
+    }
+    Ok(Backend::Gpus(Box::new(multi)))
+}
+
+/// `FURNACE_LOSE_GPU=INDEX@PASS`: a render on several GPUs destroys device INDEX (its position
+/// in `--gpus`) before pass PASS (0: the first), to watch the recovery on real GPUs
+/// ([`MultiGpuRenderer::lose_device_at`]).
+fn lose_gpu_from_env() -> Result<Option<(usize, u64)>, GpuError> {
+    let Ok(v) = std::env::var("FURNACE_LOSE_GPU") else { return Ok(None) };
+    let parsed = v.split_once('@').and_then(|(k, p)| Some((k.trim().parse().ok()?, p.trim().parse().ok()?)));
+    parsed.map(Some).ok_or_else(|| {
+        GpuError::Unsupported(format!(
+            "FURNACE_LOSE_GPU={v}: expected INDEX@PASS (the device's position in --gpus, the pass \
+             before which it is lost), e.g. 1@10"
+        ))
+    })
 }
 
 /// The integrator a command's `--backend`, `--adapter` and `--gpus` ask for: [`open_gpus`] with

@@ -237,6 +237,32 @@ fn two_devices_render_one_image_and_resume() {
             assert!((x - y).abs() <= bound * y.abs(), "{}: value {i}: {x} vs {y}", a.display());
         }
     }
+    // A device lost before the second pass (FURNACE_LOSE_GPU): a warning, and the other
+    // renders its samples again. At 16×16 a lavapipe device's pass is 64 spp, so a pass of the
+    // two is 128: device 1 held 64..128 and was given 192..256.
+    let lose = |spp: &str, name: &str| {
+        let out = dir.join(name);
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_furnace"))
+            .args(["render", "--backend", "gpu", "--width", "16", "--height", "16", "--bounces", "3"])
+            .args(["--gpus", "0,0", "--spp", spp, "--out", out.to_str().unwrap()])
+            .env("FURNACE_LOSE_GPU", "1@1")
+            .output()
+            .unwrap();
+        (o, dir.join(format!("{name}.exr")))
+    };
+    let (o, lost) = lose("256", "lost");
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("warning: GPU 1 (") && err.contains("left the render: the GPU device was lost"),
+        "{err}"
+    );
+    assert!(err.contains("the other GPUs rendered its samples 64..128, 192..256 again"), "{err}");
+    let (whole, _) = run("whole", &["--spp", "256"]);
+    let ((sa, ca), (sb, cb)) = (film(&lost), film(&whole));
+    assert_eq!(ca, cb, "every pixel has its 256 samples");
+    let bound = furnace_render::merge_bound(256);
+    assert!(sa.iter().zip(&sb).all(|(x, y)| (x - y).abs() <= bound * y.abs()));
     // A list entry that names no adapter: the error lists those present.
     let o = furnace(&[
         "render",

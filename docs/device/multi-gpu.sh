@@ -3,7 +3,8 @@
 # samples/s on 1, 2, 4 (8) GPUs for the Cornell box at 3840x2160 and a 10^7-triangle interior,
 # scaling efficiency (rate on N / (N x rate on 1)), time to first frame (BVH built once, uploaded
 # to each GPU in parallel), each count run twice in alternating rounds; then the film on all GPUs
-# against one GPU's at equal samples (same estimator: RMSE at f32 rounding). Needs
+# against one GPU's at equal samples (same estimator: RMSE at f32 rounding), and with one GPU
+# lost mid-render (FURNACE_LOSE_GPU). Needs
 # .dev/furnace-new.xz (a stripped release build) and .gl/ as docs/device/README.md says; no Mitsuba.
 # ROUNDS (2), MIN_S (10) and COUNTS ("1 2 4 8", cut to the GPUs present) shorten it.
 for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
@@ -32,3 +33,6 @@ echo "== films: all GPUs against one, cbox 1920x1080, 256 spp"
 /tmp/f render --gpus 0 --width 1920 --height 1080 --spp 256 --out $W/one 2>&1 | grep Msamples
 /tmp/f render --gpus all --width 1920 --height 1080 --spp 256 --out $W/all 2>&1 | grep -E "rendering on|Msamples"
 /tmp/f compare $W/all.exr $W/one.exr | grep -E "RMSE|ratio"
+echo "== a GPU lost mid-render (FURNACE_LOSE_GPU=1@20: device 1 destroyed before pass 20): the render finishes"
+FURNACE_LOSE_GPU=1@20 /tmp/f render --gpus all --width 1920 --height 1080 --spp 256 --out $W/lost 2>&1 | grep -E "warning: GPU|Msamples"
+/tmp/f compare $W/lost.exr $W/one.exr | grep -E "RMSE|ratio"

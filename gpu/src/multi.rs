@@ -44,6 +44,10 @@ pub struct MultiGpuRenderer {
     retired: Vec<Retirement>,
     /// How many devices the render began with.
     opened: usize,
+    /// Passes rendered so far (for [`MultiGpuRenderer::lose_device_at`]).
+    passes: u64,
+    /// A device to destroy before a pass: `(index, pass)`.
+    fault: Option<(usize, u64)>,
 }
 
 /// A device taking part in the render.
@@ -175,7 +179,17 @@ impl MultiGpuRenderer {
             equal: infos.windows(2).all(|w| same_model(&w[0], &w[1])),
             retired,
             opened,
+            passes: 0,
+            fault: None,
         })
+    }
+
+    /// Fault injection, to watch the recovery on real GPUs: destroys device `index` (its
+    /// position in the list the render was opened with) just before pass number `pass` (0: the
+    /// first) with `wgpu::Device::destroy`, which loses it as a driver reset does. The CLI sets
+    /// it from `FURNACE_LOSE_GPU=INDEX@PASS`.
+    pub fn lose_device_at(&mut self, index: usize, pass: u64) {
+        self.fault = Some((index, pass));
     }
 
     /// Devices rendering now.
@@ -416,6 +430,13 @@ impl Integrator for MultiGpuRenderer {
         else {
             return Ok(());
         };
+        if let Some((index, pass)) = self.fault
+            && pass == self.passes
+            && let Some(m) = self.members.iter().find(|m| m.index == index)
+        {
+            m.renderer.context().device.destroy();
+        }
+        self.passes += 1;
         let Some(rule) = self.settings.adaptive else {
             let work = self.shares(&[range]);
             return Ok(self.render_work(work)?);
