@@ -118,8 +118,9 @@ pub fn gpu_indices(set: &GpuSet) -> Result<Vec<usize>, GpuError> {
 /// single adapter, [`MultiGpuRenderer`] for several (a device on each, the BVH built once).
 ///
 /// # Errors
-/// As [`open`]; a device that fails to open among several is left out (see
-/// [`MultiGpuRenderer::take_retirements`]), an error only when none opens.
+/// As [`open`]; among several, an adapter that refuses a device (said on stderr) or a device
+/// that fails to take the scene ([`MultiGpuRenderer::take_retirements`]) is left out, an error
+/// only when none opens.
 pub fn open_gpus(
     indices: &[usize],
     scene: Arc<Scene>,
@@ -130,10 +131,21 @@ pub fn open_gpus(
         return open(BackendChoice::Gpu, Some(&one.to_string()), scene, camera, settings);
     }
     let fault = lose_gpu_from_env()?;
-    let contexts = indices
-        .iter()
-        .map(|i| GpuContext::new(&AdapterChoice::Named(i.to_string())))
-        .collect::<Result<Vec<_>, _>>()?;
+    // An adapter that refuses a device is left out, as one that fails later would be.
+    let mut contexts = Vec::new();
+    let mut first_error = None;
+    for i in indices {
+        match GpuContext::new(&AdapterChoice::Named(i.to_string())) {
+            Ok(ctx) => contexts.push(ctx),
+            Err(e) => {
+                eprintln!("warning: adapter {i} could not be opened, rendering without it: {e}");
+                first_error.get_or_insert(e);
+            }
+        }
+    }
+    if let (true, Some(e)) = (contexts.is_empty(), first_error) {
+        return Err(e.into());
+    }
     let mut multi = MultiGpuRenderer::new(contexts, &scene, camera, settings)?;
     if let Some((index, pass)) = fault {
         multi.lose_device_at(index, pass);
