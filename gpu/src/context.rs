@@ -257,7 +257,9 @@ impl GpuContext {
         let sink = lost.clone();
         device.set_device_lost_callback(move |reason, message| {
             let mut v = sink.lock().unwrap_or_else(|p| p.into_inner());
-            v.get_or_insert_with(|| format!("{reason:?}: {message}"));
+            v.get_or_insert_with(|| {
+                if message.is_empty() { format!("{reason:?}") } else { format!("{reason:?}: {message}") }
+            });
         });
         Ok(Self {
             shader_f64: required_features.contains(wgpu::Features::SHADER_F64),
