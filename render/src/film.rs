@@ -724,4 +724,19 @@ mod tests {
         assert_eq!(e.to_string(), "a 2×2 film needs 4 pixel sums and counts, got 4 sums and 3 counts");
         assert!(Film::from_parts(2, 2, vec![DVec3::ZERO; 3], vec![0; 4], 0).is_err());
     }
+
+    #[test]
+    fn convergence_marks_are_replaced_whole_and_only_with_adaptive_state() {
+        let mut film = Film::new(2, 1).with_adaptive();
+        film.add_sample(0, 0, Vec3::ONE);
+        film.set_converged(&[false, true]).unwrap();
+        assert_eq!(film.converged(), Some(&[false, true][..]));
+        assert!(!film.is_active(1) && film.is_active(0));
+        assert_eq!(film.sample_count(0, 0), 1, "the sums stay");
+        assert!(film.set_converged(&[true]).is_err(), "one mark per pixel");
+        assert_eq!(film.converged(), Some(&[false, true][..]), "unchanged by a refused call");
+        let mut plain = Film::new(2, 1);
+        plain.set_converged(&[true, true]).unwrap();
+        assert_eq!(plain.converged(), None, "no marks without adaptive state");
+    }
 }
