@@ -114,6 +114,14 @@ pub fn split_range(range: SampleRange, weights: &[f64]) -> Vec<Option<SampleRang
     parts
 }
 
+/// Shares in proportion to measured rates, a device not yet measured (`None`) taking the mean of
+/// those that are (all equal before any is).
+fn weights_by_rate(rates: &[Option<f64>]) -> Vec<f64> {
+    let measured: Vec<f64> = rates.iter().flatten().copied().collect();
+    let mean = if measured.is_empty() { 1.0 } else { measured.iter().sum::<f64>() / measured.len() as f64 };
+    rates.iter().map(|r| r.unwrap_or(mean)).collect()
+}
+
 /// Whether two adapters are the same model on the same driver (they then get equal shares).
 fn same_model(a: &wgpu::AdapterInfo, b: &wgpu::AdapterInfo) -> bool {
     (a.name.as_str(), a.device_type, a.backend, a.driver.as_str(), a.driver_info.as_str())
@@ -226,10 +234,7 @@ impl MultiGpuRenderer {
         if self.equal {
             return vec![1.0; self.members.len()];
         }
-        let measured: Vec<f64> = self.members.iter().filter_map(|m| m.rate).collect();
-        let mean =
-            if measured.is_empty() { 1.0 } else { measured.iter().sum::<f64>() / measured.len() as f64 };
-        self.members.iter().map(|m| m.rate.unwrap_or(mean)).collect()
+        weights_by_rate(&self.members.iter().map(|m| m.rate).collect::<Vec<_>>())
     }
 
     /// Each member's share of `ranges`: every range cut by [`split_range`].
@@ -502,6 +507,15 @@ mod tests {
 
     fn r(a: u32, b: u32) -> SampleRange {
         SampleRange::new(a, b).unwrap()
+    }
+
+    #[test]
+    fn unmeasured_devices_take_the_mean_rate() {
+        assert_eq!(weights_by_rate(&[None, None]), [1.0, 1.0]);
+        assert_eq!(weights_by_rate(&[Some(3.0), None, Some(1.0)]), [3.0, 2.0, 1.0]);
+        // A fast device and a slow one: a pass of 8 samples goes 6 and 2.
+        let w = weights_by_rate(&[Some(300.0), Some(100.0)]);
+        assert_eq!(split_range(r(0, 8), &w), [Some(r(0, 6)), Some(r(6, 8))]);
     }
 
     #[test]
