@@ -366,7 +366,7 @@ pub struct ViewArgs {
     /// Drive the viewer by the commands of FILE (`-`: standard input, read as it comes), one per
     /// line, each acknowledged on stdout: wait-spp N, wait-frames N, wait-seconds S, drag
     /// left|middle|right DX DY, scroll STEPS, key NAME, hold KEY SECONDS, set NAME VALUE, save
-    /// [PATH], resize W H, print, quit.
+    /// \[PATH\], resize W H, print, quit.
     #[arg(long, value_name = "FILE|-")]
     pub script: Option<PathBuf>,
 }

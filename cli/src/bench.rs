@@ -4,7 +4,7 @@
 //! * Time to first frame: from the start of setup (adapter, scene build or load, BVH, upload,
 //!   pipeline) to the end of the first pass of one sample per pixel. That pass is a warm-up and
 //!   is not part of the measured passes; on a hardware GPU more untimed passes follow for
-//!   [`WARM_UP_SECONDS`](crate::shared::WARM_UP_SECONDS), while the GPU's clocks ramp up.
+//!   [`WARM_UP_SECONDS`], while the GPU's clocks ramp up.
 //! * Then passes of the backend's own size (`Integrator::pass_samples`) until `--min-seconds` have
 //!   passed, or exactly `--spp` samples per pixel.
 //! * Rays (closest-hit and shadow): on the GPU, counted during the measured passes by the

@@ -19,13 +19,13 @@
 //!    vertex tangents when it has one). For a double-sided material both normals are turned to
 //!    the side the ray came from; the back of a single-sided material is black and ends the
 //!    path. The material is evaluated at the hit's UV (`Material::evaluate`) into a
-//!    `MetallicRoughness` BSDF with [`RenderSettings::specular`].
+//!    `MetallicRoughness` BSDF with [`RenderSettings::specular`](furnace_render::RenderSettings::specular).
 //! 4. **Emission**: `throughput · emissive` is added — on the front of the surface only (emission
 //!    is one-sided, as in the references' conventions; the back of a double-sided emitter is dark).
 //!    Reached by a BSDF-sampled ray (not the camera's), it is weighted by the power heuristic
 //!    against the emitter sample that could have chosen the same point from the previous vertex:
 //!    `w = p_bsdf² / (p_bsdf² + p_light²)` with `p_light = P(triangle) · d² / (area · cos θ_light)`.
-//! 5. If the path already has [`RenderSettings::bounces`] scattering events, it ends here.
+//! 5. If the path already has [`RenderSettings::bounces`](furnace_render::RenderSettings::bounces) scattering events, it ends here.
 //!    Otherwise this hit is a scattering event:
 //!    * **Delta sun** (gathered *only* here): if `-sun.direction` is above `Ng` and a
 //!      shadow ray from the offset point (`offset_ray_origin(p, Ng)`) reaches infinity, add
@@ -40,7 +40,7 @@
 //!      shadow ray; the sample is weighted by the power heuristic against BSDF sampling.
 //!    * **Sun discs**: one direction uniform in each disc's cone, a shadow ray, weighted
 //!      likewise; a sampled ray that escapes inside the cone sees the disc's radiance, weighted
-//!      against the cone sample ([`RenderSettings::light_sampling`] chooses BSDF only, light
+//!      against the cone sample ([`RenderSettings::light_sampling`](furnace_render::RenderSettings::light_sampling) chooses BSDF only, light
 //!      samples only, or both).
 //!    * **BSDF sample** `wi` from three sampler dimensions; `throughput *= eval/pdf`. A
 //!      direction above `Ns`'s horizon but below `Ng`'s ends the path. The sky is gathered only

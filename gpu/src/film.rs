@@ -220,7 +220,7 @@ impl GpuFilm {
         self.precision
     }
 
-    /// Whether it sums AOVs ([`GpuFilm::with_aovs`]).
+    /// Whether it sums AOVs ([`GpuFilm::with_parts`] with `aovs`).
     pub fn has_aovs(&self) -> bool {
         self.aov.is_some()
     }

@@ -402,7 +402,7 @@ pub fn with_group_size(source: &str, n: u32) -> String {
 const HARDWARE_GROUP_SAMPLES: u32 = 16;
 
 /// Invocations per pixel on a hardware adapter for an image of `pixels` pixels: the largest
-/// power of two up to [`HARDWARE_GROUP_SAMPLES`] whose dispatch of every pixel stays within
+/// power of two up to `HARDWARE_GROUP_SAMPLES` whose dispatch of every pixel stays within
 /// `samples_per_dispatch` invocations (at least 1). Small images get 16 invocations per pixel to
 /// fill the GPU; large ones few, so that one dispatch covers the whole image: measured on the
 /// H200 (BENCHMARKS.md, "Speed"), 1920×1440 at 4 per pixel was cut into dispatches of 1092 and

@@ -82,7 +82,8 @@ impl LightBounds {
 
     /// A bound of the power these emitters send to `p`, a point whose receiving side is
     /// `n` (unit; [`Vec3::ZERO`]: any side), up to a constant shared by every node; 0 when none
-    /// of them can light `p` (see the [module docs](self)). The WGSL twin is
+    /// of them can light `p` (the formula and its deviations from pbrt-v4 open
+    /// `scene/src/light_bvh.rs`). The WGSL twin is
     /// `light_bvh_importance` in furnace-gpu's `light_bvh.wgsl`.
     pub fn importance(&self, p: Vec3, n: Vec3) -> f32 {
         let centre = 0.5 * (self.lo + self.hi);
@@ -213,7 +214,8 @@ const COUNT_SPLIT_DEPTH: u32 = 32;
 /// Buckets per axis of the build's split search (pbrt's 12).
 const BUCKETS: usize = 12;
 
-/// A light BVH over items `0 … n−1` given by their [`LightBounds`] (see the [module docs](self)).
+/// A light BVH over items `0 … n−1` given by their [`LightBounds`] (the importance, the
+/// sampling and the build are described at the top of `scene/src/light_bvh.rs`).
 ///
 /// ```
 /// use furnace_scene::{LightBounds, LightBvh};

@@ -41,7 +41,7 @@ pub fn assert_layout(source: &str, name: &str, size: usize, members: &[(&str, us
 }
 
 /// Asserts that the WGSL struct `T::NAME` in `source` has `T`'s size and, for every member that
-/// the Rust declares for WGSL, the Rust offset (from [`GpuStruct::members`]: no list kept by
+/// the Rust declares for WGSL, the Rust offset (from [`furnace_gpu::shared::GpuStruct::members`]: no list kept by
 /// hand). Generated `_pad` members are left out of the comparison; the size covers them.
 pub fn assert_gpu_struct<T: furnace_gpu::shared::GpuStruct>(source: &str) {
     let got = wgsl_struct(source, T::NAME);
