@@ -97,9 +97,10 @@ pub fn gpu_indices(set: &GpuSet) -> Result<Vec<usize>, GpuError> {
                     }
                 };
                 if matched.is_empty() {
-                    // The single-adapter lookup's error lists the adapters present.
-                    GpuContext::new(&AdapterChoice::Named(entry.clone()))?;
-                    return Err(GpuError::NoAdapter(format!(" matching \"{entry}\"")));
+                    return Err(furnace_gpu::context::no_adapter(
+                        &format!(" matching \"{entry}\""),
+                        &adapters,
+                    ));
                 }
                 v.extend(matched);
             }
@@ -107,9 +108,7 @@ pub fn gpu_indices(set: &GpuSet) -> Result<Vec<usize>, GpuError> {
         }
     };
     if indices.is_empty() {
-        // No adapter at all: the single-adapter lookup says how to install one.
-        GpuContext::new(&AdapterChoice::Best)?;
-        return Err(GpuError::NoAdapter(String::new()));
+        return Err(furnace_gpu::context::no_adapter("", &adapters));
     }
     Ok(indices)
 }

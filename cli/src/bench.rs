@@ -411,14 +411,16 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         }
         Backend::Gpus(g) => {
             g.set_timing(false);
-            let profile = GpuProfile {
+            // The first device's kernel shape, for its own share of a pass (every device
+            // decides alike for one model).
+            let profile = g.renderers().next().map(|r| GpuProfile {
                 gpu_seconds: timing.then_some(gpu_seconds),
-                group_samples: g.renderers().next().map_or(1, |r| r.group_samples(per_pass)),
-                group_size: g.renderers().next().map_or(0, GpuRenderer::group_size),
-                traversal_stack: g.renderers().next().map_or(0, GpuRenderer::traversal_stack_size),
+                group_samples: r.group_samples(Integrator::pass_samples(r)),
+                group_size: r.group_size(),
+                traversal_stack: r.traversal_stack_size(),
                 counts: None,
-            };
-            (Rays::None("no ray counts on several GPUs".to_string()), None, Some(profile))
+            });
+            (Rays::None("no ray counts on several GPUs".to_string()), None, profile)
         }
         Backend::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None, None),
         Backend::Cpu(_) => (estimate_rays(a, &scene, &camera, settings), None, None),

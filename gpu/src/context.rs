@@ -171,6 +171,30 @@ pub fn is_hardware(info: &wgpu::AdapterInfo) -> bool {
     )
 }
 
+/// [`GpuError::NoAdapter`] for a search described by `what` (empty, or e.g. ` matching "H200"`)
+/// among `adapters` (in [`GpuContext::adapters`]' order): it lists them with their indices and PCI
+/// addresses, or says how to install a driver when there is none.
+pub fn no_adapter(what: &str, adapters: &[wgpu::AdapterInfo]) -> GpuError {
+    if adapters.is_empty() {
+        return GpuError::NoAdapter(format!(
+            "{what}; install a Vulkan driver (e.g. Mesa's mesa-vulkan-drivers for the lavapipe software device)"
+        ));
+    }
+    let names: Vec<String> = adapters
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let bus = if a.device_pci_bus_id.is_empty() {
+                String::new()
+            } else {
+                format!(", PCI {}", a.device_pci_bus_id)
+            };
+            format!("{i}: {} ({:?}, {:?}{bus})", a.name, a.device_type, a.backend)
+        })
+        .collect();
+    GpuError::NoAdapter(format!("{what}; adapters present: {}", names.join(", ")))
+}
+
 impl GpuContext {
     /// The adapters present, best first (see [`AdapterChoice::Best`]).
     pub fn adapters() -> Vec<wgpu::AdapterInfo> {
@@ -188,22 +212,6 @@ impl GpuContext {
         let instance = instance();
         let mut adapters = pollster::block_on(instance.enumerate_adapters(wgpu::Backends::all()));
         adapters.sort_by_key(|a| rank(a.get_info().device_type));
-        let listing = || {
-            let names: Vec<String> = adapters
-                .iter()
-                .enumerate()
-                .map(|(i, a)| {
-                    let i2 = a.get_info();
-                    let bus = if i2.device_pci_bus_id.is_empty() {
-                        String::new()
-                    } else {
-                        format!(", PCI {}", i2.device_pci_bus_id)
-                    };
-                    format!("{i}: {} ({:?}, {:?}{bus})", i2.name, i2.device_type, i2.backend)
-                })
-                .collect();
-            if names.is_empty() { String::new() } else { format!("; adapters present: {}", names.join(", ")) }
-        };
         let picked = match choice {
             AdapterChoice::Best => adapters.first(),
             AdapterChoice::Hardware => adapters.iter().find(|a| is_hardware(&a.get_info())),
@@ -226,13 +234,8 @@ impl GpuContext {
                 }
                 AdapterChoice::Named(n) => format!(" matching \"{n}\""),
             };
-            let hint = if adapters.is_empty() {
-                "; install a Vulkan driver (e.g. Mesa's mesa-vulkan-drivers for the lavapipe software device)"
-                    .to_string()
-            } else {
-                listing()
-            };
-            return Err(GpuError::NoAdapter(format!("{what}{hint}")));
+            let infos: Vec<wgpu::AdapterInfo> = adapters.iter().map(wgpu::Adapter::get_info).collect();
+            return Err(no_adapter(&what, &infos));
         };
         let info = adapter.get_info();
         let offered = adapter.features();

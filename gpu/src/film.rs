@@ -311,8 +311,7 @@ impl GpuFilm {
     fn upload_converged(&self, ctx: &GpuContext) -> Result<(), GpuError> {
         let (Some(buffer), Some(host)) = (&self.converged, &self.host) else { return Ok(()) };
         let Some(marks) = host.converged() else { return Ok(()) };
-        let words: Vec<u32> = marks.iter().map(|&c| u32::from(c)).collect();
-        ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&words));
+        write_marks(ctx, buffer, marks);
         ctx.queue.submit([]);
         ctx.check()
     }
@@ -336,8 +335,7 @@ impl GpuFilm {
             h.set_converged(marks).map_err(|e| GpuError::Wgpu(e.to_string()))?;
             return self.upload_converged(ctx);
         }
-        let words: Vec<u32> = marks.iter().map(|&c| u32::from(c)).collect();
-        ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&words));
+        write_marks(ctx, buffer, marks);
         ctx.queue.submit([]);
         ctx.check()
     }
@@ -509,8 +507,7 @@ impl GpuFilm {
             .flat_map(|(i, s)| [s.x, s.y, s.z, squares.map_or(0.0, |q| q[i])])
             .collect();
         if let (Some(buffer), Some(marks)) = (&self.converged, data.converged()) {
-            let words: Vec<u32> = marks.iter().map(|&c| u32::from(c)).collect();
-            ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&words));
+            write_marks(ctx, buffer, marks);
         }
         ctx.queue.write_buffer(&self.sum, 0, bytemuck::cast_slice(&v));
         ctx.queue.write_buffer(&self.count, 0, bytemuck::cast_slice(&counts));
@@ -521,6 +518,12 @@ impl GpuFilm {
         ctx.queue.submit([]);
         ctx.wait()
     }
+}
+
+/// Queues the upload of convergence marks as the GPU's `u32` per pixel (1: converged).
+fn write_marks(ctx: &GpuContext, buffer: &wgpu::Buffer, marks: &[bool]) {
+    let words: Vec<u32> = marks.iter().map(|&c| u32::from(c)).collect();
+    ctx.queue.write_buffer(buffer, 0, bytemuck::cast_slice(&words));
 }
 
 /// Copies a whole buffer (created with `COPY_SRC`) back as `u32` words.

@@ -1114,8 +1114,10 @@ fn integrator_pipeline(
     Ok((layout, pipeline, converge))
 }
 
-/// What the GPU integrator renders: one directional light at most, and a sampler it can build.
-fn check_renderable(scene: &Scene, settings: &RenderSettings) -> Result<(), GpuError> {
+/// The render's sampler, once the scene and settings are known to be renderable on the GPU: one
+/// directional light at most, and a sampler it can build. Called before the BVH is built, so
+/// that a refusal costs nothing.
+pub(crate) fn renderable_sampler(scene: &Scene, settings: &RenderSettings) -> Result<AnySampler, GpuError> {
     let suns = scene.suns().count();
     if suns > 1 {
         return Err(GpuError::Unsupported(format!(
@@ -1123,8 +1125,7 @@ fn check_renderable(scene: &Scene, settings: &RenderSettings) -> Result<(), GpuE
              integrator renders any number)"
         )));
     }
-    AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
-    Ok(())
+    Ok(AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?)
 }
 
 impl GpuRenderer {
@@ -1140,7 +1141,7 @@ impl GpuRenderer {
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
-        check_renderable(scene, &settings)?;
+        renderable_sampler(scene, &settings)?;
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         Self::with_bvh(ctx, scene, &bvh, camera, settings)
@@ -1160,7 +1161,7 @@ impl GpuRenderer {
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
-        check_renderable(scene, &settings)?;
+        let sampler = renderable_sampler(scene, &settings)?;
         let g = &scene.geometry;
         if bvh.input_count() != g.triangle_count() || bvh.layout() != furnace_accel::Layout::Cwbvh {
             return Err(GpuError::Unsupported(format!(
@@ -1170,7 +1171,6 @@ impl GpuRenderer {
                 g.triangle_count()
             )));
         }
-        let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
         let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
         let bvh_depth = bvh.depth();
         let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);

@@ -143,7 +143,8 @@ impl MultiGpuRenderer {
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
-        let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
+        // Refused before the BVH is built, as GpuRenderer::new does.
+        let sampler = crate::integrator::renderable_sampler(scene, &settings)?;
         if contexts.is_empty() {
             return Err(GpuError::Unsupported("no GPU to render on".into()));
         }
@@ -273,7 +274,6 @@ impl MultiGpuRenderer {
                 handles.into_iter().map(|h| h.join().expect("a device's render thread panicked")).collect()
             });
             let mut orphans = Vec::new();
-            let mut last_error = None;
             // A sampler's error is the caller's (a fixed-N sampler run past N), the same on every
             // device: no device is retired for it, and it is returned once every result is in.
             let mut sampler_error = None;
@@ -290,20 +290,7 @@ impl MultiGpuRenderer {
                         m.held.extend(ranges);
                     }
                     Err(GpuError::Sampler(e)) => sampler_error = Some(e),
-                    Err(error) => {
-                        let m = self.members.remove(k);
-                        let mut lost = m.held;
-                        lost.extend(ranges);
-                        lost.sort();
-                        orphans.extend(lost.iter().copied());
-                        last_error = Some(error.to_string());
-                        self.retired.push(Retirement {
-                            index: m.index,
-                            adapter: m.renderer.context().describe(),
-                            error,
-                            rerendered: lost,
-                        });
-                    }
+                    Err(error) => orphans.extend(self.retire(k, error, ranges)),
                 }
             }
             if let Some(e) = sampler_error {
@@ -312,12 +299,7 @@ impl MultiGpuRenderer {
             if orphans.is_empty() {
                 return Ok(());
             }
-            if self.members.is_empty() {
-                return Err(GpuError::DeviceLost(format!(
-                    "every GPU of the render failed (the last: {})",
-                    last_error.unwrap_or_default()
-                )));
-            }
+            self.check_any_left()?;
             orphans.sort();
             work = self.shares(&orphans);
         }
@@ -353,57 +335,57 @@ impl MultiGpuRenderer {
                 });
                 match read {
                     Ok(()) => k += 1,
-                    Err(error) => {
-                        let m = self.members.remove(k);
-                        orphans.extend(m.held.iter().copied());
-                        self.retired.push(Retirement {
-                            index: m.index,
-                            adapter: m.renderer.context().describe(),
-                            error,
-                            rerendered: m.held,
-                        });
-                    }
+                    Err(error) => orphans.extend(self.retire(k, error, Vec::new())),
                 }
             }
             if orphans.is_empty() {
                 return Ok(());
             }
-            if self.members.is_empty() {
-                return Err(GpuError::DeviceLost("every GPU of the render failed".into()));
-            }
+            self.check_any_left()?;
             orphans.sort();
             let work = self.shares(&orphans);
             self.render_work(work)?;
         }
     }
-}
 
-impl MultiGpuRenderer {
+    /// Retires member `k` for `error`: what its film held since the last collection and
+    /// `unfinished` (work it was given) are lost with it, recorded in its [`Retirement`] and
+    /// returned, sorted, for the others to render again.
+    fn retire(&mut self, k: usize, error: GpuError, unfinished: Vec<SampleRange>) -> Vec<SampleRange> {
+        let m = self.members.remove(k);
+        let mut lost = m.held;
+        lost.extend(unfinished);
+        lost.sort();
+        self.retired.push(Retirement {
+            index: m.index,
+            adapter: m.renderer.context().describe(),
+            error,
+            rerendered: lost.clone(),
+        });
+        lost
+    }
+
+    /// [`GpuError::DeviceLost`], naming the last failure, once every member is retired.
+    fn check_any_left(&self) -> Result<(), GpuError> {
+        if !self.members.is_empty() {
+            return Ok(());
+        }
+        let last = self.retired.last().map(|r| r.error.to_string()).unwrap_or_default();
+        Err(GpuError::DeviceLost(format!("every GPU of the render failed (the last: {last})")))
+    }
+
     /// Gives every device the collected film's convergence marks (adaptive sampling; nothing
     /// otherwise). A device that fails is retired: it holds no samples since the collection
     /// that comes before every call, so nothing is rendered again.
     fn share_marks(&mut self) -> Result<(), GpuError> {
         let Some(marks) = self.collected.converged() else { return Ok(()) };
-        let mut k = 0;
-        while k < self.members.len() {
-            let m = &mut self.members[k];
-            match m.renderer.set_converged(marks) {
-                Ok(()) => k += 1,
-                Err(error) => {
-                    let m = self.members.remove(k);
-                    self.retired.push(Retirement {
-                        index: m.index,
-                        adapter: m.renderer.context().describe(),
-                        error,
-                        rerendered: m.held,
-                    });
-                }
-            }
+        let failed: Vec<(usize, GpuError)> = (self.members.iter_mut().enumerate())
+            .filter_map(|(k, m)| m.renderer.set_converged(marks).err().map(|e| (k, e)))
+            .collect();
+        for (k, error) in failed.into_iter().rev() {
+            self.retire(k, error, Vec::new());
         }
-        if self.members.is_empty() {
-            return Err(GpuError::DeviceLost("every GPU of the render failed".into()));
-        }
-        Ok(())
+        self.check_any_left()
     }
 }
 
