@@ -127,6 +127,9 @@ pub fn open_gpus(
     settings: RenderSettings,
 ) -> Result<Backend, RenderError> {
     if let [one] = indices {
+        if std::env::var_os("FURNACE_LOSE_GPU").is_some() {
+            eprintln!("warning: FURNACE_LOSE_GPU is ignored: it loses a device of a render on several GPUs");
+        }
         return open(BackendChoice::Gpu, Some(&one.to_string()), scene, camera, settings);
     }
     let fault = lose_gpu_from_env()?;
@@ -190,8 +193,8 @@ pub fn open_chosen(
     for (k, i) in indices.iter().enumerate() {
         if indices[..k].contains(i) {
             eprintln!(
-                "warning: --gpus names adapter {i} more than once: its devices share one GPU (no faster \
-                 than one)"
+                "warning: --gpus names adapter {i} more than once: its devices share one GPU, which \
+                 runs them in turn (slower than one device)"
             );
         }
     }

@@ -263,6 +263,15 @@ fn two_devices_render_one_image_and_resume() {
     assert_eq!(ca, cb, "every pixel has its 256 samples");
     let bound = furnace_render::merge_bound(256);
     assert!(sa.iter().zip(&sb).all(|(x, y)| (x - y).abs() <= bound * y.abs()));
+    // On one device the fault injection does nothing, and says so.
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_furnace"))
+        .args(["render", "--backend", "gpu", "--width", "8", "--height", "8", "--spp", "4", "--gpus", "0"])
+        .args(["--out", dir.join("one").to_str().unwrap()])
+        .env("FURNACE_LOSE_GPU", "0@0")
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("warning: FURNACE_LOSE_GPU is ignored"), "{}", stderr(&o));
     // A list entry that names no adapter: the error lists those present.
     let o = furnace(&[
         "render",

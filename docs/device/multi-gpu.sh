@@ -7,6 +7,9 @@
 # lost mid-render (FURNACE_LOSE_GPU). Needs
 # .dev/furnace-new.xz (a stripped release build) and .gl/ as docs/device/README.md says; no Mitsuba.
 # ROUNDS (2), MIN_S (10) and COUNTS ("1 2 4 8", cut to the GPUs present) shorten it.
+# SAME_GPU=1 opens every device on GPU 0 instead (`--gpus 0,0,...`): on a one-GPU machine this
+# measures what the several-device path costs (shares, collections, the slowest device's wait)
+# where no speed-up is possible; the loss test then loses the second device on the same GPU.
 for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
 export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
 xz -dc .dev/furnace-new.xz > /tmp/f; chmod +x /tmp/f
@@ -14,7 +17,13 @@ W=/tmp/w; mkdir -p $W
 nvidia-smi --query-gpu=index,name,driver_version,pci.bus_id,clocks.max.sm --format=csv,noheader
 gpus=$(nvidia-smi --query-gpu=index --format=csv,noheader | wc -l)
 /tmp/f bench --gpus all --width 8 --height 8 --spp 1 -q > /dev/null 2>&1  # driver warm-up
-list() { seq -s, 0 $(($1 - 1)); }
+if [ -n "$SAME_GPU" ]; then
+  list() { printf '0%.0s,' $(seq $1) | sed 's/,$//'; }
+  gpus=8; all=0,0
+else
+  list() { seq -s, 0 $(($1 - 1)); }
+  all=all
+fi
 bench() {
   local label=$1 n=$2; shift 2
   /tmp/f bench --gpus "$(list $n)" "$@" --no-rays --min-seconds ${MIN_S:-10} -q --json $W/b.json > $W/b.log 2>&1 || tail -3 $W/b.log
@@ -31,8 +40,10 @@ for round in $(seq 1 ${ROUNDS:-2}); do
 done
 echo "== films: all GPUs against one, cbox 1920x1080, 256 spp"
 /tmp/f render --gpus 0 --width 1920 --height 1080 --spp 256 --out $W/one 2>&1 | grep Msamples
-/tmp/f render --gpus all --width 1920 --height 1080 --spp 256 --out $W/all 2>&1 | grep -E "rendering on|Msamples"
+/tmp/f render --gpus $all --width 1920 --height 1080 --spp 256 --out $W/all 2>&1 | grep -E "rendering on|Msamples"
 /tmp/f compare $W/all.exr $W/one.exr | grep -E "RMSE|ratio"
-echo "== a GPU lost mid-render (FURNACE_LOSE_GPU=1@20: device 1 destroyed before pass 20): the render finishes"
-FURNACE_LOSE_GPU=1@20 /tmp/f render --gpus all --width 1920 --height 1080 --spp 256 --out $W/lost 2>&1 | grep -E "warning: GPU|Msamples"
+# A 1080p render of 256 spp on an H200 takes ~10 passes (they grow to fill 0.1 s), so the loss
+# is set early enough to happen.
+echo "== a GPU lost mid-render (FURNACE_LOSE_GPU=1@3: device 1 destroyed before pass 3): the render finishes"
+FURNACE_LOSE_GPU=1@3 /tmp/f render --gpus $all --width 1920 --height 1080 --spp 256 --out $W/lost 2>&1 | grep -E "warning: GPU|Msamples"
 /tmp/f compare $W/lost.exr $W/one.exr | grep -E "RMSE|ratio"
