@@ -55,6 +55,9 @@ struct Report {
     rays: Rays,
     gpu: Option<GpuMemory>,
     profile: Option<GpuProfile>,
+    /// Each device's work and the waits in the timed passes, and the seconds of one
+    /// collection of the film after them (several GPUs).
+    load: Option<(furnace_gpu::multi::Load, f64)>,
 }
 
 /// Where the GPU's time goes (GPU backend).
@@ -149,6 +152,31 @@ impl Report {
         s
     }
 
+    /// Each device's rate and busy share, the idle share and the collection time (several
+    /// GPUs; empty otherwise).
+    fn load_lines(&self) -> String {
+        let Some((l, collect)) = &self.load else { return String::new() };
+        let mut s = String::new();
+        for d in &l.devices {
+            let _ = writeln!(
+                s,
+                "GPU {}: {:.2} Msamples/s while rendering, busy {:.1}% of the passes' shares",
+                d.index,
+                d.pixel_samples / d.busy_seconds.max(1e-12) / 1e6,
+                100.0 * d.busy_seconds / l.shares_seconds.max(1e-12)
+            );
+        }
+        let _ = writeln!(
+            s,
+            "GPUs: {:.1}% of their time waiting for the slowest of a share; collecting films {:.3} s in the \
+             timed passes, {:.3} s for one collection after them",
+            100.0 * l.idle(),
+            l.collect_seconds,
+            collect
+        );
+        s
+    }
+
     fn rays_note(&self) -> String {
         match &self.rays {
             Rays::Counted(_) => "counted on the GPU".to_string(),
@@ -202,6 +230,7 @@ impl Report {
         );
         let _ = writeln!(s, "\nrays: {}", self.rays_note());
         s.push_str(&self.profile_lines());
+        s.push_str(&self.load_lines());
         s
     }
 
@@ -213,7 +242,20 @@ impl Report {
         let per_ray = |f: fn(&furnace_gpu::integrator::TraceCounts) -> u64| {
             finite(counts.map(|c| f(&c) as f64 / c.rays.max(1) as f64))
         };
-        let value = serde_json::json!({
+        let devices = self.load.as_ref().map(|(l, _)| {
+            l.devices
+                .iter()
+                .map(|d| {
+                    serde_json::json!({
+                        "index": d.index,
+                        "msamples_per_s": finite(Some(d.pixel_samples / d.busy_seconds.max(1e-12) / 1e6)),
+                        "busy_seconds": finite(Some(d.busy_seconds)),
+                        "busy": finite(Some(d.busy_seconds / l.shares_seconds.max(1e-12))),
+                    })
+                })
+                .collect::<Vec<_>>()
+        });
+        let mut value = serde_json::json!({
             "backend": self.backend,
             "adapter": self.adapter,
             "scene": self.scene,
@@ -249,7 +291,11 @@ impl Report {
             "triangles_per_ray": per_ray(|c| c.triangles),
             "max_stack_depth": counts.map(|c| c.max_stack_depth),
             "fallback_sweeps": counts.map(|c| c.fallbacks),
+            "gpus_idle": finite(self.load.as_ref().map(|(l, _)| l.idle())),
+            "gpus_collect_seconds": finite(self.load.as_ref().map(|(l, _)| l.collect_seconds)),
+            "gpus_one_collection_seconds": finite(self.load.as_ref().map(|(_, c)| *c)),
         });
+        value["gpus"] = serde_json::json!(devices);
         let mut text = serde_json::to_string_pretty(&value).unwrap_or_default();
         text.push('\n');
         text
@@ -375,6 +421,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     }
     if let Backend::Gpus(g) = &mut engine {
         timing = g.set_timing(true);
+        g.reset_load();
     }
     let timer = Instant::now();
     // Passes from sample 1 (after the warm-up frame): exactly --spp, or until --min-seconds.
@@ -389,6 +436,17 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     };
     let seconds = timer.elapsed().as_secs_f64();
 
+    // The devices' loads in the timed passes, and the time of one collection of every
+    // device's film (which a render does at each progress update and at its end).
+    let load = match &mut engine {
+        Backend::Gpus(g) => {
+            let load = g.load();
+            let t = Instant::now();
+            Integrator::film(g.as_mut()).map_err(|e| e.to_string())?;
+            Some((load, t.elapsed().as_secs_f64()))
+        }
+        _ => None,
+    };
     let (rays, gpu, profile) = match &mut engine {
         Backend::Gpu(r) => {
             r.set_timing(false);
@@ -446,6 +504,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         rays,
         gpu,
         profile,
+        load,
     };
     let json = report.json();
     match a.json.as_deref() {

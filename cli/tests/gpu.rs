@@ -286,6 +286,38 @@ fn two_devices_render_one_image_and_resume() {
     assert!(stderr(&o).contains("matching \"no-such-gpu\"; adapters present: 0: "), "{}", stderr(&o));
 }
 
+/// `furnace bench --gpus 0,0`: the devices' loads (each one's rate and busy share, the wait for
+/// the slowest, the collection time) in the table and the JSON.
+#[test]
+fn bench_on_two_devices_reports_each_devices_load() {
+    if skip_gpu() {
+        return;
+    }
+    let args = ["bench", "--gpus", "0,0", "--width", "16", "--height", "16", "--spp", "8", "--bounces", "2"];
+    let o = furnace(&[&args[..], &["--json", "-"]].concat());
+    assert!(o.status.success(), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("GPU 0: ") && err.contains("GPU 1: ") && err.contains("busy "), "{err}");
+    assert!(err.contains("of their time waiting for the slowest of a share"), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is JSON");
+    assert_eq!(v["backend"], "gpus");
+    let devices = v["gpus"].as_array().expect("a list of devices");
+    assert_eq!(devices.len(), 2);
+    for (k, d) in devices.iter().enumerate() {
+        assert_eq!(d["index"].as_u64(), Some(k as u64));
+        // A device is busy for part of its shares' time (rounded, so at most 1).
+        assert!(d["busy"].as_f64().is_some_and(|b| b > 0.0 && b <= 1.0), "{d}");
+        assert!(d["msamples_per_s"].as_f64().is_some_and(|r| r > 0.0), "{d}");
+    }
+    assert!(v["gpus_idle"].as_f64().is_some_and(|i| (0.0..1.0).contains(&i)), "{v}");
+    assert!(v["gpus_one_collection_seconds"].as_f64().is_some_and(|c| c > 0.0), "{v}");
+    // One device reports no loads.
+    let o =
+        furnace(&["bench", "--backend", "gpu", "--width", "8", "--height", "8", "--spp", "1", "--json", "-"]);
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is JSON");
+    assert!(v["gpus"].is_null() && v["gpus_idle"].is_null(), "{v}");
+}
+
 #[test]
 fn no_adapter_is_one_line_and_auto_falls_back_to_the_cpu() {
     let dir = temp_dir("no_adapter");

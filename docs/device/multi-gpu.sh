@@ -2,7 +2,8 @@
 # One render on several GPUs (`furnace render/bench --gpus`), for a machine kind with 2-8 H200s:
 # samples/s on 1, 2, 4 (8) GPUs for the Cornell box at 3840x2160 and a 10^7-triangle interior,
 # scaling efficiency (rate on N / (N x rate on 1)), time to first frame (BVH built once, uploaded
-# to each GPU in parallel), each count run twice in alternating rounds; then the film on all GPUs
+# to each GPU in parallel), the devices' wait for the slowest of each pass's shares and the time
+# of one collection of the film, each count run twice in alternating rounds; then the film on all GPUs
 # against one GPU's at equal samples (same estimator: RMSE at f32 rounding), and with one GPU
 # lost mid-render (FURNACE_LOSE_GPU). Needs
 # .dev/furnace-new.xz (a stripped release build) and .gl/ as docs/device/README.md says; no Mitsuba.
@@ -27,7 +28,7 @@ fi
 bench() {
   local label=$1 n=$2; shift 2
   /tmp/f bench --gpus "$(list $n)" "$@" --no-rays --min-seconds ${MIN_S:-10} -q --json $W/b.json > $W/b.log 2>&1 || tail -3 $W/b.log
-  python3 -c "import json; d=json.load(open('$W/b.json')); print('$label', 'gpus=$n', round(d['msamples_per_s'],1), 'Ms/s', 'first frame', round(d['time_to_first_frame_s'],2), 's', 'gpu ms/frame', round(d.get('gpu_timestamp_ms_per_frame') or 0, 3))"
+  python3 -c "import json; d=json.load(open('$W/b.json')); print('$label', 'gpus=$n', round(d['msamples_per_s'],1), 'Ms/s', 'first frame', round(d['time_to_first_frame_s'],2), 's', 'gpu ms/frame', round(d.get('gpu_timestamp_ms_per_frame') or 0, 3), 'idle', round(d.get('gpus_idle') or 0, 3), 'busy', [round(g['busy'], 3) for g in d.get('gpus') or []], 'one collection', round(d.get('gpus_one_collection_seconds') or 0, 3), 's')"
 }
 configs=("cbox2160|--scene cbox --width 3840 --height 2160" "interior1e7|--scene interior:1e7 --width 1920 --height 1080 --bounces 6")
 for round in $(seq 1 ${ROUNDS:-2}); do

@@ -48,6 +48,48 @@ pub struct MultiGpuRenderer {
     passes: u64,
     /// A device to destroy before a pass: `(index, pass)`.
     fault: Option<(usize, u64)>,
+    /// Seconds the shares of passes took from start to the last device's end (what the
+    /// render waited), and the seconds spent collecting films, since [`MultiGpuRenderer::reset_load`].
+    shares_seconds: f64,
+    collect_seconds: f64,
+}
+
+/// One device's part in a render on several GPUs since [`MultiGpuRenderer::reset_load`]
+/// ([`MultiGpuRenderer::load`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct DeviceLoad {
+    /// Its position in the list the render was opened with.
+    pub index: usize,
+    /// Pixel samples it rendered.
+    pub pixel_samples: f64,
+    /// Seconds it was rendering (its thread's time from its share's start to its end).
+    pub busy_seconds: f64,
+}
+
+/// How a render on several GPUs spent its time since [`MultiGpuRenderer::reset_load`]: each
+/// device's work, the time the passes' shares took (each waits for its slowest device) and the
+/// time collecting films on the host.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Load {
+    /// The devices rendering now, in the order they were opened.
+    pub devices: Vec<DeviceLoad>,
+    /// Seconds from each share's start to its last device's end, summed.
+    pub shares_seconds: f64,
+    /// Seconds reading back, adding and clearing the devices' films.
+    pub collect_seconds: f64,
+}
+
+impl Load {
+    /// The share of the devices' time spent waiting for another device to finish its share:
+    /// `1 − Σ busy / (devices × shares_seconds)` (0 with nothing measured).
+    pub fn idle(&self) -> f64 {
+        let n = self.devices.len() as f64;
+        if n == 0.0 || self.shares_seconds <= 0.0 {
+            return 0.0;
+        }
+        let busy: f64 = self.devices.iter().map(|d| d.busy_seconds).sum();
+        (1.0 - busy / (n * self.shares_seconds)).max(0.0)
+    }
 }
 
 /// A device taking part in the render.
@@ -60,6 +102,9 @@ struct Member {
     held: Vec<SampleRange>,
     /// Pixel samples per second of its last share (`None` before one is measured).
     rate: Option<f64>,
+    /// Its [`DeviceLoad`] figures: pixel samples and busy seconds.
+    pixel_samples: f64,
+    busy_seconds: f64,
 }
 
 /// A device that failed and left the render.
@@ -172,7 +217,14 @@ impl MultiGpuRenderer {
             match r {
                 Ok(mut renderer) => {
                     renderer.set_convergence_tests(false);
-                    members.push(Member { index, renderer, held: Vec::new(), rate: None });
+                    members.push(Member {
+                        index,
+                        renderer,
+                        held: Vec::new(),
+                        rate: None,
+                        pixel_samples: 0.0,
+                        busy_seconds: 0.0,
+                    });
                 }
                 Err(error) => retired.push(Retirement { index, adapter, error, rerendered: Vec::new() }),
             }
@@ -190,6 +242,8 @@ impl MultiGpuRenderer {
             opened,
             passes: 0,
             fault: None,
+            shares_seconds: 0.0,
+            collect_seconds: 0.0,
         })
     }
 
@@ -199,6 +253,32 @@ impl MultiGpuRenderer {
     /// it from `FURNACE_LOSE_GPU=INDEX@PASS`.
     pub fn lose_device_at(&mut self, index: usize, pass: u64) {
         self.fault = Some((index, pass));
+    }
+
+    /// Each device's work and the time spent waiting and collecting since the last
+    /// [`reset_load`](Self::reset_load) (or the start): what a benchmark reports.
+    pub fn load(&self) -> Load {
+        Load {
+            devices: self
+                .members
+                .iter()
+                .map(|m| DeviceLoad {
+                    index: m.index,
+                    pixel_samples: m.pixel_samples,
+                    busy_seconds: m.busy_seconds,
+                })
+                .collect(),
+            shares_seconds: self.shares_seconds,
+            collect_seconds: self.collect_seconds,
+        }
+    }
+
+    /// Starts [`load`](Self::load)'s figures again from zero (after a warm-up).
+    pub fn reset_load(&mut self) {
+        for m in &mut self.members {
+            (m.pixel_samples, m.busy_seconds) = (0.0, 0.0);
+        }
+        (self.shares_seconds, self.collect_seconds) = (0.0, 0.0);
     }
 
     /// Devices rendering now.
@@ -256,6 +336,7 @@ impl MultiGpuRenderer {
     fn render_work(&mut self, mut work: Vec<Vec<SampleRange>>) -> Result<(), GpuError> {
         let pixels = f64::from(self.settings.width) * f64::from(self.settings.height);
         loop {
+            let start = Instant::now();
             let results: Vec<Result<f64, GpuError>> = std::thread::scope(|s| {
                 let handles: Vec<_> = self
                     .members
@@ -273,6 +354,7 @@ impl MultiGpuRenderer {
                     .collect();
                 handles.into_iter().map(|h| h.join().expect("a device's render thread panicked")).collect()
             });
+            self.shares_seconds += start.elapsed().as_secs_f64();
             let mut orphans = Vec::new();
             // A sampler's error is the caller's (a fixed-N sampler run past N), the same on every
             // device: no device is retired for it, and it is returned once every result is in.
@@ -287,6 +369,8 @@ impl MultiGpuRenderer {
                         if samples > 0 && seconds > 0.0 {
                             m.rate = Some(pixels * f64::from(samples) / seconds);
                         }
+                        m.pixel_samples += pixels * f64::from(samples);
+                        m.busy_seconds += seconds;
                         m.held.extend(ranges);
                     }
                     Err(GpuError::Sampler(e)) => sampler_error = Some(e),
@@ -309,6 +393,7 @@ impl MultiGpuRenderer {
     /// cannot be read is retired and its samples rendered again by the others (then collected).
     fn collect(&mut self) -> Result<(), GpuError> {
         loop {
+            let start = Instant::now();
             // Read back in parallel (a 4K film is hundreds of megabytes), added in member order.
             let films: Vec<Result<Option<Film>, GpuError>> = std::thread::scope(|s| {
                 let handles: Vec<_> = self
@@ -338,6 +423,7 @@ impl MultiGpuRenderer {
                     Err(error) => orphans.extend(self.retire(k, error, Vec::new())),
                 }
             }
+            self.collect_seconds += start.elapsed().as_secs_f64();
             if orphans.is_empty() {
                 return Ok(());
             }
@@ -489,6 +575,17 @@ mod tests {
 
     fn r(a: u32, b: u32) -> SampleRange {
         SampleRange::new(a, b).unwrap()
+    }
+
+    #[test]
+    fn idle_is_the_devices_wait_for_the_slowest() {
+        let d = |busy_seconds| DeviceLoad { index: 0, pixel_samples: 1.0, busy_seconds };
+        // Shares of 2 s in all: one device busy throughout, one for 1.5 s: a quarter of its time,
+        // an eighth of the two's, waiting.
+        let load = Load { devices: vec![d(2.0), d(1.5)], shares_seconds: 2.0, collect_seconds: 0.0 };
+        assert!((load.idle() - 0.125).abs() < 1e-12);
+        assert_eq!(Load { devices: vec![], shares_seconds: 1.0, collect_seconds: 0.0 }.idle(), 0.0);
+        assert_eq!(Load { devices: vec![d(0.0)], shares_seconds: 0.0, collect_seconds: 0.0 }.idle(), 0.0);
     }
 
     #[test]

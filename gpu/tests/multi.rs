@@ -78,6 +78,20 @@ fn two_devices_add_up_to_their_shares() {
     assert!(film.counts().iter().all(|&c| c == 7), "every pixel has 7 samples");
     let expected = added(&[single(&[(0, 2), (3, 5)], settings()), single(&[(2, 3), (5, 7)], settings())]);
     assert_same("two devices", &film, &expected);
+    // The load: each device's pixel samples are its shares (4 and 3 samples of 12 × 10),
+    // each busy for part of the shares' time, and one collection counted.
+    let load = m.load();
+    let samples: Vec<f64> = load.devices.iter().map(|d| d.pixel_samples).collect();
+    assert_eq!(samples, [4.0 * 120.0, 3.0 * 120.0]);
+    for d in &load.devices {
+        // A device's time is inside its share's, which starts before and ends after it.
+        assert!(d.busy_seconds > 0.0 && d.busy_seconds <= load.shares_seconds, "{load:?}");
+    }
+    assert!((0.0..1.0).contains(&load.idle()) && load.collect_seconds > 0.0, "{load:?}");
+    m.reset_load();
+    let zero = m.load();
+    assert!(zero.devices.iter().all(|d| d.pixel_samples == 0.0 && d.busy_seconds == 0.0));
+    assert_eq!((zero.shares_seconds, zero.collect_seconds), (0.0, 0.0));
     // Reading the film collects it: a second read without passes is the same film.
     assert_same("read twice", &m.film().unwrap(), &film);
     assert!(m.take_retirements().is_empty());
