@@ -33,7 +33,7 @@
 
 use crate::film::{FilmPrecision, GpuFilm};
 use crate::sampling::SamplerParams;
-use crate::scene::GpuScene;
+use crate::scene::{GpuScene, SceneBuffers};
 use crate::shared::{Binding, BindingKind, BindingTable, GpuStruct, WgslType, wgsl_struct};
 use crate::traverse::BvhBuffers;
 use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
@@ -852,13 +852,17 @@ fn emitter_buffer(
     emitters: Option<&Emitters>,
     features: SceneFeatures,
 ) -> Result<Option<wgpu::Buffer>, GpuError> {
+    emitter_buffer_words(scene, emitters, features).map(|w| storage_buffer(ctx, "emitters", &w)).transpose()
+}
+
+/// The words of [`emitter_buffer`].
+fn emitter_buffer_words(
+    scene: &Scene,
+    emitters: Option<&Emitters>,
+    features: SceneFeatures,
+) -> Option<Vec<u32>> {
     emitters
-        .map(|e| {
-            let words =
-                if features.light_bvh { light_bvh_words(e, &e.light_bvh(scene)) } else { emitter_words(e) };
-            storage_buffer(ctx, "emitters", &words)
-        })
-        .transpose()
+        .map(|e| if features.light_bvh { light_bvh_words(e, &e.light_bvh(scene)) } else { emitter_words(e) })
 }
 
 /// The environment's texels, and its CDFs when it is light-sampled; none (and no binding)
@@ -869,25 +873,133 @@ fn environment_buffers(
     settings: &RenderSettings,
     limit: u64,
 ) -> Result<Vec<wgpu::Buffer>, GpuError> {
+    environment_buffer_words(scene, settings, limit)?
+        .iter()
+        .map(|(label, w)| storage_buffer(ctx, label, w))
+        .collect()
+}
+
+/// The labels and words of [`environment_buffers`].
+fn environment_buffer_words(
+    scene: &Scene,
+    settings: &RenderSettings,
+    limit: u64,
+) -> Result<Vec<(&'static str, Vec<u32>)>, GpuError> {
     let mut environment = Vec::new();
     if let Some(env) = scene.environment() {
         let sampler = settings
             .env_sampling
             .light_samples(settings.light_sampling)
             .and_then(|compensated| env.sampler(compensated));
-        let words = environment_words(env, sampler.as_ref());
-        for (what, w) in [("environment map", &words[0]), ("environment map's CDFs", &words[1])] {
+        let [texels, cdfs] = environment_words(env, sampler.as_ref());
+        for (what, w) in [("environment map", &texels), ("environment map's CDFs", &cdfs)] {
             let bytes = 4 * w.len() as u64;
             if bytes > limit {
                 return Err(GpuError::TooLarge { what: what.into(), bytes, limit });
             }
         }
-        environment.push(storage_buffer(ctx, "environment", &words[0])?);
+        environment.push(("environment", texels));
         if sampler.is_some() {
-            environment.push(storage_buffer(ctx, "environment cdf", &words[1])?);
+            environment.push(("environment cdf", cdfs));
         }
     }
     Ok(environment)
+}
+
+/// The largest buffer `ctx` binds: what a packed buffer may hold.
+fn upload_limit(ctx: &GpuContext) -> u64 {
+    ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size)
+}
+
+/// What a renderer uploads, made on the host: the BVH's and the scene's words, the emitters' (a
+/// light BVH) and the environment's (its CDFs), and the frame's constants. A render on several
+/// GPUs makes it once for all its devices ([`crate::MultiGpuRenderer`]).
+#[derive(Debug)]
+pub(crate) struct PackedScene {
+    settings: RenderSettings,
+    sampler: AnySampler,
+    base: FrameParams,
+    features: SceneFeatures,
+    bvh_depth: usize,
+    triangles: usize,
+    bvh_words: BvhBuffers,
+    scene_words: SceneBuffers,
+    point_lights: Vec<GpuPointLight>,
+    emitter_words: Option<Vec<u32>>,
+    environment: Vec<(&'static str, Vec<u32>)>,
+}
+
+impl PackedScene {
+    /// Packs `scene` with its CWBVH `bvh` for `settings`, every buffer at most `limit` bytes (the
+    /// smallest limit of the devices that will upload it).
+    ///
+    /// # Errors
+    /// As [`GpuRenderer::with_bvh`], but no device error.
+    pub(crate) fn new(
+        scene: &Scene,
+        bvh: &Bvh,
+        camera: &Camera,
+        settings: RenderSettings,
+        limit: u64,
+    ) -> Result<Self, GpuError> {
+        let sampler = renderable_sampler(scene, &settings)?;
+        let g = &scene.geometry;
+        if bvh.input_count() != g.triangle_count() || bvh.layout() != furnace_accel::Layout::Cwbvh {
+            return Err(GpuError::Unsupported(format!(
+                "a {:?} BVH over {} triangles for a scene of {} (the GPU traverses a CWBVH of the scene's triangles)",
+                bvh.layout(),
+                bvh.input_count(),
+                g.triangle_count()
+            )));
+        }
+        let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
+        let scene_emitters = Emitters::new(scene);
+        let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
+        Ok(Self {
+            settings,
+            sampler,
+            base: frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref()),
+            features,
+            bvh_depth: bvh.depth(),
+            triangles: g.triangles.len(),
+            bvh_words: BvhBuffers::new(bvh, limit)?,
+            scene_words: SceneBuffers::new(scene, limit)?,
+            point_lights: point_light_records(scene),
+            emitter_words: emitter_buffer_words(scene, scene_emitters.as_ref(), features),
+            environment: environment_buffer_words(scene, &settings, limit)?,
+        })
+    }
+
+    /// The largest upload limit of `contexts` ([`PackedScene::new`]'s `limit`): a device with a
+    /// smaller one refuses the scene in [`GpuRenderer::with_packed`] if it does not fit.
+    pub(crate) fn limit_of<'a>(contexts: impl IntoIterator<Item = &'a GpuContext>) -> u64 {
+        contexts.into_iter().map(upload_limit).max().unwrap_or(u64::MAX)
+    }
+
+    /// [`GpuError::TooLarge`] for the first buffer over `limit` bytes (a device's own limit,
+    /// where the scene was packed for a larger one).
+    fn check_limit(&self, limit: u64) -> Result<(), GpuError> {
+        let [nodes, tris] = self.bvh_words.extra();
+        let scene_names = [
+            "scene triangles",
+            "scene vertices",
+            "scene uvs",
+            "scene tangents",
+            "scene materials",
+            "scene texels",
+        ];
+        let mut buffers: Vec<(&str, &[u32])> = vec![("BVH node", nodes), ("BVH triangle", tris)];
+        buffers.extend(scene_names.into_iter().zip(self.scene_words.extra()));
+        buffers.extend(self.emitter_words.as_deref().map(|w| ("emitter", w)));
+        buffers.extend(self.environment.iter().map(|(label, w)| (*label, w.as_slice())));
+        for (what, words) in buffers {
+            let bytes = size_of_val(words) as u64;
+            if bytes > limit {
+                return Err(GpuError::TooLarge { what: format!("the {what} buffer"), bytes, limit });
+            }
+        }
+        Ok(())
+    }
 }
 
 /// The runtime checks wgpu adds to the integrator's shader when it translates it (naga's
@@ -1161,39 +1273,38 @@ impl GpuRenderer {
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
-        let sampler = renderable_sampler(scene, &settings)?;
-        let g = &scene.geometry;
-        if bvh.input_count() != g.triangle_count() || bvh.layout() != furnace_accel::Layout::Cwbvh {
-            return Err(GpuError::Unsupported(format!(
-                "a {:?} BVH over {} triangles for a scene of {} (the GPU traverses a CWBVH of the scene's triangles)",
-                bvh.layout(),
-                bvh.input_count(),
-                g.triangle_count()
-            )));
-        }
-        let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
-        let bvh_depth = bvh.depth();
-        let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
-        let bvh_words = BvhBuffers::new(bvh, limit)?;
-        let [nodes, tris] = bvh_words.extra();
+        let packed = PackedScene::new(scene, bvh, camera, settings, upload_limit(&ctx))?;
+        Self::with_packed(ctx, &packed)
+    }
+
+    /// [`GpuRenderer::with_bvh`] from the scene as packed on the host ([`PackedScene`]): several
+    /// devices rendering one scene pack it once and each uploads the same words.
+    ///
+    /// # Errors
+    /// A device error, or a pipeline error.
+    pub(crate) fn with_packed(ctx: GpuContext, packed: &PackedScene) -> Result<Self, GpuError> {
+        packed.check_limit(upload_limit(&ctx))?;
+        let PackedScene { settings, sampler, base, features, bvh_depth, triangles, .. } = *packed;
+        let [nodes, tris] = packed.bvh_words.extra();
         let bvh = [storage_buffer(&ctx, "bvh nodes", nodes)?, storage_buffer(&ctx, "bvh triangles", tris)?];
         let bvh_bytes = bvh.iter().map(wgpu::Buffer::size).sum();
-        let gpu_scene = GpuScene::upload(&ctx, scene)?;
+        let gpu_scene = GpuScene::upload_buffers(&ctx, &packed.scene_words)?;
         let ray_counter = ctx.buffer_init(
             "ray counter",
             bytemuck::cast_slice(&[0u32; COUNTER_WORDS]),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         )?;
         let turquin = storage_buffer(&ctx, "turquin", bytemuck::cast_slice(&brdf::turquin_table()))?;
-        let point_lights =
-            storage_buffer(&ctx, "point lights", bytemuck::cast_slice(&point_light_records(scene)))?;
-        let scene_emitters = Emitters::new(scene);
-        let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
-        let emitters = emitter_buffer(&ctx, scene, scene_emitters.as_ref(), features)?;
-        let environment = environment_buffers(&ctx, scene, &settings, limit)?;
+        let point_lights = storage_buffer(&ctx, "point lights", bytemuck::cast_slice(&packed.point_lights))?;
+        let emitters =
+            packed.emitter_words.as_ref().map(|w| storage_buffer(&ctx, "emitters", w)).transpose()?;
+        let environment = packed
+            .environment
+            .iter()
+            .map(|(label, w)| storage_buffer(&ctx, label, w))
+            .collect::<Result<Vec<_>, _>>()?;
         let precision = FilmPrecision::for_context(&ctx);
         let film = film_for(&ctx, &settings, precision)?;
-        let base = frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref());
         let overrides = ProfilingOverrides::from_env()?;
         let group_size = group_size_for(&ctx, &overrides, features);
         let limit = ctx.device.limits().max_compute_invocations_per_workgroup;
@@ -1243,7 +1354,7 @@ impl GpuRenderer {
             group_size,
             stack_size,
             timer: None,
-            triangles: scene.geometry.triangles.len(),
+            triangles,
             display: false,
         };
         renderer.tuner = renderer.tuner_for();
@@ -1319,8 +1430,7 @@ impl GpuRenderer {
         }
         let env_samples = |s: &RenderSettings| s.env_sampling.light_samples(s.light_sampling);
         if env_samples(&old) != env_samples(&settings) || features.environment != self.features.environment {
-            let limit = self.ctx.max_storage_binding().min(self.ctx.device.limits().max_buffer_size);
-            self.environment = environment_buffers(&self.ctx, scene, &settings, limit)?;
+            self.environment = environment_buffers(&self.ctx, scene, &settings, upload_limit(&self.ctx))?;
         }
         let precision = self.film.precision();
         if features != self.features {
@@ -1933,6 +2043,30 @@ fn set_camera_params(p: &mut FrameParams, camera: &Camera) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A scene packed for one device's limit is checked again against another's: the first
+    /// buffer over it is named, and a limit it fits passes.
+    #[test]
+    fn a_packed_scene_is_checked_against_each_devices_limit() {
+        let scene = furnace_scene::builtin::cornell_box().unwrap();
+        let g = &scene.geometry;
+        let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
+        let settings = RenderSettings { width: 8, height: 8, ..RenderSettings::default() };
+        let packed = PackedScene::new(&scene, &bvh, &scene.default_camera(), settings, u64::MAX).unwrap();
+        let nodes = 4 * packed.bvh_words.nodes.len() as u64;
+        let largest = [nodes, 4 * packed.bvh_words.triangles.len() as u64]
+            .into_iter()
+            .chain(packed.scene_words.extra().iter().map(|w| 4 * w.len() as u64))
+            .max()
+            .unwrap();
+        assert!(packed.check_limit(largest).is_ok());
+        match packed.check_limit(nodes - 1) {
+            Err(GpuError::TooLarge { what, bytes, limit }) => {
+                assert_eq!((what.as_str(), bytes, limit), ("the BVH node buffer", nodes, nodes - 1));
+            }
+            other => panic!("expected TooLarge, got {other:?}"),
+        }
+    }
 
     /// 16 per pixel while a whole-image dispatch stays within the budget, then halves: the
     /// sizes measured on the H200 (BENCHMARKS.md, "Speed").

@@ -1,7 +1,8 @@
 //! [`MultiGpuRenderer`]: one render on several GPUs of one host at once.
 //!
-//! Every device holds the whole scene (the BVH is built once, on the host, and uploaded to
-//! each) and a film of the whole image. Each pass's sample indices `a..b` are cut into
+//! Every device holds the whole scene (the BVH is built once on the host, and the scene, BVH,
+//! light BVH and environment CDFs packed once, then uploaded to each) and a film of the whole
+//! image. Each pass's sample indices `a..b` are cut into
 //! consecutive ranges, one per device, in proportion to the devices' weights: equal for
 //! devices of one model, else their measured rates. A furnace sampler is addressable — sample
 //! `i` of pixel `p` is the same wherever it is traced — so the devices' films add up to the
@@ -21,6 +22,7 @@
 //! marks given to every device. That costs a read-back of every film every
 //! [`furnace_render::ADAPTIVE_STEP`] samples per pixel.
 
+use crate::integrator::PackedScene;
 use crate::{GpuContext, GpuError, GpuRenderer};
 use furnace_accel::{BuildOptions, Bvh};
 use furnace_render::split::SampleRange;
@@ -174,14 +176,16 @@ fn same_model(a: &wgpu::AdapterInfo, b: &wgpu::AdapterInfo) -> bool {
 }
 
 impl MultiGpuRenderer {
-    /// Builds the scene's BVH once and opens the GPU integrator on every context (in parallel:
-    /// each uploads the scene and builds its pipeline), to render `scene` through `camera`.
-    /// A device that fails to open is retired ([`MultiGpuRenderer::take_retirements`]) and the
+    /// Builds the scene's BVH and packs the scene once, then opens the GPU integrator on every
+    /// context (in parallel: each uploads the packed words and builds its pipeline), to render
+    /// `scene` through `camera`. A device that fails to open (or whose limits the packed scene
+    /// exceeds) is retired ([`MultiGpuRenderer::take_retirements`]) and the
     /// render goes on without it.
     ///
     /// # Errors
     /// The sampler's (a fixed-N sampler without N); [`GpuError::Unsupported`] for no context;
-    /// the first device's error when none opens.
+    /// [`GpuError::TooLarge`] for a scene over the largest device's limits; the first device's
+    /// error when none opens.
     pub fn new(
         contexts: Vec<GpuContext>,
         scene: &Scene,
@@ -195,6 +199,10 @@ impl MultiGpuRenderer {
         }
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
+        // Packed once, within the largest device's limits (a smaller one that it exceeds is
+        // retired), and uploaded by each; the BVH's own copy is dropped first.
+        let packed = PackedScene::new(scene, &bvh, camera, settings, PackedScene::limit_of(&contexts))?;
+        drop(bvh);
         let infos: Vec<wgpu::AdapterInfo> = contexts.iter().map(|c| c.info.clone()).collect();
         let opened = contexts.len();
         let results: Vec<(usize, String, Result<GpuRenderer, GpuError>)> = std::thread::scope(|s| {
@@ -202,10 +210,10 @@ impl MultiGpuRenderer {
                 .into_iter()
                 .enumerate()
                 .map(|(index, ctx)| {
-                    let bvh = &bvh;
+                    let packed = &packed;
                     s.spawn(move || {
                         let adapter = ctx.describe();
-                        (index, adapter, GpuRenderer::with_bvh(ctx, scene, bvh, camera, settings))
+                        (index, adapter, GpuRenderer::with_packed(ctx, packed))
                     })
                 })
                 .collect();
