@@ -52,6 +52,8 @@ struct Report {
     spp: u32,
     seconds: f64,
     time_to_first_frame_s: f64,
+    /// Its parts: the scene made, the backend opened, the first pass.
+    first_frame: [f64; 3],
     rays: Rays,
     gpu: Option<GpuMemory>,
     profile: Option<GpuProfile>,
@@ -229,6 +231,13 @@ impl Report {
             gpu,
         );
         let _ = writeln!(s, "\nrays: {}", self.rays_note());
+        let [scene, open, pass] = self.first_frame;
+        let parts = if self.backend == "cpu" { "the BVH" } else { "BVH, upload, pipeline" };
+        let _ = writeln!(
+            s,
+            "first frame: scene {scene:.2} s, {} opened {open:.2} s ({parts}), first pass {pass:.2} s",
+            self.backend
+        );
         s.push_str(&self.profile_lines());
         s.push_str(&self.load_lines());
         s
@@ -277,6 +286,9 @@ impl Report {
             "rays_counted": self.rays_note(),
             "ms_per_frame": finite(Some(self.ms_per_frame())),
             "time_to_first_frame_s": finite(Some(self.time_to_first_frame_s)),
+            "first_frame_scene_s": finite(Some(self.first_frame[0])),
+            "first_frame_open_s": finite(Some(self.first_frame[1])),
+            "first_frame_pass_s": finite(Some(self.first_frame[2])),
             "gpu_bytes_per_triangle": finite(g.map(|g| g.bytes_per_triangle)),
             "gpu_bvh_bytes_per_triangle": finite(g.map(|g| g.bvh_bytes as f64 / self.triangles.max(1) as f64)),
             "gpu_scene_bytes": g.map(|g| g.scene_bytes),
@@ -323,6 +335,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     }
     let start = Instant::now();
     let mut scene = load(&a.scene)?;
+    let scene_seconds = start.elapsed().as_secs_f64();
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
@@ -356,6 +369,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         SceneArg::File(p) => p.display().to_string(),
     };
     let scene = Arc::new(scene);
+    let opening = Instant::now();
     let mut engine = backend::open_chosen(
         a.backend.into(),
         a.adapter.as_deref(),
@@ -377,6 +391,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
             format!("{} threads", std::thread::available_parallelism().map_or(1, |n| n.get()))
         }
     };
+    let open_seconds = opening.elapsed().as_secs_f64();
     let backend_name = engine.name();
     if !a.quiet {
         eprintln!(
@@ -385,6 +400,9 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     }
     engine.render_pass(0, 1).map_err(|e| e.to_string())?;
     let time_to_first_frame_s = start.elapsed().as_secs_f64();
+    // The first frame's parts: making the scene, opening the backend (BVH, upload, pipeline)
+    // and the first pass (with what the driver does at a pipeline's first dispatch).
+    let first_frame = [scene_seconds, open_seconds, time_to_first_frame_s - scene_seconds - open_seconds];
     if let Some(r) = engine.gpu()
         && !a.no_rays
     {
@@ -501,6 +519,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         spp: done,
         seconds,
         time_to_first_frame_s,
+        first_frame,
         rays,
         gpu,
         profile,

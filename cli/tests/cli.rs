@@ -794,6 +794,10 @@ fn bench_cpu_prints_json_with_every_field() {
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).expect("stdout is JSON");
     assert_eq!(v["backend"], "cpu");
     assert_eq!(v["scene"], "cbox");
+    // The first frame's parts add up to it (to the JSON's float printing).
+    let part = |k: &str| v[k].as_f64().filter(|x| *x >= 0.0).unwrap_or_else(|| panic!("{k}: {v}"));
+    let parts = part("first_frame_scene_s") + part("first_frame_open_s") + part("first_frame_pass_s");
+    assert!((parts - part("time_to_first_frame_s")).abs() < 1e-9, "{v}");
     assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(32), Some(32)));
     assert_eq!((v["spp"].as_u64(), v["bounces"].as_u64()), (Some(4), Some(4)));
     assert!(v["triangles"].as_u64().is_some_and(|t| t > 0));
