@@ -28,7 +28,7 @@ fi
 bench() {
   local label=$1 n=$2; shift 2
   /tmp/f bench --gpus "$(list $n)" "$@" --no-rays --min-seconds ${MIN_S:-10} -q --json $W/b.json > $W/b.log 2>&1 || tail -3 $W/b.log
-  python3 -c "import json; d=json.load(open('$W/b.json')); print('$label', 'gpus=$n', round(d['msamples_per_s'],1), 'Ms/s', 'first frame', round(d['time_to_first_frame_s'],2), 's', 'gpu ms/frame', round(d.get('gpu_timestamp_ms_per_frame') or 0, 3), 'idle', round(d.get('gpus_idle') or 0, 3), 'busy', [round(g['busy'], 3) for g in d.get('gpus') or []], 'one collection', round(d.get('gpus_one_collection_seconds') or 0, 3), 's')"
+  python3 -c "import json; d=json.load(open('$W/b.json')); print('$label', 'gpus=$n', round(d['msamples_per_s'],1), 'Ms/s', 'first frame', round(d['time_to_first_frame_s'],2), 's', '(scene', round(d.get('first_frame_scene_s') or 0, 2), 'open', round(d.get('first_frame_open_s') or 0, 2), 'pass', round(d.get('first_frame_pass_s') or 0, 2), ')', 'gpu ms/frame', round(d.get('gpu_timestamp_ms_per_frame') or 0, 3), 'idle', round(d.get('gpus_idle') or 0, 3), 'busy', [round(g['busy'], 3) for g in d.get('gpus') or []], 'one collection', round(d.get('gpus_one_collection_seconds') or 0, 3), 's')"
 }
 configs=("cbox2160|--scene cbox --width 3840 --height 2160" "interior1e7|--scene interior:1e7 --width 1920 --height 1080 --bounces 6")
 for round in $(seq 1 ${ROUNDS:-2}); do
