@@ -931,7 +931,8 @@ pub(crate) struct PackedScene {
 
 impl PackedScene {
     /// Packs `scene` with its CWBVH `bvh` for `settings`, every buffer at most `limit` bytes (the
-    /// smallest limit of the devices that will upload it).
+    /// largest limit of the devices that will upload it: each checks its own,
+    /// [`PackedScene::check_limit`]).
     ///
     /// # Errors
     /// As [`GpuRenderer::with_bvh`], but no device error.
@@ -990,6 +991,7 @@ impl PackedScene {
         ];
         let mut buffers: Vec<(&str, &[u32])> = vec![("BVH node", nodes), ("BVH triangle", tris)];
         buffers.extend(scene_names.into_iter().zip(self.scene_words.extra()));
+        buffers.push(("scene transmission", bytemuck::cast_slice(&self.scene_words.transmission)));
         buffers.extend(self.emitter_words.as_deref().map(|w| ("emitter", w)));
         buffers.extend(self.environment.iter().map(|(label, w)| (*label, w.as_slice())));
         for (what, words) in buffers {
