@@ -50,6 +50,7 @@ use clap::{CommandFactory, FromArgMatches};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
+    quiet_device_select_layer();
     let cli = match parse() {
         Ok(cli) => cli,
         Err(e) => {
@@ -79,6 +80,26 @@ fn main() -> ExitCode {
         // 128 + SIGINT, what a shell reports for a process ended by Ctrl-C.
         Ok(shared::Outcome::Interrupted) => ExitCode::from(130),
         Err(message) => fail(&message),
+    }
+}
+
+/// Switches off Mesa's Vulkan device-selection layer for this process, unless the user set its
+/// switches (`NODEVICE_SELECT`, `MESA_VK_DEVICE_SELECT`). The layer is an implicit layer that
+/// Mesa's Vulkan drivers install, loaded into every Vulkan instance; it connects to a Wayland
+/// display to put the display's GPU first, and without `XDG_RUNTIME_DIR` (a headless shell, a
+/// container, a batch job) libwayland prints `error: XDG_RUNTIME_DIR is invalid or not set in
+/// the environment.` twice on a run that did not fail, lines that read as furnace's own errors.
+/// furnace ranks adapters itself (`furnace_gpu::context`), so it needs nothing from the layer;
+/// switching it off in every session, not only headless ones, keeps the adapters' order (and
+/// so `--gpus` indices) the same whatever the session's display.
+fn quiet_device_select_layer() {
+    if std::env::var_os("NODEVICE_SELECT").is_none() && std::env::var_os("MESA_VK_DEVICE_SELECT").is_none() {
+        // SAFETY: the first statement of `main`, before any thread is started, so no other
+        // thread reads or writes the environment meanwhile.
+        #[allow(unsafe_code)]
+        unsafe {
+            std::env::set_var("NODEVICE_SELECT", "1");
+        }
     }
 }
 

@@ -105,6 +105,30 @@ fn time_limit_stops_at_whole_passes_and_warns_for_fixed_n() {
     assert!((4..1_000_000).contains(&spp) && spp % 4 == 0, "spp {spp}");
 }
 
+/// A headless session (no `XDG_RUNTIME_DIR`, no display): a render that succeeds prints no
+/// `error:` line. Mesa's Vulkan device-selection layer, loaded when the default backend looks for
+/// a GPU, printed libwayland's `error: XDG_RUNTIME_DIR is invalid or not set` twice there.
+/// (Where Mesa's layer is not installed the test passes either way.)
+#[test]
+fn a_headless_render_prints_no_error_lines() {
+    let dir = temp_dir("headless_quiet");
+    let out = dir.join("h");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_furnace"))
+        .args(["render", "--width", "8", "--height", "8", "--spp", "1", "--out"])
+        .arg(&out)
+        .env_remove("XDG_RUNTIME_DIR")
+        .env_remove("WAYLAND_DISPLAY")
+        .env_remove("DISPLAY")
+        .env_remove("NODEVICE_SELECT")
+        .env_remove("MESA_VK_DEVICE_SELECT")
+        .output()
+        .unwrap();
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    let errors: Vec<&str> = err.lines().filter(|l| l.starts_with("error")).collect();
+    assert!(errors.is_empty(), "a render that succeeded printed error lines:\n{err}");
+}
+
 #[test]
 fn missing_scene_is_one_line_and_exit_code_1() {
     let dir = temp_dir("missing");
