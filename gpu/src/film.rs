@@ -407,59 +407,58 @@ impl GpuFilm {
         })
     }
 
+    /// The device's film. Its buffers are copied to staging buffers in one submission and
+    /// converted straight from the mapped memory (a 4K `F64` film's sums are 265 MB: no copy of
+    /// them is made on the host before they are turned into the film's).
     fn read_device(&self, ctx: &GpuContext) -> Result<Film, GpuError> {
-        let sum_words: Vec<u32> = read_buffer(ctx, &self.sum)?;
-        let count_words: Vec<u32> = read_buffer(ctx, &self.count)?;
         let n = self.pixels();
-        let sum = match self.precision {
-            FilmPrecision::F64 => {
-                let v: &[f64] = bytemuck::cast_slice(&sum_words[..n * 8]);
-                v.chunks_exact(4).map(|c| DVec3::new(c[0], c[1], c[2])).collect()
+        // Convergence marks are the GPU's only for `F64` (`F32Pass`: the host's, kept by
+        // `Film::add_film`).
+        let converged = self.converged.as_ref().filter(|_| self.host.is_none());
+        let mut buffers = vec![&self.sum, &self.count];
+        buffers.extend(converged);
+        buffers.extend(&self.aov);
+        read_buffers(ctx, &buffers, |words| {
+            let (sum_words, count_words) = (words[0], words[1]);
+            let adaptive = self.converged.is_some();
+            let (sum, lum_sq) = match self.precision {
+                FilmPrecision::F64 => sums_and_squares::<f64>(&sum_words[..n * 8], adaptive),
+                FilmPrecision::F32Pass => sums_and_squares::<f32>(&sum_words[..n * 4], adaptive),
+            };
+            let pairs = &count_words[..2 * n];
+            let count = pairs.chunks_exact(2).map(|c| u64::from(c[0])).collect();
+            let rejected = pairs.chunks_exact(2).map(|c| u64::from(c[1])).sum();
+            let mut film = Film::from_parts(self.width, self.height, sum, count, rejected)
+                .map_err(|e| GpuError::Wgpu(e.to_string()))?;
+            let mut next = 2;
+            if let Some(lum_sq) = lum_sq {
+                // The marks are the GPU's (F64) or the host's (F32Pass: these are zero,
+                // Film::add_film keeps the host's).
+                let marks = match converged {
+                    Some(_) => {
+                        next += 1;
+                        words[2][..n].iter().map(|&w| w != 0).collect()
+                    }
+                    None => vec![false; n],
+                };
+                film = film.with_adaptive_state(lum_sq, marks).map_err(|e| GpuError::Wgpu(e.to_string()))?;
             }
-            FilmPrecision::F32Pass => {
-                let v: &[f32] = bytemuck::cast_slice(&sum_words[..n * 4]);
-                v.chunks_exact(4).map(|c| DVec3::new(c[0].into(), c[1].into(), c[2].into())).collect()
+            if self.aov.is_none() {
+                return Ok(film);
             }
-        };
-        let count = count_words[..2 * n].chunks_exact(2).map(|c| u64::from(c[0])).collect();
-        let rejected = count_words[..2 * n].chunks_exact(2).map(|c| u64::from(c[1])).sum();
-        let mut film = Film::from_parts(self.width, self.height, sum, count, rejected)
-            .map_err(|e| GpuError::Wgpu(e.to_string()))?;
-        if let Some(converged) = &self.converged {
-            // The squared luminances are the sums' w; the marks are the GPU's (F64) or the
-            // host's (F32Pass: these are zero, Film::add_film keeps the host's).
-            let lum_sq: Vec<f64> = match self.precision {
-                FilmPrecision::F64 => bytemuck::cast_slice::<u32, f64>(&sum_words[..n * 8])
-                    .chunks_exact(4)
-                    .map(|c| c[3])
+            let words = words[next];
+            let sums: Vec<AovSum> = match self.precision {
+                FilmPrecision::F64 => pod_words::<f64>(&words[..n * 16])
+                    .chunks_exact(8)
+                    .map(|c| AovSum::from_array(c.try_into().expect("8 sums")))
                     .collect(),
-                FilmPrecision::F32Pass => bytemuck::cast_slice::<u32, f32>(&sum_words[..n * 4])
-                    .chunks_exact(4)
-                    .map(|c| f64::from(c[3]))
+                FilmPrecision::F32Pass => pod_words::<f32>(&words[..n * 8])
+                    .chunks_exact(8)
+                    .map(|c| AovSum::from_array(std::array::from_fn(|k| f64::from(c[k]))))
                     .collect(),
             };
-            let marks: Vec<bool> = if self.host.is_none() {
-                read_buffer(ctx, converged)?[..n].iter().map(|&w| w != 0).collect()
-            } else {
-                vec![false; n]
-            };
-            film = film.with_adaptive_state(lum_sq, marks).map_err(|e| GpuError::Wgpu(e.to_string()))?;
-        }
-        let Some(aov) = &self.aov else {
-            return Ok(film);
-        };
-        let words: Vec<u32> = read_buffer(ctx, aov)?;
-        let sums: Vec<AovSum> = match self.precision {
-            FilmPrecision::F64 => bytemuck::cast_slice::<u32, f64>(&words[..n * 16])
-                .chunks_exact(8)
-                .map(|c| AovSum::from_array(c.try_into().expect("8 sums")))
-                .collect(),
-            FilmPrecision::F32Pass => bytemuck::cast_slice::<u32, f32>(&words[..n * 8])
-                .chunks_exact(8)
-                .map(|c| AovSum::from_array(std::array::from_fn(|k| f64::from(c[k]))))
-                .collect(),
-        };
-        film.with_aov_sums(sums).map_err(|e| GpuError::Wgpu(e.to_string()))
+            film.with_aov_sums(sums).map_err(|e| GpuError::Wgpu(e.to_string()))
+        })?
     }
 
     /// Loads a film (to resume a render). `F64`: uploaded as is (rejected samples are
@@ -528,23 +527,78 @@ fn write_marks(ctx: &GpuContext, buffer: &wgpu::Buffer, marks: &[bool]) {
 
 /// Copies a whole buffer (created with `COPY_SRC`) back as `u32` words.
 pub fn read_buffer(ctx: &GpuContext, buffer: &wgpu::Buffer) -> Result<Vec<u32>, GpuError> {
-    let size = buffer.size();
-    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
-        label: Some("readback"),
-        size,
-        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
-        mapped_at_creation: false,
-    });
+    read_buffers(ctx, &[buffer], |words| words[0].to_vec())
+}
+
+/// Copies whole buffers (created with `COPY_SRC`) to staging buffers in one submission, waits
+/// once, and gives `read` their contents as `u32` words, in `buffers`' order, while they are
+/// mapped: `read` converts them without a copy on the host first.
+pub fn read_buffers<T>(
+    ctx: &GpuContext,
+    buffers: &[&wgpu::Buffer],
+    read: impl FnOnce(&[&[u32]]) -> T,
+) -> Result<T, GpuError> {
     let mut enc = ctx.device.create_command_encoder(&Default::default());
-    enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    let staging: Vec<wgpu::Buffer> = buffers
+        .iter()
+        .map(|buffer| {
+            let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("readback"),
+                size: buffer.size(),
+                usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            });
+            enc.copy_buffer_to_buffer(buffer, 0, &staging, 0, buffer.size());
+            staging
+        })
+        .collect();
     ctx.queue.submit([enc.finish()]);
-    staging.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    for s in &staging {
+        s.slice(..).map_async(wgpu::MapMode::Read, |_| {});
+    }
     ctx.wait()?;
-    let view = staging.slice(..).get_mapped_range().map_err(|e| GpuError::Wgpu(e.to_string()))?;
-    let words = bytemuck::cast_slice(&view).to_vec();
-    drop(view);
-    staging.unmap();
-    Ok(words)
+    let views = staging
+        .iter()
+        .map(|s| s.slice(..).get_mapped_range().map_err(|e| GpuError::Wgpu(e.to_string())))
+        .collect::<Result<Vec<_>, _>>()?;
+    // Mapped ranges are aligned to at least `wgpu::MAP_ALIGNMENT` (8 bytes); a view that were
+    // not would be copied into words.
+    let copies: Vec<Option<Vec<u32>>> = views
+        .iter()
+        .map(|v| bytemuck::try_cast_slice::<u8, u32>(v).is_err().then(|| bytemuck::pod_collect_to_vec(v)))
+        .collect();
+    let words: Vec<&[u32]> = views
+        .iter()
+        .zip(&copies)
+        .map(|(v, c)| c.as_deref().unwrap_or_else(|| bytemuck::cast_slice(v)))
+        .collect();
+    let result = read(&words);
+    drop(words);
+    drop(views);
+    for s in &staging {
+        s.unmap();
+    }
+    Ok(result)
+}
+
+/// A film's `[r, g, b, squared luminance]` sums per pixel (`words`, as `T`s) as the RGB sums
+/// and, with `squares`, the squared luminances.
+fn sums_and_squares<T: bytemuck::Pod + Into<f64>>(
+    words: &[u32],
+    squares: bool,
+) -> (Vec<DVec3>, Option<Vec<f64>>) {
+    let v = pod_words::<T>(words);
+    let sum = v.chunks_exact(4).map(|c| DVec3::new(c[0].into(), c[1].into(), c[2].into())).collect();
+    (sum, squares.then(|| v.chunks_exact(4).map(|c| c[3].into()).collect()))
+}
+
+/// `words` as `T`s (`f32` or `f64`), copied only where they are not aligned for `T` (mapped
+/// ranges are).
+fn pod_words<T: bytemuck::Pod>(words: &[u32]) -> std::borrow::Cow<'_, [T]> {
+    match bytemuck::try_cast_slice(words) {
+        Ok(v) => std::borrow::Cow::Borrowed(v),
+        Err(_) => std::borrow::Cow::Owned(bytemuck::pod_collect_to_vec(words)),
+    }
 }
 
 /// A uniform buffer holding `words`.
