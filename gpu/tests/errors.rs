@@ -102,6 +102,22 @@ fn buffer_init_holds_its_contents() {
     }
 }
 
+/// `film::read_buffers` reads several buffers in one submission and gives each one's words, in
+/// the order given, to its closure (a film's sums, counts, marks and AOVs are read this way).
+#[test]
+fn read_buffers_gives_each_buffers_words_in_order() {
+    let Some(ctx) = test_context() else { return };
+    let usage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    let contents: [Vec<u32>; 3] = [(0..1000).collect(), vec![7], (0..64).map(|i| i * 3 + 1).collect()];
+    let buffers: Vec<wgpu::Buffer> =
+        contents.iter().map(|w| ctx.buffer_init("test", bytemuck::cast_slice(w), usage).unwrap()).collect();
+    let read = furnace_gpu::film::read_buffers(&ctx, &buffers.iter().collect::<Vec<_>>(), |words| {
+        words.iter().map(|w| w.to_vec()).collect::<Vec<_>>()
+    })
+    .unwrap();
+    assert_eq!(read, contents);
+}
+
 /// Rendering on a lost device is `DeviceLost`. It failed (a panic) while `render_pass` made its
 /// uniform buffer with `wgpu::util::DeviceExt::create_buffer_init`: on a lost device that
 /// buffer cannot be mapped at creation ("Failed to get mapped range for buffer created with
