@@ -164,8 +164,8 @@ impl Report {
                 s,
                 "GPU {}: {:.2} Msamples/s while rendering, busy {:.1}% of the passes' shares",
                 d.index,
-                d.pixel_samples / d.busy_seconds.max(1e-12) / 1e6,
-                100.0 * d.busy_seconds / l.shares_seconds.max(1e-12)
+                d.rate() / 1e6,
+                100.0 * l.busy(d)
             );
         }
         let _ = writeln!(
@@ -257,9 +257,9 @@ impl Report {
                 .map(|d| {
                     serde_json::json!({
                         "index": d.index,
-                        "msamples_per_s": finite(Some(d.pixel_samples / d.busy_seconds.max(1e-12) / 1e6)),
+                        "msamples_per_s": finite(Some(d.rate() / 1e6)),
                         "busy_seconds": finite(Some(d.busy_seconds)),
-                        "busy": finite(Some(d.busy_seconds / l.shares_seconds.max(1e-12))),
+                        "busy": finite(Some(l.busy(d))),
                     })
                 })
                 .collect::<Vec<_>>()
@@ -455,7 +455,8 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     let seconds = timer.elapsed().as_secs_f64();
 
     // The devices' loads in the timed passes, and the time of one collection of every
-    // device's film (which a render does at each progress update and at its end).
+    // device's film (which a render does at its end, at each checkpoint it saves and at each
+    // adaptive-sampling test).
     let load = match &mut engine {
         Backend::Gpus(g) => {
             let load = g.load();

@@ -342,6 +342,12 @@ impl GpuContext {
     pub fn max_storage_binding(&self) -> u64 {
         self.device.limits().max_storage_buffer_binding_size
     }
+
+    /// The largest buffer this device both creates and binds as storage, in bytes: what one
+    /// uploaded buffer (a film, the scene's, the BVH's) may hold.
+    pub fn upload_limit(&self) -> u64 {
+        self.max_storage_binding().min(self.device.limits().max_buffer_size)
+    }
 }
 
 #[cfg(test)]

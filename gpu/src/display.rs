@@ -164,7 +164,7 @@ pub fn display_on_gpu(
         return Ok(Vec::new());
     }
     let bytes = 12 * linear.len() as u64;
-    let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
+    let limit = ctx.upload_limit();
     let count = u32::try_from(linear.len()).ok().filter(|_| bytes <= limit).ok_or_else(|| {
         GpuError::TooLarge { what: format!("{} colours to display", linear.len()), bytes, limit }
     })?;

@@ -161,7 +161,7 @@ impl GpuFilm {
     ) -> Result<Self, GpuError> {
         let pixels = u64::from(width) * u64::from(height);
         let sum_bytes = pixels * precision.sum_bytes_per_pixel();
-        let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
+        let limit = ctx.upload_limit();
         if sum_bytes > limit {
             return Err(GpuError::TooLarge {
                 what: format!("a {width}×{height} film"),

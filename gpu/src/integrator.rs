@@ -906,11 +906,6 @@ fn environment_buffer_words(
     Ok(environment)
 }
 
-/// The largest buffer `ctx` binds: what a packed buffer may hold.
-fn upload_limit(ctx: &GpuContext) -> u64 {
-    ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size)
-}
-
 /// What a renderer uploads, made on the host: the BVH's and the scene's words, the emitters' (a
 /// light BVH) and the environment's (its CDFs), and the frame's constants. A render on several
 /// GPUs makes it once for all its devices ([`crate::MultiGpuRenderer`]).
@@ -974,23 +969,15 @@ impl PackedScene {
     /// The largest upload limit of `contexts` ([`PackedScene::new`]'s `limit`): a device with a
     /// smaller one refuses the scene in [`GpuRenderer::with_packed`] if it does not fit.
     pub(crate) fn limit_of<'a>(contexts: impl IntoIterator<Item = &'a GpuContext>) -> u64 {
-        contexts.into_iter().map(upload_limit).max().unwrap_or(u64::MAX)
+        contexts.into_iter().map(GpuContext::upload_limit).max().unwrap_or(u64::MAX)
     }
 
     /// [`GpuError::TooLarge`] for the first buffer over `limit` bytes (a device's own limit,
     /// where the scene was packed for a larger one).
     fn check_limit(&self, limit: u64) -> Result<(), GpuError> {
         let [nodes, tris] = self.bvh_words.extra();
-        let scene_names = [
-            "scene triangles",
-            "scene vertices",
-            "scene uvs",
-            "scene tangents",
-            "scene materials",
-            "scene texels",
-        ];
         let mut buffers: Vec<(&str, &[u32])> = vec![("BVH node", nodes), ("BVH triangle", tris)];
-        buffers.extend(scene_names.into_iter().zip(self.scene_words.extra()));
+        buffers.extend(SceneBuffers::EXTRA_NAMES.into_iter().zip(self.scene_words.extra()));
         buffers.push(("scene transmission", bytemuck::cast_slice(&self.scene_words.transmission)));
         buffers.extend(self.emitter_words.as_deref().map(|w| ("emitter", w)));
         buffers.extend(self.environment.iter().map(|(label, w)| (*label, w.as_slice())));
@@ -1275,7 +1262,7 @@ impl GpuRenderer {
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
-        let packed = PackedScene::new(scene, bvh, camera, settings, upload_limit(&ctx))?;
+        let packed = PackedScene::new(scene, bvh, camera, settings, ctx.upload_limit())?;
         Self::with_packed(ctx, &packed)
     }
 
@@ -1285,7 +1272,7 @@ impl GpuRenderer {
     /// # Errors
     /// A device error, or a pipeline error.
     pub(crate) fn with_packed(ctx: GpuContext, packed: &PackedScene) -> Result<Self, GpuError> {
-        packed.check_limit(upload_limit(&ctx))?;
+        packed.check_limit(ctx.upload_limit())?;
         let PackedScene { settings, sampler, base, features, bvh_depth, triangles, .. } = *packed;
         let [nodes, tris] = packed.bvh_words.extra();
         let bvh = [storage_buffer(&ctx, "bvh nodes", nodes)?, storage_buffer(&ctx, "bvh triangles", tris)?];
@@ -1432,7 +1419,7 @@ impl GpuRenderer {
         }
         let env_samples = |s: &RenderSettings| s.env_sampling.light_samples(s.light_sampling);
         if env_samples(&old) != env_samples(&settings) || features.environment != self.features.environment {
-            self.environment = environment_buffers(&self.ctx, scene, &settings, upload_limit(&self.ctx))?;
+            self.environment = environment_buffers(&self.ctx, scene, &settings, self.ctx.upload_limit())?;
         }
         let precision = self.film.precision();
         if features != self.features {

@@ -81,7 +81,19 @@ pub struct Load {
     pub collect_seconds: f64,
 }
 
+impl DeviceLoad {
+    /// Its rate while rendering, in pixel samples per second.
+    pub fn rate(&self) -> f64 {
+        self.pixel_samples / self.busy_seconds.max(1e-12)
+    }
+}
+
 impl Load {
+    /// The share of the passes' shares' time that device `d` was rendering.
+    pub fn busy(&self, d: &DeviceLoad) -> f64 {
+        d.busy_seconds / self.shares_seconds.max(1e-12)
+    }
+
     /// The share of the devices' time spent waiting for another device to finish its share:
     /// `1 − Σ busy / (devices × shares_seconds)` (0 with nothing measured).
     pub fn idle(&self) -> f64 {

@@ -478,6 +478,16 @@ impl SceneBuffers {
         })
     }
 
+    /// The names of [`extra`](Self::extra)'s buffers, in its order.
+    pub const EXTRA_NAMES: [&'static str; 6] = [
+        "scene triangles",
+        "scene vertices",
+        "scene uvs",
+        "scene tangents",
+        "scene materials",
+        "scene texels",
+    ];
+
     /// The six buffers' words in binding order (an absent one as 4 zero words), e.g. for
     /// a test kernel (`furnace_tests::gpu::run_with`) with [`bindings`]`(0, 3)`.
     pub fn extra(&self) -> [&[u32]; 6] {
@@ -541,20 +551,13 @@ impl GpuScene {
     /// [`GpuError::TooLarge`] when a buffer exceeds the device's limits (nothing is allocated on
     /// the device then); a wgpu error if an allocation fails.
     pub fn upload(ctx: &GpuContext, scene: &Scene) -> Result<Self, GpuError> {
-        let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);
+        let limit = ctx.upload_limit();
         Self::upload_buffers(ctx, &SceneBuffers::new(scene, limit)?)
     }
 
     /// Uploads already packed buffers.
     pub fn upload_buffers(ctx: &GpuContext, packed: &SceneBuffers) -> Result<Self, GpuError> {
-        let names = [
-            "scene triangles",
-            "scene vertices",
-            "scene uvs",
-            "scene tangents",
-            "scene materials",
-            "scene texels",
-        ];
+        let names = SceneBuffers::EXTRA_NAMES;
         let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let words = packed.extra();
         let mut made = Vec::with_capacity(names.len());
