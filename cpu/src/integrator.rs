@@ -9,7 +9,8 @@ use furnace_render::layout::{
     self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
 };
 use furnace_render::{
-    ADAPTIVE_STEP, AovSample, Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings,
+    ADAPTIVE_STEP, AovSample, CancelFlag, Film, Integrator, LightSampling, LightSelection, RenderError,
+    RenderSettings,
 };
 use furnace_sampling::{AnySampler, Sampler};
 use furnace_scene::{
@@ -81,6 +82,8 @@ pub struct CpuRenderer {
     /// How the environment's light samples and BSDF rays are weighted
     /// ([`furnace_render::EnvSampling::weights`]).
     env_weights: LightSampling,
+    /// Polled once per sample: raised, the pass stops ([`Integrator::set_cancel_flag`]).
+    cancel: CancelFlag,
 }
 
 /// A material's emission and BSDF, when they are the same everywhere on its surface.
@@ -155,6 +158,7 @@ impl CpuRenderer {
         let point_lights: Vec<furnace_scene::PointLight> = scene.point_lights().copied().collect();
         let rays = camera.rays(settings.width, settings.height);
         Ok(Self {
+            cancel: CancelFlag::new(),
             env_rotation: environment
                 .as_ref()
                 .map_or(furnace_scene::YRotation::IDENTITY, Environment::y_rotation),
@@ -227,10 +231,16 @@ impl CpuRenderer {
     /// This is [`Integrator::render_pass`] into a film the caller holds (which the renderer
     /// does not keep).
     ///
+    /// A raised cancel flag ([`Integrator::set_cancel_flag`]) stops the pass within a sample's
+    /// time: the samples are computed into a buffer first and added to the film only once every
+    /// pixel has them (whole blocks of samples, see below), so the film never holds part of a
+    /// sample index.
+    ///
     /// # Errors
     /// [`RenderError::FilmSize`] if `film` is not `settings.width × settings.height`; for a
     /// fixed-N sampler, [`RenderError::Sampler`] when the pass would run past N (the pattern
-    /// would repeat). Nothing is rendered then.
+    /// would repeat). Nothing is rendered then. [`RenderError::Interrupted`] when the cancel
+    /// flag stopped the pass: the film holds the blocks finished before it.
     pub fn render_into(
         &self,
         film: &mut Film,
@@ -253,7 +263,9 @@ impl CpuRenderer {
                 Some(_) => (block / ADAPTIVE_STEP + 1).saturating_mul(ADAPTIVE_STEP).min(end),
                 None => end,
             };
-            self.render_block(film, block, block_end);
+            if !self.render_block(film, block, block_end) {
+                return Err(RenderError::Interrupted { samples: block - first_sample });
+            }
             if let Some(rule) = &self.settings.adaptive
                 && rule.tests_at(block_end)
             {
@@ -264,33 +276,73 @@ impl CpuRenderer {
         Ok(())
     }
 
-    /// Samples `first..end` of every pixel still taking samples, rows in parallel.
-    fn render_block(&self, film: &mut Film, first: u32, end: u32) {
-        let w = self.settings.width;
-        let rejected: u64 = film
-            .rows_mut()
-            .into_par_iter()
-            .enumerate()
-            .map(|(y, mut row)| {
-                let mut rejected = 0;
-                let aovs = row.has_aovs();
+    /// Samples `first..end` of every pixel still taking samples, rows in parallel: computed
+    /// into a buffer (one sample per pixel and index, polling the cancel flag before each), then
+    /// added to the film in index order. `false`, with the film untouched, if the flag stopped
+    /// it.
+    fn render_block(&self, film: &mut Film, first: u32, end: u32) -> bool {
+        let w = self.settings.width as usize;
+        let per_pixel = (end - first) as usize;
+        let aovs = film.has_aovs();
+        let row_len = w * per_pixel;
+        let mut values = vec![Vec3::ZERO; row_len * self.settings.height as usize];
+        let mut aov_values = if aovs { vec![AovSample::MISS; values.len()] } else { Vec::new() };
+        let mut aov_rows: Vec<Option<&mut [AovSample]>> = if aovs {
+            aov_values.chunks_mut(row_len).map(Some).collect()
+        } else {
+            (0..self.settings.height).map(|_| None).collect()
+        };
+        let shared: &Film = film;
+        let finished = values.par_chunks_mut(row_len).zip(aov_rows.par_iter_mut()).enumerate().all(
+            |(y, (row, aov_row))| {
                 for x in 0..w {
-                    if !row.is_active(x as usize) {
+                    if !shared.is_active(y * w + x) {
                         continue;
                     }
-                    for index in first..end {
+                    for (k, index) in (first..end).enumerate() {
+                        if self.cancel.is_raised() {
+                            return false;
+                        }
+                        let slot = x * per_pixel + k;
                         let mut aov = AovSample::MISS;
-                        let mut value = self.sample_into(x, y as u32, index, aovs.then_some(&mut aov));
+                        let mut value = self.sample_into(x as u32, y as u32, index, aovs.then_some(&mut aov));
                         if let Some(max) = self.settings.clamp {
                             value = furnace_render::clamp_sample(value, max);
                         }
-                        rejected += u64::from(!row.add_sample_with_aovs(x as usize, value, &aov));
+                        row[slot] = value;
+                        if let Some(a) = aov_row {
+                            a[slot] = aov;
+                        }
+                    }
+                }
+                true
+            },
+        );
+        if !finished {
+            return false;
+        }
+        let rejected: u64 = film
+            .rows_mut()
+            .into_par_iter()
+            .zip(values.par_chunks(row_len))
+            .enumerate()
+            .map(|(y, (mut row, samples))| {
+                let mut rejected = 0;
+                for x in 0..w {
+                    if !row.is_active(x) {
+                        continue;
+                    }
+                    for k in 0..per_pixel {
+                        let slot = x * per_pixel + k;
+                        let aov = aov_values.get(y * row_len + slot).unwrap_or(&AovSample::MISS);
+                        rejected += u64::from(!row.add_sample_with_aovs(x, samples[slot], aov));
                     }
                 }
                 rejected
             })
             .sum();
         film.add_rejected(rejected);
+        true
     }
 
     /// One path sample of pixel `(x, y)`, sample number `index`: the radiance carried by the
@@ -725,6 +777,10 @@ impl Integrator for CpuRenderer {
     fn pass_samples(&self) -> u32 {
         let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
         (262_144 / pixels.max(1)).clamp(1, 4) as u32
+    }
+
+    fn set_cancel_flag(&mut self, flag: CancelFlag) {
+        self.cancel = flag;
     }
 }
 

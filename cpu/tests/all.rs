@@ -3,6 +3,8 @@
 //! 2 cores). Each module is one file beside this one, run alone with
 //! `cargo test -p furnace-cpu --test all MODULE::`.
 
+#[path = "cancel.rs"]
+mod cancel;
 #[path = "determinism.rs"]
 mod determinism;
 #[path = "film.rs"]

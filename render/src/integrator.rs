@@ -3,6 +3,38 @@
 
 use crate::{Film, RenderSettings};
 use furnace_sampling::SamplerError;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// A flag that stops a render inside a pass: the caller raises it (from a Ctrl-C handler, a
+/// viewer's close button), an integrator that polls it ([`Integrator::set_cancel_flag`]) drops
+/// the unfinished part of its pass and returns [`RenderError::Interrupted`]. Clones share the
+/// flag.
+#[derive(Debug, Clone, Default)]
+pub struct CancelFlag(Arc<AtomicBool>);
+
+impl CancelFlag {
+    /// A flag not raised.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// Raises the flag: every integrator polling it stops at its next check.
+    pub fn raise(&self) {
+        self.0.store(true, Ordering::Relaxed);
+    }
+
+    /// Lowers it again (to render on after a stop).
+    pub fn clear(&self) {
+        self.0.store(false, Ordering::Relaxed);
+    }
+
+    /// Whether it is raised (a relaxed load: cheap enough to poll once per sample).
+    #[inline]
+    pub fn is_raised(&self) -> bool {
+        self.0.load(Ordering::Relaxed)
+    }
+}
 
 /// A renderer of one scene, through one camera, with one [`RenderSettings`], accumulating into a
 /// film it holds.
@@ -69,6 +101,15 @@ pub trait Integrator {
     fn last_pass_device_seconds(&self) -> Option<f64> {
         None
     }
+
+    /// Gives the integrator a flag to poll during its passes: once it is raised, the pass in
+    /// progress stops within about a sample's time, its unfinished samples are dropped (the
+    /// film keeps whole samples only, in index order) and it returns
+    /// [`RenderError::Interrupted`]. The default ignores the flag: such an integrator is only
+    /// stopped between passes ([`crate::Session::run`]'s `cancel`).
+    fn set_cancel_flag(&mut self, flag: CancelFlag) {
+        let _ = flag;
+    }
 }
 
 /// What rendering can fail with.
@@ -114,6 +155,14 @@ pub enum RenderError {
     /// The backend's device failed (a GPU's validation error, out of memory, device lost, …).
     #[error(transparent)]
     Device(Box<dyn std::error::Error + Send + Sync>),
+    /// The pass was stopped by its [`CancelFlag`]: the film holds the pass's first `samples`
+    /// samples per pixel (whole samples of every pixel, added in index order) and nothing of
+    /// the rest.
+    #[error("interrupted after {samples} samples per pixel of the pass")]
+    Interrupted {
+        /// Samples per pixel of the pass that the film holds.
+        samples: u32,
+    },
 }
 
 impl RenderError {

@@ -70,12 +70,12 @@ pub mod split;
 
 pub use adaptive::{ADAPTIVE_STEP, AdaptiveSampling, LUMINANCE, luminance, relative_noise};
 pub use film::{AovImages, AovMean, AovSample, AovSum, Film, FilmRow, FilmSizeError};
-pub use integrator::{Integrator, RenderError};
+pub use integrator::{CancelFlag, Integrator, RenderError};
 pub use layout::SAMPLER_LAYOUT_VERSION;
 pub use session::{Budget, Progress, Session, Stop, Timing, process_cpu_seconds};
 pub use settings::{
-    EnvSampling, LightSampling, LightSelection, POINT_LIGHTS_ALL_UP_TO, PointLightSampling, RenderSettings,
-    TriangleSampling, power_heuristic,
+    EnvSampling, LightSampling, LightSelection, MAX_BOUNCES, POINT_LIGHTS_ALL_UP_TO, PointLightSampling,
+    RenderSettings, TriangleSampling, power_heuristic,
 };
 pub use split::{Coverage, SampleRange, merge_bound};
 

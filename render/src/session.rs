@@ -139,7 +139,9 @@ impl<'a> Session<'a> {
 
     /// Renders passes of [`Integrator::pass_samples`] samples per pixel (the last one shorter, to
     /// end at the budget's spp) until the budget is spent or `cancel` returns `true` (asked
-    /// before every pass), calling `progress` after each pass. Can be called again with a larger
+    /// before every pass) or the integrator stops a pass at its [`crate::CancelFlag`]
+    /// ([`Stop::Cancelled`], the samples it finished counted), calling `progress` after each
+    /// whole pass. Can be called again with a larger
     /// budget to continue (a chart's checkpoints); time limits count from the start of each run.
     ///
     /// # Errors
@@ -179,7 +181,12 @@ impl<'a> Session<'a> {
             let measure = self.cpu_time;
             let cpu_seconds = || if measure { process_cpu_seconds() } else { None };
             let (wall, cpu) = (Instant::now(), cpu_seconds());
-            self.integrator.render_pass(self.done, n)?;
+            // A pass stopped by the integrator's cancel flag keeps its whole samples.
+            let (n, interrupted) = match self.integrator.render_pass(self.done, n) {
+                Ok(()) => (n, false),
+                Err(RenderError::Interrupted { samples }) => (samples.min(n), true),
+                Err(e) => return Err(e),
+            };
             self.timing.wall += wall.elapsed().as_secs_f64();
             self.timing.cpu += match (cpu, cpu_seconds()) {
                 (Some(a), Some(b)) => b - a,
@@ -188,6 +195,9 @@ impl<'a> Session<'a> {
             self.timing.device += self.integrator.last_pass_device_seconds().unwrap_or(0.0);
             self.timing.passes += 1;
             self.done += n;
+            if interrupted {
+                return Ok(Stop::Cancelled);
+            }
             let elapsed = start.elapsed().as_secs_f64();
             let converged = self.integrator.converged_pixels();
             progress(&Progress {
@@ -232,12 +242,21 @@ mod tests {
         passes: Vec<(u32, u32)>,
         pass_samples: u32,
         fail_at: Option<u32>,
+        /// A pass containing this sample stops after the samples before it.
+        interrupt_at: Option<u32>,
     }
 
     impl Counting {
         fn new(pass_samples: u32) -> Self {
             let settings = RenderSettings { width: 2, height: 2, ..Default::default() };
-            Self { settings, film: Film::new(2, 2), passes: Vec::new(), pass_samples, fail_at: None }
+            Self {
+                settings,
+                film: Film::new(2, 2),
+                passes: Vec::new(),
+                pass_samples,
+                fail_at: None,
+                interrupt_at: None,
+            }
         }
     }
 
@@ -256,12 +275,16 @@ mod tests {
                 return Err(RenderError::Device("device lost".into()));
             }
             self.passes.push((first, n));
-            for i in first..first + n {
+            let stop = self.interrupt_at.filter(|s| (first..first + n).contains(s));
+            for i in first..stop.unwrap_or(first + n) {
                 for (x, y) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
                     self.film.add_sample(x, y, Vec3::splat(i as f32));
                 }
             }
-            Ok(())
+            match stop {
+                Some(s) => Err(RenderError::Interrupted { samples: s - first }),
+                None => Ok(()),
+            }
         }
         fn film(&mut self) -> Result<Film, RenderError> {
             Ok(self.film.clone())
@@ -274,6 +297,30 @@ mod tests {
         fn pass_samples(&self) -> u32 {
             self.pass_samples
         }
+    }
+
+    #[test]
+    fn a_pass_stopped_by_its_integrator_keeps_its_whole_samples_and_cancels() {
+        let mut c = Counting::new(4);
+        c.interrupt_at = Some(6);
+        let mut reports = Vec::new();
+        let mut s = Session::new(&mut c, 0);
+        assert_eq!(
+            s.run(&Budget::spp(16), &|| false, &mut |p| reports.push(p.done)).unwrap(),
+            Stop::Cancelled
+        );
+        // Pass 4..8 stopped at sample 6: samples 0..6 are in the film, and the next run goes on
+        // from 6.
+        assert_eq!(s.done(), 6);
+        assert_eq!(reports, [4]);
+        let film = s.film().unwrap();
+        assert_eq!(film.sample_count(1, 1), 6);
+        assert_eq!(film.pixel(1, 1).x, (0..6).sum::<u32>() as f64 / 6.0);
+        c.interrupt_at = None;
+        let mut s = Session::new(&mut c, 6);
+        assert_eq!(s.run(&Budget::spp(8), &|| false, &mut |_| ()).unwrap(), Stop::Finished);
+        assert_eq!(s.film().unwrap().sample_count(0, 0), 8);
+        assert_eq!(c.passes, [(0, 4), (4, 4), (6, 2)]);
     }
 
     #[test]
