@@ -57,8 +57,9 @@ pub enum PostError {
         /// Why (reserved, empty, too long, not printable ASCII).
         reason: &'static str,
     },
-    /// A furnace metadata attribute in an EXR file does not parse as its type.
-    #[error("{path}: attribute '{key}' = '{value}' is not a valid {expected}", path = .path.display())]
+    /// A furnace metadata attribute in an EXR file does not parse as its type. The message
+    /// shows the value only as [`printable_excerpt`] does.
+    #[error("{path}: attribute '{key}' = {shown} is not a valid {expected}", path = .path.display(), shown = printable_excerpt(.value))]
     InvalidMetadataValue {
         /// The file that was read.
         path: PathBuf,
@@ -77,7 +78,64 @@ pub enum PostError {
         /// What is wrong.
         reason: String,
     },
+    /// The path names something other than a regular file (a directory, a FIFO, a device):
+    /// it is not opened.
+    #[error("{path}: {kind}, not a regular file: images are read only from regular files", path = .path.display())]
+    NotAFile {
+        /// The path given.
+        path: PathBuf,
+        /// What it is (`a FIFO`, `a directory`, …).
+        kind: &'static str,
+    },
+    /// The header's data window is larger than [`crate::MAX_IMAGE_SIDE`] on a side.
+    #[error(
+        "{path}: header attribute 'dataWindow' gives {width}×{height} pixels, more than furnace reads \
+         ({max} per side, the largest image it renders)",
+        path = .path.display(),
+        max = crate::MAX_IMAGE_SIDE
+    )]
+    TooLarge {
+        /// The file that was read.
+        path: PathBuf,
+        /// The width the header gives.
+        width: u64,
+        /// The height the header gives.
+        height: u64,
+    },
+    /// The headers claim more pixel data than the file can hold, even compressed at
+    /// [`crate::MAX_COMPRESSION_RATIO`]: a damaged or crafted file.
+    #[error(
+        "{path}: header attribute 'dataWindow' gives {width}×{height} pixels, {claimed} bytes of pixel \
+         data with the layers before it, more than a file of {file_bytes} bytes holds: the file is \
+         truncated or damaged",
+        path = .path.display()
+    )]
+    TooLittleData {
+        /// The file that was read.
+        path: PathBuf,
+        /// The width of the layer that went over.
+        width: u64,
+        /// Its height.
+        height: u64,
+        /// Uncompressed bytes claimed by the headers up to that layer.
+        claimed: u64,
+        /// The file's length.
+        file_bytes: u64,
+    },
     /// An unknown tone-map name (from [`crate::Tonemap`]'s `FromStr`).
     #[error("unknown tone map '{0}' (expected one of: aces, pbr-neutral, clamp)")]
     UnknownTonemap(String),
+}
+
+/// How furnace's messages show a text read from a file (an attribute value): in quotes if it is
+/// short printable ASCII, else only its length — never a file's raw bytes, which could be
+/// control sequences for the terminal or megabytes long.
+pub fn printable_excerpt(text: &str) -> String {
+    /// The longest value shown: a number, a sampler's name, a sample range.
+    const SHOWN: usize = 40;
+    if text.len() <= SHOWN && text.bytes().all(|b| b.is_ascii_graphic() || b == b' ') {
+        format!("'{text}'")
+    } else {
+        format!("(a text of {} bytes)", text.len())
+    }
 }

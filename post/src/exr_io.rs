@@ -2,7 +2,7 @@
 //! text attributes.
 
 use crate::PostError;
-use crate::atomic::write_atomic;
+use crate::atomic::{Staged, stage};
 use exr::prelude::{
     AnyChannel, AnyChannels, AttributeValue, Encoding, FlatSamples, Image, Layer, LayerAttributes,
     ReadChannels, ReadLayers, SmallVec, SpecificChannels, Text, Vec2, WritableImage, read,
@@ -11,8 +11,25 @@ use furnace_render::{AovSum, Film};
 use glam::{DVec3, Vec3};
 use std::collections::{BTreeMap, HashMap};
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufReader, BufWriter, Seek, SeekFrom, Write};
 use std::path::Path;
+
+/// The largest width and height of an image furnace reads: the largest film it renders
+/// (`furnace render --width/--height` stop there too). A header claiming more is refused before
+/// anything is allocated for its pixels: a film of 16384² pixels with its resume state already
+/// takes tens of gigabytes, and an image side of 100000 in a file of a few hundred bytes would
+/// otherwise ask the allocator for terabytes.
+pub const MAX_IMAGE_SIDE: u32 = 16_384;
+
+/// The most bytes of uncompressed pixel data an EXR is believed to hold per byte of file.
+/// The `exr` crate allocates every channel of a layer at its full size before it decodes a
+/// block, so a small file claiming a large image (within [`MAX_IMAGE_SIDE`]) would still cost
+/// gigabytes before its missing blocks are noticed; such a file is refused from its header. No
+/// codec the crate reads does better than zlib's 1032:1 (ZIP; PXR24 on `f32` data 4/3 of that,
+/// after it drops a byte per sample; RLE 64:1, PIZ and B44 less; measured on a one-colour image
+/// by the `constant_images_compress_below_the_bound` test: at most about 330:1), so 2¹² refuses
+/// no real file while bounding a hostile one's pixel memory to 4 KiB per byte of file.
+pub const MAX_COMPRESSION_RATIO: u64 = 1 << 12;
 
 /// Render metadata stored in an EXR header as text attributes.
 ///
@@ -53,7 +70,11 @@ const SEED: &str = "furnace.seed";
 const SCENE: &str = "furnace.scene";
 const RENDER_TIME: &str = "furnace.renderTimeS";
 const REJECTED: &str = "furnace.rejectedSamples";
-const FURNACE_KEYS: [&str; 7] = [SPP, SAMPLER, BOUNCES, SEED, SCENE, RENDER_TIME, REJECTED];
+/// The film size of the resume state (`WxH`), written beside the state channels and checked
+/// against the data window when the state is read: a file cropped or padded after furnace wrote
+/// it is refused. Not part of [`Metadata`] (the file's own record of itself).
+const STATE_SIZE: &str = "furnace.resume.size";
+const FURNACE_KEYS: [&str; 8] = [SPP, SAMPLER, BOUNCES, SEED, SCENE, RENDER_TIME, REJECTED, STATE_SIZE];
 
 /// Attribute names that the OpenEXR format (and the `exr` crate) give a meaning and a type;
 /// an extra key may not take one of them.
@@ -169,6 +190,8 @@ impl Metadata {
                 SCENE => m.scene = Some(value),
                 RENDER_TIME => m.render_time_s = Some(value.parse().map_err(|_| bad("f64"))?),
                 REJECTED => m.rejected_samples = Some(value.parse().map_err(|_| bad("u64"))?),
+                // Checked by `read_exr_with_state`.
+                STATE_SIZE => {}
                 _ => {
                     m.extra.insert(key, value);
                 }
@@ -184,6 +207,69 @@ fn text_to_string(text: &Text) -> String {
         Ok(s) => s.to_string(),
         Err(_) => text.to_string(),
     }
+}
+
+/// Opens `path` for reading if it is a regular file (symbolic links followed); anything else
+/// — a directory, a FIFO, a device, a socket — is refused before it is opened, so a FIFO cannot
+/// block the reader and a device cannot feed it without end.
+pub(crate) fn open_regular_file(path: &Path) -> Result<File, PostError> {
+    let io_err = |source| PostError::Io { path: path.to_path_buf(), source };
+    let kind = std::fs::metadata(path).map_err(io_err)?.file_type();
+    if !kind.is_file() {
+        return Err(PostError::NotAFile { path: path.to_path_buf(), kind: file_kind(kind) });
+    }
+    File::open(path).map_err(io_err)
+}
+
+/// What a file that is not a regular file is, for messages.
+fn file_kind(kind: std::fs::FileType) -> &'static str {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if kind.is_fifo() {
+            return "a FIFO";
+        }
+        if kind.is_char_device() || kind.is_block_device() {
+            return "a device";
+        }
+        if kind.is_socket() {
+            return "a socket";
+        }
+    }
+    if kind.is_dir() { "a directory" } else { "not a regular file" }
+}
+
+/// Opens the EXR at `path` (a regular file) and reads its headers, refusing an image larger than
+/// [`MAX_IMAGE_SIDE`] or one claiming more pixel data than the file can hold
+/// ([`MAX_COMPRESSION_RATIO`]) before any pixel is allocated; returns the file, at its start.
+fn open_exr(path: &Path) -> Result<(File, exr::meta::MetaData), PostError> {
+    let io_err = |source| PostError::Io { path: path.to_path_buf(), source };
+    let mut file = open_regular_file(path)?;
+    let file_bytes = file.metadata().map_err(io_err)?.len();
+    let meta = exr::meta::MetaData::read_from_buffered(BufReader::new(&mut file), false)
+        .map_err(|source| PostError::Exr { path: path.to_path_buf(), source })?;
+    let mut claimed = 0u64;
+    for header in &meta.headers {
+        let (w, h) = (header.layer_size.0 as u64, header.layer_size.1 as u64);
+        if w > u64::from(MAX_IMAGE_SIDE) || h > u64::from(MAX_IMAGE_SIDE) {
+            return Err(PostError::TooLarge { path: path.to_path_buf(), width: w, height: h });
+        }
+        // At most 2^28 pixels times a byte count of the channel list: no overflow in u64 for
+        // fewer than 2^36 bytes per pixel.
+        let bytes = (w * h).saturating_mul(header.channels.bytes_per_pixel as u64);
+        claimed = claimed.saturating_add(bytes);
+        if claimed > file_bytes.saturating_mul(MAX_COMPRESSION_RATIO) {
+            return Err(PostError::TooLittleData {
+                path: path.to_path_buf(),
+                width: w,
+                height: h,
+                claimed,
+                file_bytes,
+            });
+        }
+    }
+    file.seek(SeekFrom::Start(0)).map_err(io_err)?;
+    Ok((file, meta))
 }
 
 /// `Ok` if `len == width · height ≥ 1`, else [`PostError::SizeMismatch`].
@@ -241,8 +327,16 @@ fn write_encoded(
     path: &Path,
     encode: impl FnOnce(&mut BufWriter<&mut File>) -> exr::error::Result<()>,
 ) -> Result<(), PostError> {
+    stage_encoded(path, encode)?.commit()
+}
+
+/// Stages `path` ([`stage`]) with `encode`.
+fn stage_encoded(
+    path: &Path,
+    encode: impl FnOnce(&mut BufWriter<&mut File>) -> exr::error::Result<()>,
+) -> Result<Staged, PostError> {
     let exr_err = |source| PostError::Exr { path: path.to_path_buf(), source };
-    write_atomic(path, |file| {
+    stage(path, |file| {
         let mut out = BufWriter::new(file);
         encode(&mut out).map_err(exr_err)?;
         out.flush().map_err(|source| PostError::Io { path: path.to_path_buf(), source })
@@ -273,7 +367,7 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(u32, u32, Vec<Vec3>, Metadata
         )
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(BufReader::new(open_exr(path)?.0))
         .map_err(exr_err)?;
     let layer = &image.layer_data;
     let size = layer.size;
@@ -293,8 +387,7 @@ pub fn read_exr(path: impl AsRef<Path>) -> Result<(u32, u32, Vec<Vec3>, Metadata
 /// a furnace attribute that does not parse. Both name `path`.
 pub fn read_exr_metadata(path: impl AsRef<Path>) -> Result<(u32, u32, Metadata), PostError> {
     let path = path.as_ref();
-    let meta = exr::meta::MetaData::read_from_file(path, false)
-        .map_err(|source| PostError::Exr { path: path.to_path_buf(), source })?;
+    let (_, meta) = open_exr(path)?;
     let Some(header) = meta.headers.first() else {
         return Err(PostError::Exr {
             path: path.to_path_buf(),
@@ -402,6 +495,21 @@ pub fn write_exr_with_state_and(
     metadata: &Metadata,
     extra: &[ExtraChannel],
 ) -> Result<(), PostError> {
+    stage_exr_with_state_and(path, film, metadata, extra)?.commit()
+}
+
+/// What [`write_exr_with_state_and`] writes, left at its temporary name until
+/// [`Staged::commit`]: for files that are replaced together or not at all (a render's EXR and
+/// PNG).
+///
+/// # Errors
+/// As [`write_exr_with_state_and`].
+pub fn stage_exr_with_state_and(
+    path: impl AsRef<Path>,
+    film: &Film,
+    metadata: &Metadata,
+    extra: &[ExtraChannel],
+) -> Result<Staged, PostError> {
     let path = path.as_ref();
     let (width, height) = (film.width(), film.height());
     let pixels: Vec<Vec3> = film.to_rgb_f32().chunks_exact(3).map(Vec3::from_slice).collect();
@@ -414,7 +522,11 @@ pub fn write_exr_with_state_and(
         .map(|&c| u32::try_from(c))
         .collect::<Result<_, _>>()
         .map_err(|_| bad(format!("a pixel count exceeds {}", u32::MAX)))?;
-    let layer_attributes = layer_attributes(path, metadata)?;
+    let mut layer_attributes = layer_attributes(path, metadata)?;
+    layer_attributes.other.insert(
+        Text::from_slice_unchecked(STATE_SIZE.as_bytes()),
+        AttributeValue::Text(Text::from_slice_unchecked(format!("{width}x{height}").as_bytes())),
+    );
     let mut list = SmallVec::new();
     for (c, name) in ["R", "G", "B"].into_iter().enumerate() {
         let values = pixels.iter().map(|p| p[c]).collect();
@@ -480,7 +592,7 @@ pub fn write_exr_with_state_and(
     let size = (width as usize, height as usize);
     let layer = Layer::new(size, layer_attributes, Encoding::SMALL_LOSSLESS, AnyChannels::sort(list));
     let image = Image::from_layer(layer);
-    write_encoded(path, |out| image.write().to_buffered(out))
+    stage_encoded(path, |out| image.write().to_buffered(out))
 }
 
 /// Reads a furnace EXR with its accumulation state: the first layer's `R`, `G`, `B` channels
@@ -502,7 +614,7 @@ pub fn read_exr_with_state(path: impl AsRef<Path>) -> Result<ExrWithState, PostE
         .all_channels()
         .first_valid_layer()
         .all_attributes()
-        .from_file(path)
+        .from_buffered(BufReader::new(open_exr(path)?.0))
         .map_err(exr_err)?;
     let layer = &image.layer_data;
     let attributes = image.attributes.other.iter().chain(layer.attributes.other.iter());
@@ -531,6 +643,33 @@ pub fn read_exr_with_state(path: impl AsRef<Path>) -> Result<ExrWithState, PostE
     } else {
         if let Some((missing, _)) = found.iter().find(|(_, v)| v.is_none()) {
             return Err(bad(format!("incomplete resume state: no '{missing}' channel")));
+        }
+        let size_record = image
+            .attributes
+            .other
+            .iter()
+            .chain(layer.attributes.other.iter())
+            .find(|(k, _)| k.bytes() == STATE_SIZE.as_bytes());
+        // Files written before the record have none: their size is their data window's.
+        if let Some((_, value)) = size_record {
+            let recorded = match value {
+                AttributeValue::Text(t) => std::str::from_utf8(t.bytes()).ok().and_then(|v| {
+                    let (w, h) = v.split_once('x')?;
+                    Some((w.parse::<usize>().ok()?, h.parse::<usize>().ok()?))
+                }),
+                _ => None,
+            };
+            match recorded {
+                None => return Err(bad(format!("attribute '{STATE_SIZE}' is not a size WxH"))),
+                Some((w, h)) if (w, h) != (layer.size.0, layer.size.1) => {
+                    return Err(bad(format!(
+                        "attribute '{STATE_SIZE}' records a {w}×{h} film but the data window is {}×{}: \
+                         the image was cropped or resized after furnace wrote it",
+                        layer.size.0, layer.size.1
+                    )));
+                }
+                Some(_) => {}
+            }
         }
         let get = |i: usize| found[i].1.map_or(&[][..], |v| v.as_slice());
         let counts = get(0).iter().map(|&c| u64::from(c)).collect();

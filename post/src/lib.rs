@@ -30,7 +30,11 @@
 //! reads it back. [`write_png`] stores the 8-bit sRGB image. All writers are **atomic**: they
 //! write a temporary file in the target's directory and rename it into place, so an
 //! interrupted write never leaves a truncated image, and a failed write removes its temporary
-//! file. Errors are [`PostError`]s naming the file.
+//! file; [`stage`], [`stage_exr_with_state_and`] and [`stage_png`] write several files that are
+//! renamed into place together, or not at all. Readers open regular files only (a FIFO or a device
+//! is refused before it is opened) and check the header's image size against [`MAX_IMAGE_SIDE`]
+//! and the file's length ([`MAX_COMPRESSION_RATIO`]) before any pixel is allocated. Errors are
+//! [`PostError`]s naming the file.
 //!
 //! ## Example
 //!
@@ -65,12 +69,15 @@ mod png_io;
 mod srgb;
 mod tonemap;
 
-pub use atomic::{write_atomic, write_bytes_atomic};
-pub use error::PostError;
-pub use exr_io::{
-    AOV_CHANNELS, ExrWithState, ExtraChannel, Metadata, RESUME_LAYER, read_exr, read_exr_metadata,
-    read_exr_with_state, write_exr, write_exr_with_state, write_exr_with_state_and,
+pub use atomic::{
+    Staged, remove_stale_temporaries, remove_temporaries_in_flight, stage, write_atomic, write_bytes_atomic,
 };
-pub use png_io::write_png;
+pub use error::{PostError, printable_excerpt};
+pub use exr_io::{
+    AOV_CHANNELS, ExrWithState, ExtraChannel, MAX_COMPRESSION_RATIO, MAX_IMAGE_SIDE, Metadata, RESUME_LAYER,
+    read_exr, read_exr_metadata, read_exr_with_state, stage_exr_with_state_and, write_exr,
+    write_exr_with_state, write_exr_with_state_and,
+};
+pub use png_io::{stage_png, write_png};
 pub use srgb::{linear_to_srgb, pixel_to_srgb8, quantize_unorm8, srgb_to_linear, srgb8_to_linear, to_srgb8};
 pub use tonemap::{Tonemap, aces_filmic, exposure_scale, pbr_neutral};

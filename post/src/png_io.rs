@@ -1,7 +1,7 @@
 //! 8-bit sRGB PNG output through the `image` crate.
 
 use crate::PostError;
-use crate::atomic::write_atomic;
+use crate::atomic::{Staged, stage};
 use crate::exr_io::check_size;
 use image::ImageEncoder;
 use image::codecs::png::PngEncoder;
@@ -22,10 +22,24 @@ pub fn write_png(
     height: u32,
     pixels: &[[u8; 3]],
 ) -> Result<(), PostError> {
+    stage_png(path, width, height, pixels)?.commit()
+}
+
+/// What [`write_png`] writes, left at its temporary name until [`Staged::commit`]: for files
+/// that are replaced together or not at all (a render's EXR and PNG).
+///
+/// # Errors
+/// As [`write_png`].
+pub fn stage_png(
+    path: impl AsRef<Path>,
+    width: u32,
+    height: u32,
+    pixels: &[[u8; 3]],
+) -> Result<Staged, PostError> {
     let path = path.as_ref();
     check_size(path, width, height, pixels.len())?;
     let bytes: Vec<u8> = pixels.iter().flatten().copied().collect();
-    write_atomic(path, |file| {
+    stage(path, |file| {
         let mut out = BufWriter::new(file);
         PngEncoder::new(&mut out)
             .write_image(&bytes, width, height, image::ExtendedColorType::Rgb8)

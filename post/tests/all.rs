@@ -7,3 +7,7 @@
 mod curves;
 #[path = "files.rs"]
 mod files;
+#[path = "fuzz.rs"]
+mod fuzz;
+#[path = "hostile.rs"]
+mod hostile;

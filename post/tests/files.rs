@@ -132,7 +132,8 @@ fn bad_inputs_fail_cleanly_and_leave_nothing() {
     fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
     let err = read_exr(&truncated).unwrap_err();
     assert!(matches!(err, PostError::Exr { .. }) && err.to_string().contains("truncated.exr"), "{err}");
-    assert!(matches!(read_exr(dir.join("nope.exr")), Err(PostError::Exr { .. })));
+    let missing = read_exr(dir.join("nope.exr")).unwrap_err();
+    assert!(matches!(missing, PostError::Io { .. }) && missing.to_string().contains("nope.exr"), "{missing}");
     assert_eq!(entries(&dir), vec!["good.exr".to_string(), "truncated.exr".to_string()]);
 }
 
