@@ -9,7 +9,10 @@
 //!   inverse-transpose and octahedral-encoded (Cigolle et al. 2014), per-face normals when a
 //!   primitive has none, zero-area triangles dropped and counted; a NaN or infinite position
 //!   (or one a node's transform takes beyond f32's range) is an error naming the primitive,
-//!   its accessor and the vertex.
+//!   its accessor and the vertex. Reads are bounded: only regular files, a scene of at most
+//!   [`MAX_SCENE_FILE_BYTES`], a buffer up to its `byteLength`, image sizes checked from their
+//!   headers ([`MAX_TEXTURE_SIZE`], [`MAX_ENVIRONMENT_TEXELS`]) before decoding; URIs relative to
+//!   the scene (absolute paths refused).
 //! * **Materials** ([`Material`]): metallic-roughness with KHR_materials_specular and
 //!   KHR_materials_emissive_strength, alpha MASK, double-sided; textures stored as 8-bit RGBA and
 //!   decoded (sRGB → linear, IEC 61966-2-1) when sampled bilinearly with glTF wrap modes and
@@ -46,6 +49,7 @@ mod camera;
 mod emitter;
 mod environment;
 mod error;
+mod file;
 mod geometry;
 mod hash;
 mod light;
@@ -68,9 +72,17 @@ pub use light_bvh::{LEAF as LIGHT_BVH_LEAF, LightBounds, LightBvh, LightBvhNode}
 pub use load::{MAX_COORDINATE, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
 pub use material::{AlphaMode, Material, MaterialSample};
 pub use surface::{SurfacePoint, geometric_normal};
-pub use texture::{ColorSpace, Image, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear};
+pub use texture::{
+    ColorSpace, Image, MAX_TEXTURE_SIZE, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear,
+};
 
 use std::path::Path;
+
+/// The largest scene file [`Scene::load`] reads: 4 GiB, the most a GLB container can hold (its
+/// length field is a `u32`). A `.gltf`'s JSON has no such limit in the format, but JSON that
+/// large (its buffers are data URIs or separate files) is beyond any real asset, and the loader
+/// holds the whole file and its parsed document in memory.
+pub const MAX_SCENE_FILE_BYTES: u64 = u32::MAX as u64;
 
 /// A scene ready to render: world-space triangles, materials, textures, cameras, sun and sky.
 /// All fields are public: override the lights or cameras by assigning them ([`Scene::set_sun`],
@@ -128,15 +140,14 @@ impl Scene {
         self.geometry.triangle_materials.get(t).map_or(last, |&m| (m as usize).min(last))
     }
 
-    /// Loads a `.gltf` or `.glb` file; buffers and images are resolved relative to it.
+    /// Loads a `.gltf` or `.glb` file; buffers and images are resolved relative to it. Only a
+    /// regular file of at most [`MAX_SCENE_FILE_BYTES`] is read (a FIFO, a device or a
+    /// directory is an error, not a wait or an endless read).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
         let path = path.as_ref();
         let file = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|source| SceneError::Io {
-            file: file.clone(),
-            what: "the scene file".into(),
-            source,
-        })?;
+        let bytes = file::read_regular(path, MAX_SCENE_FILE_BYTES, "a scene file")
+            .map_err(|source| SceneError::Io { file: file.clone(), what: "the scene file".into(), source })?;
         load::load(&bytes, &file, Some(path.parent().unwrap_or(Path::new("."))))
     }
 

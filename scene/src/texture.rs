@@ -5,6 +5,11 @@
 use glam::{Mat3, Vec2, Vec3, Vec4};
 use std::sync::OnceLock;
 
+/// The most texels a texture may have along each side: 16384, the largest 2D texture most GPUs
+/// take, so 2²⁸ texels (1 GiB of RGBA8) at most. The loader refuses a larger image from its
+/// header, before decoding it.
+pub const MAX_TEXTURE_SIZE: u32 = 16384;
+
 /// An image decoded to 8-bit RGBA, row 0 at the top (glTF's UV (0, 0) is the top-left corner).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Image {

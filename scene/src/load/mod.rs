@@ -36,7 +36,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
     let default_material = (materials.len() - 1) as u32;
     let needs_uv = materials.iter().any(Material::uses_textures);
     let needs_tangent = materials.iter().any(|m| m.normal_texture.is_some());
-    let images = resources::load_images(&ctx, &doc, &buffers, &materials, &textures)?;
+    let images = resources::load_images(&mut ctx, &doc, &buffers, &materials, &textures)?;
 
     let scene = nodes::scene_to_render(&ctx, &doc)?;
     let sky = nodes::read_sky(&mut ctx, &scene);

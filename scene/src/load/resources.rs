@@ -20,8 +20,28 @@ pub(super) fn percent_decode(s: &str) -> String {
     String::from_utf8_lossy(&urlencoding::decode_binary(s.as_bytes())).into_owned()
 }
 
-/// Resolves a URI (data URI or relative file) to bytes; `what` names it in errors.
-fn resolve_uri(ctx: &Ctx<'_>, uri: &str, path: &str) -> Result<Vec<u8>, SceneError> {
+/// How much of a file a URI may name: a buffer reads exactly its `byteLength` (a longer file's
+/// rest is not read), an image at most [`MAX_IMAGE_FILE_BYTES`].
+#[derive(Clone, Copy)]
+enum Extent {
+    Buffer(u64),
+    Image,
+}
+
+/// The largest image file read for a texture: 1 GiB, the RGBA8 texels of the largest texture
+/// ([`crate::MAX_TEXTURE_SIZE`]²). PNG and JPEG files are smaller than their texels; a file
+/// larger than that could not decode within [`MAX_TEXTURE_DECODE_BYTES`] anyway.
+const MAX_IMAGE_FILE_BYTES: u64 = 1 << 30;
+
+/// The most bytes a texture's decoder may allocate (`image::Limits::max_alloc`): 1 GiB, the
+/// decoded texels of the largest texture ([`crate::MAX_TEXTURE_SIZE`]²) in 8-bit RGBA. A
+/// 16-bit image of that size is refused; smaller ones decode.
+const MAX_TEXTURE_DECODE_BYTES: u64 = 1 << 30;
+
+/// Resolves a URI (data URI or relative file) to bytes; `path` names it in errors. A relative
+/// URI may go up (`../textures/wood.png`: assets share folders), but an absolute path is
+/// refused, and only regular files are read (see [`crate::file`]).
+fn resolve_uri(ctx: &Ctx<'_>, uri: &str, path: &str, extent: Extent) -> Result<Vec<u8>, SceneError> {
     if let Some(rest) = uri.strip_prefix("data:") {
         let Some((meta, data)) = rest.split_once(',') else {
             return Err(ctx.invalid((format!("{path}.uri"), "malformed data URI".into())));
@@ -39,6 +59,9 @@ fn resolve_uri(ctx: &Ctx<'_>, uri: &str, path: &str) -> Result<Vec<u8>, SceneErr
         )));
     }
     let rel = percent_decode(uri);
+    if crate::file::is_absolute_uri_path(&rel) {
+        return Err(ctx.invalid((format!("{path}.uri"), absolute_uri_message(&rel))));
+    }
     let Some(base) = ctx.base else {
         return Err(SceneError::Io {
             file: ctx.file.to_string(),
@@ -50,11 +73,24 @@ fn resolve_uri(ctx: &Ctx<'_>, uri: &str, path: &str) -> Result<Vec<u8>, SceneErr
         });
     };
     let full = base.join(&rel);
-    std::fs::read(&full).map_err(|source| SceneError::Io {
+    let read = match extent {
+        Extent::Buffer(len) => crate::file::read_prefix(&full, len),
+        Extent::Image => crate::file::read_regular(&full, MAX_IMAGE_FILE_BYTES, "an image file"),
+    };
+    read.map_err(|source| SceneError::Io {
         file: ctx.file.to_string(),
         what: format!("{path} '{}'", full.display()),
         source,
     })
+}
+
+/// Why an absolute path is refused as a URI (the buffer, image and environment URIs say the
+/// same).
+pub(super) fn absolute_uri_message(rel: &str) -> String {
+    format!(
+        "'{rel}' is an absolute path: a glTF URI is relative to the glTF file (or a data URI); \
+         copy the file beside the scene or name it relatively"
+    )
 }
 
 /// Every buffer's bytes, in file order; `blob` is the GLB BIN chunk.
@@ -82,7 +118,9 @@ pub(super) fn load_buffers(
                 buffers.push(Vec::new());
                 continue;
             }
-            gltf::buffer::Source::Uri(uri) => resolve_uri(ctx, uri, &path)?,
+            gltf::buffer::Source::Uri(uri) => {
+                resolve_uri(ctx, uri, &path, Extent::Buffer(b.length() as u64))?
+            }
         };
         if data.len() < b.length() {
             return Err(ctx.invalid((
@@ -98,7 +136,7 @@ pub(super) fn load_buffers(
 /// The images (glTF `images`, same indices): those some material uses decoded, the others
 /// 1×1 white placeholders.
 pub(super) fn load_images(
-    ctx: &Ctx<'_>,
+    ctx: &mut Ctx<'_>,
     doc: &gltf::Document,
     buffers: &[Vec<u8>],
     materials: &[Material],
@@ -111,7 +149,7 @@ pub(super) fn load_images(
             images.push(Image { width: 1, height: 1, texels: vec![[255; 4]] });
             continue;
         }
-        images.push(decode_image(ctx, &img, buffers)?);
+        images.push(decode_image(ctx, doc, &img, buffers)?);
     }
     Ok(images)
 }
@@ -134,10 +172,26 @@ fn used_images(count: usize, materials: &[Material], textures: &[Texture]) -> Ve
     used
 }
 
-fn decode_image(ctx: &Ctx<'_>, img: &gltf::Image<'_>, buffers: &[Vec<u8>]) -> Result<Image, SceneError> {
+fn decode_image(
+    ctx: &mut Ctx<'_>,
+    doc: &gltf::Document,
+    img: &gltf::Image<'_>,
+    buffers: &[Vec<u8>],
+) -> Result<Image, SceneError> {
     let path = format!("images[{}]", img.index());
-    let bytes: Vec<u8> = match img.source() {
-        gltf::image::Source::View { view, .. } => {
+    // The JSON, not `Image::source()`, which unwraps a missing `uri` and a missing `mimeType`.
+    let json = &doc.as_json().images[img.index()];
+    let bytes: Vec<u8> = match (&json.uri, &json.buffer_view) {
+        (None, Some(index)) => {
+            let Some(view) = doc.views().nth(index.value()) else {
+                return Err(ctx.invalid((format!("{path}.bufferView"), "buffer view does not exist".into())));
+            };
+            if json.mime_type.is_none() {
+                ctx.warn(
+                    format!("{path}.mimeType"),
+                    "missing (required with a bufferView): the format is recognised from the bytes",
+                );
+            }
             let buf = buffers.get(view.buffer().index()).map(Vec::as_slice).unwrap_or(&[]);
             let end = view.offset().checked_add(view.length());
             match end.and_then(|e| buf.get(view.offset()..e)) {
@@ -149,13 +203,41 @@ fn decode_image(ctx: &Ctx<'_>, img: &gltf::Image<'_>, buffers: &[Vec<u8>]) -> Re
                 }
             }
         }
-        gltf::image::Source::Uri { uri, .. } => resolve_uri(ctx, uri, &path)?,
+        (Some(uri), None) => resolve_uri(ctx, uri, &path, Extent::Image)?,
+        (uri, _) => {
+            let which =
+                if uri.is_some() { "both a uri and a bufferView" } else { "neither a uri nor a bufferView" };
+            return Err(ctx.invalid((path, format!("{which}: an image needs exactly one"))));
+        }
     };
-    let decoded = image::load_from_memory(&bytes).map_err(|e| SceneError::Image {
-        file: ctx.file.to_string(),
-        path: path.clone(),
-        message: e.to_string(),
-    })?;
+    let image_error =
+        |message: String| SceneError::Image { file: ctx.file.to_string(), path: path.clone(), message };
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
+        .with_guessed_format()
+        .map_err(|e| image_error(e.to_string()))?;
+    // The size from the header, refused (with the size in the message) before any texel is
+    // allocated; then the decoder gets the width, height and allocation limits, which image's
+    // decoders also enforce themselves.
+    let mut limits = image::Limits::default();
+    limits.max_alloc = Some(MAX_TEXTURE_DECODE_BYTES);
+    reader.limits(limits.clone());
+    let mut decoder = reader.into_decoder().map_err(|e| image_error(texture_decode_message(&e)))?;
+    let (w, h) = image::ImageDecoder::dimensions(&decoder);
+    if w > crate::MAX_TEXTURE_SIZE || h > crate::MAX_TEXTURE_SIZE {
+        return Err(image_error(texture_too_large(w, h)));
+    }
+    limits.max_image_width = Some(crate::MAX_TEXTURE_SIZE);
+    limits.max_image_height = Some(crate::MAX_TEXTURE_SIZE);
+    image::ImageDecoder::set_limits(&mut decoder, limits)
+        .map_err(|e| image_error(texture_decode_message(&e)))?;
+    // `DynamicImage::from_decoder` allocates the decoded image without consulting the limits.
+    if image::ImageDecoder::total_bytes(&decoder) > MAX_TEXTURE_DECODE_BYTES {
+        return Err(image_error(texture_decode_message(&image::ImageError::Limits(
+            image::error::LimitErrorKind::InsufficientMemory.into(),
+        ))));
+    }
+    let decoded =
+        image::DynamicImage::from_decoder(decoder).map_err(|e| image_error(texture_decode_message(&e)))?;
     let rgba = decoded.to_rgba8();
     let (width, height) = rgba.dimensions();
     if width == 0 || height == 0 {
@@ -167,4 +249,26 @@ fn decode_image(ctx: &Ctx<'_>, img: &gltf::Image<'_>, buffers: &[Vec<u8>]) -> Re
     }
     let texels = rgba.pixels().map(|p| p.0).collect();
     Ok(Image { width, height, texels })
+}
+
+fn texture_too_large(w: u32, h: u32) -> String {
+    let max = crate::MAX_TEXTURE_SIZE;
+    format!("{w} × {h} texels: a texture may have at most {max} × {max}")
+}
+
+/// The decoder's message, with image's limit errors said in furnace's terms.
+fn texture_decode_message(e: &image::ImageError) -> String {
+    match e {
+        image::ImageError::Limits(l) => match l.kind() {
+            image::error::LimitErrorKind::DimensionError => {
+                let max = crate::MAX_TEXTURE_SIZE;
+                format!("larger than the {max} × {max} texels a texture may have")
+            }
+            _ => format!(
+                "decoding needs more than the {} MiB a texture may take",
+                MAX_TEXTURE_DECODE_BYTES >> 20
+            ),
+        },
+        other => other.to_string(),
+    }
 }
