@@ -79,6 +79,14 @@ pub enum EnvironmentError {
 /// `u32` word indices into its texels and CDFs (4 words per texel) cannot overflow.
 pub const MAX_ENVIRONMENT_TEXELS: u64 = 1 << 28;
 
+/// The most texels a map's file may claim per byte of its length: 4096. The best compression
+/// of the formats read stays well below it (OpenEXR's deflate at most 1032:1 on 6-byte half RGB
+/// texels, about 170 texels a byte, PIZ's run-length codes on constant data about a thousand;
+/// Radiance RLE at most 127 texels per 8 bytes), so only a header that lies about the size (or
+/// a truncated file) is refused, before its texels are allocated: a 441-byte EXR claiming
+/// 4 × 5·10⁷ texels would otherwise cost gigabytes.
+const MAX_TEXELS_PER_BYTE: u64 = 4096;
+
 /// A latitude-longitude HDR image of radiance: `width` columns × `height` rows, row 0 at the top
 /// (+Y), linear RGB in W/(m²·sr).
 #[derive(Clone, PartialEq)]
@@ -162,7 +170,10 @@ impl EnvironmentMap {
     }
 
     /// Reads an `.hdr` (Radiance RGBE) or `.exr` (OpenEXR; its R, G, B channels) file, or any
-    /// other format `image` decodes (an 8-bit image is read as linear values in [0, 1]).
+    /// other format `image` decodes (an 8-bit image is read as linear values in [0, 1]). Only a
+    /// regular file is opened (a FIFO or a device is an error, not a wait), and the size its
+    /// header states is checked against [`MAX_ENVIRONMENT_TEXELS`] before any texel is
+    /// allocated.
     ///
     /// # Errors
     /// [`EnvironmentError::Io`] for a missing or unreadable file, [`EnvironmentError::Decode`]
@@ -170,15 +181,56 @@ impl EnvironmentMap {
     pub fn load(path: impl AsRef<Path>) -> Result<(Self, Option<String>), EnvironmentError> {
         let path = path.as_ref();
         let file = path.display().to_string();
+        let io = |source| EnvironmentError::Io { file: file.clone(), source };
+        let (handle, len) = crate::file::open_regular(path).map_err(io)?;
+        let mut reader = image::ImageReader::new(std::io::BufReader::new(handle));
+        if let Ok(format) = image::ImageFormat::from_path(path) {
+            reader.set_format(format);
+        }
+        Self::decode(reader.with_guessed_format().map_err(io)?, len, file)
+    }
+
+    /// [`EnvironmentMap::load`] of a file's bytes already in memory; `name` names it in
+    /// messages (its extension is not consulted: the format is recognised from the bytes).
+    ///
+    /// # Errors
+    /// As [`EnvironmentMap::load`].
+    pub fn from_bytes(bytes: &[u8], name: &str) -> Result<(Self, Option<String>), EnvironmentError> {
+        let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|source| EnvironmentError::Io { file: name.to_string(), source })?;
+        Self::decode(reader, bytes.len() as u64, name.to_string())
+    }
+
+    /// Decodes through `reader` (a file of `len` bytes) with the limits that keep a lying
+    /// header from allocating: the size is read from the header and refused above
+    /// [`MAX_ENVIRONMENT_TEXELS`] or above [`MAX_TEXELS_PER_BYTE`] × `len`, and the decoder may
+    /// allocate at most [`MAX_ENVIRONMENT_TEXELS`] RGBA f32 texels.
+    fn decode<R: std::io::BufRead + std::io::Seek>(
+        mut reader: image::ImageReader<R>,
+        len: u64,
+        file: String,
+    ) -> Result<(Self, Option<String>), EnvironmentError> {
         let decode =
             |e: image::ImageError| EnvironmentError::Decode { file: file.clone(), message: e.to_string() };
-        let mut reader = image::ImageReader::open(path)
-            .map_err(|source| EnvironmentError::Io { file: file.clone(), source })?
-            .with_guessed_format()
-            .map_err(|source| EnvironmentError::Io { file: file.clone(), source })?;
-        // Large HDRIs exceed `image`'s default 512 MiB allocation limit (8192 × 4096 RGBA f32).
-        reader.no_limits();
-        let image = reader.decode().map_err(decode)?.into_rgb32f();
+        let mut limits = image::Limits::default();
+        // 16 bytes a texel: RGBA f32, the widest form a decoder produces (EXR with alpha).
+        limits.max_alloc = Some(MAX_ENVIRONMENT_TEXELS * 16);
+        reader.limits(limits);
+        let decoder = reader.into_decoder().map_err(decode)?;
+        let (width, height) = image::ImageDecoder::dimensions(&decoder);
+        if u64::from(width) * u64::from(height) > MAX_ENVIRONMENT_TEXELS {
+            return Err(EnvironmentError::Size { file, width, height, message: "more than 2²⁸ texels" });
+        }
+        if u64::from(width) * u64::from(height) > len.saturating_mul(MAX_TEXELS_PER_BYTE) {
+            return Err(EnvironmentError::Size {
+                file,
+                width,
+                height,
+                message: "more texels than a file of this size can hold (the header lies or the file is truncated)",
+            });
+        }
+        let image = image::DynamicImage::from_decoder(decoder).map_err(decode)?.into_rgb32f();
         let (width, height) = image.dimensions();
         let texels = image.pixels().map(|p| Vec3::from(p.0)).collect();
         Self::new(width, height, texels, file)
