@@ -94,10 +94,13 @@ pub(super) fn read_environment(
         );
         return Ok(None);
     };
-    let (map, warning) =
-        crate::EnvironmentMap::load(base.join(super::resources::percent_decode(uri))).map_err(|source| {
-            SceneError::Environment { file: ctx.file.to_string(), path: format!("{path}.uri"), source }
-        })?;
+    let rel = super::resources::percent_decode(uri);
+    if crate::file::is_absolute_uri_path(&rel) {
+        return Err(ctx.invalid((format!("{path}.uri"), super::resources::absolute_uri_message(&rel))));
+    }
+    let (map, warning) = crate::EnvironmentMap::load(base.join(rel)).map_err(|source| {
+        SceneError::Environment { file: ctx.file.to_string(), path: format!("{path}.uri"), source }
+    })?;
     if let Some(w) = warning {
         ctx.warn(format!("{path}.uri"), w);
     }
@@ -123,7 +126,7 @@ pub(super) fn flatten<'b>(
             ctx.warn(npath, "node reached twice (cycle or shared child): skipped");
             continue;
         }
-        let local = Mat4::from_cols_array_2d(&node.transform().matrix());
+        let Some(local) = local_transform(ctx, node.transform(), &npath) else { continue };
         let world = parent * local;
         if !world.is_finite() {
             ctx.warn(npath, "non-finite transform: subtree skipped");
@@ -132,7 +135,7 @@ pub(super) fn flatten<'b>(
         for child in node.children().collect::<Vec<_>>().into_iter().rev() {
             stack.push((child, world));
         }
-        out.add_node(ctx, &node, &npath, world)?;
+        out.add_node(ctx, doc, &node, &npath, world)?;
     }
     Ok(out)
 }
@@ -142,6 +145,7 @@ impl Flattened<'_> {
     fn add_node(
         &mut self,
         ctx: &mut Ctx<'_>,
+        doc: &gltf::Document,
         node: &gltf::Node<'_>,
         npath: &str,
         world: Mat4,
@@ -149,8 +153,10 @@ impl Flattened<'_> {
         if node.skin().is_some() || node.weights().is_some() {
             ctx.warn(npath, "skinning and morph targets are not supported: rest pose used");
         }
-        if let Some(cam) = node.camera() {
-            self.cameras.push(make_camera(ctx, &cam, world));
+        if let Some(cam) = node.camera()
+            && let Some(camera) = make_camera(ctx, doc, &cam, npath, world)?
+        {
+            self.cameras.push(camera);
         }
         if let Some(light) = node.light() {
             self.add_light(ctx, &light, world);
@@ -201,31 +207,163 @@ fn angular_radius(ctx: &mut Ctx<'_>, light: &gltf::khr_lights_punctual::Light<'_
     }
 }
 
-fn make_camera(ctx: &mut Ctx<'_>, cam: &gltf::Camera<'_>, world: Mat4) -> Camera {
-    // Remove scale: keep rotation (orthonormalised columns) and translation.
-    let (_, rot, t) = world.to_scale_rotation_translation();
-    let world_from_camera = Affine3A::from_rotation_translation(rot.normalize(), t);
-    let projection = match cam.projection() {
-        gltf::camera::Projection::Perspective(p) => {
-            let yfov = p.yfov();
-            if !(yfov > 0.0 && yfov < std::f32::consts::PI) {
+/// A node's local transform. A TRS rotation must be a unit quaternion (glTF 2.0 §5.25): one
+/// whose norm is off by more than the rounding of a written file (10⁻³) is normalised with a
+/// warning (unnormalised, it would scale and shear the subtree, and a camera's view with it);
+/// one that cannot be normalised (zero or not finite) skips the subtree with a warning.
+fn local_transform(ctx: &mut Ctx<'_>, t: gltf::scene::Transform, npath: &str) -> Option<Mat4> {
+    let t = match t {
+        gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
+            let norm = rotation.iter().map(|&c| f64::from(c).powi(2)).sum::<f64>().sqrt();
+            if !(norm.is_finite() && norm > 0.0) {
                 ctx.warn(
-                    format!("cameras[{}].perspective.yfov", cam.index()),
-                    "yfov outside (0, π): 45° used",
+                    format!("{npath}.rotation"),
+                    "not a rotation (a zero or non-finite quaternion): subtree skipped",
                 );
+                return None;
+            }
+            let rotation = if (norm - 1.0).abs() > 1e-3 {
+                ctx.warn(
+                    format!("{npath}.rotation"),
+                    format!("quaternion of norm {norm:.6e}, not a unit quaternion: normalised"),
+                );
+                rotation.map(|c| (f64::from(c) / norm) as f32)
+            } else {
+                rotation
+            };
+            gltf::scene::Transform::Decomposed { translation, rotation, scale }
+        }
+        matrix => matrix,
+    };
+    Some(Mat4::from_cols_array_2d(&t.matrix()))
+}
+
+/// The camera `cam` of node `npath`, placed by `world`, or none (with a warning) when `world`
+/// gives it no orientation. The projection is read from the JSON: a `type` whose object is
+/// missing is an error (gltf's `Camera::projection` would panic), as is an orthographic view of
+/// zero or non-finite size (glTF 2.0 §5.12: `xmag`, `ymag` must not be zero).
+fn make_camera(
+    ctx: &mut Ctx<'_>,
+    doc: &gltf::Document,
+    cam: &gltf::Camera<'_>,
+    npath: &str,
+    world: Mat4,
+) -> Result<Option<Camera>, SceneError> {
+    use gltf::json::camera::Type;
+    use gltf::json::validation::Checked;
+    let cpath = format!("cameras[{}]", cam.index());
+    let Some(json) = doc.as_json().cameras.get(cam.index()) else {
+        return Err(ctx.invalid((cpath, "camera does not exist".into())));
+    };
+    let projection = match (json.type_, &json.perspective, &json.orthographic) {
+        (Checked::Valid(Type::Perspective), Some(p), _) => {
+            let yfov = p.yfov;
+            let valid = yfov > 0.0 && yfov < std::f32::consts::PI;
+            if !valid {
+                ctx.warn(format!("{cpath}.perspective.yfov"), "yfov outside (0, π): 45° used");
             }
             Projection::Perspective {
-                yfov: if yfov > 0.0 && yfov < std::f32::consts::PI {
-                    yfov
-                } else {
-                    crate::camera::DEFAULT_YFOV
-                },
-                aspect_ratio: p.aspect_ratio(),
+                yfov: if valid { yfov } else { crate::camera::DEFAULT_YFOV },
+                aspect_ratio: p.aspect_ratio,
             }
         }
-        gltf::camera::Projection::Orthographic(o) => {
-            Projection::Orthographic { xmag: o.xmag(), ymag: o.ymag() }
+        (Checked::Valid(Type::Orthographic), _, Some(o)) => {
+            let xmag = magnification(ctx, &cpath, "xmag", o.xmag)?;
+            let ymag = magnification(ctx, &cpath, "ymag", o.ymag)?;
+            Projection::Orthographic { xmag, ymag }
+        }
+        (Checked::Valid(t), _, _) => {
+            let name = if t == Type::Perspective { "perspective" } else { "orthographic" };
+            return Err(
+                ctx.invalid((cpath, format!("type is \"{name}\" but the camera has no \"{name}\" object")))
+            );
+        }
+        (Checked::Invalid, _, _) => {
+            return Err(
+                ctx.invalid((format!("{cpath}.type"), "not \"perspective\" or \"orthographic\"".into()))
+            );
         }
     };
-    Camera { world_from_camera, projection }
+    if json.perspective.is_some() && json.orthographic.is_some() {
+        ctx.warn(
+            &cpath,
+            "both \"perspective\" and \"orthographic\" are defined (glTF allows one): the one its type names is used",
+        );
+    }
+    let Some(world_from_camera) = camera_frame(world) else {
+        ctx.warn(
+            npath,
+            format!(
+                "{cpath}: the node's transform collapses the camera's view or up axis (a scale of 0): \
+                 camera ignored"
+            ),
+        );
+        return Ok(None);
+    };
+    let position = Vec3::from(world_from_camera.translation);
+    if position.abs().max_element() > crate::MAX_COORDINATE {
+        ctx.warn(
+            npath,
+            format!(
+                "{cpath}: the camera is at ({:e}, {:e}, {:e}), beyond the ±{:.1e} within which f32 ray tracing \
+                 holds: the view may be black",
+                position.x,
+                position.y,
+                position.z,
+                crate::MAX_COORDINATE
+            ),
+        );
+    }
+    Ok(Some(Camera { world_from_camera, projection }))
+}
+
+/// An orthographic camera's `xmag` or `ymag` (`field`): zero or not finite is an error; a
+/// negative one (which glTF 2.0 says should not be) is used by its magnitude with a warning, as
+/// furnace does not mirror views; one beyond [`crate::MAX_COORDINATE`] is kept with a warning,
+/// as rays from so wide a film start outside the range f32 ray tracing handles.
+fn magnification(ctx: &mut Ctx<'_>, cpath: &str, field: &str, value: f32) -> Result<f32, SceneError> {
+    let path = format!("{cpath}.orthographic.{field}");
+    if !(value.is_finite() && value != 0.0) {
+        return Err(
+            ctx.invalid((path, format!("{field} is {value}: it must be a finite number other than 0")))
+        );
+    }
+    if value < 0.0 {
+        ctx.warn(
+            &path,
+            format!("{field} is negative ({value}): its magnitude is used (views are not mirrored)"),
+        );
+    }
+    let value = value.abs();
+    if value > crate::MAX_COORDINATE {
+        ctx.warn(
+            &path,
+            format!(
+                "{field} {value:e} is beyond the ±{:.1e} within which f32 ray tracing holds: the view may be black",
+                crate::MAX_COORDINATE
+            ),
+        );
+    }
+    Ok(value)
+}
+
+/// The camera's rotation and translation from its node's world transform, any scale, shear or
+/// mirror removed: the view axis (the transform's −Z column) and the up axis (its +Y column made
+/// orthogonal to the view) are kept, and right completes a right-handed frame. Computed in f64
+/// so that scales from 1e-38 to 1e38 lose nothing (in f32 their squared lengths underflow or
+/// overflow). `None` when the view axis is zero or the up axis parallel to it (within 10⁻⁶
+/// relative, well above f64's rounding of the f32 inputs).
+fn camera_frame(world: Mat4) -> Option<Affine3A> {
+    let col = |c: glam::Vec4| glam::DVec3::new(f64::from(c.x), f64::from(c.y), f64::from(c.z));
+    let (y, z) = (col(world.y_axis), col(world.z_axis));
+    let back = z.normalize_or_zero();
+    let up = y - y.dot(back) * back;
+    if back == glam::DVec3::ZERO || !(up.length() > 1e-6 * y.length()) {
+        return None;
+    }
+    let up = up.normalize();
+    let right = up.cross(back);
+    let rot = glam::Mat3::from_cols(right.as_vec3(), up.as_vec3(), back.as_vec3());
+    let rotation = glam::Quat::from_mat3(&rot).normalize();
+    Some(Affine3A::from_rotation_translation(rotation, world.w_axis.truncate()))
 }
