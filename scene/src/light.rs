@@ -439,9 +439,20 @@ impl Scene {
     /// **textures** alone do not count: in glTF assets they are glow details (decals, screens,
     /// indicator lamps) drawn for a viewer that lights the model with an environment, and such
     /// assets (DamagedHelmet) would render black but for them. A scene without a light of its
-    /// own is lit by the built-in studio environment in `furnace render`.
+    /// own is lit by the built-in studio environment in `furnace render`. Only materials some
+    /// triangle uses count: an emissive material no mesh uses lights nothing.
     pub fn has_own_light(&self) -> bool {
-        let lamp = self.materials.iter().any(|m| m.emissive != Vec3::ZERO && m.emissive_texture.is_none());
+        let mut used = vec![false; self.materials.len()];
+        for t in 0..self.geometry.triangle_count() {
+            if let Some(u) = used.get_mut(self.triangle_material(t)) {
+                *u = true;
+            }
+        }
+        let lamp = self
+            .materials
+            .iter()
+            .zip(&used)
+            .any(|(m, &u)| u && m.emissive != Vec3::ZERO && m.emissive_texture.is_none());
         lamp || self.lights.iter().any(|l| match l {
             Light::Sky(s) => s.radiance != Vec3::ZERO,
             _ => true,
