@@ -35,9 +35,36 @@ pub(super) fn parse(bytes: &[u8], file: &str) -> Result<(gltf::Document, Option<
             });
         }
     }
-    let gltf = gltf::Gltf::from_slice_without_validation(bytes)
-        .map_err(|e| SceneError::Parse { file: file.to_string(), message: e.to_string() })?;
+    let gltf = gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| SceneError::Parse {
+        file: file.to_string(),
+        message: without_found_value(&e.to_string()),
+    })?;
     Ok((gltf.document, gltf.blob))
+}
+
+/// The JSON parser's message without the value it found (serde's `invalid type: string "…",
+/// expected …`, `unknown variant `…``): the line, the column and what was expected say where
+/// and what is wrong, and a file that is not glTF (a text file named by mistake) must not have
+/// its content printed.
+fn without_found_value(message: &str) -> String {
+    let mut m = message.to_string();
+    for prefix in ["invalid type: ", "invalid value: "] {
+        if let Some(i) = m.find(prefix)
+            && let Some(j) = m.rfind(", expected").filter(|&j| j > i)
+        {
+            let found = &m[i + prefix.len()..j];
+            let kind = found.split(['`', '"']).next().unwrap_or("").trim().to_string();
+            m.replace_range(i + prefix.len()..j, &kind);
+        }
+    }
+    for prefix in ["unknown variant `", "unknown field `"] {
+        if let Some(i) = m.find(prefix)
+            && let Some(j) = m.rfind("`, expected").filter(|&j| j >= i + prefix.len())
+        {
+            m.replace_range(i + prefix.len() - 2..j + 1, "");
+        }
+    }
+    m
 }
 
 /// Refuses a required extension furnace does not support and a document that fails
@@ -133,4 +160,32 @@ fn validate(ctx: &Ctx<'_>, root: &gltf::json::Root) -> Result<(), SceneError> {
         return Err(ctx.invalid((path.clone(), format!("{msg}{more}"))));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::without_found_value;
+
+    #[test]
+    fn parse_messages_keep_no_found_value() {
+        let cases = [
+            (
+                "invalid type: string \"secret, expected x\", expected u32 at line 3 column 9",
+                "invalid type: string, expected u32 at line 3 column 9",
+            ),
+            (
+                "invalid value: integer `42`, expected a u8 at line 1 column 2",
+                "invalid value: integer, expected a u8 at line 1 column 2",
+            ),
+            (
+                "unknown variant `SECRET`, expected `SCALAR` or `VEC2` at line 2 column 4",
+                "unknown variant, expected `SCALAR` or `VEC2` at line 2 column 4",
+            ),
+            ("expected value at line 1 column 1", "expected value at line 1 column 1"),
+            ("missing field `asset` at line 1 column 2", "missing field `asset` at line 1 column 2"),
+        ];
+        for (raw, want) in cases {
+            assert_eq!(without_found_value(raw), want);
+        }
+    }
 }
