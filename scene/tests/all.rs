@@ -9,5 +9,9 @@ mod bad_geometry;
 mod corpus;
 #[path = "environment.rs"]
 mod environment;
+#[path = "fuzz.rs"]
+mod fuzz;
+#[path = "hostile.rs"]
+mod hostile;
 #[path = "scenes.rs"]
 mod scenes;
