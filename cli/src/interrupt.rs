@@ -28,6 +28,8 @@ impl Interrupt {
                 );
             } else {
                 eprintln!("\ninterrupted twice: quitting without saving this render");
+                // `exit` runs no destructors: remove the temporary files of a write in progress.
+                furnace_post::remove_temporaries_in_flight();
                 std::process::exit(130);
             }
         });

@@ -7,8 +7,8 @@ use crate::shared::{Outcome, image_size};
 use furnace_brdf::SpecularOptions;
 use furnace_cli::backend;
 use furnace_post::{
-    ExrWithState, ExtraChannel, Metadata, Tonemap, read_exr_with_state, to_srgb8, write_exr_with_state_and,
-    write_png,
+    ExrWithState, ExtraChannel, Metadata, Tonemap, read_exr_with_state, stage_exr_with_state_and, stage_png,
+    to_srgb8,
 };
 use furnace_render::{Budget, Film, Integrator, RenderSettings, SAMPLER_LAYOUT_VERSION, Session, Stop};
 use furnace_scene::{Camera, Projection, Scene, builtin};
@@ -228,6 +228,7 @@ fn check_samples(args: &mut RenderArgs) -> Result<(), String> {
 pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     let Prepared { job, scene, view, saved } = prepare(a, "render")?;
     let a = &job.args;
+    check_outputs(&a.out, a.denoise)?;
     let (width, height) = (job.settings.width, job.settings.height);
     let settings = job.settings;
     // The sample indices this run renders: the part's range, or the whole render's.
@@ -485,17 +486,94 @@ pub(crate) fn write_outputs(
             })
         })
         .collect();
-    write_exr_with_state_and(exr_path, film, metadata, &extra).map_err(|e| e.to_string())?;
+    // Every file is written to its temporary name first and renamed into place only once all
+    // were written: a failure leaves every earlier output as it was (a failed PNG does not leave
+    // a new EXR beside the old PNG). The EXR, the render's record, is renamed last.
+    let exr = stage_exr_with_state_and(exr_path, film, metadata, &extra).map_err(|e| e.to_string())?;
     let srgb = to_srgb8(&radiance, a.exposure, a.tonemap);
-    write_png(png_path, width, height, &srgb).map_err(|e| e.to_string())?;
-    if let Some(d) = &denoised {
-        let path = denoised_png_path(png_path);
-        write_png(&path, width, height, &to_srgb8(d, a.exposure, a.tonemap)).map_err(|e| e.to_string())?;
+    let png = stage_png(png_path, width, height, &srgb).map_err(|e| e.to_string())?;
+    let denoised_png = match &denoised {
+        Some(d) => {
+            let path = denoised_png_path(png_path);
+            Some(
+                stage_png(&path, width, height, &to_srgb8(d, a.exposure, a.tonemap))
+                    .map_err(|e| e.to_string())?,
+            )
+        }
+        None => None,
+    };
+    png.commit().map_err(|e| e.to_string())?;
+    if let Some(staged) = denoised_png {
+        let path = staged.target().to_path_buf();
+        staged.commit().map_err(|e| e.to_string())?;
         if !a.quiet {
             eprintln!("wrote {}", path.display());
         }
     }
-    Ok(())
+    exr.commit().map_err(|e| e.to_string())
+}
+
+/// Checks, before anything is rendered, that `--out PATH` (`out`) names files that can be
+/// written: `PATH` must end in a file name (not a separator, `.` or `..`, and not only an
+/// extension such as `.exr`) and not be a directory, the outputs must not be directories, and
+/// their directory must take a new file (one is created there and removed). Removes the
+/// temporary files that a furnace killed while writing these outputs left behind, with a note.
+/// `denoise`: the denoised PNG is an output too. Returns the PNG and EXR paths
+/// ([`output_paths`]).
+///
+/// `--out DIR/` is refused rather than read as `DIR/furnace`: a trailing separator is easy to
+/// type by accident (shell completion adds it), and a file name made up by furnace is one the
+/// user would then have to find; the message says what to give.
+pub(crate) fn check_outputs(out: &Path, denoise: bool) -> Result<(PathBuf, PathBuf), String> {
+    let text = out.as_os_str().to_string_lossy();
+    let last = text.rsplit(|c| c == '/' || c == std::path::MAIN_SEPARATOR).next().unwrap_or_default();
+    let example = || {
+        let dir = out.to_string_lossy();
+        let dir = dir.trim_end_matches(|c| c == '/' || c == std::path::MAIN_SEPARATOR);
+        if dir.is_empty() { "furnace".to_string() } else { format!("{dir}/furnace") }
+    };
+    let why = if text.is_empty() {
+        Some("is empty")
+    } else if matches!(last, "" | "." | "..") {
+        Some("names a directory, not a file")
+    } else if out.is_dir() {
+        Some("is a directory")
+    } else if matches!(last.to_ascii_lowercase().as_str(), ".png" | ".exr") {
+        Some("has no file name before its extension")
+    } else {
+        None
+    };
+    if let Some(why) = why {
+        return Err(format!(
+            "--out '{}' {why}: give a file path without extension, such as --out {} (writes {0}.exr and \
+             {0}.png)",
+            out.display(),
+            example()
+        ));
+    }
+    let (png_path, exr_path) = output_paths(out);
+    let mut outputs = vec![exr_path.clone(), png_path.clone()];
+    if denoise {
+        outputs.push(denoised_png_path(&png_path));
+    }
+    for path in &outputs {
+        if path.is_dir() {
+            return Err(format!("{}: an output of --out '{}' is a directory", path.display(), out.display()));
+        }
+        for stale in furnace_post::remove_stale_temporaries(path).map_err(|e| e.to_string())? {
+            eprintln!(
+                "note: removed {}, a temporary file left by a furnace that was stopped while writing {}",
+                stale.display(),
+                path.display()
+            );
+        }
+    }
+    // A file created and removed beside the outputs: the directory exists and takes new files.
+    drop(
+        furnace_post::stage(&exr_path, |_| Ok(()))
+            .map_err(|e| format!("cannot write the outputs of --out '{}': {e}", out.display()))?,
+    );
+    Ok((png_path, exr_path))
 }
 
 /// `PATH.png` → `PATH.denoised.png`.
@@ -556,6 +634,44 @@ pub(crate) fn restore(path: &Path, file: ExrWithState) -> Result<Saved, String> 
     let film = file.state.ok_or_else(|| format!("{p}: no furnace resume state"))?;
     if let Some(c) = film.counts().iter().find(|&&c| c > u64::from(spp)) {
         return Err(format!("{p}: a pixel has {c} samples but the file says {spp} spp; it was modified"));
+    }
+    if let Some(b) = meta.bounces
+        && b > furnace_render::MAX_BOUNCES
+    {
+        return Err(format!(
+            "{p}: attribute 'furnace.bounces' = {b} is more than furnace renders (at most {}); it was \
+             modified",
+            furnace_render::MAX_BOUNCES
+        ));
+    }
+    // A render holds at most its part's samples, or the whole render's.
+    let whole = meta.extra.get(resume::TARGET_SPP).and_then(|v| v.parse::<u32>().ok());
+    let part =
+        meta.extra.get(resume::SAMPLE_RANGE).and_then(|v| v.parse::<furnace_render::SampleRange>().ok());
+    if let Some(most) = part.map(|r| r.len()).or(whole)
+        && spp > most
+    {
+        return Err(format!(
+            "{p}: attribute 'furnace.spp' = {spp} is more than the {most} samples per pixel the render \
+             was asked for; it was modified"
+        ));
+    }
+    // Every sample taken was either added to its pixel or rejected: together they are at most
+    // spp per pixel (fewer where adaptive sampling stopped a pixel).
+    let taken = u128::from(spp) * film.counts().len() as u128;
+    let added: u128 = film.counts().iter().map(|&c| u128::from(c)).sum();
+    if u128::from(film.rejected()) + added > taken {
+        return Err(format!(
+            "{p}: attribute 'furnace.rejectedSamples' = {} is more than the {} samples that 'furnace.spp' \
+             = {spp} leaves unaccounted for; it was modified",
+            film.rejected(),
+            taken.saturating_sub(added)
+        ));
+    }
+    if let Some(t) = meta.render_time_s
+        && !(t.is_finite() && t >= 0.0)
+    {
+        return Err(format!("{p}: attribute 'furnace.renderTimeS' = {t} is not a time in seconds"));
     }
     let rgb = film.to_rgb_f32();
     let stored = file.pixels.iter().flat_map(|v| v.to_array());
