@@ -1,9 +1,11 @@
 //! Ctrl-C (SIGINT), and SIGTERM / SIGHUP, which schedulers such as Slurm send before they kill
-//! a job (cancel, requeue, preemption, time limit): the first one asks the render loop to stop
-//! after the current pass (which then saves the partial image); a second one exits at once with
+//! a job (cancel, requeue, preemption, time limit): the first one stops the render within about
+//! a second (between passes, or inside a pass for an integrator that polls its cancel flag: the
+//! unfinished samples of that pass are dropped) and saves the partial image; a second one exits at once with
 //! code 130 (outputs already written stay intact: every file is written to a temporary name and
 //! renamed into place).
 
+use furnace_render::CancelFlag;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicU32, Ordering};
 
@@ -11,6 +13,8 @@ use std::sync::atomic::{AtomicU32, Ordering};
 #[derive(Debug, Clone, Default)]
 pub struct Interrupt {
     presses: Arc<AtomicU32>,
+    /// Raised at the first press, for integrators that stop inside a pass.
+    flag: CancelFlag,
 }
 
 impl Interrupt {
@@ -20,12 +24,12 @@ impl Interrupt {
     pub fn install() -> Self {
         let interrupt = Self::default();
         let presses = Arc::clone(&interrupt.presses);
+        let flag = interrupt.flag.clone();
         let installed = ctrlc::set_handler(move || {
             // The handler runs on ctrlc's own thread, not in signal context: printing is fine.
             if presses.fetch_add(1, Ordering::SeqCst) == 0 {
-                eprintln!(
-                    "\ninterrupted: finishing the current pass, then saving (Ctrl-C again to quit at once)"
-                );
+                flag.raise();
+                eprintln!("\ninterrupted: stopping the render, then saving (Ctrl-C again to quit at once)");
             } else {
                 eprintln!("\ninterrupted twice: quitting without saving this render");
                 // `exit` runs no destructors: remove the temporary files of a write in progress.
@@ -42,5 +46,11 @@ impl Interrupt {
     /// Whether Ctrl-C has been pressed since [`Interrupt::install`].
     pub fn requested(&self) -> bool {
         self.presses.load(Ordering::SeqCst) > 0
+    }
+
+    /// The flag the first press raises, to give an integrator
+    /// ([`furnace_render::Integrator::set_cancel_flag`]).
+    pub fn flag(&self) -> CancelFlag {
+        self.flag.clone()
     }
 }

@@ -38,6 +38,7 @@ mod compare;
 mod env;
 mod info;
 mod interrupt;
+mod memory;
 mod merge;
 mod render;
 mod resume;

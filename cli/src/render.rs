@@ -1,6 +1,6 @@
 //! `furnace render`: load, render in passes with a progress bar, write EXR + PNG.
 
-use crate::args::{DenoiseDeviceArg, RenderArgs, Switch};
+use crate::args::{BackendArg, DenoiseDeviceArg, RenderArgs, Switch};
 use crate::interrupt::Interrupt;
 use crate::resume;
 use crate::shared::{Outcome, image_size};
@@ -260,6 +260,12 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             a.sampler, a.spp
         );
     }
+    // Memory planned before the BVH is built and the film allocated.
+    let on_cpu = a.backend != BackendArg::Gpu;
+    let plan = crate::memory::Plan::new(&settings, scene.geometry.triangle_count(), on_cpu);
+    if let Some((free, limit)) = crate::memory::free_memory() {
+        plan.check(&settings, free, limit)?;
+    }
     let (film, first, previous_time, previous_backend) = match saved {
         Some(s) => (Some(s.film), start + s.spp, s.render_time_s, s.backend),
         None => (None, start, 0.0, None),
@@ -275,6 +281,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     if let Some(film) = &film {
         backend.set_film(film).map_err(|e| e.to_string())?;
     }
+    backend.set_cancel_flag(interrupt.flag());
     if backend.name() != "cpu" && !a.quiet {
         eprintln!("rendering on {}", backend.describe());
     }
@@ -303,8 +310,8 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     };
     let pass = render_passes(&mut backend, &job, (first, end), interrupt, &mut checkpoint)?;
     if pass.done == first {
-        // Ctrl-C before the first pass: nothing new; leave every file as it was.
-        eprintln!("interrupted before the first pass: nothing rendered, nothing written");
+        // Ctrl-C before a whole sample of every pixel: nothing new; leave every file as it was.
+        eprintln!("interrupted before the first sample of every pixel: nothing rendered, nothing written");
         return Ok(Outcome::Interrupted);
     }
     let film = save(&mut backend, pass.done, pass.seconds, &Look::of(a))?;
@@ -410,8 +417,13 @@ fn render_passes(
             time_limit: a.time_limit.map(|t| (t - elapsed).max(0.0)),
             min_seconds: a.checkpoint,
         };
-        let stop =
-            session.run(&budget, &|| interrupt.requested(), &mut progress).map_err(|e| e.to_string())?;
+        let stop = match session.run(&budget, &|| interrupt.requested(), &mut progress) {
+            Ok(stop) => stop,
+            Err(e) => {
+                bar.finish_and_clear();
+                return Err(save_after_failure(session, first, start, checkpoint, &e.to_string(), &a.out));
+            }
+        };
         if a.checkpoint.is_none() || stop != Stop::TimeLimit {
             break stop;
         }
@@ -427,6 +439,34 @@ fn render_passes(
     };
     bar.finish_and_clear();
     Ok(Passes { done: session.done(), seconds: start.elapsed().as_secs_f64(), stop })
+}
+
+/// The error of a pass that failed (a device lost, memory exhausted), after saving the passes
+/// before it when there are any, so that nothing rendered is lost: says what was saved and how
+/// to continue it.
+fn save_after_failure(
+    mut session: Session<'_>,
+    first: u32,
+    start: Instant,
+    checkpoint: &mut Checkpoint<'_>,
+    error: &str,
+    out: &Path,
+) -> String {
+    let done = session.done();
+    if done == first {
+        return error.to_string();
+    }
+    let exr = output_paths(out).1;
+    match checkpoint(session.integrator(), done, start.elapsed().as_secs_f64()) {
+        Ok(()) => format!(
+            "{error} (the render so far, {} samples per pixel, is saved in {}: continue it with \
+             furnace render --resume {})",
+            done - first,
+            exr.display(),
+            shell_quote(&exr.display().to_string())
+        ),
+        Err(save) => format!("{error} (saving the render so far failed too: {save})"),
+    }
 }
 
 /// How [`write_outputs`] writes a film: the PNG's look, and whether to denoise.

@@ -218,6 +218,22 @@ impl CpuRenderer {
         Film::for_settings(&self.settings)
     }
 
+    /// Samples per pixel of each pass at the settings' image size ([`Integrator::pass_samples`]):
+    /// at most 4, and about 2¹⁸ samples per pass (a fifth of a second on two cores).
+    pub fn pass_samples_for(settings: &RenderSettings) -> u32 {
+        let pixels = u64::from(settings.width) * u64::from(settings.height);
+        (262_144 / pixels.max(1)).clamp(1, 4) as u32
+    }
+
+    /// Bytes of the buffer a pass of [`CpuRenderer::pass_samples_for`] samples computes before
+    /// adding them to the film: one colour per pixel and sample, and one [`AovSample`] each with
+    /// AOVs.
+    pub fn pass_buffer_bytes(settings: &RenderSettings) -> u64 {
+        let per_sample = size_of::<Vec3>() + if settings.aovs { size_of::<AovSample>() } else { 0 };
+        let pixels = u64::from(settings.width) * u64::from(settings.height);
+        pixels * u64::from(Self::pass_samples_for(settings)) * per_sample as u64
+    }
+
     /// The film of [`Integrator::render_pass`].
     pub fn film_ref(&self) -> &Film {
         &self.film
@@ -263,7 +279,7 @@ impl CpuRenderer {
                 Some(_) => (block / ADAPTIVE_STEP + 1).saturating_mul(ADAPTIVE_STEP).min(end),
                 None => end,
             };
-            if !self.render_block(film, block, block_end) {
+            if !self.render_block(film, block, block_end)? {
                 return Err(RenderError::Interrupted { samples: block - first_sample });
             }
             if let Some(rule) = &self.settings.adaptive
@@ -279,14 +295,15 @@ impl CpuRenderer {
     /// Samples `first..end` of every pixel still taking samples, rows in parallel: computed
     /// into a buffer (one sample per pixel and index, polling the cancel flag before each), then
     /// added to the film in index order. `false`, with the film untouched, if the flag stopped
-    /// it.
-    fn render_block(&self, film: &mut Film, first: u32, end: u32) -> bool {
+    /// it; [`RenderError::OutOfMemory`] if the buffer cannot be allocated.
+    fn render_block(&self, film: &mut Film, first: u32, end: u32) -> Result<bool, RenderError> {
         let w = self.settings.width as usize;
         let per_pixel = (end - first) as usize;
         let aovs = film.has_aovs();
         let row_len = w * per_pixel;
-        let mut values = vec![Vec3::ZERO; row_len * self.settings.height as usize];
-        let mut aov_values = if aovs { vec![AovSample::MISS; values.len()] } else { Vec::new() };
+        let n = row_len * self.settings.height as usize;
+        let mut values = try_filled(n, Vec3::ZERO)?;
+        let mut aov_values = if aovs { try_filled(n, AovSample::MISS)? } else { Vec::new() };
         let mut aov_rows: Vec<Option<&mut [AovSample]>> = if aovs {
             aov_values.chunks_mut(row_len).map(Some).collect()
         } else {
@@ -319,7 +336,7 @@ impl CpuRenderer {
             },
         );
         if !finished {
-            return false;
+            return Ok(false);
         }
         let rejected: u64 = film
             .rows_mut()
@@ -342,7 +359,7 @@ impl CpuRenderer {
             })
             .sum();
         film.add_rejected(rejected);
-        true
+        Ok(true)
     }
 
     /// One path sample of pixel `(x, y)`, sample number `index`: the radiance carried by the
@@ -769,19 +786,29 @@ impl Integrator for CpuRenderer {
         Ok(())
     }
 
-    /// At most 4, and about 2¹⁸ samples per pass (a fifth of a second on two cores).
     fn converged_pixels(&self) -> Option<u64> {
         self.film.converged_count()
     }
 
     fn pass_samples(&self) -> u32 {
-        let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
-        (262_144 / pixels.max(1)).clamp(1, 4) as u32
+        Self::pass_samples_for(&self.settings)
     }
 
     fn set_cancel_flag(&mut self, flag: CancelFlag) {
         self.cancel = flag;
     }
+}
+
+/// `n` copies of `value`, or [`RenderError::OutOfMemory`] instead of an abort when they do not
+/// fit.
+fn try_filled<T: Clone>(n: usize, value: T) -> Result<Vec<T>, RenderError> {
+    let mut v = Vec::new();
+    v.try_reserve_exact(n).map_err(|_| RenderError::OutOfMemory {
+        what: "the pass's sample buffer",
+        bytes: (n as u64).saturating_mul(size_of::<T>() as u64),
+    })?;
+    v.resize(n, value);
+    Ok(v)
 }
 
 /// `exp(−σ·t)` per channel, 1 where σ is 0 (also for t = ∞).

@@ -160,6 +160,15 @@ impl Film {
         }
     }
 
+    /// Bytes per pixel of a film made by [`Film::for_settings`]: the sums and count (32), the
+    /// AOV sums (64 more), the adaptive state (9 more).
+    pub fn bytes_per_pixel(settings: &crate::RenderSettings) -> u64 {
+        let base = (size_of::<DVec3>() + size_of::<u64>()) as u64;
+        let aov = if settings.aovs { size_of::<AovSum>() as u64 } else { 0 };
+        let adaptive = if settings.adaptive.is_some() { (size_of::<f64>() + size_of::<bool>()) as u64 } else { 0 };
+        base + aov + adaptive
+    }
+
     /// An empty film of the settings' size with the parts they need: AOV sums
     /// ([`crate::RenderSettings::aovs`]), squared luminances and convergence marks
     /// ([`crate::RenderSettings::adaptive`]).

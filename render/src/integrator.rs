@@ -155,6 +155,14 @@ pub enum RenderError {
     /// The backend's device failed (a GPU's validation error, out of memory, device lost, …).
     #[error(transparent)]
     Device(Box<dyn std::error::Error + Send + Sync>),
+    /// Memory for the pass could not be allocated (the film keeps the passes before it).
+    #[error("out of memory: {what} needs {} MB", bytes.div_ceil(1_000_000))]
+    OutOfMemory {
+        /// What needed it.
+        what: &'static str,
+        /// How many bytes it asked for.
+        bytes: u64,
+    },
     /// The pass was stopped by its [`CancelFlag`]: the film holds the pass's first `samples`
     /// samples per pixel (whole samples of every pixel, added in index order) and nothing of
     /// the rest.
