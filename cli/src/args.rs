@@ -77,10 +77,11 @@ pub struct RenderArgs {
     /// Also save the render so far (EXR and PNG, atomically) every SECONDS of rendering, so that
     /// a process killed without warning (SIGKILL, a lost node) loses at most that much work.
     /// Ctrl-C and SIGTERM (a scheduler's cancel, preemption or time limit) always save.
-    #[arg(long, value_name = "SECONDS", value_parser = parse_interval)]
+    #[arg(long, allow_negative_numbers = true, value_name = "SECONDS", value_parser = parse_interval)]
     pub checkpoint: Option<f64>,
-    /// Scattering events per path (0: only what the camera sees directly; 1: direct lighting).
-    #[arg(long, default_value_t = 4)]
+    /// Scattering events per path (0: only what the camera sees directly; 1: direct lighting;
+    /// at most 1024).
+    #[arg(long, allow_negative_numbers = true, default_value_t = 4, value_parser = parse_bounces)]
     pub bounces: u32,
     /// Sampler: random, hammersley, cmj, pmj02, sobol.
     #[arg(long, default_value_t = furnace_render::RenderSettings::default().sampler)]
@@ -126,7 +127,7 @@ pub struct RenderArgs {
     pub look_at: Option<LookAt>,
     /// Vertical field of view of the --look-at camera in degrees, between 0 and 180 [default:
     /// the scene's first perspective camera's, else 45].
-    #[arg(long, value_name = "DEG", requires = "look_at", value_parser = parse_yfov)]
+    #[arg(long, allow_negative_numbers = true, value_name = "DEG", requires = "look_at", value_parser = parse_yfov)]
     pub yfov: Option<f32>,
     /// Russian roulette from the third scattering event on (unbiased; faster, noisier).
     #[arg(long, value_enum, default_value_t = Switch::Off)]
@@ -152,14 +153,14 @@ pub struct RenderArgs {
     pub point_lights: PointLightsArg,
     /// Clamp each sample so that its largest channel is at most X (firefly suppression; off by
     /// default because it is biased: it darkens caustics and small bright lights).
-    #[arg(long, value_name = "X", value_parser = parse_clamp)]
+    #[arg(long, allow_negative_numbers = true, value_name = "X", value_parser = parse_clamp)]
     pub clamp: Option<f32>,
     /// Adaptive sampling: a pixel stops taking samples once the relative standard error of its
     /// luminance is below T (0.01: about 1 %), tested every 8 samples from --min-spp on; the
     /// render ends when every pixel has (or at --spp / --time-limit). A pixel whose first
     /// samples all miss its rare bright paths can stop too dark (--min-spp guards against it;
     /// measured in docs/accuracy.md).
-    #[arg(long, value_name = "T", value_parser = parse_noise_threshold)]
+    #[arg(long, allow_negative_numbers = true, value_name = "T", value_parser = parse_noise_threshold)]
     pub noise_threshold: Option<f32>,
     /// Adaptive sampling: no pixel stops before this many samples.
     #[arg(long, value_name = "N", default_value_t = furnace_render::AdaptiveSampling::DEFAULT_MIN_SAMPLES,
@@ -186,7 +187,7 @@ pub struct RenderArgs {
     pub aovs: bool,
     /// The sun's angular diameter in degrees (0: a delta sun, hard shadows; the real sun is
     /// about 0.53), replacing the scene's `extras.angular_diameter_deg`.
-    #[arg(long, value_name = "DEG", value_parser = parse_sun_angle)]
+    #[arg(long, allow_negative_numbers = true, value_name = "DEG", value_parser = parse_sun_angle)]
     pub sun_angle: Option<f32>,
     // The environment map and how it is placed (--env, --env-intensity, --env-rotation,
     // --env-visible).
@@ -221,7 +222,7 @@ pub struct RenderArgs {
     #[arg(long, short)]
     pub quiet: bool,
     /// Stop after this many seconds (at a whole number of passes; at least one pass is done).
-    #[arg(long, value_name = "SECONDS", value_parser = parse_seconds)]
+    #[arg(long, allow_negative_numbers = true, value_name = "SECONDS", value_parser = parse_seconds)]
     pub time_limit: Option<f64>,
     /// The ids of the arguments given on the command line (not defaulted): filled by `main`
     /// from clap's matches; a resumed render takes the others from the file.
@@ -459,10 +460,10 @@ pub struct BenchArgs {
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
     pub spp: Option<u32>,
     /// Without --spp: render passes until this many seconds have passed.
-    #[arg(long, value_name = "SECONDS", default_value_t = 2.0, value_parser = parse_seconds)]
+    #[arg(long, allow_negative_numbers = true, value_name = "SECONDS", default_value_t = 2.0, value_parser = parse_seconds)]
     pub min_seconds: f64,
-    /// Scattering events per path.
-    #[arg(long, default_value_t = 4)]
+    /// Scattering events per path (at most 1024).
+    #[arg(long, allow_negative_numbers = true, default_value_t = 4, value_parser = parse_bounces)]
     pub bounces: u32,
     /// Sampler: random, hammersley, cmj, pmj02, sobol (the fixed-N ones need --spp).
     #[arg(long, default_value_t = furnace_render::RenderSettings::default().sampler)]
@@ -612,8 +613,9 @@ pub struct ChartArgs {
     /// Samples per pixel of the last checkpoint (checkpoints: 1, 2, 4, … and this).
     #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
     pub spp: u32,
-    /// Scattering events per path [default: the reference's, if furnace rendered it; else 4].
-    #[arg(long)]
+    /// Scattering events per path, at most 1024 [default: the reference's, if furnace rendered
+    /// it; else 4].
+    #[arg(long, allow_negative_numbers = true, value_parser = parse_bounces)]
     pub bounces: Option<u32>,
     /// Seed of the samplers' scrambling (1, not render's 0: a reference rendered with furnace's
     /// defaults is then independent of the study).
@@ -700,8 +702,23 @@ pub(crate) fn parse_scene(s: &str) -> Result<SceneArg, String> {
     Err(format!("unknown scene '{s}': expected cbox, interior:N (about N triangles) or a .gltf/.glb path"))
 }
 
-/// The largest image side accepted.
-pub const MAX_SIDE: u32 = 16_384;
+/// The largest image side accepted: the largest image furnace reads back
+/// (`furnace_post::MAX_IMAGE_SIDE`), so that every render can be resumed, merged and compared.
+/// A 16384² film takes 8 GiB of sums and counts, more with AOVs or adaptive sampling.
+pub const MAX_SIDE: u32 = furnace_post::MAX_IMAGE_SIDE;
+
+/// `--bounces N`: at most `furnace_render::MAX_BOUNCES`.
+pub(crate) fn parse_bounces(s: &str) -> Result<u32, String> {
+    let max = furnace_render::MAX_BOUNCES;
+    let n: u32 = s.trim().parse().map_err(|_| format!("'{s}' is not a whole number from 0 to {max}"))?;
+    if n > max {
+        return Err(format!(
+            "at most {max} scattering events per path (beyond that a path's light is negligible, \
+             and a pass can take hours)"
+        ));
+    }
+    Ok(n)
+}
 
 /// The largest `furnace chart --spp`.
 const MAX_SPP: u32 = 1 << 20;
@@ -1073,6 +1090,48 @@ mod tests {
         assert!(Cli::try_parse_from(["furnace", "render", "--exposure", "nan"]).is_err());
         assert!(Cli::try_parse_from(["furnace", "render", "--time-limit", "0"]).is_err());
         assert!(Cli::try_parse_from(["furnace", "render", "--spp", "0"]).is_err());
+    }
+
+    #[test]
+    fn signed_values_parse_without_equals() {
+        let render = |args: &[&str]| Cli::try_parse_from([&["furnace", "render"], args].concat());
+        let Command::Render(a) =
+            render(&["--exposure", "-1", "--env-rotation", "-90", "--look-at", "-1,0,0,0,0,0"])
+                .unwrap()
+                .command
+        else {
+            panic!("not render")
+        };
+        assert_eq!((a.exposure, a.environment.env_rotation), (-1.0, Some(-90.0)));
+        // A negative value where none is valid reaches its parser, which says why it is refused
+        // (not clap's "unexpected argument '-1'").
+        for (flag, needle) in [
+            ("--sun-angle", "-1"),
+            ("--clamp", "above 0"),
+            ("--time-limit", "positive"),
+            ("--env-intensity", "-1"),
+            ("--bounces", "whole number"),
+        ] {
+            let e = render(&[flag, "-1"]).unwrap_err().to_string();
+            assert!(e.contains(needle) && !e.contains("unexpected argument"), "{flag}: {e}");
+        }
+        let merge = Cli::try_parse_from(["furnace", "merge", "a.exr", "-o", "m", "--exposure", "-2"]);
+        assert!(merge.is_ok(), "{merge:?}");
+    }
+
+    #[test]
+    fn bounces_are_bounded_everywhere() {
+        let max = furnace_render::MAX_BOUNCES.to_string();
+        let over = (furnace_render::MAX_BOUNCES + 1).to_string();
+        for command in ["render", "view", "bench", "chart"] {
+            let parse = |n: &str| Cli::try_parse_from(["furnace", command, "--bounces", n]);
+            if command != "chart" {
+                assert!(parse(&max).is_ok(), "{command} --bounces {max}");
+            }
+            let e = parse(&over).unwrap_err().to_string();
+            assert!(e.contains("at most 1024 scattering events"), "{command}: {e}");
+            assert!(parse("4294967295").is_err(), "{command}");
+        }
     }
 
     #[test]

@@ -14,7 +14,7 @@
 //! is an ordinary render at M samples per pixel: `furnace render --resume` continues it.
 
 use crate::args::MergeArgs;
-use crate::render::{Look, denoise_options, output_paths, restore, write_outputs};
+use crate::render::{Look, check_outputs, denoise_options, restore, write_outputs};
 use crate::resume::{self, SAMPLE_RANGE, SAMPLES, TARGET_SPP};
 use furnace_post::{Metadata, read_exr_metadata, read_exr_with_state};
 use furnace_render::Film;
@@ -49,7 +49,9 @@ impl Part {
         let spp = metadata.spp.ok_or_else(|| {
             format!("{p}: no 'furnace.spp' attribute: only EXRs written by `furnace render` can be merged")
         })?;
-        let invalid = |key: &str, v: &str| format!("{p}: attribute '{key}' = '{v}' is not a valid value");
+        let invalid = |key: &str, v: &str| {
+            format!("{p}: attribute '{key}' = {} is not a valid value", furnace_post::printable_excerpt(v))
+        };
         let total = metadata
             .extra
             .get(TARGET_SPP)
@@ -64,8 +66,8 @@ impl Part {
                 let ranges = parse_ranges(v).map_err(|_| invalid(SAMPLES, v))?;
                 if ranges.iter().map(|r| u64::from(r.len())).sum::<u64>() != u64::from(spp) {
                     return Err(format!(
-                        "{p}: it lists samples {v} but says {} samples per pixel; it was modified",
-                        spp
+                        "{p}: it lists samples {} but says {spp} samples per pixel; it was modified",
+                        format_ranges(&ranges)
                     ));
                 }
                 ranges
@@ -111,7 +113,7 @@ pub fn run(a: &MergeArgs) -> Result<(), String> {
         return Err(furnace_denoise::DenoiseError::NotBuilt.to_string());
     }
     let start = Instant::now();
-    let (png_path, exr_path) = output_paths(&a.out);
+    let (png_path, exr_path) = check_outputs(&a.out, a.denoise)?;
     for part in &a.parts {
         if same_file(part, &exr_path) {
             return Err(format!(

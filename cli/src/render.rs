@@ -566,10 +566,10 @@ pub(crate) fn write_outputs(
 /// user would then have to find; the message says what to give.
 pub(crate) fn check_outputs(out: &Path, denoise: bool) -> Result<(PathBuf, PathBuf), String> {
     let text = out.as_os_str().to_string_lossy();
-    let last = text.rsplit(|c| c == '/' || c == std::path::MAIN_SEPARATOR).next().unwrap_or_default();
+    let last = text.rsplit(['/', std::path::MAIN_SEPARATOR]).next().unwrap_or_default();
     let example = || {
         let dir = out.to_string_lossy();
-        let dir = dir.trim_end_matches(|c| c == '/' || c == std::path::MAIN_SEPARATOR);
+        let dir = dir.trim_end_matches(['/', std::path::MAIN_SEPARATOR]);
         if dir.is_empty() { "furnace".to_string() } else { format!("{dir}/furnace") }
     };
     let why = if text.is_empty() {

@@ -28,7 +28,7 @@ use crate::args::{
     RenderArgs, SamplingArg, Switch, TriangleSamplingArg,
 };
 use clap::ValueEnum;
-use furnace_post::Metadata;
+use furnace_post::{Metadata, printable_excerpt};
 use furnace_render::{SampleRange, resume};
 use furnace_sampling::SamplerKind;
 use std::path::{Path, PathBuf};
@@ -235,8 +235,9 @@ pub fn apply_recorded(
 ) -> Result<(), String> {
     let missing =
         |key: &str| format!("{}: no '{key}' attribute; this file's render cannot be resumed", file.display());
-    let invalid =
-        |key: &str, v: &str| format!("{}: attribute '{key}' = '{v}' is not a valid value", file.display());
+    let invalid = |key: &str, v: &str| {
+        format!("{}: attribute '{key}' = {} is not a valid value", file.display(), printable_excerpt(v))
+    };
     let extra = |key: &'static str| meta.extra.get(key).map(String::as_str).ok_or_else(|| missing(key));
     fn enum_value<T: ValueEnum>(v: &str) -> Option<T> {
         T::from_str(v, false).ok()
@@ -373,9 +374,12 @@ pub fn apply_recorded(
     }
     if let Some(v) = meta.extra.get(SAMPLES) {
         return Err(format!(
-            "{}: a merge of parts with samples missing (it holds samples {v}): it cannot be continued; \
+            "{}: a merge of parts with samples missing (it holds samples {}): it cannot be continued; \
              render the missing ranges with --samples and merge them with it",
-            file.display()
+            file.display(),
+            // Shown as parsed (what it says, not the file's bytes).
+            furnace_render::split::parse_ranges(v)
+                .map_or_else(|_| printable_excerpt(v), |r| furnace_render::split::format_ranges(&r))
         ));
     }
     if let Some(v) = meta.extra.get(SAMPLE_RANGE) {

@@ -11,5 +11,7 @@ mod cli;
 mod common;
 #[path = "gpu.rs"]
 mod gpu;
+#[path = "hostile.rs"]
+mod hostile;
 #[path = "view.rs"]
 mod view;
