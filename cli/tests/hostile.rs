@@ -193,6 +193,26 @@ fn bounces_past_the_limit_are_refused_by_every_command() {
         let o = furnace_within(&args, AT_ONCE);
         assert_one_line_error(&o, &["--bounces", "at most 1024 scattering events per path"]);
     }
+    // A reference's record is held to the same limit by `chart`.
+    let reference = small_render(&dir, "r");
+    set_attribute(&reference, "furnace.bounces", "4294967295");
+    let study = dir.join("study");
+    let o = furnace_within(
+        &[
+            "chart",
+            "--reference",
+            reference.to_str().unwrap(),
+            "--spp",
+            "1",
+            "--out",
+            study.to_str().unwrap(),
+        ],
+        AT_ONCE,
+    );
+    assert_one_line_error(
+        &o,
+        &["r.exr: attribute 'furnace.bounces' = 4294967295 is more than furnace renders"],
+    );
 }
 
 #[test]

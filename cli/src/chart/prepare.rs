@@ -202,6 +202,12 @@ fn check_recorded(
             ));
         }
         if let Some(b) = r.metadata.bounces {
+            if b > furnace_render::MAX_BOUNCES {
+                return Err(format!(
+                    "{p}: attribute 'furnace.bounces' = {b} is more than furnace renders (at most {})",
+                    furnace_render::MAX_BOUNCES
+                ));
+            }
             match (a.bounces, recorded_bounces) {
                 (Some(given), _) if given != b => {
                     return Err(format!("{p} was rendered with --bounces {b}, not {given}"));
