@@ -384,3 +384,22 @@ fn a_render_killed_during_checkpoints_leaves_nothing_after_the_next_run() {
     assert_eq!(stderr(&o).matches("note: removed").count(), left, "{}", stderr(&o));
     assert_eq!(entries(&dir), ["k.exr", "k.png"]);
 }
+
+#[test]
+#[cfg(unix)]
+fn a_resume_record_naming_a_fifo_as_scene_or_map_is_refused_not_waited_for() {
+    // The scene and the environment map a file was rendered from are loaded by the scene crate,
+    // which reads regular files only; resume must not open them itself first.
+    let dir = temp_dir("hostile_record_fifo");
+    let fifo = dir.join("pipe.glb");
+    assert!(Command::new("mkfifo").arg(&fifo).status().unwrap().success());
+    for key in ["furnace.scene", "furnace.env"] {
+        let file = small_render(&dir, key);
+        set_attribute(&file, key, fifo.to_str().unwrap());
+        let o = furnace_within(
+            &["render", "--quiet", "--backend", "cpu", "--resume", file.to_str().unwrap()],
+            AT_ONCE,
+        );
+        assert_one_line_error(&o, &["pipe.glb", "FIFO"]);
+    }
+}
