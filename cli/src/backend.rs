@@ -4,7 +4,7 @@
 
 use furnace_cpu::CpuRenderer;
 use furnace_gpu::{AdapterChoice, GpuContext, GpuError, GpuRenderer, MultiGpuRenderer};
-use furnace_render::{Film, Integrator, RenderError, RenderSettings};
+use furnace_render::{CancelFlag, Film, Integrator, RenderError, RenderSettings};
 use furnace_scene::{Camera, Scene};
 use std::sync::Arc;
 
@@ -315,6 +315,14 @@ impl Integrator for Backend {
 
     fn last_pass_device_seconds(&self) -> Option<f64> {
         self.integrator_ref().last_pass_device_seconds()
+    }
+
+    fn converged_pixels(&self) -> Option<u64> {
+        self.integrator_ref().converged_pixels()
+    }
+
+    fn set_cancel_flag(&mut self, flag: CancelFlag) {
+        self.integrator().set_cancel_flag(flag);
     }
 }
 

@@ -772,17 +772,50 @@ fn ctrl_c_saves_a_partial_render_that_resumes_exactly() {
     assert_same_render(&dir.join("resumed.exr"), &whole);
 }
 
+/// Ctrl-C inside a long pass — 2048² paths of 64 bounces without Russian roulette in the closed
+/// box, about 20 s on 2 cores — stops the render within 3 s (the CPU integrator polls its flag
+/// once per sample, microseconds; the margin is a loaded CI machine's): no whole sample of
+/// every pixel was rendered, so nothing is written.
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_a_long_pass_promptly() {
+    use std::io::Read;
+    use std::time::{Duration, Instant};
+    let dir = temp_dir("ctrl_c_long_pass");
+    let out = dir.join("long");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_furnace"))
+        .args(["render", &furnace_tests::data::reference("lights/cbox_point.gltf").display().to_string()])
+        .args(["--width", "2048", "--height", "2048", "--spp", "4", "--bounces", "64"])
+        .args(["--russian-roulette", "off", "--backend", "cpu", "--out"])
+        .arg(&out)
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Loading the box and building its BVH take milliseconds: a second in, the pass is running.
+    std::thread::sleep(Duration::from_secs(1));
+    let sent = Instant::now();
+    sigint(&child);
+    let status = child.wait().unwrap();
+    let took = sent.elapsed();
+    let mut err = String::new();
+    child.stderr.take().unwrap().read_to_string(&mut err).unwrap();
+    assert_eq!(status.code(), Some(130), "{err}");
+    assert!(took < Duration::from_secs(3), "Ctrl-C took {took:?} to stop the render:\n{err}");
+    assert!(err.contains("nothing rendered, nothing written"), "{err}");
+    assert!(!dir.join("long.exr").exists() && !dir.join("long.png").exists());
+}
+
 #[cfg(unix)]
 #[test]
 fn second_ctrl_c_exits_at_once() {
     use std::io::Read;
     let dir = temp_dir("ctrl_c_twice");
     let out = dir.join("q");
-    // 1024×1024: a pass is 1 spp of 2²⁰ pixels (≈ 0.7 s on 2 cores) and saving takes longer
-    // still, so the second signal lands while the process works. It is sent only once the first
-    // has been handled: two SIGINTs sent back to back can reach the process as one (the kernel
-    // keeps one pending signal of a kind), which made this test flaky in CI.
-    let (mut child, mut reader, _) = start_long_render(&out, 1024, &[]);
+    // 2048×2048: the first signal stops the pass at once, and saving 2²² pixels takes over a
+    // second on 2 cores, so the second signal lands while the process works. It is sent only
+    // once the first has been handled: two SIGINTs sent back to back can reach the process as
+    // one (the kernel keeps one pending signal of a kind), which made this test flaky in CI.
+    let (mut child, mut reader, _) = start_long_render(&out, 2048, &[]);
     sigint(&child);
     let mut rest = String::new();
     read_until(&mut reader, "interrupted: ", &mut rest, "it reported the first Ctrl-C");
@@ -1143,6 +1176,34 @@ fn aovs_are_written_as_layers_and_resume_exactly() {
     let o = furnace(&["render", "--quiet", "--resume", plain.to_str().unwrap(), "--spp", "4", "--aovs"]);
     assert!(!o.status.success());
     assert!(stderr(&o).contains("rendered without AOVs"), "{}", stderr(&o));
+}
+
+/// A render whose every pixel converges stops there, says so, and records the samples it took
+/// (the threshold 0.5 is met by every pixel of the 16×16 box within a few tens of samples;
+/// 4000 are asked).
+#[test]
+fn an_adaptive_render_stops_when_every_pixel_converged() {
+    let dir = temp_dir("adaptive_stop");
+    let out = dir.join("conv");
+    let o = furnace(&[
+        "render",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--spp",
+        "4000",
+        "--noise-threshold",
+        "0.5",
+        "--backend",
+        "cpu",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("(every pixel converged)"), "{}", stderr(&o));
+    let (_, _, _, meta) = furnace_post::read_exr(dir.join("conv.exr")).unwrap();
+    assert!(meta.spp.unwrap() < 4000, "spp {:?}", meta.spp);
 }
 
 /// `--noise-threshold` is recorded; a resumed adaptive render equals one run (the marks and
