@@ -69,7 +69,7 @@ pub use error::{SceneError, Warning};
 pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, oct_decode, oct_encode};
 pub use light::{Light, PointLight, PointLightDistribution, Sky, SpotCone, Sun};
 pub use light_bvh::{LEAF as LIGHT_BVH_LEAF, LightBounds, LightBvh, LightBvhNode};
-pub use load::{MAX_COORDINATE, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
+pub use load::{MAX_COORDINATE, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
 pub use material::{AlphaMode, Material, MaterialSample};
 pub use surface::{SurfacePoint, geometric_normal};
 pub use texture::{

@@ -297,3 +297,27 @@ fn fuzz_findings_are_one_error_or_a_warning() {
     assert!(w.contains("images[0].mimeType") && w.contains("recognised from the bytes"), "{w}");
     assert_eq!(s.images[0].width, 256);
 }
+
+/// A 5-KiB file whose mesh of 2²⁰ triangles is placed by 300 nodes names 3·10⁸ triangles: it is
+/// refused from the accessors' counts, before anything is read, naming the scene and the count.
+#[test]
+fn a_scene_of_too_many_instanced_triangles_is_refused() {
+    let nodes = 300;
+    let list: Vec<String> = (0..nodes).map(|i| i.to_string()).collect();
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [{}]}}],
+        "nodes": [{}], "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+        "accessors": [{{"componentType": 5126, "count": {}, "type": "VEC3", "min": [0, 0, 0], "max": [0, 0, 0]}}]}}"#,
+        list.join(","),
+        vec![r#"{"mesh": 0}"#; nodes].join(","),
+        3 << 20
+    );
+    let t = std::time::Instant::now();
+    let e = Scene::from_slice(json.as_bytes(), "instanced.gltf").unwrap_err().to_string();
+    assert!(
+        e.contains("instanced.gltf") && e.contains("scenes[0]") && e.contains(&format!("{}", nodes << 20)),
+        "{e}"
+    );
+    // From the counts alone: milliseconds; reading 300 meshes of 2²⁰ triangles takes seconds.
+    assert!(t.elapsed() < Duration::from_secs(1), "{:?}", t.elapsed());
+}

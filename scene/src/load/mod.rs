@@ -41,6 +41,16 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
     let scene = nodes::scene_to_render(&ctx, &doc)?;
     let sky = nodes::read_sky(&mut ctx, &scene);
     let environment = nodes::read_environment(&mut ctx, &scene)?;
+    let triangles = nodes::flattened_triangles(&doc, &scene);
+    if triangles > MAX_TRIANGLES {
+        return Err(ctx.invalid((
+            format!("scenes[{}]", scene.index()),
+            format!(
+                "its meshes, placed by its nodes, make {triangles} triangles: more than the {MAX_TRIANGLES} \
+                 (2²⁸) a scene may have"
+            ),
+        )));
+    }
     let meshes = Meshes::new(&buffers, needs_uv, needs_tangent, default_material);
     let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes)?;
     let (mut geo, dropped) = (flat.meshes.geo, flat.meshes.dropped);
@@ -70,6 +80,13 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
         dropped_triangles: dropped,
     })
 }
+
+/// The most triangles a scene may flatten to: 2²⁸. A mesh is copied once per node that places
+/// it, so a file of a few megabytes can name billions of triangles; the count is taken from the
+/// accessors' counts before any is read, and a scene above it is refused instead of filling
+/// memory (at about 64 bytes a triangle with its vertices, 2²⁸ is some 16 GiB, past what the
+/// GPU integrator can bind).
+pub const MAX_TRIANGLES: u64 = 1 << 28;
 
 /// Refuses a scene without triangles; warns about dropped triangles and about coordinates
 /// outside the range the renderer handles.

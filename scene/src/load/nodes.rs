@@ -107,6 +107,41 @@ pub(super) fn read_environment(
     Ok(Some(crate::Environment { intensity, ..crate::Environment::new(std::sync::Arc::new(map)) }))
 }
 
+/// How many triangles `scene` would flatten to, from the accessors' counts alone (nothing is
+/// read): each node once, as [`flatten`] visits them, each TRIANGLES primitive's index count
+/// (or vertex count) / 3 per node that places its mesh. An upper bound: `flatten` may still
+/// skip subtrees and drop triangles.
+pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>) -> u64 {
+    let json = doc.as_json();
+    let count =
+        |i: gltf::json::Index<gltf::json::Accessor>| json.accessors.get(i.value()).map_or(0, |a| a.count.0);
+    let mut visited = vec![false; json.nodes.len()];
+    let mut stack: Vec<gltf::Node<'_>> = scene.nodes().collect();
+    let mut total = 0u64;
+    while let Some(node) = stack.pop() {
+        if std::mem::replace(&mut visited[node.index()], true) {
+            continue;
+        }
+        stack.extend(node.children());
+        let Some(mesh) = node.mesh().and_then(|m| json.meshes.get(m.index())) else { continue };
+        for p in &mesh.primitives {
+            let triangles = p.mode == gltf::json::validation::Checked::Valid(gltf::mesh::Mode::Triangles);
+            let vertices = match (
+                &p.indices,
+                p.attributes.get(&gltf::json::validation::Checked::Valid(gltf::Semantic::Positions)),
+            ) {
+                (Some(i), _) => count(*i),
+                (None, Some(pos)) => count(*pos),
+                (None, None) => 0,
+            };
+            if triangles {
+                total = total.saturating_add(vertices / 3);
+            }
+        }
+    }
+    total
+}
+
 /// Walks `scene`'s nodes depth-first (children in file order), each once, adding what they
 /// hold to `meshes` and the cameras and lights; a subtree with a non-finite transform is
 /// skipped with a warning.
