@@ -584,14 +584,24 @@ pub(crate) fn check_outputs(out: &Path, denoise: bool) -> Result<(PathBuf, PathB
         None
     };
     if let Some(why) = why {
+        let example = example();
         return Err(format!(
-            "--out '{}' {why}: give a file path without extension, such as --out {} (writes {0}.exr and \
-             {0}.png)",
-            out.display(),
-            example()
+            "--out '{}' {why}: give a file path without extension, such as --out {example} (writes \
+             {example}.exr and {example}.png)",
+            out.display()
         ));
     }
     let (png_path, exr_path) = output_paths(out);
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty())
+        && !dir.is_dir()
+    {
+        return Err(format!(
+            "{}: the directory {} does not exist (--out '{}')",
+            exr_path.display(),
+            dir.display(),
+            out.display()
+        ));
+    }
     let mut outputs = vec![exr_path.clone(), png_path.clone()];
     if denoise {
         outputs.push(denoised_png_path(&png_path));

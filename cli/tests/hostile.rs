@@ -274,9 +274,12 @@ fn an_out_naming_a_directory_is_refused_before_rendering() {
             AT_ONCE,
         );
         assert_one_line_error(&o, &[&format!("--out '{out}' {why}"), "give a file path"]);
+        assert!(!stderr(&o).contains("/.exr and"), "{}", stderr(&o));
         assert!(entries(&sub).is_empty(), "{out}: {:?}", entries(&sub));
     }
     assert_eq!(entries(&dir), ["sub"]);
+    let o = furnace_within(&["render", "--out", &format!("{s}/no/such/x")], AT_ONCE);
+    assert_one_line_error(&o, &[&format!("the directory {s}/no/such does not exist")]);
     // `merge` checks its --out the same way.
     let o = furnace_within(&["merge", "part.exr", "-o", &format!("{s}/")], AT_ONCE);
     assert_one_line_error(&o, &["names a directory, not a file"]);
