@@ -383,12 +383,25 @@ fn magnification(ctx: &mut Ctx<'_>, cpath: &str, field: &str, value: f32) -> Res
 }
 
 /// The camera's rotation and translation from its node's world transform, any scale, shear or
-/// mirror removed: the view axis (the transform's −Z column) and the up axis (its +Y column made
+/// mirror removed. For column lengths in 1e-12 … 1e12, glam's f32 decomposition; otherwise the
+/// view axis (the transform's −Z column) and the up axis (its +Y column made
 /// orthogonal to the view) are kept, and right completes a right-handed frame. Computed in f64
 /// so that scales from 1e-38 to 1e38 lose nothing (in f32 their squared lengths underflow or
 /// overflow). `None` when the view axis is zero or the up axis parallel to it (within 10⁻⁶
 /// relative, well above f64's rounding of the f32 inputs).
 fn camera_frame(world: Mat4) -> Option<Affine3A> {
+    // Columns of ordinary lengths keep f32's decomposition, bit for bit what earlier versions
+    // computed (saved renders keep their scene hash and resume).
+    let ordinary = [world.x_axis, world.y_axis, world.z_axis]
+        .iter()
+        .all(|c| (1e-12..=1e12).contains(&c.truncate().length()));
+    if ordinary {
+        let (_, rotation, t) = world.to_scale_rotation_translation();
+        let rotation = rotation.normalize();
+        if rotation.is_finite() && t.is_finite() {
+            return Some(Affine3A::from_rotation_translation(rotation, t));
+        }
+    }
     let col = |c: glam::Vec4| glam::DVec3::new(f64::from(c.x), f64::from(c.y), f64::from(c.z));
     let (y, z) = (col(world.y_axis), col(world.z_axis));
     let back = z.normalize_or_zero();
