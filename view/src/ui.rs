@@ -125,7 +125,9 @@ pub(crate) fn set(c: &mut Controls, name: &str, value: &str) -> Result<(), Strin
         "exposure" => c.exposure = number(value)?.clamp(-20.0, 20.0),
         "tonemap" => c.tonemap = value.parse().map_err(|e: furnace_post::PostError| e.to_string())?,
         "bounces" => {
-            s.bounces = value.parse().map_err(|_| format!("bounces: '{value}' is not a whole number"))?
+            s.bounces = value.parse().ok().filter(|&b| b <= furnace_render::MAX_BOUNCES).ok_or_else(|| {
+                format!("bounces: '{value}' is not a whole number from 0 to {}", furnace_render::MAX_BOUNCES)
+            })?
         }
         "seed" => s.seed = value.parse().map_err(|_| format!("seed: '{value}' is not a whole number"))?,
         "sampler" => {
@@ -416,6 +418,7 @@ mod tests {
         let mut c = controls();
         set(&mut c, "exposure", "1.5").unwrap();
         set(&mut c, "tonemap", "pbr-neutral").unwrap();
+        assert!(set(&mut c, "bounces", "1025").unwrap_err().contains("0 to 1024"));
         set(&mut c, "bounces", "2").unwrap();
         set(&mut c, "masking", "separable").unwrap();
         set(&mut c, "compensation", "off").unwrap();
