@@ -58,6 +58,13 @@ pub enum GpuError {
         /// Whether the film has AOVs.
         film_has_aovs: bool,
     },
+    /// The pass was stopped by its cancel flag ([`furnace_render::RenderError::Interrupted`]):
+    /// the film holds its first `samples` samples per pixel and nothing of the rest.
+    #[error("interrupted after {samples} samples per pixel of the pass")]
+    Interrupted {
+        /// Samples per pixel of the pass that the film holds.
+        samples: u32,
+    },
     /// A film with adaptive-sampling state for a render without it, or the other way round
     /// ([`furnace_render::RenderError::FilmAdaptive`]).
     #[error("{}", furnace_render::RenderError::FilmAdaptive { film_has_state: *film_has_state })]
@@ -76,6 +83,7 @@ impl From<GpuError> for furnace_render::RenderError {
             }
             GpuError::FilmAovs { film_has_aovs } => Self::FilmAovs { film_has_aovs },
             GpuError::FilmAdaptive { film_has_state } => Self::FilmAdaptive { film_has_state },
+            GpuError::Interrupted { samples } => Self::Interrupted { samples },
             e => Self::Device(Box::new(e)),
         }
     }

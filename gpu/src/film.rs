@@ -362,6 +362,25 @@ impl GpuFilm {
         self.host.as_ref().and_then(Film::converged_count)
     }
 
+    /// The device buffers a pass changes and a stopped pass must give back: for `F64` the sums,
+    /// counts, AOV sums and convergence marks; none for `F32Pass`, whose device buffers hold
+    /// only the pass in progress ([`GpuFilm::drop_pass`] clears them).
+    pub fn pass_state(&self) -> Vec<&wgpu::Buffer> {
+        if self.host.is_some() {
+            return Vec::new();
+        }
+        [Some(&self.sum), Some(&self.count), self.aov.as_ref(), self.converged.as_ref()]
+            .into_iter()
+            .flatten()
+            .collect()
+    }
+
+    /// Drops an unfinished `F32Pass` pass (its device sums and counts zeroed); nothing for `F64`
+    /// (its buffers are restored from the copies of [`GpuFilm::pass_state`]).
+    pub fn drop_pass(&self, ctx: &GpuContext) -> Result<(), GpuError> {
+        if self.host.is_none() { Ok(()) } else { self.clear_device(ctx) }
+    }
+
     fn clear_device(&self, ctx: &GpuContext) -> Result<(), GpuError> {
         let mut enc = ctx.device.create_command_encoder(&Default::default());
         enc.clear_buffer(&self.sum, 0, None);

@@ -41,7 +41,8 @@ use bytemuck::Zeroable;
 use furnace_accel::{BuildOptions, Bvh, offset_scale_of_bounds};
 use furnace_render::ADAPTIVE_STEP;
 use furnace_render::{
-    Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings, TriangleSampling,
+    CancelFlag, Film, Integrator, LightSampling, LightSelection, RenderError, RenderSettings,
+    TriangleSampling,
 };
 use furnace_sampling::AnySampler;
 use furnace_scene::{AlphaMode, Camera, Emitters, LightBvh, PointLightDistribution, Projection, Scene};
@@ -574,6 +575,27 @@ pub struct GpuRenderer {
     triangles: usize,
     /// Whether the film is kept drawable ([`GpuRenderer::enable_display`]).
     display: bool,
+    /// Polled between dispatches of a long pass ([`Integrator::set_cancel_flag`]).
+    cancel: Option<CancelFlag>,
+    /// Wall seconds of the last pass's submissions (0 before the first): a pass after one longer
+    /// than [`LONG_PASS_SECONDS`] is submitted dispatch by dispatch, so that it can be stopped.
+    last_pass_seconds: f64,
+    /// Copies of the film's pass state taken before a pass submitted dispatch by dispatch
+    /// ([`GpuFilm::pass_state`], then the convergence counter), to give it back if stopped.
+    pass_backup: Vec<wgpu::Buffer>,
+}
+
+/// A pass whose predecessor took longer than this (seconds) is submitted dispatch by dispatch,
+/// with the cancel flag polled between: a quarter of the one second within which Ctrl-C is to
+/// be answered. Shorter passes stay one submission (no wait between dispatches).
+const LONG_PASS_SECONDS: f64 = 0.25;
+
+/// One step of a pass's submission: a dispatch of samples (its uniform slot, workgroup rows and
+/// tile width) or the adaptive-sampling test after a block.
+#[derive(Debug, Clone, Copy)]
+enum Step {
+    Samples { slot: usize, groups_y: u32, tile_width: u32 },
+    Converge,
 }
 
 /// GPU timestamps around each pass's compute pass (adapters with `TIMESTAMP_QUERY`).
@@ -1345,6 +1367,9 @@ impl GpuRenderer {
             timer: None,
             triangles,
             display: false,
+            cancel: None,
+            last_pass_seconds: 0.0,
+            pass_backup: Vec::new(),
         };
         renderer.tuner = renderer.tuner_for();
         Ok(renderer)
@@ -1653,7 +1678,7 @@ impl GpuRenderer {
         };
         // At least one row, at most the image (an image shorter than a tile is one dispatch: the
         // `clamp(8, h)` here before panicked for images under 8 rows), whole tiles.
-        let rows = (self.samples_per_dispatch / (u64::from(w) * u64::from(per_invocation)))
+        let rows = (self.dispatch_samples() / (u64::from(w) * u64::from(per_invocation)))
             .clamp(1, u64::from(h)) as u32;
         // As many dispatches as that needs, of equal heights: a thin last dispatch would leave
         // the GPU idle behind its few long paths.
@@ -1676,6 +1701,13 @@ impl GpuRenderer {
             s += samples;
         }
         v
+    }
+
+    /// [`GpuRenderer::samples_per_dispatch`] for paths of up to 4 bounces; fewer for longer
+    /// paths, in proportion, so that a dispatch (and a pass, [`Integrator::pass_samples`]) takes
+    /// about as long whatever the bounce limit.
+    fn dispatch_samples(&self) -> u64 {
+        scale_by_bounces(self.samples_per_dispatch, self.settings.bounces)
     }
 
     /// Adds samples `first_sample .. first_sample + samples_per_pixel` of every pixel to the film
@@ -1717,7 +1749,10 @@ impl GpuRenderer {
         // An F32Pass film: each block folded on the host and tested there.
         let mut total = Some(0.0);
         for b in &blocks {
-            let seconds = self.render_blocks(&[Block { converge: false, ..*b }])?;
+            let seconds = self.render_blocks(&[Block { converge: false, ..*b }]).map_err(|e| match e {
+                GpuError::Interrupted { .. } => GpuError::Interrupted { samples: b.first - first_sample },
+                e => e,
+            })?;
             total = total.zip(seconds).map(|(a, b)| a + b);
             self.film.fold(&self.ctx)?;
             if b.converge {
@@ -1766,6 +1801,82 @@ impl GpuRenderer {
             self.ctx.queue.write_buffer(counter, 0, bytemuck::cast_slice(&[n, 0, 0, 0]));
             self.ctx.queue.submit([]);
             self.ctx.wait()?;
+        }
+        Ok(())
+    }
+
+    /// Records one step of a pass into `pass`.
+    fn record_step(&self, pass: &mut wgpu::ComputePass<'_>, step: Step, bind: &wgpu::BindGroup) {
+        match step {
+            Step::Samples { slot, groups_y, tile_width } => {
+                pass.set_pipeline(&self.pipeline);
+                pass.set_bind_group(0, bind, &[(slot as u64 * SLOT) as u32]);
+                pass.dispatch_workgroups(self.settings.width.div_ceil(tile_width), groups_y, 1);
+            }
+            Step::Converge => {
+                let Some(pipeline) = &self.converge else { return };
+                // After the block's samples (wgpu orders the dispatches' storage accesses):
+                // every pixel not yet converged tested once, the newly converged counted.
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(0, bind, &[0]);
+                let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
+                let groups = pixels.div_ceil(u64::from(self.group_size));
+                let x = groups.clamp(1, 65_535) as u32;
+                pass.dispatch_workgroups(x, groups.div_ceil(u64::from(x)).max(1) as u32, 1);
+            }
+        }
+    }
+
+    /// Submits `steps` one submission each, polling the cancel flag after each: raised before
+    /// the last, the film is given back as it was before the pass (`F64`: from copies taken
+    /// first; `F32Pass`: its pass buffers cleared) and [`GpuError::Interrupted`] returned.
+    fn submit_steps_one_by_one(&mut self, steps: &[Step], bind: &wgpu::BindGroup) -> Result<(), GpuError> {
+        let mut state = self.film.pass_state();
+        state.extend(&self.converged_counter);
+        if self.pass_backup.len() != state.len() {
+            self.pass_backup = state
+                .iter()
+                .map(|b| {
+                    self.ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                        label: Some("pass backup"),
+                        size: b.size(),
+                        usage: wgpu::BufferUsages::COPY_SRC | wgpu::BufferUsages::COPY_DST,
+                        mapped_at_creation: false,
+                    })
+                })
+                .collect();
+        }
+        let copy = |from: &[&wgpu::Buffer], to: &[&wgpu::Buffer]| {
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            for (a, b) in from.iter().zip(to) {
+                encoder.copy_buffer_to_buffer(a, 0, b, 0, a.size());
+            }
+            encoder.finish()
+        };
+        let backup: Vec<&wgpu::Buffer> = self.pass_backup.iter().collect();
+        if !state.is_empty() {
+            self.ctx.queue.submit([copy(&state, &backup)]);
+        }
+        let cancel = self.cancel.clone().unwrap_or_default();
+        for (k, step) in steps.iter().enumerate() {
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            {
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("integrator"),
+                    timestamp_writes: None,
+                });
+                self.record_step(&mut pass, *step, bind);
+            }
+            self.ctx.queue.submit([encoder.finish()]);
+            self.ctx.wait()?;
+            if cancel.is_raised() && k + 1 < steps.len() {
+                if !state.is_empty() {
+                    self.ctx.queue.submit([copy(&backup, &state)]);
+                    self.ctx.wait()?;
+                }
+                self.film.drop_pass(&self.ctx)?;
+                return Err(GpuError::Interrupted { samples: 0 });
+            }
         }
         Ok(())
     }
@@ -1832,45 +1943,56 @@ impl GpuRenderer {
             layout: &self.layout,
             entries: &entries,
         });
-        let mut encoder = device.create_command_encoder(&Default::default());
-        {
-            let timestamp_writes = self.timer.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
-                query_set: &t.queries,
-                beginning_of_pass_write_index: Some(0),
-                end_of_pass_write_index: Some(1),
-            });
-            let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
-                label: Some("integrator"),
-                timestamp_writes,
-            });
-            let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
-            for (list, tile_width, converge) in &plan {
-                pass.set_pipeline(&self.pipeline);
-                for &(slot, groups_y) in list {
-                    pass.set_bind_group(0, &bind, &[(slot as u64 * SLOT) as u32]);
-                    pass.dispatch_workgroups(self.settings.width.div_ceil(*tile_width), groups_y, 1);
-                }
-                if *converge && let Some(pipeline) = &self.converge {
-                    // After the block's samples (wgpu orders the dispatches' storage accesses):
-                    // every pixel not yet converged tested once, the newly converged counted.
-                    pass.set_pipeline(pipeline);
-                    pass.set_bind_group(0, &bind, &[0]);
-                    let groups = pixels.div_ceil(u64::from(self.group_size));
-                    let x = groups.clamp(1, 65_535) as u32;
-                    pass.dispatch_workgroups(x, groups.div_ceil(u64::from(x)).max(1) as u32, 1);
+        let steps: Vec<Step> = plan
+            .iter()
+            .flat_map(|(list, tile_width, converge)| {
+                let samples = list.iter().map(|&(slot, groups_y)| Step::Samples {
+                    slot,
+                    groups_y,
+                    tile_width: *tile_width,
+                });
+                samples.chain((*converge && self.converge.is_some()).then_some(Step::Converge))
+            })
+            .collect();
+        // The first pass, or one after a long pass, is split where a cancel flag may stop it.
+        let split = self.cancel.is_some()
+            && steps.len() > 1
+            && (self.last_pass_seconds == 0.0 || self.last_pass_seconds > LONG_PASS_SECONDS);
+        let started = std::time::Instant::now();
+        if split {
+            self.submit_steps_one_by_one(&steps, &bind)?;
+        } else {
+            let mut encoder = device.create_command_encoder(&Default::default());
+            {
+                let timestamp_writes = self.timer.as_ref().map(|t| wgpu::ComputePassTimestampWrites {
+                    query_set: &t.queries,
+                    beginning_of_pass_write_index: Some(0),
+                    end_of_pass_write_index: Some(1),
+                });
+                let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
+                    label: Some("integrator"),
+                    timestamp_writes,
+                });
+                for step in &steps {
+                    self.record_step(&mut pass, *step, &bind);
                 }
             }
+            if let Some(t) = &self.timer {
+                encoder.resolve_query_set(&t.queries, 0..2, &t.resolve, 0);
+            }
+            self.ctx.queue.submit([encoder.finish()]);
+            self.ctx.wait()?;
         }
-        if let Some(t) = &self.timer {
-            encoder.resolve_query_set(&t.queries, 0..2, &t.resolve, 0);
-        }
-        self.ctx.queue.submit([encoder.finish()]);
-        self.ctx.wait()?;
+        self.last_pass_seconds = started.elapsed().as_secs_f64().max(f64::MIN_POSITIVE);
         if let Some(t) = &mut self.timer {
-            let w = crate::film::read_buffer(&self.ctx, &t.resolve)?;
-            let (begin, end) =
-                (u64::from(w[0]) | u64::from(w[1]) << 32, u64::from(w[2]) | u64::from(w[3]) << 32);
-            t.last = Some(end.wrapping_sub(begin) as f64 * f64::from(t.period_ns) * 1e-9);
+            t.last = if split {
+                None
+            } else {
+                let w = crate::film::read_buffer(&self.ctx, &t.resolve)?;
+                let (begin, end) =
+                    (u64::from(w[0]) | u64::from(w[1]) << 32, u64::from(w[2]) | u64::from(w[3]) << 32);
+                Some(end.wrapping_sub(begin) as f64 * f64::from(t.period_ns) * 1e-9)
+            };
         }
         Ok(self.timer.as_ref().and_then(|t| t.last))
     }
@@ -1914,11 +2036,12 @@ impl Integrator for GpuRenderer {
     }
 
     /// About 2²⁴ samples per pass on hardware (tens of milliseconds on a large GPU), 2¹⁶ on a
-    /// software adapter; 1 to 64 samples per pixel.
+    /// software adapter, for paths of up to 4 bounces (fewer in proportion beyond); 1 to 64
+    /// samples per pixel.
     fn pass_samples(&self) -> u32 {
         let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
         let target: u64 = if crate::context::is_hardware(&self.ctx.info) { 1 << 24 } else { 1 << 16 };
-        (target / pixels.max(1)).clamp(1, 64) as u32
+        (scale_by_bounces(target, self.settings.bounces) / pixels.max(1)).clamp(1, 64) as u32
     }
 
     fn last_pass_device_seconds(&self) -> Option<f64> {
@@ -1928,6 +2051,20 @@ impl Integrator for GpuRenderer {
     fn converged_pixels(&self) -> Option<u64> {
         self.converged
     }
+
+    /// Polled between dispatches of a long pass (one after a pass longer than a quarter of a
+    /// second, and the first): such a pass is submitted dispatch by dispatch, so that it stops
+    /// within one dispatch's time.
+    fn set_cancel_flag(&mut self, flag: CancelFlag) {
+        self.cancel = Some(flag);
+    }
+}
+
+/// `samples` of paths of up to 4 bounces, scaled down in proportion to the path length for
+/// longer paths (`samples · 5 / (bounces + 1)`, at least 1): the same number of path segments.
+fn scale_by_bounces(samples: u64, bounces: u32) -> u64 {
+    let segments = u64::from(bounces) + 1;
+    if segments <= 5 { samples } else { (samples * 5 / segments).max(1) }
 }
 
 /// The per-render part of the uniform block.

@@ -3,6 +3,8 @@
 //! 2 cores). Each module is one file beside this one, run alone with
 //! `cargo test -p furnace-gpu --test all MODULE::`.
 
+#[path = "cancel.rs"]
+mod cancel;
 #[path = "errors.rs"]
 mod errors;
 #[path = "film.rs"]
