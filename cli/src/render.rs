@@ -316,6 +316,9 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     }
     let film = save(&mut backend, pass.done, pass.seconds, &Look::of(a))?;
 
+    if let Some(why) = black_image(&film) {
+        eprintln!("warning: {}: the image is black: {why}", job.scene_name);
+    }
     let stopped_by_user = pass.stop == Stop::Cancelled;
     if !a.quiet || stopped_by_user {
         let rendered = u64::from(pass.done - first);
@@ -362,6 +365,23 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         }
     }
     Ok(if stopped_by_user { Outcome::Interrupted } else { Outcome::Done })
+}
+
+/// Why a film is black, when no pixel has a non-zero mean; `None` otherwise. Every warning the
+/// scene gave was printed before: this is the last word, for the causes no check foresaw.
+fn black_image(film: &Film) -> Option<String> {
+    let pixels = film.counts().len();
+    if pixels == 0 || (0..pixels).any(|i| film.mean(i) != glam::DVec3::ZERO) {
+        return None;
+    }
+    let accepted: u64 = film.counts().iter().sum();
+    Some(if accepted == 0 {
+        format!("all {} samples were non-finite and rejected (see the warnings above)", film.rejected())
+    } else {
+        "no sample carried light to the camera: no light reaches what it sees, or it sees nothing \
+         (`furnace info SCENE` lists the lights and cameras; --env studio lights any scene)"
+            .to_string()
+    })
 }
 
 /// What the pass loop did.

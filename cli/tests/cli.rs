@@ -720,6 +720,24 @@ fn bad_look_at_values_fail_clearly() {
     }
 }
 
+/// A render that comes out black says so, whatever the cause: here a scene without lights
+/// rendered with `--env none`.
+#[test]
+fn a_black_image_is_named() {
+    let dir = temp_dir("black");
+    let out = dir.join("black");
+    let args = ["render", &data("Box/glTF/Box.gltf"), "--env", "none", "--spp", "1", "--width", "8"];
+    let o = furnace(
+        &[&args[..], &["--height", "8", "--backend", "cpu", "--out", out.to_str().unwrap()]].concat(),
+    );
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(stderr(&o).contains("the image is black: no sample carried light"), "{}", stderr(&o));
+    // A lit render says nothing of the kind.
+    let o =
+        furnace(&["render", "--spp", "1", "--width", "8", "--height", "8", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success() && !stderr(&o).contains("is black"), "{}", stderr(&o));
+}
+
 #[test]
 fn info_lists_the_cameras() {
     let o = furnace(&["info", &data("Cameras/glTF/Cameras.gltf")]);
