@@ -8,7 +8,7 @@
 //!   linear image as OpenEXR (with the render's metadata) and the tone-mapped sRGB image as PNG
 //!   (`furnace_post`).
 //!   `--resume PATH.exr` continues a saved render bit-identically (the EXR carries the film's
-//!   exact sums and counts, `resume.rs`); Ctrl-C finishes the current pass, saves, and exits
+//!   exact sums and counts, `resume.rs`); Ctrl-C stops the render within a second, saves, and exits
 //!   with code 130 (`interrupt.rs`). The loop drives a `furnace_render::Session` over the
 //!   integrator that `furnace_cli::backend::open` chooses (CPU or GPU).
 //! * `furnace view [SCENE]` takes render's options and shows the GPU integrator's film as it
