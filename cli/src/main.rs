@@ -40,6 +40,7 @@ mod info;
 mod interrupt;
 mod memory;
 mod merge;
+mod outputs;
 mod render;
 mod resume;
 mod shared;

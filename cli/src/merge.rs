@@ -14,7 +14,8 @@
 //! is an ordinary render at M samples per pixel: `furnace render --resume` continues it.
 
 use crate::args::MergeArgs;
-use crate::render::{Look, check_outputs, denoise_options, restore, write_outputs};
+use crate::outputs::{Look, check_outputs, denoise_options, write_outputs};
+use crate::render::restore;
 use crate::resume::{self, SAMPLE_RANGE, SAMPLES, TARGET_SPP};
 use furnace_post::{Metadata, read_exr_metadata, read_exr_with_state};
 use furnace_render::Film;

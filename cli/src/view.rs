@@ -6,7 +6,8 @@ use crate::args::{
     TriangleSamplingArg, ViewArgs,
 };
 use crate::interrupt::Interrupt;
-use crate::render::{Job, Look, Prepared, output_paths, prepare, write_outputs};
+use crate::outputs::{Look, output_paths, write_outputs};
+use crate::render::{Job, Prepared, prepare};
 use crate::resume;
 use crate::shared::Outcome;
 use furnace_brdf::{Masking, SpecularSampling};

@@ -212,7 +212,7 @@ impl Runner<'_> {
             let cpu = furnace_render::process_cpu_seconds();
             let start = Instant::now();
             let options = furnace_denoise::Options { prefilter_guides: false, ..Default::default() };
-            let d = crate::render::denoise_film(film, &rgb, &options)
+            let d = crate::outputs::denoise_film(film, &rgb, &options)
                 .map_err(|e| format!("{name}: denoising: {e}"))?;
             time.wall += start.elapsed().as_secs_f64();
             time.cpu += match (cpu, furnace_render::process_cpu_seconds()) {
