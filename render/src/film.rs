@@ -165,7 +165,8 @@ impl Film {
     pub fn bytes_per_pixel(settings: &crate::RenderSettings) -> u64 {
         let base = (size_of::<DVec3>() + size_of::<u64>()) as u64;
         let aov = if settings.aovs { size_of::<AovSum>() as u64 } else { 0 };
-        let adaptive = if settings.adaptive.is_some() { (size_of::<f64>() + size_of::<bool>()) as u64 } else { 0 };
+        let adaptive =
+            if settings.adaptive.is_some() { (size_of::<f64>() + size_of::<bool>()) as u64 } else { 0 };
         base + aov + adaptive
     }
 
