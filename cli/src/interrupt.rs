@@ -32,9 +32,9 @@ impl Interrupt {
                 eprintln!("\ninterrupted: stopping the render, then saving (Ctrl-C again to quit at once)");
             } else {
                 eprintln!("\ninterrupted twice: quitting without saving this render");
-                // `exit` runs no destructors: remove the temporary files of a write in progress.
+                // Nothing runs after this: remove the temporary files of a write in progress.
                 furnace_post::remove_temporaries_in_flight();
-                std::process::exit(130);
+                exit_now(130);
             }
         });
         if let Err(e) = installed {
@@ -53,4 +53,18 @@ impl Interrupt {
     pub fn flag(&self) -> CancelFlag {
         self.flag.clone()
     }
+}
+
+/// Ends the process at once with `code`, running no exit handlers: other threads may be inside a
+/// GPU driver, whose own exit handlers would tear it down under them.
+fn exit_now(code: i32) -> ! {
+    #[cfg(unix)]
+    #[allow(unsafe_code)]
+    // SAFETY: `_exit` takes no pointers, is async-signal-safe and does not return; the output
+    // written so far is unbuffered (stderr) or complete (files are renamed into place whole).
+    unsafe {
+        libc::_exit(code)
+    }
+    #[cfg(not(unix))]
+    std::process::exit(code)
 }
