@@ -578,8 +578,13 @@ pub struct GpuRenderer {
     /// Polled between dispatches of a long pass ([`Integrator::set_cancel_flag`]).
     cancel: Option<CancelFlag>,
     /// Wall seconds of the last pass's submissions (0 before the first): a pass after one longer
-    /// than [`LONG_PASS_SECONDS`] is submitted dispatch by dispatch, so that it can be stopped.
+    /// than [`LONG_PASS_SECONDS`] is submitted dispatch by dispatch, so that it can be stopped
+    /// (the first too when its dispatches start halved for long paths).
     last_pass_seconds: f64,
+    /// How many times dispatches are halved from [`GpuRenderer::samples_per_dispatch`]
+    /// ([`GpuRenderer::fit_dispatches`]); for paths of more than 16 bounces it starts at what
+    /// paths of every bounce would need.
+    dispatch_shift: u32,
     /// Copies of the film's pass state taken before a pass submitted dispatch by dispatch
     /// ([`GpuFilm::pass_state`], then the convergence counter), to give it back if stopped.
     pass_backup: Vec<wgpu::Buffer>,
@@ -589,6 +594,20 @@ pub struct GpuRenderer {
 /// with the cancel flag polled between: a quarter of the one second within which Ctrl-C is to
 /// be answered. Shorter passes stay one submission (no wait between dispatches).
 const LONG_PASS_SECONDS: f64 = 0.25;
+
+/// A dispatch longer than this (seconds) makes the next ones smaller
+/// ([`GpuRenderer::fit_dispatches`]): a quarter of the second within which a cancel flag is to be
+/// answered.
+const LONG_DISPATCH_SECONDS: f64 = 0.25;
+
+/// Halvings of the dispatches for paths of up to `bounces` scattering events: none up to 16, else
+/// as many as make a dispatch of paths that all reach the limit no longer than one of 16-bounce
+/// paths (`⌈log₂((bounces + 1) / 17)⌉`: 6 at 1024); measured dispatch times correct it after
+/// the first pass.
+fn initial_dispatch_shift(bounces: u32) -> u32 {
+    let ratio = (f64::from(bounces) + 1.0) / 17.0;
+    if ratio > 1.0 { ratio.log2().ceil() as u32 } else { 0 }
+}
 
 /// One step of a pass's submission: a dispatch of samples (its uniform slot, workgroup rows and
 /// tile width) or the adaptive-sampling test after a block.
@@ -1369,6 +1388,7 @@ impl GpuRenderer {
             display: false,
             cancel: None,
             last_pass_seconds: 0.0,
+            dispatch_shift: initial_dispatch_shift(settings.bounces),
             pass_backup: Vec::new(),
         };
         renderer.tuner = renderer.tuner_for();
@@ -1703,11 +1723,26 @@ impl GpuRenderer {
         v
     }
 
-    /// [`GpuRenderer::samples_per_dispatch`] for paths of up to 4 bounces; fewer for longer
-    /// paths, in proportion, so that a dispatch (and a pass, [`Integrator::pass_samples`]) takes
-    /// about as long whatever the bounce limit.
+    /// Samples per dispatch now: [`GpuRenderer::samples_per_dispatch`] halved `dispatch_shift`
+    /// times, so that a dispatch of long paths stays short enough for a cancel flag to be
+    /// answered within a second ([`GpuRenderer::fit_dispatches`]).
     fn dispatch_samples(&self) -> u64 {
-        scale_by_bounces(self.samples_per_dispatch, self.settings.bounces)
+        (self.samples_per_dispatch >> self.dispatch_shift).max(1)
+    }
+
+    /// After a pass whose dispatches took `seconds` each (the longest, or the mean): halves the
+    /// dispatches until one would take about a tenth of a second when one took more than
+    /// [`LONG_DISPATCH_SECONDS`], doubles them back (up to
+    /// [`GpuRenderer::samples_per_dispatch`]) when one took under a twentieth. Films do not
+    /// depend on where dispatches are cut.
+    fn fit_dispatches(&mut self, seconds: f64) {
+        let max_shift = 63 - self.samples_per_dispatch.leading_zeros();
+        if seconds > LONG_DISPATCH_SECONDS {
+            let halvings = (seconds / 0.1).log2().ceil().max(1.0) as u32;
+            self.dispatch_shift = (self.dispatch_shift + halvings).min(max_shift);
+        } else if seconds < 0.05 && self.dispatch_shift > 0 {
+            self.dispatch_shift -= 1;
+        }
     }
 
     /// Adds samples `first_sample .. first_sample + samples_per_pixel` of every pixel to the film
@@ -1830,7 +1865,8 @@ impl GpuRenderer {
     /// Submits `steps` one submission each, polling the cancel flag after each: raised before
     /// the last, the film is given back as it was before the pass (`F64`: from copies taken
     /// first; `F32Pass`: its pass buffers cleared) and [`GpuError::Interrupted`] returned.
-    fn submit_steps_one_by_one(&mut self, steps: &[Step], bind: &wgpu::BindGroup) -> Result<(), GpuError> {
+    /// Returns the longest dispatch of samples, in seconds.
+    fn submit_steps_one_by_one(&mut self, steps: &[Step], bind: &wgpu::BindGroup) -> Result<f64, GpuError> {
         let mut state = self.film.pass_state();
         state.extend(&self.converged_counter);
         if self.pass_backup.len() != state.len() {
@@ -1858,7 +1894,9 @@ impl GpuRenderer {
             self.ctx.queue.submit([copy(&state, &backup)]);
         }
         let cancel = self.cancel.clone().unwrap_or_default();
+        let mut longest = 0.0f64;
         for (k, step) in steps.iter().enumerate() {
+            let started = std::time::Instant::now();
             let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
             {
                 let mut pass = encoder.begin_compute_pass(&wgpu::ComputePassDescriptor {
@@ -1869,16 +1907,20 @@ impl GpuRenderer {
             }
             self.ctx.queue.submit([encoder.finish()]);
             self.ctx.wait()?;
+            if matches!(step, Step::Samples { .. }) {
+                longest = longest.max(started.elapsed().as_secs_f64());
+            }
             if cancel.is_raised() && k + 1 < steps.len() {
                 if !state.is_empty() {
                     self.ctx.queue.submit([copy(&backup, &state)]);
                     self.ctx.wait()?;
                 }
                 self.film.drop_pass(&self.ctx)?;
+                self.fit_dispatches(longest);
                 return Err(GpuError::Interrupted { samples: 0 });
             }
         }
-        Ok(())
+        Ok(longest)
     }
 
     /// Renders `blocks` in order in one compute pass and one submission: each block's samples
@@ -1954,13 +1996,16 @@ impl GpuRenderer {
                 samples.chain((*converge && self.converge.is_some()).then_some(Step::Converge))
             })
             .collect();
-        // The first pass, or one after a long pass, is split where a cancel flag may stop it.
+        // A pass after a long one is split where a cancel flag may stop it, and so is the first
+        // when its paths may be long (its dispatches start halved).
         let split = self.cancel.is_some()
             && steps.len() > 1
-            && (self.last_pass_seconds == 0.0 || self.last_pass_seconds > LONG_PASS_SECONDS);
+            && (self.last_pass_seconds > LONG_PASS_SECONDS
+                || (self.last_pass_seconds == 0.0 && self.dispatch_shift > 0));
         let started = std::time::Instant::now();
-        if split {
-            self.submit_steps_one_by_one(&steps, &bind)?;
+        let sample_steps = steps.iter().filter(|s| matches!(s, Step::Samples { .. })).count().max(1);
+        let longest = if split {
+            Some(self.submit_steps_one_by_one(&steps, &bind)?)
         } else {
             let mut encoder = device.create_command_encoder(&Default::default());
             {
@@ -1982,8 +2027,10 @@ impl GpuRenderer {
             }
             self.ctx.queue.submit([encoder.finish()]);
             self.ctx.wait()?;
-        }
+            None
+        };
         self.last_pass_seconds = started.elapsed().as_secs_f64().max(f64::MIN_POSITIVE);
+        self.fit_dispatches(longest.unwrap_or(self.last_pass_seconds / sample_steps as f64));
         if let Some(t) = &mut self.timer {
             t.last = if split {
                 None
@@ -2036,12 +2083,11 @@ impl Integrator for GpuRenderer {
     }
 
     /// About 2²⁴ samples per pass on hardware (tens of milliseconds on a large GPU), 2¹⁶ on a
-    /// software adapter, for paths of up to 4 bounces (fewer in proportion beyond); 1 to 64
-    /// samples per pixel.
+    /// software adapter; 1 to 64 samples per pixel.
     fn pass_samples(&self) -> u32 {
         let pixels = u64::from(self.settings.width) * u64::from(self.settings.height);
         let target: u64 = if crate::context::is_hardware(&self.ctx.info) { 1 << 24 } else { 1 << 16 };
-        (scale_by_bounces(target, self.settings.bounces) / pixels.max(1)).clamp(1, 64) as u32
+        (target / pixels.max(1)).clamp(1, 64) as u32
     }
 
     fn last_pass_device_seconds(&self) -> Option<f64> {
@@ -2053,18 +2099,11 @@ impl Integrator for GpuRenderer {
     }
 
     /// Polled between dispatches of a long pass (one after a pass longer than a quarter of a
-    /// second, and the first): such a pass is submitted dispatch by dispatch, so that it stops
-    /// within one dispatch's time.
+    /// second, and the first of paths of more than 16 bounces): such a pass is submitted
+    /// dispatch by dispatch, so that it stops within one dispatch's time.
     fn set_cancel_flag(&mut self, flag: CancelFlag) {
         self.cancel = Some(flag);
     }
-}
-
-/// `samples` of paths of up to 4 bounces, scaled down in proportion to the path length for
-/// longer paths (`samples · 5 / (bounces + 1)`, at least 1): the same number of path segments.
-fn scale_by_bounces(samples: u64, bounces: u32) -> u64 {
-    let segments = u64::from(bounces) + 1;
-    if segments <= 5 { samples } else { (samples * 5 / segments).max(1) }
 }
 
 /// The per-render part of the uniform block.
@@ -2169,6 +2208,12 @@ fn set_camera_params(p: &mut FrameParams, camera: &Camera) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_paths_start_with_smaller_dispatches() {
+        let shifts: Vec<u32> = [0, 4, 16, 17, 33, 34, 1024].map(initial_dispatch_shift).to_vec();
+        assert_eq!(shifts, [0, 0, 0, 1, 1, 2, 6]);
+    }
 
     /// A scene packed for one device's limit is checked again against another's: the first
     /// buffer over it is named, and a limit it fits passes.

@@ -7,9 +7,9 @@ use furnace_render::{AdaptiveSampling, CancelFlag, Integrator, RenderError, Rend
 use furnace_scene::builtin;
 use furnace_tests::gpu::test_context;
 
-/// 512 × 256 pixels: two dispatches per sample on a software adapter (2¹⁶ samples each), four
-/// on... at least two anywhere the image is cut into dispatches; a first pass is submitted
-/// dispatch by dispatch when a cancel flag is set.
+/// 256 × 128 pixels of paths of up to 20 bounces: the first pass of paths longer than 16 bounces
+/// is submitted dispatch by dispatch when a cancel flag is set, its dispatches halved for them
+/// (2¹⁵ samples on a software adapter: one per sample of a pass; more on hardware).
 fn renderer(settings: RenderSettings) -> Option<GpuRenderer> {
     let scene = builtin::cornell_box().expect("the built-in Cornell box");
     Some(GpuRenderer::new(test_context()?, &scene, &scene.default_camera(), settings).expect("a renderer"))
@@ -17,6 +17,12 @@ fn renderer(settings: RenderSettings) -> Option<GpuRenderer> {
 
 fn check(settings: RenderSettings) {
     let (Some(mut stopped), Some(mut plain)) = (renderer(settings), renderer(settings)) else { return };
+    if furnace_gpu::context::is_hardware(&stopped.context().info) {
+        // A hardware adapter renders this image in one dispatch, which nothing interrupts; the
+        // device script `docs/device/interrupt.sh` stops real 4K passes there.
+        eprintln!("skipped: one dispatch per pass on a hardware adapter");
+        return;
+    }
     let flag = CancelFlag::new();
     stopped.set_cancel_flag(flag.clone());
     flag.raise();
@@ -40,7 +46,7 @@ fn check(settings: RenderSettings) {
 
 #[test]
 fn a_stopped_pass_gives_the_film_back() {
-    check(RenderSettings { width: 512, height: 256, bounces: 2, seed: 4, ..Default::default() });
+    check(RenderSettings { width: 256, height: 128, bounces: 20, seed: 4, ..Default::default() });
 }
 
 /// With adaptive sampling the marks and the device's count of converged pixels are given back
@@ -48,5 +54,5 @@ fn a_stopped_pass_gives_the_film_back() {
 #[test]
 fn a_stopped_adaptive_pass_gives_the_marks_back() {
     let adaptive = Some(AdaptiveSampling { threshold: 0.3, min_samples: 8 });
-    check(RenderSettings { width: 512, height: 256, bounces: 2, seed: 4, adaptive, ..Default::default() });
+    check(RenderSettings { width: 256, height: 128, bounces: 20, seed: 4, adaptive, ..Default::default() });
 }
