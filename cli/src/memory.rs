@@ -42,7 +42,7 @@ impl Plan {
         }
         parts.push(("BVH", triangles as u64 * BVH_BYTES_PER_TRIANGLE));
         // The film read back (a copy), the EXR's 32-bit channels, the images.
-        let channels = 4 * exr_channels(settings);
+        let channels = 4 * furnace_post::state_channel_count(settings.aovs, settings.adaptive.is_some());
         parts.push((
             "writing the EXR and PNG",
             pixels * (Film::bytes_per_pixel(settings) + channels + OUTPUT_IMAGE_BYTES_PER_PIXEL),
@@ -84,13 +84,6 @@ impl Plan {
             gb(usable),
         ))
     }
-}
-
-/// 32-bit channels of the EXR a render writes: R, G, B and the resume state (count, three sums
-/// as high and low halves), the AOVs (7 channels and 8 sums in halves), the adaptive state
-/// (squared-luminance halves and the mark).
-fn exr_channels(settings: &RenderSettings) -> u64 {
-    3 + 7 + if settings.aovs { 7 + 16 } else { 0 } + if settings.adaptive.is_some() { 3 } else { 0 }
 }
 
 /// `bytes` in GB (10⁹), two significant decimals.

@@ -43,7 +43,7 @@ fn in_flight() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
 }
 
 /// Removes the temporary files this process is writing now, and returns how many it removed:
-/// for an exit that skips destructors (`std::process::exit` on a second Ctrl-C), so that no
+/// for an exit that skips destructors (the CLI's `_exit` on a second Ctrl-C), so that no
 /// temporary file outlives the process. A write still in progress then fails at its rename.
 pub fn remove_temporaries_in_flight() -> usize {
     let paths = std::mem::take(&mut *in_flight());

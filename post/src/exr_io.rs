@@ -439,6 +439,16 @@ const LUM_SQ_CHANNELS: [&str; 2] = ["furnace.resume.lumSq.hi", "furnace.resume.l
 /// See [`LUM_SQ_CHANNELS`].
 const CONVERGED_CHANNEL: &str = "furnace.resume.converged";
 
+/// The 32-bit channels [`write_exr_with_state`] writes per pixel for a film with or without
+/// AOVs and adaptive-sampling state: `R`, `G`, `B`, the count and the sums' halves, and those of
+/// the AOVs and the adaptive state (what a render's memory plan counts for writing its EXR).
+pub fn state_channel_count(aovs: bool, adaptive: bool) -> u64 {
+    let image = 3 + 1 + 2 * SUM_CHANNELS.len();
+    let aov = if aovs { AOV_CHANNELS.len() + 2 * AOV_STATE_NAMES.len() } else { 0 };
+    let adaptive = if adaptive { LUM_SQ_CHANNELS.len() + 1 } else { 0 };
+    (image + aov + adaptive) as u64
+}
+
 fn aov_state_channel(k: usize, half: &str) -> String {
     format!("{RESUME_LAYER}.aov.{}.{half}", AOV_STATE_NAMES[k])
 }
@@ -731,6 +741,22 @@ pub fn read_exr_with_state(path: impl AsRef<Path>) -> Result<ExrWithState, PostE
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The count a memory plan uses is the channels written, for each kind of film.
+    #[test]
+    fn state_channel_count_is_what_is_written() {
+        let dir = scratch("channel_count");
+        for (aovs, adaptive) in [(false, false), (true, false), (false, true), (true, true)] {
+            let film = if aovs { Film::with_aovs(2, 1) } else { Film::new(2, 1) };
+            let film = if adaptive { film.with_adaptive() } else { film };
+            let path = dir.join(format!("c{aovs}{adaptive}.exr"));
+            write_exr_with_state(&path, &film, &Metadata::default()).unwrap();
+            let meta = exr::meta::MetaData::read_from_file(&path, false).unwrap();
+            let written = meta.headers.iter().map(|h| h.channels.list.len() as u64).sum::<u64>();
+            assert_eq!(state_channel_count(aovs, adaptive), written, "aovs {aovs}, adaptive {adaptive}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     fn scratch(name: &str) -> std::path::PathBuf {
         let dir = std::env::temp_dir().join(format!("furnace-post-state-{name}-{}", std::process::id()));

@@ -75,8 +75,8 @@ pub use atomic::{
 pub use error::{PostError, printable_excerpt};
 pub use exr_io::{
     AOV_CHANNELS, ExrWithState, ExtraChannel, MAX_COMPRESSION_RATIO, MAX_IMAGE_SIDE, Metadata, RESUME_LAYER,
-    read_exr, read_exr_metadata, read_exr_with_state, stage_exr_with_state_and, write_exr,
-    write_exr_with_state, write_exr_with_state_and,
+    read_exr, read_exr_metadata, read_exr_with_state, stage_exr_with_state_and, state_channel_count,
+    write_exr, write_exr_with_state, write_exr_with_state_and,
 };
 pub use png_io::{stage_png, write_png};
 pub use srgb::{linear_to_srgb, pixel_to_srgb8, quantize_unorm8, srgb_to_linear, srgb8_to_linear, to_srgb8};
