@@ -847,6 +847,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         &environment,
         precision.wgsl(),
         wgsl::PATH,
+        &wgsl::select(wgsl::MATERIAL, |name| features.enabled(name)),
         &integrator,
     ])
 }

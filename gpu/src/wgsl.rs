@@ -47,6 +47,8 @@ pub const TRAVERSE: &str = include_str!("wgsl/traverse.wgsl");
 /// survival probability (`furnace_render::russian_roulette_survival`). Needs the `FRAME_*`
 /// constants and a `params: FrameParams` (see [`crate::integrator`]).
 pub const PATH: &str = include_str!("wgsl/path.wgsl");
+/// The BSDF at a hit (`HitBsdf`, `hit_bsdf`, `hit_eval`, `hit_pdf`): furnace-cpu's `HitBsdf`.
+pub const MATERIAL: &str = include_str!("wgsl/material.wgsl");
 
 /// Concatenates WGSL modules (in the order given) into one shader source.
 pub fn compose(parts: &[&str]) -> String {

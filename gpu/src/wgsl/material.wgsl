@@ -1,0 +1,65 @@
+// The BSDF at a hit, assembled from the material (furnace-cpu's `HitBsdf`): composed after the
+// generated bindings and before integrator.wgsl, with the TRANSMISSION parts only when a scene has them.
+
+// The BSDF at a hit and what light samples need of it besides (furnace-cpu's HitBsdf and
+// Vertex): the opaque record, or with TRANSMISSION the transmissive mixture.
+struct HitBsdf {
+    m: BsdfParams,
+    // #if TRANSMISSION
+    t: Transmissive,
+    // SCENE_TRANSMISSIVE | SCENE_VOLUME bits (0: opaque).
+    kind: u32,
+    // Light samples may also arrive from behind (a rough solid interface), leaving from `behind`.
+    two_sided: bool,
+    behind: vec3<f32>,
+    // The absorption coefficient of the volume the vertex is in (0: air).
+    medium: vec3<f32>,
+    // #endif
+}
+
+// furnace-cpu's `bsdf`: the material's BSDF at a hit.
+fn hit_bsdf(ms: MaterialSample, material: u32, uv: vec2<f32>) -> HitBsdf {
+    var b: HitBsdf;
+    b.m = bsdf_params(ms.base_color, ms.metallic, ms.roughness, ms.specular_factor, ms.specular_color,
+                      params.bsdf_flags);
+    // #if TRANSMISSION
+    let tr = scene_transmission[material];
+    let transmission = tr.transmission_factor * scene_texture_sample(tr.transmission_texture, uv).x;
+    let metallic = brdf_clamp(ms.metallic, 0.0, 1.0);
+    let g = brdf_clamp(transmission, 0.0, 1.0) * (1.0 - metallic);
+    if g > 0.0 {
+        let rough = brdf_clamp(ms.roughness, 0.0, 1.0);
+        let d = dielectric_new(tr.ior, rough * rough, (tr.flags & SCENE_VOLUME) == 0u,
+                               brdf_height_correlated(b.m), ms.base_color);
+        var m_opaque = 0.0;
+        if g < 1.0 {
+            m_opaque = min(metallic / (1.0 - g), 1.0);
+        }
+        let opaque = bsdf_params(ms.base_color, m_opaque, ms.roughness, ms.specular_factor, ms.specular_color,
+                                 params.bsdf_flags);
+        b.t = Transmissive(d, opaque, min(g, 1.0));
+        b.kind = tr.flags;
+    }
+    // #endif
+    return b;
+}
+
+// HitBsdf::eval.
+fn hit_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    // #if TRANSMISSION
+    if b.kind != 0u {
+        return transmissive_eval(b.t, wo, wi);
+    }
+    // #endif
+    return bsdf_eval(b.m, wo, wi);
+}
+
+// HitBsdf::pdf.
+fn hit_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    // #if TRANSMISSION
+    if b.kind != 0u {
+        return transmissive_pdf(b.t, wo, wi);
+    }
+    // #endif
+    return bsdf_pdf(b.m, wo, wi);
+}
