@@ -126,7 +126,7 @@ fn dispatches_cover_every_pixel_once() {
 }
 
 /// A scene without emitters, a sun or a sun disc gets a shader without their code, variables or
-/// binding (not code behind a `false` constant: measured on the H200, that cost 2–4 %).
+/// binding (not code behind a `false` constant, which still costs the GPU time: BENCHMARKS.md).
 #[test]
 fn absent_light_features_compose_no_code() {
     let bare = shader_source(FilmPrecision::F64, SceneFeatures::default());
@@ -220,9 +220,8 @@ fn absent_light_features_compose_no_code() {
 /// The driver inlines a copy of the traversal at each call site and of the path code at each
 /// call of it: the integrator calls the path code once and traces every ray of a path and of its
 /// sampled lights through one `trace_query` call (point lights, a shadow ray per light, keep a
-/// second one, `shadow`, only when there are more than the queue holds). Measured on the H200
-/// (BENCHMARKS.md, "One trace call per iteration"), two copies cost 10–14 % on the box and the
-/// emitter scenes.
+/// second one, `shadow`, only when there are more than the queue holds): a second copy of either
+/// costs the GPU measurable time (BENCHMARKS.md).
 #[test]
 fn one_traversal_and_one_path_code_per_shader() {
     let calls = |source: &str, call: &str| source.matches(call).count();

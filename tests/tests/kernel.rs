@@ -59,11 +59,10 @@ fn naga_reflection_reports_wgsl_offsets() {
     assert!(mismatch.is_err(), "a wrong offset must fail");
 }
 
-/// Many contexts, one after another, in one process: each works. NVIDIA's Vulkan driver (580,
-/// H100) found no adapter at the 31st `GpuContext::new` when every context created its own
-/// `wgpu::Instance` (a `furnace chart` study makes a renderer per configuration and
-/// checkpoint); contexts now share one instance. Lavapipe never failed, so in CI this checks
-/// only that shared-instance contexts stay independent and usable.
+/// Many contexts, one after another, in one process: each works. Contexts share one
+/// `wgpu::Instance` (a `furnace chart` study makes a renderer per configuration and checkpoint,
+/// and a driver may run out of instances); this checks that shared-instance contexts stay
+/// independent and usable.
 #[test]
 fn forty_contexts_in_one_process_all_work() {
     if test_context().is_none() {
