@@ -24,7 +24,7 @@
 # references' material model), the rate from its summary line (the render passes' time);
 # Mitsuba through the oracle's render_ref.py (its JIT warm-up excluded, passes of ≤ 64 spp,
 # max_depth = bounces + 1, path or volpath as the scene says); Cycles through cycles_render.py
-# (the glTF importer, the references' conventions, the timed render after a 1-spp warm-up).
+# (the glTF importer, the references' conventions; the time of SPP samples less that of 1).
 # The error is score.py's (the oracle's compare.py): RMSE, relative MSE and the image mean's
 # ratio to the reference's per channel. The oracle needs `bash ../shared/oracle/setup.sh` once.
 set -euo pipefail

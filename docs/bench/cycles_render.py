@@ -22,11 +22,12 @@ where the importer reads them otherwise:
 
 What stays Cycles' own: its samplers, light tree, Russian roulette, height-correlated masking
 and Principled BSDF (not exactly the references' model), and thin-walled glass sheets (Cycles
-refracts through a single face as into a solid). The sampling's time is the difference between
-a render of SPP and one of 1 sample per pixel, both timed whole (scene sync, BVH, kernels and
-film included in each): render_s = (t(SPP) − t(1)) · SPP / (SPP − 1). Cycles' persistent data
-would keep the BVH between renders, but with it a second render in background mode does not
-sample again.
+refracts through a single face as into a solid).
+
+The sampling's time is the difference between a render of SPP samples per pixel and one of 1,
+each timed whole (scene sync, BVH, film) after an untimed first render that loads what the
+others reuse: render_s = (t(SPP) − t(1)) · SPP / (SPP − 1). Cycles' persistent data would keep
+the BVH between renders, but with it a second render in background mode does not sample again.
 """
 
 import json
@@ -172,19 +173,21 @@ def main():
     set_render(width, height, spp, bounces)
     scene = bpy.context.scene
     times = []
-    for samples in (1, spp):
+    # An untimed first render loads what later renders reuse (images, the environment's
+    # importance map), so that the two timed ones differ by their samples alone.
+    for samples in (1, 1, spp):
         scene.cycles.samples = samples
         t0 = time.perf_counter()
         bpy.ops.render.render()
         times.append(time.perf_counter() - t0)
     bpy.data.images["Render Result"].save_render(out)
-    seconds = (times[1] - times[0]) * spp / max(spp - 1, 1)
+    seconds = (times[2] - times[1]) * spp / max(spp - 1, 1)
     print(json.dumps({
         "blender": bpy.app.version_string,
         "threads": scene.render.threads,
         "width": width, "height": height, "spp": spp, "bounces": bounces,
         "render_s": seconds,
-        "whole_render_s": times[1],
+        "whole_render_s": times[2],
         "Msamples_per_s": width * height * spp / seconds / 1e6,
     }))
 
