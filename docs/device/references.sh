@@ -26,13 +26,13 @@ for s in $want; do
     glass_*) scene=$SC/$s.gltf; ref=$REF/glass/${s}_ref_bounces8; size=256x256; b=8 ;;
     *) scene=$SC/$s.gltf; ref=$REF/lights/${s}_ref_bounces4; size=256x256; b=4 ;;
   esac
-  start=$(date +%s.%N)
+  start=$EPOCHREALTIME
   $f render $scene --backend "${BACKEND:-gpu}" --width ${size%x*} --height ${size#*x} --bounces $b \
     --spp "${SPP:-65536}" --sampler "${SAMPLER:-sobol}" --masking separable --compensation off \
     --out "$out/$s" -q > /tmp/r.log 2>&1 || tail -2 /tmp/r.log
-  t=$(echo "$(date +%s.%N) - $start" | bc)
+  t=$(python3 -c "print(round($EPOCHREALTIME - $start))")
   $f compare "$out/$s.exr" "$ref.exr" --stderr "${ref}_stderr.exr" > /tmp/c.txt
   ratio=$(grep "^mean ratio" /tmp/c.txt | awk '{print $4", "$6", "$8}')
   zm=$(grep "^z mean" /tmp/c.txt | awk '{print $3}'); zs=$(grep "^z std" /tmp/c.txt | awk '{print $3}')
-  echo "| $s | $size | $b | ${SPP:-65536} | ${t%.*} | $ratio | $zm | $zs |"
+  echo "| $s | $size | $b | ${SPP:-65536} | $t | $ratio | $zm | $zs |"
 done

@@ -40,8 +40,9 @@ for c in "${configs[@]}"; do
   [[ $want == *" $name "* ]] || continue
   mrate=-
   if [ $mi_ok = 1 ]; then
-    mitsuba "$mscene" "$size" 64 $((spp / 64)) --max-depth=$((b + 1)) > /dev/null
-    mrate=$(mitsuba "$mscene" "$size" 64 $((spp / 64)) --max-depth=$((b + 1)))
+    per_pass=$((spp < 64 ? spp : 64))
+    mitsuba "$mscene" "$size" $per_pass $((spp / per_pass)) --max-depth=$((b + 1)) > /dev/null
+    mrate=$(mitsuba "$mscene" "$size" $per_pass $((spp / per_pass)) --max-depth=$((b + 1)))
   fi
   echo "$name $size $b bounces: Mitsuba $mrate"
   line="$name|$size|$b|$mrate"
