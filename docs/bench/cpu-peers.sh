@@ -87,13 +87,14 @@ for s in $scenes; do
       score "$s" "furnace CPU (${SAMPLER:-sobol})" "$rate" "$work/furnace.exr"
     fi
     if [[ $only == *" mitsuba "* ]]; then
-      per_pass=$((spp < 64 ? spp : 64))
+      # Mitsuba renders passes of at most 64 spp: the largest such divisor of SPP.
+      per_pass=64; while [ $((spp % per_pass)) != 0 ]; do per_pass=$((per_pass - 1)); done
       rm -f "$work"/*_llvm_ad_rgb_*
       ORACLE_SCENES=$work ORACLE_OUT=$work ORACLE_RESULTS=$work ORACLE_SIZE=${w}x$h \
         WAIT_IDLE=${WAIT_IDLE:-5} python "$shared/oracle/render_ref.py" "$s" llvm_ad_rgb "$per_pass" \
         $((spp / per_pass)) --max-depth=$((bounces + 1)) > "$work/mitsuba.log" 2>&1 \
         || { tail -3 "$work/mitsuba.log"; exit 1; }
-      tag=${s}_maxdepth$((bounces + 1))_llvm_ad_rgb_$(((spp / per_pass) * per_pass))spp
+      tag=${s}_maxdepth$((bounces + 1))_llvm_ad_rgb_${spp}spp
       rate=$(python -c "import json; print('%.3f' % json.load(open('$work/$tag.json'))['Msamples_per_s'])")
       score "$s" "Mitsuba llvm_ad_rgb" "$rate" "$work/$tag.exr"
       if [ -n "${MITSUBA_AVX2:-}" ]; then

@@ -40,7 +40,8 @@ for c in "${configs[@]}"; do
   [[ $want == *" $name "* ]] || continue
   mrate=-
   if [ $mi_ok = 1 ]; then
-    per_pass=$((spp < 64 ? spp : 64))
+    # Mitsuba renders passes of at most 64 spp: the largest such divisor of SPP.
+    per_pass=64; while [ $((spp % per_pass)) != 0 ]; do per_pass=$((per_pass - 1)); done
     mitsuba "$mscene" "$size" $per_pass $((spp / per_pass)) --max-depth=$((b + 1)) > /dev/null
     mrate=$(mitsuba "$mscene" "$size" $per_pass $((spp / per_pass)) --max-depth=$((b + 1)))
   fi
