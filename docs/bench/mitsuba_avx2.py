@@ -6,7 +6,7 @@ Dr.Jit's LLVM backend compiles its kernels for the host's widest vectors: 16 lan
 machine, 8 on an AVX2 one. This runs SCRIPT (e.g. the oracle's render_ref.py) with the backend
 retargeted, after `mi.set_variant`, to a Haswell-class CPU (AVX2 + FMA, 8 lanes) through Dr.Jit's
 exported `jit_llvm_set_target(cpu, features, vector_width)`: on an AVX-512 machine it measures
-what Mitsuba does on an AVX2 one, on the same cores in the same run (cpu-vs-mitsuba.sh,
+what Mitsuba does on an AVX2 one, on the same cores in the same run (cpu-peers.sh,
 MITSUBA_AVX2=1). The images are the same renders; only the kernels' vector width changes.
 """
 

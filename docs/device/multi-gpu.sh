@@ -1,21 +1,23 @@
 #!/bin/bash
-# One render on several GPUs (`furnace render/bench --gpus`), for a machine kind with 2-8 H200s:
+# One render on several GPUs (`furnace render/bench --gpus`), for a machine with 2-8 GPUs:
 # samples/s on 1, 2, 4 (8) GPUs for the Cornell box at 3840x2160 and a 10^7-triangle interior,
 # scaling efficiency (rate on N / (N x rate on 1)), time to first frame (BVH built once, uploaded
 # to each GPU in parallel), the devices' wait for the slowest of each pass's shares and the time
 # of one collection of the film, each count run twice in alternating rounds; then the film on all GPUs
 # against one GPU's at equal samples (same estimator: RMSE at f32 rounding), and with one GPU
-# lost mid-render (FURNACE_LOSE_GPU). Needs
-# .dev/furnace-new.xz (a stripped release build) and .gl/ as docs/device/README.md says; no Mitsuba.
+# lost mid-render (FURNACE_LOSE_GPU). Needs .gl/ and the binary (README.md); no Mitsuba.
+#
+#   bash docs/device/multi-gpu.sh .dev/furnace.xz
+#
 # ROUNDS (2), MIN_S (10) and COUNTS ("1 2 4 8", cut to the GPUs present) shorten it.
 # SAME_GPU=1 opens every device on GPU 0 instead (`--gpus 0,0,...`): on a one-GPU machine this
 # measures what the several-device path costs (shares, collections, the slowest device's wait)
 # where no speed-up is possible; the loss test then loses the second device on the same GPU.
-for f in .gl/*.deb; do dpkg -x $f / >/dev/null; done; ldconfig
-export VK_DRIVER_FILES=/usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json
-xz -dc .dev/furnace-new.xz > /tmp/f; chmod +x /tmp/f
+source docs/device/env.sh
+unpack "${1:-.dev/furnace-new.xz}"
+cp "${bins[0]}" /tmp/f
 W=/tmp/w; mkdir -p $W
-nvidia-smi --query-gpu=index,name,driver_version,pci.bus_id,clocks.max.sm --format=csv,noheader
+nvidia-smi --query-gpu=index,pci.bus_id --format=csv,noheader
 gpus=$(nvidia-smi --query-gpu=index --format=csv,noheader | wc -l)
 /tmp/f bench --gpus all --width 8 --height 8 --spp 1 -q > /dev/null 2>&1  # driver warm-up
 if [ -n "$SAME_GPU" ]; then

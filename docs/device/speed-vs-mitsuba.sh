@@ -1,55 +1,82 @@
 #!/bin/bash
-# furnace against Mitsuba 3 (cuda_ad_rgb) at equal samples on the seven speed configurations'
-# scenes, in one device command: Mitsuba's Msamples/s (its render_s over 4 passes), furnace's
-# (`furnace bench --spp` the same total, random sampler like Mitsuba's independent one) with the
-# defaults, with the profiling overrides in BEFORE (e.g. BEFORE=FURNACE_TRV_STACK=16: the shader
-# before a change), at each workgroup size in GROUP_SIZES (FURNACE_GROUP_SIZE; none by default),
-# with the binary .dev/furnace-old.xz when it travelled (the code before a change), and for the
-# emitter scenes furnace with Mitsuba's light sampling (power-proportional choice, area
-# sampling). ONLY (scene names of speed-env.sh's `equal`, e.g. "cbox cbox_area") runs a part, to
-# stay within one device command. Then the film with BEFORE, at each size and of the old binary
-# against the default's (FILMS=0 skips them).
-# Needs Mitsuba unpacked to /root/site (a first command carrying .mi), .gl/,
-# .dev/furnace-new.xz, .dev/sc/{cbox,interior_19880}.*, .dev/oracle/.
-xz -dc .dev/furnace-new.xz > /tmp/fnew; chmod +x /tmp/fnew
-if [ -f .dev/furnace-old.xz ]; then xz -dc .dev/furnace-old.xz > /tmp/fold; chmod +x /tmp/fold; fi
-source docs/device/speed-env.sh
-echo "== Mitsuba and furnace at equal samples, random sampler"
-for v in "${equal[@]}"; do
-  IFS='|' read -r s size path spp passes b <<< "$v"
-  if [ -n "$ONLY" ] && [[ " $ONLY " != *" $s "* ]]; then continue; fi
-  mitsuba_at $s $size $spp $passes
-  args="--scene $path --width ${size%x*} --height ${size#*x} --bounces $b --sampler random --spp $((spp*passes))"
-  bench "furnace $s $size" fnew $args
-  if [ -n "$BEFORE" ]; then (export $BEFORE; bench "furnace $s $size before ($BEFORE)" fnew $args); fi
-  if [ -x /tmp/fold ]; then bench "furnace $s $size before (furnace-old)" fold $args; fi
-  for g in $GROUP_SIZES; do FURNACE_GROUP_SIZE=$g bench "furnace $s $size group $g" fnew $args; done
-  case $s in cbox_area|cbox_many_lights)
-    bench "furnace $s $size power+area" fnew $args --light-selection power --triangle-sampling area
-    if [ -x /tmp/fold ]; then bench "furnace $s $size power+area before (furnace-old)" fold $args --light-selection power --triangle-sampling area; fi;;
-  esac
-done
-[ "$FILMS" = 0 ] && exit 0
-echo "== the film with BEFORE, at each workgroup size and of the old binary against the default's"
-for sc in "" /tmp/sc/cbox_area.gltf /tmp/sc/cbox_many_lights.gltf /tmp/sc/envmap_spheres.gltf $I; do
-  /tmp/fnew render $sc --backend gpu --width 320 --height 240 --spp 64 --out $W/gdefault.exr -q > /dev/null 2>&1
-  if [ -n "$BEFORE" ]; then
-    env $BEFORE /tmp/fnew render $sc --backend gpu --width 320 --height 240 --spp 64 --out $W/gbefore.exr -q > /dev/null 2>&1
-    echo "${sc:-cbox} before ($BEFORE) against the default: $(/tmp/fnew compare $W/gbefore.exr $W/gdefault.exr | grep RMSE)"
+# GPU speed: furnace binaries interleaved with Mitsuba 3 (cuda_ad_rgb) at equal samples on each
+# reference scene, one device command; prints a Markdown table.
+#
+#   bash docs/device/speed-vs-mitsuba.sh .dev/furnace-a.xz [.dev/furnace-b.xz ...]
+#
+# Per scene, Mitsuba renders SPP samples per pixel (passes of 64) twice and the second is quoted
+# (the first runs while the GPU's clocks rise); then ROUNDS rounds in which every binary runs
+# `furnace bench --backend gpu --spp SPP --no-rays` in turn. The last column is the first
+# binary's median over Mitsuba's, and with two binaries or more each one's median over the first
+# binary's: the before/after check of a change (the same samples: expect ±1 %).
+#
+# SCENES   names among: cbox256 cbox cbox_area cbox_many_lights cbox_point cbox_sun_disc
+#          envmap_spheres glass_box glass_absorb interior (default: all but interior, which needs
+#          .dev/sc/interior_19880.* from make_interior.py)
+# SPP (256), ROUNDS (3), SAMPLER (random: Mitsuba's independent sampler; sobol is furnace's
+# default), WIDTH x HEIGHT (1920 x 1080; cbox256 is 256², the interior 1920 x 1440 at 6 bounces),
+# MITSUBA=0 skips Mitsuba.
+# Needs .gl/, the binaries, and for Mitsuba .mi/ (or MITSUBA_SITE) and .dev/oracle/ (README.md);
+# Mitsuba's cbox needs .dev/sc/cbox.{gltf,bin} from ../shared/references/cbox.
+set -u
+source docs/device/env.sh
+args=("$@")
+unpack "$@"
+[ ${#bins[@]} -gt 0 ] || { echo "usage: $0 FURNACE.xz [FURNACE.xz ...]"; exit 2; }
+mi_ok=0
+if [ "${MITSUBA:-1}" != 0 ] && mitsuba_setup; then mi_ok=1; fi
+w=${WIDTH:-1920}; h=${HEIGHT:-1080}; spp=${SPP:-256}; sampler=${SAMPLER:-random}
+# name | furnace scene | Mitsuba scene | WxH | bounces
+configs=("cbox256|cbox|cbox|256x256|4" "cbox|cbox|cbox|${w}x$h|4"
+  "cbox_area|$SC/cbox_area.gltf|cbox_area|${w}x$h|4" "cbox_many_lights|$SC/cbox_many_lights.gltf|cbox_many_lights|${w}x$h|4"
+  "cbox_point|$SC/cbox_point.gltf|cbox_point|${w}x$h|4" "cbox_sun_disc|$SC/cbox_sun_disc.gltf|cbox_sun_disc|${w}x$h|4"
+  "envmap_spheres|$SC/envmap_spheres.gltf|envmap_spheres|${w}x$h|4"
+  "glass_box|$SC/glass_box.gltf|glass_box|${w}x$h|8" "glass_absorb|$SC/glass_absorb.gltf|glass_absorb|${w}x$h|8"
+  "interior|$SC/interior_19880.gltf|interior_19880|1920x1440|6")
+want=" ${SCENES:-cbox256 cbox cbox_area cbox_many_lights cbox_point cbox_sun_disc envmap_spheres glass_box glass_absorb} "
+rows=/tmp/rows.txt; : > $rows
+for c in "${configs[@]}"; do
+  IFS='|' read -r name scene mscene size b <<< "$c"
+  [[ $want == *" $name "* ]] || continue
+  mrate=-
+  if [ $mi_ok = 1 ]; then
+    # Mitsuba renders passes of at most 64 spp: the largest such divisor of SPP.
+    per_pass=64; while [ $((spp % per_pass)) != 0 ]; do per_pass=$((per_pass - 1)); done
+    mitsuba "$mscene" "$size" $per_pass $((spp / per_pass)) --max-depth=$((b + 1)) > /dev/null
+    mrate=$(mitsuba "$mscene" "$size" $per_pass $((spp / per_pass)) --max-depth=$((b + 1)))
   fi
-  for g in $GROUP_SIZES; do
-    FURNACE_GROUP_SIZE=$g /tmp/fnew render $sc --backend gpu --width 320 --height 240 --spp 64 --out $W/g$g.exr -q > /dev/null 2>&1
-    echo "${sc:-cbox} group $g against the default: $(/tmp/fnew compare $W/g$g.exr $W/gdefault.exr | grep RMSE)"
-  done
-  if [ -x /tmp/fold ]; then
-    /tmp/fold render $sc --backend gpu --width 320 --height 240 --spp 64 --out $W/gold.exr -q > /dev/null 2>&1
-    echo "${sc:-cbox} furnace-old against the default: $(/tmp/fnew compare $W/gold.exr $W/gdefault.exr | grep RMSE)"
-    for o in "--light-selection power --triangle-sampling area" "--light-selection power" "--triangle-sampling area"; do
-      case $sc in *cbox_area*|*many_lights*)
-        /tmp/fold render $sc $o --backend gpu --width 320 --height 240 --spp 64 --out $W/gold.exr -q > /dev/null 2>&1
-        /tmp/fnew render $sc $o --backend gpu --width 320 --height 240 --spp 64 --out $W/gnew.exr -q > /dev/null 2>&1
-        echo "${sc:-cbox} $o: furnace-old against new: $(/tmp/fnew compare $W/gold.exr $W/gnew.exr | grep RMSE)";;
-      esac
+  echo "$name $size $b bounces: Mitsuba $mrate"
+  line="$name|$size|$b|$mrate"
+  for k in "${!bins[@]}"; do rates[$k]=""; done
+  for round in $(seq "${ROUNDS:-3}"); do
+    for k in "${!bins[@]}"; do
+      "${bins[$k]}" bench --backend gpu --scene "$scene" --width "${size%x*}" --height "${size#*x}" \
+        --bounces "$b" --sampler "$sampler" --spp "$spp" --no-rays -q --json /tmp/b.json > /tmp/b.log 2>&1 \
+        || tail -2 /tmp/b.log
+      r=$(python3 -c "import json; print('%.1f' % json.load(open('/tmp/b.json'))['msamples_per_s'])" 2> /dev/null || echo nan)
+      echo "  round $round, binary $((k + 1)) (${args[$k]}): $r"
+      rates[$k]="${rates[$k]} $r"
     done
-  fi
+  done
+  for k in "${!bins[@]}"; do line="$line|${rates[$k]# }"; done
+  echo "$line" >> $rows
 done
+echo
+echo "furnace: $*; $sampler sampler, $spp spp, \`furnace bench --backend gpu --no-rays\`; Mitsuba 3 cuda_ad_rgb, the second of two renders; Msamples/s"
+echo
+python3 - "$rows" "${#bins[@]}" <<'PY'
+import statistics, sys
+rows, n = sys.argv[1], int(sys.argv[2])
+head = ["scene", "size", "bounces", "Mitsuba"] + [f"furnace {k + 1}" for k in range(n)] + ["furnace 1 / Mitsuba"]
+head += [f"{k + 1} / 1" for k in range(1, n)]
+print("| " + " | ".join(head) + " |")
+print("|" + "---|" * len(head))
+for row in open(rows):
+    f = row.strip().split("|")
+    runs = [[float(x) for x in r.split()] for r in f[4:]]
+    med = [statistics.median(r) if r else float("nan") for r in runs]
+    cells = f[:4] + [", ".join(f"{x:.1f}" for x in r) for r in runs]
+    cells.append(f"**{med[0] / float(f[3]):.2f}×**" if f[3] not in ("-", "") else "—")
+    cells += [f"{m / med[0]:.3f}" for m in med[1:]]
+    print("| " + " | ".join(cells) + " |")
+PY
