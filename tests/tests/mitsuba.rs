@@ -210,7 +210,7 @@
 //! (16×16 blocks) at 32 768 spp** (9.8 M paths, 16 s on 2 cores), measured z std 0.996, 1.094,
 //! 1.011 for seeds 11, 12, 13, ratios within ±0.27 % (± 0.13 %); at 4096 spp z std was 1.22,
 //! at 40×30 and 16 384 spp 1.15. On the GPU the same plan is 512 passes of 64 spp — minutes of
-//! lavapipe, so that test is ignored in CI and run on the H200 (`docs/device/environment.sh`);
+//! a software adapter, so that test is ignored in CI and run with `--ignored` on a hardware GPU;
 //! in CI the GPU traces the CPU's paths from the same samples on this scene
 //! (`tests/integrator.rs`, every environment-sampling mode, within 1.3·10⁻⁵ of the image mean).
 //! With compensated environment sampling (the default; the figures above were measured with
@@ -243,8 +243,9 @@
 //! 11 gives ratios 1.0001, 1.0000, 0.9999 (± 0.0006), z mean −0.26, z std 1.131) and **64²,
 //! 1024 passes of 1 spp** for the absorbing box (4.2 M paths, 6.5 s; 1.0000, 1.0003, 1.0004
 //! (± 0.0003), z std 1.005). The GPU test is the full-size one (256², 512 passes of 128 spp,
-//! ignored in CI: lavapipe runs glass paths ~7× slower than the box's), run on the H200:
-//! glass_absorb z std 1.020, glass_box 1.031, ratios within 10⁻⁴ (`docs/device/glass-h200.sh`).
+//! ignored in CI: a software adapter runs glass paths ~7× slower than the box's), run with
+//! `--ignored` on a hardware GPU: glass_absorb z std 1.020, glass_box 1.031, ratios within 10⁻⁴
+//! (`docs/device/references.sh` scores full-size renders of every reference the same way).
 //!
 //! ## It can fail
 //!
@@ -601,7 +602,7 @@ fn environment_map_matches_mitsuba_cpu() {
 }
 
 #[test]
-#[ignore = "32 768 spp: minutes on a software adapter; run with --ignored on a hardware GPU (docs/device/environment.sh)"]
+#[ignore = "32 768 spp: minutes on a software adapter; run with --ignored on a hardware GPU"]
 fn environment_map_matches_mitsuba_gpu() {
     compare(Backend::Gpu, "envmap_spheres_ref_bounces4");
 }
@@ -620,7 +621,7 @@ fn glass_box_matches_mitsuba_cpu() {
 }
 
 #[test]
-#[ignore = "full size, 65 536 spp: a hardware GPU's work (docs/device/glass-h200.sh); in CI the GPU traces the CPU's paths (tests/integrator.rs)"]
+#[ignore = "full size, 65 536 spp: a hardware GPU's work (run with --ignored); in CI the GPU traces the CPU's paths (tests/integrator.rs)"]
 fn glass_matches_mitsuba_gpu() {
     compare(Backend::Gpu, "glass_absorb_ref_bounces8");
     compare(Backend::Gpu, "glass_box_ref_bounces8");
