@@ -139,3 +139,4 @@ var<private> shadow_queued: u32 = 0u;
 fn defer_shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32, value: vec3<f32>) {
     shadow_rays[shadow_queued] = ShadowRay(origin, t_max, dir, value * vertex_absorption(b, t_max));
     shadow_queued += 1u;
+}
