@@ -1,7 +1,7 @@
 //! [`GpuRenderer`]: furnace-cpu's path tracer on the GPU.
 //!
-//! The shader is the concatenation of the twins — [`wgsl::SAMPLING`], [`wgsl::BRDF`],
-//! [`wgsl::SCENE`], [`wgsl::TRAVERSE`], the film module — and the integrator's own WGSL
+//! The shader is the concatenation of the twins — [`crate::wgsl::SAMPLING`], [`crate::wgsl::BRDF`],
+//! [`crate::wgsl::SCENE`], [`crate::wgsl::TRAVERSE`], the film module — and the integrator's own WGSL
 //! (`shadow.wgsl`, `lights.wgsl`, `integrator.wgsl`), a line-for-line twin of
 //! `CpuRenderer::trace` (same sampler dimensions, same branches), so the GPU estimates the
 //! same integral with the same sample points; images agree with the CPU's within noise

@@ -120,7 +120,7 @@ crate::wgsl_consts! {
 }
 
 /// The `emitters` buffer when light samples choose by the [`LightBvh`] `bvh` of `e`
-/// ([`LightSelection::Bvh`]), as `u32` words read by the shader as `vec4<u32>`: per emitter
+/// ([`furnace_render::LightSelection::Bvh`]), as `u32` words read by the shader as `vec4<u32>`: per emitter
 /// its triangle, its path from the root (two words, levels 0–31 then 32–63) and a pad —
 /// `4·n` words — then the nodes, depth first, [`LIGHT_BVH_NODE_WORDS`] each (`lo.xyz`, `φ`,
 /// `hi.xyz`, `cos θo`, `axis.xyz`, `child`, the floats as bits): 16 bytes per emitter and 48
