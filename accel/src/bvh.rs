@@ -63,11 +63,11 @@ impl BuildQuality {
     /// The preset chosen when none is given, by triangle count `n`:
     ///
     /// * `n ≤ 300 000` → [`VerySlow`](Self::VerySlow): reinsertion on every node. On the
-    ///   procedural interiors (a room of furniture and large walls) its trees render 1.4–1.8×
-    ///   faster than `Slow`'s (20% of the nodes reinserted) on the H200 and on the CPU; on the
-    ///   reference boxes 0–4%. It builds 287 k triangles in ~0.9 s instead of ~0.5 s on the
-    ///   development VM's two cores (obvhs builds on the current rayon pool; 1.6 s on one
-    ///   core; `BENCHMARKS.md`): paid once, against renders of seconds to minutes.
+    ///   procedural interiors (a room of furniture and large walls) its trees render much
+    ///   faster than `Slow`'s (20% of the nodes reinserted), on the GPU and on the CPU, and the
+    ///   reference boxes no slower; it builds in about twice `Slow`'s time (obvhs builds on the
+    ///   current rayon pool; `BENCHMARKS.md`): paid once, against renders of seconds to
+    ///   minutes.
     /// * `n ≤ 3 000 000` → [`Medium`](Self::Medium): builds 1.04 M triangles in 0.9 s on one
     ///   core (`BENCHMARKS.md`); `Slow` adds spatial splits and 128-bit Morton codes on top, a
     ///   cost that grows with the scene while the first frame does not. (`VerySlow` takes ~5 s
@@ -596,11 +596,8 @@ impl Bvh {
 
 /// Whether this CPU can run the queries' AVX2 versions (8-lane node test; the features LLVM may
 /// use in them: AVX2 and the bit instructions every AVX2 CPU has). Films do not depend on it:
-/// both node tests give the same masks. `FURNACE_CPU_NODE_TEST=4` turns it off (to compare).
+/// both node tests give the same masks.
 fn wide_node_test_available() -> bool {
-    if std::env::var_os("FURNACE_CPU_NODE_TEST").is_some_and(|v| v == "4") {
-        return false;
-    }
     #[cfg(target_arch = "x86_64")]
     {
         std::is_x86_feature_detected!("avx2")
@@ -751,9 +748,9 @@ const OBVHS_STACK: usize = 32;
 
 /// Largest CWBVH (in nodes) traversed with decoded [`WideNode`]s (256 bytes each, so 4 MiB
 /// here); larger trees keep obvhs's 80-byte nodes and node test. Decoding cuts the node test's
-/// instructions ~3x, but triples the bytes a ray touches: 10–25% faster on 15–20 k-triangle
-/// scenes (~2 k nodes), ~10% *slower* on the 1 M-triangle MetalRoughSpheres (107 k nodes,
-/// 27 MB decoded; `BENCHMARKS.md`). The limit sits between those two measurements.
+/// instructions about threefold, but triples the bytes a ray touches: it pays on trees of a few
+/// thousand nodes (15–20 k triangles) and costs on trees of ~10⁵ nodes (the 1 M-triangle
+/// MetalRoughSpheres, 27 MB decoded; `BENCHMARKS.md`). The limit sits between the two.
 const WIDE_NODE_LIMIT: usize = 16_384;
 
 /// Factor on the distance beyond which obvhs may cull a box (`1 + 2^-12`).

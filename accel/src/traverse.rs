@@ -7,10 +7,10 @@
 //! an incoherent closest-hit query on the Cornell box (`BENCHMARKS.md`). [`WideNode`] keeps the
 //! same quantised planes as exact `f32` (256 bytes per node instead of 80), tests the boxes
 //! without branches and loops only over the hit leaf children (inner children's mask bits come
-//! from a table). A branch-free mask of the leaf children (lane masks selecting precomputed
-//! bits, summed) ran ~7% slower with about as many instructions: a ray's traversal is a chain
-//! of dependent node visits, and the select-and-sum lengthened each link, where the loop's
-//! predicted branches do not. The arithmetic per child and axis is obvhs's, in the same order
+//! from a table). The leaf children are looped over rather than masked without branches (lane
+//! masks selecting precomputed bits, summed): a ray's traversal is a chain of dependent node
+//! visits, and a select-and-sum lengthens each link, where the loop's predicted branches do not
+//! (`BENCHMARKS.md`). The arithmetic per child and axis is obvhs's, in the same order
 //! (`q · (extent / d) + (p − o) / d`, then max/min), so box decisions are the same except for
 //! the entry cut-off: obvhs clamps entry distances to an absolute `1e-4`, this test to `0` (it
 //! visits a superset of obvhs's boxes).

@@ -6,20 +6,19 @@
 //! ```sh
 //! cargo run --release -p furnace-gpu --features pipeline-stats --example pipeline_stats -- \
 //!     [SCENE.gltf|cbox|interior:N] [--checks checked|noloop|unchecked] [--aovs] [--f32-film] \
-//!     [--counters] [--spirv OUT.spv]
+//!     [--counters] [--group-size N] [--stack N] [--spirv OUT.spv]
 //! ```
 //!
 //! The SPIR-V is naga's, written with the options wgpu 30's Vulkan backend uses on a device with
 //! `robustBufferAccess2` (buffer accesses left to the driver) and the runtime checks of
 //! [`ShaderChecks`] (default: what every adapter gets, `noloop`; `checked` also bounds loops by a
 //! counter). `--counters` compiles the counting kernel (`GpuRenderer::set_count_rays`) instead of
-//! the rendering one. The profiling overrides `FURNACE_TRV_STACK`, `FURNACE_GROUP_SIZE` and
-//! `FURNACE_SHADER_EDIT` apply as when furnace builds the pipeline ([`ProfilingOverrides`]); the
-//! workgroup size is otherwise what a hardware adapter with NVIDIA's limits gets
-//! ([`furnace_gpu::integrator::default_group_size`]), and the traversal stack the scene's tree
-//! gets ([`furnace_gpu::traverse::stack_size_for`]). The pipeline is created on the first
-//! Vulkan device that has the extension (NVIDIA's driver has it; Mesa 22's lavapipe does not:
-//! then on the first device, for its compile time only — which for lavapipe leaves the LLVM
+//! the rendering one. The workgroup size is what a hardware adapter with NVIDIA's limits gets
+//! ([`furnace_gpu::integrator::default_group_size`]) unless `--group-size` gives one (a
+//! multiple of 32 up to 1024), and the traversal stack what the scene's tree gets
+//! ([`furnace_gpu::traverse::stack_size_for`]) unless `--stack` gives its node groups. The pipeline is created on the first
+//! Vulkan device that has the extension (NVIDIA's driver has it; Mesa 22's software Vulkan does not:
+//! then on the first device, for its compile time only — which for it leaves the LLVM
 //! compile to the first dispatch), with its bindings from
 //! [`furnace_gpu::integrator::binding_table`]. Nothing is dispatched.
 #![allow(unsafe_code)]
@@ -31,7 +30,7 @@ use ash::vk;
 use furnace_accel::{BuildOptions, Bvh};
 use furnace_gpu::film::FilmPrecision;
 use furnace_gpu::integrator::{
-    ProfilingOverrides, SceneFeatures, ShaderChecks, binding_table, default_group_size, pipeline_source,
+    SceneFeatures, ShaderChecks, binding_table, default_group_size, pipeline_source,
 };
 use furnace_render::RenderSettings;
 use furnace_scene::Scene;
@@ -44,7 +43,20 @@ struct Options {
     /// The counting kernel.
     counters: bool,
     precision: FilmPrecision,
+    /// Invocations per workgroup; None: the hardware default.
+    group_size: Option<u32>,
+    /// Node groups of the traversal stack; None: the scene's tree's.
+    stack: Option<u32>,
     spirv: Option<String>,
+}
+
+/// The positive integer that follows `flag`, at most `max`.
+fn number(flag: &str, value: Option<String>, max: u32) -> Result<u32, String> {
+    value
+        .as_deref()
+        .and_then(|v| v.parse::<u32>().ok())
+        .filter(|&n| n > 0 && n <= max)
+        .ok_or_else(|| format!("{flag} takes an integer from 1 to {max}, not {value:?}"))
 }
 
 fn parse() -> Result<Options, String> {
@@ -54,6 +66,8 @@ fn parse() -> Result<Options, String> {
         aovs: false,
         counters: false,
         precision: FilmPrecision::F64,
+        group_size: None,
+        stack: None,
         spirv: None,
     };
     let mut args = std::env::args().skip(1);
@@ -68,6 +82,11 @@ fn parse() -> Result<Options, String> {
             "--aovs" => o.aovs = true,
             "--counters" => o.counters = true,
             "--f32-film" => o.precision = FilmPrecision::F32Pass,
+            "--group-size" => match number("--group-size", args.next(), 1024)? {
+                n if n % 32 == 0 => o.group_size = Some(n),
+                n => return Err(format!("--group-size takes a multiple of 32, not {n}")),
+            },
+            "--stack" => o.stack = Some(number("--stack", args.next(), 64)?),
             "--spirv" => o.spirv = Some(args.next().ok_or("--spirv needs a path")?),
             s if s.starts_with("--") => return Err(format!("unknown option {s}")),
             s => o.scene = s.to_string(),
@@ -117,13 +136,15 @@ fn main() -> Result<(), Box<dyn Error>> {
     let settings = RenderSettings { aovs: o.aovs, ..Default::default() };
     let features = SceneFeatures { trace_counters: o.counters, ..SceneFeatures::of(&scene, &settings) };
     // The workgroup size furnace would choose on a hardware adapter with NVIDIA's limits (1024
-    // invocations, 48 KiB of workgroup memory), unless FURNACE_GROUP_SIZE says otherwise.
-    let overrides = ProfilingOverrides::from_env()?;
-    let group = overrides.group_size.unwrap_or(default_group_size(true, 1024, 48 * 1024, features));
+    // invocations, 48 KiB of workgroup memory), unless --group-size says otherwise.
+    let group = o.group_size.unwrap_or(default_group_size(true, 1024, 48 * 1024, features));
     // The traversal stack sized by the scene's tree, as GpuRenderer sizes it.
-    let g = &scene.geometry;
-    let depth = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default()).depth();
-    let wgsl = pipeline_source(o.precision, features, &overrides, group, overrides.stack_size(depth))?;
+    let stack = o.stack.unwrap_or_else(|| {
+        let g = &scene.geometry;
+        let depth = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default()).depth();
+        furnace_gpu::traverse::stack_size_for(depth)
+    });
+    let wgsl = pipeline_source(o.precision, features, group, stack);
     let checks = o.checks.unwrap_or_default();
     let words = spirv(&wgsl, checks)?;
     if let Some(path) = &o.spirv {

@@ -93,7 +93,7 @@ impl From<GpuError> for furnace_render::RenderError {
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub enum AdapterChoice {
     /// The best one: a discrete GPU, else integrated, else virtual, else a software one
-    /// (lavapipe, WARP, llvmpipe).
+    /// (Mesa's software Vulkan, WARP).
     #[default]
     Best,
     /// Only a hardware adapter (discrete, integrated or virtual); `None` is an error.
@@ -126,8 +126,8 @@ pub struct GpuContext {
 
 /// The adapters of Vulkan, Metal and DX12 — the backends furnace supports (`WGPU_BACKEND`
 /// chooses others). Not OpenGL: wgpu would fall back to Mesa's GL llvmpipe where no Vulkan
-/// driver is installed (200× slower than lavapipe, chosen silently), and probing GL on a
-/// headless machine prints driver noise on stderr.
+/// driver is installed (far slower than Mesa's software Vulkan, and chosen silently), and
+/// probing GL on a headless machine prints driver noise on stderr.
 ///
 /// One instance per process, shared by every context (and by a viewer's window surface, which
 /// must come from the instance of the device that draws into it): NVIDIA's Vulkan driver finds no adapter
@@ -179,7 +179,7 @@ pub fn is_hardware(info: &wgpu::AdapterInfo) -> bool {
     )
 }
 
-/// [`GpuError::NoAdapter`] for a search described by `what` (empty, or e.g. ` matching "H200"`)
+/// [`GpuError::NoAdapter`] for a search described by `what` (empty, or e.g. ` matching "NVIDIA"`)
 /// among `adapters` (in [`GpuContext::adapters`]' order): it lists them with their indices and PCI
 /// addresses, or says how to install a driver when there is none.
 pub fn no_adapter(what: &str, adapters: &[wgpu::AdapterInfo]) -> GpuError {
@@ -369,7 +369,7 @@ mod tests {
         assert_eq!(pci_address("00000000:18:00.0"), want, "nvidia-smi's spelling");
         assert_eq!(pci_address("18:00.0"), want);
         assert_eq!(pci_address(" 0001:c1:1f.7 "), Some((1, 0xc1, 0x1f, 7)));
-        for bad in ["", "0", "18:00", "H200", "0000:18:00:00.0", "zz:00.0", "1:2:3.x"] {
+        for bad in ["", "0", "18:00", "GPU-1", "0000:18:00:00.0", "zz:00.0", "1:2:3.x"] {
             assert_eq!(pci_address(bad), None, "{bad}");
         }
     }

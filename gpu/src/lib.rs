@@ -31,7 +31,7 @@
 //!
 //! This crate's own tests (`film.rs`: 10⁶ frames without drift in both precisions;
 //! `errors.rs`: device loss, oversized buffers) and the parity tests need an adapter: in CI
-//! that is Mesa's lavapipe (software Vulkan, installed by `.ci/run`). A test that finds no
+//! that is Mesa's software Vulkan driver (installed by `.ci/run`). A test that finds no
 //! adapter **fails**, unless the environment variable `FURNACE_SKIP_GPU_TESTS=1` is set, in
 //! which case it prints why and passes (`furnace_tests::gpu::test_context`).
 

@@ -28,7 +28,7 @@
 //!
 //! # How parity is tested
 //!
-//! `tests/sampler_parity.rs` runs the WGSL on the test adapter (lavapipe in CI) over more than
+//! `tests/sampler_parity.rs` runs the WGSL on the test adapter (software Vulkan in CI) over more than
 //! 10⁵ `(pixel, index, dimension)` triples per sampler — index 0, indices around every 2^k,
 //! indices ≥ N for the fixed-N kinds, huge pixel ids, dimensions 0…64 and near 2^32, seeds 0
 //! and large, N from 1 to 2^30 — and compares `bits`, `bits_2d`, `value` and `value_2d` bit for

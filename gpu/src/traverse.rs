@@ -35,8 +35,8 @@ use std::mem::offset_of;
 /// Node groups the WGSL traversal stack holds (`TRV_STACK_SIZE` in `traverse.wgsl`) at most: one
 /// per tree level below the root, so trees up to this depth never overflow (deeper ones finish
 /// with the fallback sweep, same hits). Half of obvhs's (and `furnace-accel`'s CPU) 32: the
-/// smaller stack made the megakernel 7–15 % faster on the H200, and real scenes stay below depth
-/// 11 (10^7 triangles). Shallower trees get a stack of their own depth ([`stack_size_for`]).
+/// stack is per-invocation private memory, a smaller one makes the megakernel faster
+/// (BENCHMARKS.md), and real scenes stay below depth 11 (10^7 triangles). Shallower trees get a stack of their own depth ([`stack_size_for`]).
 pub const DEFAULT_STACK_SIZE: u32 = 16;
 
 /// The line of `traverse.wgsl` that declares a stack of `size` node groups (the module's own is
@@ -53,8 +53,7 @@ pub const TRIANGLE_WORDS: usize = size_of::<GpuTriangle>() / 4;
 /// The traversal stack for a tree of `depth` node levels ([`Bvh::depth`]): `depth − 1` node
 /// groups (the most the traversal pushes, so it never overflows), at least 1, at most
 /// [`DEFAULT_STACK_SIZE`]. The stack is per-invocation private memory, and its size, not only
-/// its use, costs: on the H200 the 1080p Cornell box (a tree of a few levels) ran 22 % faster
-/// with 6 entries than with 16 (BENCHMARKS.md, "Speed").
+/// its use, costs: a shallow tree's kernel is faster with a stack of its depth (BENCHMARKS.md).
 pub fn stack_size_for(depth: usize) -> u32 {
     u32::try_from(depth.saturating_sub(1)).unwrap_or(u32::MAX).clamp(1, DEFAULT_STACK_SIZE)
 }

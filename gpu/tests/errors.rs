@@ -11,13 +11,13 @@
 //! - **Too large**: the checks run before anything is allocated, so they are provoked at no
 //!   cost: a film of one row more than the largest storage binding holds (any adapter), and a
 //!   scene whose vertex buffer is 16 bytes over it (built in host memory, so only where the
-//!   limit is at most 256 MiB, as lavapipe's 128 MiB; elsewhere that test prints that it is left
+//!   limit is at most 256 MiB, as the software adapter's 128 MiB; elsewhere that test prints that it is left
 //!   out). The error must name the buffer and both sizes.
 //! - **Out of memory**: exhausting real memory would take the machine's memory with it
-//!   (lavapipe's device memory *is* host memory). Instead a child process (this test binary,
+//!   (a software adapter's device memory *is* host memory). Instead a child process (this test binary,
 //!   running [`oom_child`]) opens the device, caps its own address space (`prlimit --as`, from
 //!   util-linux) at what it uses plus 64 MiB, and creates a film as large as one binding allows
-//!   (160 MiB on lavapipe): the driver's allocation fails at once, nothing is touched, and
+//!   (160 MiB on the software adapter): the driver's allocation fails at once, nothing is touched, and
 //!   furnace-gpu must return `GpuError::Wgpu` saying "memory"; an 8×8 film allocated next must
 //!   work. The same child without the cap (the control) allocates both. Linux only; on a
 //!   hardware adapter the cap does not bound device memory, so the test prints that and passes.
@@ -46,7 +46,7 @@ fn within<T: Send + 'static>(what: &str, limit: Duration, f: impl FnOnce() -> T 
     }
 }
 
-/// How long one call on a lost device may take: answers come at once; lavapipe under a loaded
+/// How long one call on a lost device may take: answers come at once; a software adapter under a loaded
 /// 2-core machine takes seconds for anything, so 60 s separates slow from hung.
 const LIMIT: Duration = Duration::from_secs(60);
 
@@ -225,7 +225,7 @@ fn oom_child() {
             .expect("prlimit (util-linux) runs");
         assert!(capped.success(), "prlimit failed");
     }
-    // As large as one binding allows (128 MiB of sums on lavapipe, plus 32 MiB of counts):
+    // As large as one binding allows (128 MiB of sums on the software adapter, plus 32 MiB of counts):
     // legal, but more than the 64 MiB of address space left under the cap.
     let precision = FilmPrecision::for_context(&ctx);
     let limit = ctx.max_storage_binding().min(ctx.device.limits().max_buffer_size);

@@ -109,7 +109,7 @@ fn accumulate(ctx: &GpuContext, precision: FilmPrecision, module: &str, fold: bo
     });
     // Passes of PASS frames, one dispatch each, as a progressive render does them (an F32Pass
     // film is folded after each). Also keeps each invocation far below llvmpipe's limit of
-    // 65535 loop iterations per invocation, past which lavapipe silently ends loops.
+    // 65535 loop iterations per invocation, past which the software adapter silently ends loops.
     const PASS: u32 = 1000;
     for k in 0..FRAMES.div_ceil(PASS) {
         let params = uniform(ctx, &[PIXELS, PASS.min(FRAMES - k * PASS), BAD_EVERY, k * PASS]);
@@ -171,7 +171,7 @@ fn worst(data: &Film, exact: &[([f64; 3], u64)], mean_is_stored: bool) -> f64 {
 
 /// 10⁶ frames into 64 pixels, both precisions: relative error below 1e-5 (the brief's bound);
 /// f64 sums err by ≤ n·2⁻⁵³ ≈ 1e-10, compensated f32 by ≈ 2·2⁻²⁴ ≈ 1.2e-7. The thesis's f32
-/// Measured on lavapipe: f64 0 (bit-identical to the CPU's f64 sum, same order), compensated
+/// Measured on the software adapter: f64 0 (bit-identical to the CPU's f64 sum, same order), compensated
 /// 2.9e-7, thesis running mean 9.3e-3. The thesis's f32
 /// running mean must exceed the bound (it drifted visibly after ~2000 frames), which shows the
 /// test can fail.

@@ -1,4 +1,4 @@
-//! [`MultiGpuRenderer`] on two devices of one adapter (lavapipe exposes one adapter per
+//! [`MultiGpuRenderer`] on two devices of one adapter (Mesa's software Vulkan exposes one adapter per
 //! process; two devices opened on it are as separate as two GPUs: their own queues, memory and
 //! loss). Every film is checked **bit for bit** against single-device renderers given the same
 //! sample ranges in the same order and added on the host the same way: the share of each

@@ -160,7 +160,8 @@ fn absent_light_features_compose_no_code() {
         FilmPrecision::F64,
         SceneFeatures { point_lights: true, emitters: true, sun_disc: true, ..Default::default() },
     );
-    for present in ["fn sample_emitter", "fn sample_sun_disc", "var ray_pdf", "var<storage, read> emitters"] {
+    for present in ["fn sample_emitter", "fn sample_sun_disc", "ray_pdf: f32", "var<storage, read> emitters"]
+    {
         assert!(all.contains(present), "{present} missing from the shader of a scene with every light");
     }
     // Chosen by power: no light-BVH code; by the BVH: no alias-table code.
@@ -209,7 +210,7 @@ fn absent_light_features_compose_no_code() {
         FilmPrecision::F64,
         SceneFeatures { environment: true, env_sampling: true, ..Default::default() },
     );
-    for present in ["fn env_sample", "fn env_pdf", "fn sample_environment", "var ray_pdf"] {
+    for present in ["fn env_sample", "fn env_pdf", "fn sample_environment", "ray_pdf: f32"] {
         assert!(
             sampled.contains(present),
             "{present} missing from the shader of a light-sampled environment"

@@ -83,9 +83,9 @@ struct TraceStats {
 var<private> trace_stats: TraceStats;
 
 /// Node groups the traversal stack holds; see "Traversal stack and its overflow" above. 16, not
-/// the CPU's 32: measured on the H200, the 32-entry stack took 112 bytes of local memory per
-/// invocation and more shared memory, and the megakernel ran 7–15 % slower (BENCHMARKS.md); the
-/// deepest stack seen in a real scene is 10 (10^7 triangles). The Rust side rewrites this line
+/// the CPU's 32: a 32-entry stack takes more local and shared memory per invocation and slows
+/// the megakernel (BENCHMARKS.md); the deepest stack seen in a real scene is 10 (10^7
+/// triangles). The Rust side rewrites this line
 /// to test the overflow path: keep its form.
 const TRV_STACK_SIZE: u32 = 16u;
 
@@ -218,8 +218,8 @@ struct TrvRay {
 fn trv_make_ray(o: vec3<f32>, d: vec3<f32>) -> TrvRay {
     let inv = vec3<f32>(trv_safe_recip(d.x), trv_safe_recip(d.y), trv_safe_recip(d.z));
     // Sign bits, not `d < 0`: a −0.0 component has the reciprocal −2^100, so it must enter
-    // through the far plane like any negative one (with `d < 0` such a ray missed every box;
-    // furnace-accel's NodeRay had the same bug, fixed in 2245c1b).
+    // through the far plane like any negative one (with `d < 0` such a ray would miss every
+    // box), as furnace-accel's NodeRay does.
     let neg = (bitcast<vec3<u32>>(d) >> vec3<u32>(31u)) == vec3<u32>(1u);
     let oct = select(0x04040404u, 0u, neg.x) | select(0x02020202u, 0u, neg.y) | select(0x01010101u, 0u, neg.z);
     return TrvRay(o, inv, neg, oct);
