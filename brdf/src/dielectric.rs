@@ -20,7 +20,7 @@
 //! BSDF: on a path from a camera in air to lights in air the factors cancel).
 
 use crate::ggx::{ALPHA_MIN, Ggx, Masking, SpecularSampling, reflect};
-use crate::material::MetallicRoughness;
+use crate::metallic_roughness::MetallicRoughness;
 use crate::{Bsdf, Rgb, clamp_rgb};
 use glam::{Vec2, Vec3};
 

@@ -14,6 +14,9 @@
 //! * [`Dielectric`] — glass: smooth, rough (Walter et al. 2007) or thin-walled, with the exact
 //!   unpolarised Fresnel reflectance; [`Transmissive`] mixes one with the opaque material
 //!   (KHR_materials_transmission). Dielectrics see both hemispheres ([`dielectric`]).
+//! * [`HitBsdf`] — the glTF material at a hit as one layered BSDF: the lobes above, their
+//!   weights and albedo scaling, built from [`LayeredParams`] ([`layered`]: the table of
+//!   lobes and the layering rule).
 //!
 //! ## Conventions ([`Bsdf`])
 //!
@@ -61,7 +64,8 @@ mod frame;
 pub mod fresnel;
 pub mod ggx;
 mod lambert;
-mod material;
+pub mod layered;
+mod metallic_roughness;
 mod specular;
 #[rustfmt::skip]
 mod tables;
@@ -71,7 +75,8 @@ pub use dielectric::{Dielectric, Fresnel, Interface, ScatterSample, Transmissive
 pub use frame::Frame;
 pub use ggx::{Ggx, Masking, SpecularSampling};
 pub use lambert::Lambert;
-pub use material::{MetallicRoughness, MetallicRoughnessParams, luminance};
+pub use layered::{HitBsdf, LayeredParams};
+pub use metallic_roughness::{MetallicRoughness, MetallicRoughnessParams, luminance};
 pub use specular::{GgxSpecular, SpecularOptions};
 
 use glam::{Vec2, Vec3};

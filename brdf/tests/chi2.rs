@@ -17,8 +17,8 @@
 //! * [`MetallicRoughness`] (one-sample mixture of its diffuse and specular lobes) for four
 //!   materials × θo ∈ {0°, 45°, 80°, 89°}.
 //!
-//! **Significance.** Every configuration is one test of the family of [`TESTS`]; each must
-//! reach the Šidák-corrected p-value `1 − 0.99^(1/TESTS)`, so the chance that any of them fails
+//! **Significance.** Every configuration is one test of the family ([`family_size`]); each must
+//! reach the Šidák-corrected p-value `1 − 0.99^(1/N)` for a family of N, so the chance that any of them fails
 //! for a correct sampler is 1%. Seeds are fixed, so the outcome is deterministic.
 //!
 //! **Sharp lobes.** At α = 0.02 the GGX lobe (≈ 2° wide, and at normal incidence a ring of
@@ -31,7 +31,9 @@
 //! every configuration here. (At 89° the pdf's own `f32` rounding is a few 10⁻⁵, so a much
 //! tighter tolerance could not converge.)
 //!
-//! One `#[test]` per lobe and method (and per α for GGX), so that cargo runs them in parallel.
+//! The matrix is a table, [`LOBES`]: one row per lobe (its groups of configurations built from
+//! the lobe's parameters, its view angles, its first seed), so a new lobe adds a row. One test
+//! runs every group in parallel.
 //! On failure every failing configuration's report is printed and its tables are written to
 //! `target/test-output/chi2-brdf/<name>.{txt,csv,ppm}`. Run with `--nocapture` to see the
 //! p-value of every configuration.
@@ -57,12 +59,32 @@ const METHODS: [SpecularSampling; 3] =
 /// View angles θo in degrees for the metallic-roughness materials.
 const MATERIAL_THETAS: [f32; 4] = [0.0, 45.0, 80.0, 89.0];
 
-/// Number of metallic-roughness materials ([`material`]).
-const MATERIALS: usize = 4;
+/// A BSDF under test, shared with the thread that tests it.
+type BoxedBsdf = Box<dyn Bsdf + Send + Sync>;
 
-/// Number of chi-square tests in this file: the Šidák family.
-const TESTS: usize =
-    THETAS.len() + METHODS.len() * ALPHAS.len() * THETAS.len() + MATERIALS * MATERIAL_THETAS.len();
+/// One row of the table of lobes: the chi-square family is every configuration of every row.
+struct LobeRow {
+    /// Its groups of configurations: a label and the BSDF, built from the lobe's parameters.
+    groups: fn() -> Vec<(String, BoxedBsdf)>,
+    /// The view angles θo (degrees) every group is tested at; configuration `(g, t)` is
+    /// labelled `<group label>_theta<θo>`.
+    thetas: &'static [f32],
+    /// The seed of the first configuration; configuration `(g, t)` gets
+    /// `seed + g·thetas.len() + t`.
+    seed: u32,
+}
+
+/// The lobes of `furnace-brdf` and the glTF material that mixes them. A new lobe adds a row.
+static LOBES: [LobeRow; 3] = [
+    LobeRow { groups: lambert_groups, thetas: &THETAS, seed: 100 },
+    LobeRow { groups: ggx_groups, thetas: &THETAS, seed: 1000 },
+    LobeRow { groups: metallic_roughness_groups, thetas: &MATERIAL_THETAS, seed: 2000 },
+];
+
+/// Number of chi-square tests of the table: the Šidák family.
+fn family_size() -> usize {
+    LOBES.iter().map(|row| (row.groups)().len() * row.thetas.len()).sum()
+}
 
 /// The azimuth of every `wo` that is not the normal: an arbitrary angle, so that the lobe is
 /// not symmetric about a grid line (a sign error in `y` would be invisible at φo = 0).
@@ -74,7 +96,7 @@ fn harness(seed: u32) -> ChiSquareTest {
     ChiSquareTest {
         sample_count: 1_000_000,
         significance: 0.01,
-        test_count: TESTS,
+        test_count: family_size(),
         seed,
         ..ChiSquareTest::default()
     }
@@ -137,71 +159,31 @@ fn check_all(results: &[(String, ChiSquareResult)]) {
     );
 }
 
-#[test]
-fn chi2_lambert() {
-    let bsdf = Lambert::new(Vec3::new(0.8, 0.5, 0.2));
-    let results: Vec<_> = THETAS
-        .iter()
-        .enumerate()
-        .map(|(i, &theta)| (format!("lambert_theta{theta}"), run(&bsdf, view(theta), 100 + i as u32)))
-        .collect();
-    check_all(&results);
+/// A Lambert lobe of a coloured albedo.
+fn lambert_groups() -> Vec<(String, BoxedBsdf)> {
+    vec![("lambert".to_string(), Box::new(Lambert::new(Vec3::new(0.8, 0.5, 0.2))))]
 }
 
-/// The GGX lobe with one sampling method and one α, at every θo of [`THETAS`].
-fn ggx(method_index: usize, alpha_index: usize) {
-    let method = METHODS[method_index];
-    let alpha = ALPHAS[alpha_index];
-    let options =
-        SpecularOptions { masking: Masking::HeightCorrelated, sampling: method, compensation: false };
-    let bsdf = GgxSpecular::new(alpha, Vec3::ONE, options);
-    let results: Vec<_> = THETAS
-        .iter()
-        .enumerate()
-        .map(|(t, &theta)| {
-            let seed = 1000 + ((method_index * ALPHAS.len() + alpha_index) * THETAS.len() + t) as u32;
-            (format!("ggx_{method:?}_alpha{alpha}_theta{theta}"), run(&bsdf, view(theta), seed))
-        })
-        .collect();
-    check_all(&results);
+/// The GGX lobe for every sampling method and α, F0 = 1, compensation off.
+fn ggx_groups() -> Vec<(String, BoxedBsdf)> {
+    let mut groups: Vec<(String, BoxedBsdf)> = Vec::new();
+    for method in METHODS {
+        for alpha in ALPHAS {
+            let options =
+                SpecularOptions { masking: Masking::HeightCorrelated, sampling: method, compensation: false };
+            let bsdf = GgxSpecular::new(alpha, Vec3::ONE, options);
+            groups.push((format!("ggx_{method:?}_alpha{alpha}"), Box::new(bsdf)));
+        }
+    }
+    groups
 }
 
-/// One test per sampling method and α (so that they run in parallel).
-macro_rules! ggx_tests {
-    ($($name:ident: $method:expr, $alpha:expr;)*) => {
-        $(
-            #[test]
-            fn $name() {
-                ggx($method, $alpha);
-            }
-        )*
-    };
-}
-
-ggx_tests! {
-    chi2_ggx_ndf_alpha_0_02: 0, 0;
-    chi2_ggx_ndf_alpha_0_1: 0, 1;
-    chi2_ggx_ndf_alpha_0_3: 0, 2;
-    chi2_ggx_ndf_alpha_0_6: 0, 3;
-    chi2_ggx_ndf_alpha_1: 0, 4;
-    chi2_ggx_vndf_alpha_0_02: 1, 0;
-    chi2_ggx_vndf_alpha_0_1: 1, 1;
-    chi2_ggx_vndf_alpha_0_3: 1, 2;
-    chi2_ggx_vndf_alpha_0_6: 1, 3;
-    chi2_ggx_vndf_alpha_1: 1, 4;
-    chi2_ggx_caps_alpha_0_02: 2, 0;
-    chi2_ggx_caps_alpha_0_1: 2, 1;
-    chi2_ggx_caps_alpha_0_3: 2, 2;
-    chi2_ggx_caps_alpha_0_6: 2, 3;
-    chi2_ggx_caps_alpha_1: 2, 4;
-}
-
-/// The metallic-roughness materials: name, parameters, model switches.
-fn material(index: usize) -> (&'static str, MetallicRoughness) {
-    let (name, params, options) = match index {
+/// The metallic-roughness materials, one group each.
+fn metallic_roughness_groups() -> Vec<(String, BoxedBsdf)> {
+    [
         // A plain dielectric (glTF's common case): grey base, α = 0.25, defaults (spherical
         // caps, height-correlated, compensation on).
-        0 => (
+        (
             "dielectric",
             MetallicRoughnessParams {
                 base_color: Vec3::splat(0.8),
@@ -212,7 +194,7 @@ fn material(index: usize) -> (&'static str, MetallicRoughness) {
             SpecularOptions::default(),
         ),
         // Half metallic, coloured, α = 0.09, Heitz VNDF.
-        1 => (
+        (
             "half_metallic",
             MetallicRoughnessParams {
                 base_color: Vec3::new(0.9, 0.6, 0.3),
@@ -223,7 +205,7 @@ fn material(index: usize) -> (&'static str, MetallicRoughness) {
             SpecularOptions { sampling: SpecularSampling::Vndf, ..SpecularOptions::default() },
         ),
         // A rough metal (copper, α = 1): no diffuse lobe, so the specular lobe alone.
-        2 => (
+        (
             "rough_metal",
             MetallicRoughnessParams {
                 base_color: Vec3::new(0.95, 0.64, 0.54),
@@ -236,7 +218,7 @@ fn material(index: usize) -> (&'static str, MetallicRoughness) {
         // A glossy blue dielectric (α = 0.0225, a sharp lobe over the diffuse one) sampled by
         // the NDF, which also rejects, with the Mitsuba switches (separable, no compensation:
         // the lobe choice then uses E_ss) and a tinted KHR_materials_specular.
-        3 => (
+        (
             "glossy_dielectric_ndf",
             MetallicRoughnessParams {
                 base_color: Vec3::new(0.2, 0.4, 0.8),
@@ -247,43 +229,38 @@ fn material(index: usize) -> (&'static str, MetallicRoughness) {
             },
             SpecularOptions { sampling: SpecularSampling::Ndf, ..SpecularOptions::mitsuba() },
         ),
-        _ => unreachable!("{MATERIALS} materials"),
-    };
-    (name, MetallicRoughness::new(params, options))
+    ]
+    .into_iter()
+    .map(|(name, params, options)| {
+        let bsdf: BoxedBsdf = Box::new(MetallicRoughness::new(params, options));
+        (format!("metallic_roughness_{name}"), bsdf)
+    })
+    .collect()
 }
 
-/// One test per material.
-fn metallic_roughness(index: usize) {
-    let (name, bsdf) = material(index);
-    let results: Vec<_> = MATERIAL_THETAS
-        .iter()
-        .enumerate()
-        .map(|(t, &theta)| {
-            let seed = 2000 + (index * MATERIAL_THETAS.len() + t) as u32;
-            (format!("metallic_roughness_{name}_theta{theta}"), run(&bsdf, view(theta), seed))
-        })
-        .collect();
+/// Every group of every row of [`LOBES`] at every θo of its row, the groups in parallel; one
+/// report for all.
+#[test]
+fn chi2_every_lobe() {
+    let results: Vec<(String, ChiSquareResult)> = std::thread::scope(|scope| {
+        let mut handles = Vec::new();
+        for row in &LOBES {
+            for (g, (label, bsdf)) in (row.groups)().into_iter().enumerate() {
+                handles.push(scope.spawn(move || {
+                    row.thetas
+                        .iter()
+                        .enumerate()
+                        .map(|(t, &theta)| {
+                            let seed = row.seed + (g * row.thetas.len() + t) as u32;
+                            (format!("{label}_theta{theta}"), run(bsdf.as_ref(), view(theta), seed))
+                        })
+                        .collect::<Vec<_>>()
+                }));
+            }
+        }
+        handles.into_iter().flat_map(|h| h.join().expect("a chi-square thread panicked")).collect()
+    });
     check_all(&results);
-}
-
-#[test]
-fn chi2_metallic_roughness_dielectric() {
-    metallic_roughness(0);
-}
-
-#[test]
-fn chi2_metallic_roughness_half_metallic() {
-    metallic_roughness(1);
-}
-
-#[test]
-fn chi2_metallic_roughness_rough_metal() {
-    metallic_roughness(2);
-}
-
-#[test]
-fn chi2_metallic_roughness_glossy_dielectric_ndf() {
-    metallic_roughness(3);
 }
 
 /// The test has power: visible-normal samples of α = 0.3 against the pdf of α = 0.31 (a

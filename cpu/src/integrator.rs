@@ -1,13 +1,8 @@
 //! [`CpuRenderer`]: the path tracer.
 
-use furnace_accel::{BuildOptions, Bvh, Hit, offset_ray_origin_scaled, offset_scale_of_bounds};
-use furnace_brdf::{
-    Bsdf, Dielectric, Frame, Interface, MetallicRoughness, MetallicRoughnessParams, ScatterSample,
-    SpecularOptions, Transmissive,
-};
-use furnace_render::layout::{
-    self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE, DIM_PIXEL,
-};
+use furnace_accel::{BuildOptions, Bvh, Hit, offset_scale_of_bounds};
+use furnace_brdf::{HitBsdf, LayeredParams, SpecularOptions};
+use furnace_render::layout::DIM_PIXEL;
 use furnace_render::{
     ADAPTIVE_STEP, AovSample, CancelFlag, Film, Integrator, LightSampling, LightSelection, RenderError,
     RenderSettings,
@@ -23,8 +18,9 @@ use rayon::prelude::*;
 use std::sync::Arc;
 
 mod lights;
+mod path;
 
-use lights::{SunDisc, Vertex};
+use lights::SunDisc;
 
 /// A scene prepared for rendering through one camera: its BVH, per-triangle material indices,
 /// sampler, and the film that [`Integrator::render_pass`] adds to.
@@ -383,260 +379,6 @@ impl CpuRenderer {
         self.trace(pixel, index, ray.origin, ray.direction, aov)
     }
 
-    /// The path tracing loop: radiance arriving at `origin` from direction `-direction`. With
-    /// `aov`, what the first ray hits is written there (it is left as it is for a miss).
-    fn trace(
-        &self,
-        pixel: u32,
-        index: u32,
-        mut origin: Vec3,
-        mut direction: Vec3,
-        mut aov: Option<&mut AovSample>,
-    ) -> Vec3 {
-        let scene = &self.scene;
-        let mut radiance = Vec3::ZERO;
-        let mut throughput = Vec3::ONE;
-        // `event` counts the scattering events so far; the loop body handles one ray.
-        let mut event = 0;
-        // The solid-angle pdf of the BSDF sample that made the ray (`None`: the camera's, or a
-        // delta event's), for the MIS weights of the lights it reaches.
-        let mut bsdf_pdf: Option<f32> = None;
-        // The receiving side (geometric normal) of the vertex the ray left, for the light BVH's
-        // probabilities in those weights (zero: both sides).
-        let mut normal = Vec3::ZERO;
-        // Where that vertex took its light samples from (`origin` unless the ray crossed a
-        // surface since), for the same weights.
-        let mut mis_origin: Option<Vec3> = None;
-        // The absorption coefficient of the volume the ray travels in (0: air), and the surface
-        // point the ray left (its offset origin would shorten the path by the offset).
-        let mut medium = Vec3::ZERO;
-        let mut left_from = origin;
-        // Passes straight through thin-walled sheets since the last event (not events
-        // themselves), and the lobe number they left unused for the next choice.
-        let mut passes = 0u32;
-        let mut carried_uc: Option<f32> = None;
-        loop {
-            let Some(hit) = self.closest_hit(origin, direction) else {
-                if medium != Vec3::ZERO {
-                    throughput *= absorption(medium, f32::INFINITY);
-                }
-                // The ray leaves the scene: the sky, the environment and the sun discs it sees.
-                radiance += throughput * self.sky;
-                if let Some(env) = &self.environment {
-                    radiance += throughput * self.environment_seen(env, direction, bsdf_pdf, event == 0);
-                }
-                if !self.sun_discs.is_empty() {
-                    radiance += throughput * self.sun_discs_seen(direction, bsdf_pdf);
-                }
-                break;
-            };
-            let material_index = self.triangle_materials[hit.triangle as usize] as usize;
-            let material = &scene.materials[material_index];
-            // Textured materials are evaluated at the hit's UV; the others were built once.
-            let (uv, shading) = match &self.constant_materials[material_index] {
-                Some(c) => (Vec2::ZERO, Shading::Constant(c)),
-                None => {
-                    let uv = scene.geometry.uv(hit.triangle as usize, hit.barycentrics.x, hit.barycentrics.y);
-                    (uv, Shading::Evaluated(material.evaluate(uv, &scene.textures, &scene.images)))
-                }
-            };
-            let t = hit.triangle as usize;
-            let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
-            let interpolated = self.shading_normal(t, b1, b2);
-            let surface = scene.surface_point(t, (b1, b2), material, uv, direction, interpolated);
-            if let Some(aov) = aov.take() {
-                let (base_color, emission) = match &shading {
-                    Shading::Constant(c) => (c.base_color, c.emission),
-                    Shading::Evaluated(params) => (params.base_color, params.emission),
-                };
-                // The front of an emitter: its colour is its light, like the sky's (albedo 1).
-                let emits = emission != Vec3::ZERO && surface.as_ref().is_some_and(|s| !s.back_face);
-                *aov = AovSample {
-                    albedo: if emits { Vec3::ONE } else { base_color },
-                    // The back of a single-sided surface (black) has no shading normal.
-                    normal: surface.as_ref().map_or(Vec3::ZERO, |s| s.shading),
-                    depth: Some(hit.t),
-                };
-            }
-            // Borrowed, not moved out of the `Option`: the move copied it through memory in
-            // pieces that did not match the stores that wrote it (a store-forwarding stall).
-            let Some(surface) = &surface else {
-                // The back of a single-sided surface: black, like a one-sided BSDF.
-                break;
-            };
-            if medium != Vec3::ZERO {
-                // Beer–Lambert over the segment inside the volume, surface to surface.
-                throughput *= absorption(medium, (surface.position - left_from).length());
-            }
-            let emission = match &shading {
-                Shading::Constant(c) => c.emission,
-                Shading::Evaluated(params) => params.emission,
-            };
-            // Emission is one-sided: the back of a double-sided emitter does not emit. Reached
-            // by a BSDF sample, it is weighted against the light sample that could have found it.
-            if !surface.back_face {
-                if self.emitters.is_some() && emission != Vec3::ZERO {
-                    let cos_light = -surface.geometric.dot(direction);
-                    // The distance from where the light samples were taken (the ray's own
-                    // length unless it crossed a surface on the way).
-                    let (from, distance) = match mis_origin {
-                        Some(o) => (o, (surface.position - o).length()),
-                        None => (origin, hit.t),
-                    };
-                    let w =
-                        self.emission_weight(bsdf_pdf, from, normal, material_index, t, distance, cos_light);
-                    radiance += throughput * emission * w;
-                } else {
-                    radiance += throughput * emission;
-                }
-            }
-            let evaluated;
-            let bsdf = match &shading {
-                Shading::Constant(c) => &c.bsdf,
-                Shading::Evaluated(params) => {
-                    evaluated = bsdf(params, material, self.settings.specular);
-                    &evaluated
-                }
-            };
-            // A sheet (or an η = 1 interface) can still be passed after the last event (the
-            // pass is none).
-            let last = event == self.settings.bounces;
-            if last && !bsdf.is_straight() {
-                break;
-            }
-            // A solid's interface is shaded in its outward frame (the side of index 1), where
-            // `wo` may be inside; every other surface in the frame facing the ray.
-            let outward =
-                if bsdf.is_volume() && surface.back_face { -surface.shading } else { surface.shading };
-            let frame = Frame::new(outward);
-            let wo = frame.to_local(-direction);
-            let leave = offset_ray_origin_scaled(surface.position, surface.geometric, self.offset_scale);
-            let behind = || offset_ray_origin_scaled(surface.position, -surface.geometric, self.offset_scale);
-            let vertex = Vertex {
-                throughput,
-                bsdf,
-                wo,
-                frame,
-                surface,
-                leave,
-                leave_behind: bsdf.transmits_light_samples().then(behind),
-                medium,
-            };
-
-            if !last && !bsdf.is_delta() {
-                self.light_samples(pixel, index, event, &vertex, &mut radiance);
-            }
-
-            // Continue the path by sampling the BSDF.
-            let dim = layout::bounce(event);
-            let [u1, u2] = self.sampler.value_2d(pixel, index, dim + BOUNCE_BSDF_DIRECTION);
-            // The lobe choice `uc` is drawn only where the material has two lobes (or left over
-            // by a pass through a sheet at this event).
-            let uc =
-                || carried_uc.unwrap_or_else(|| self.sampler.value(pixel, index, dim + BOUNCE_BSDF_LOBE));
-            let Some(s) = bsdf.sample(wo, Vec2::new(u1, u2), uc) else { break };
-            let wi = frame.to_world(s.wi);
-            // Reflections leave on the side the ray came from, transmissions on the other; a
-            // direction the shading normal allows but the surface does not ends the path —
-            // except at a solid's interface, where the ray goes on to whichever side it points
-            // (as Mitsuba's, which switches media by that side too).
-            let side = wi.dot(surface.geometric);
-            let crosses = if bsdf.is_volume() { side < 0.0 } else { s.transmitted };
-            if !(if crosses { side < 0.0 } else { side > 0.0 }) {
-                break;
-            }
-            if s.delta && s.transmitted && bsdf.is_straight() {
-                // Straight through a sheet or an invisible interface: no event, the MIS state of
-                // the last one kept (a solid's medium changes).
-                if bsdf.is_volume() {
-                    medium = if surface.back_face { Vec3::ZERO } else { material.absorption };
-                }
-                passes += 1;
-                if passes > furnace_render::MAX_SHEET_PASSES {
-                    break;
-                }
-                throughput *= s.weight;
-                carried_uc = Some(s.rest);
-                mis_origin.get_or_insert(origin);
-                origin = behind();
-                left_from = surface.position;
-                continue;
-            }
-            if last {
-                break;
-            }
-            throughput *= s.weight;
-            bsdf_pdf = (!s.delta).then_some(s.pdf);
-            event += 1;
-            passes = 0;
-            carried_uc = None;
-            if crosses && bsdf.is_volume() {
-                // Into the solid from outside, or out of it.
-                medium = if surface.back_face { Vec3::ZERO } else { material.absorption };
-            }
-            if self.settings.russian_roulette && event >= 3 {
-                let survive = furnace_render::russian_roulette_survival(throughput);
-                if !(self.sampler.value(pixel, index, dim + BOUNCE_RUSSIAN_ROULETTE) < survive) {
-                    break;
-                }
-                throughput /= survive;
-            }
-            normal = vertex.receiver_normal();
-            left_from = surface.position;
-            if crosses {
-                origin = behind();
-                mis_origin = Some(leave);
-            } else {
-                origin = leave;
-                mis_origin = None;
-            }
-            direction = wi;
-        }
-        radiance
-    }
-
-    /// The lights gathered at a non-delta scattering event (throughput included): a shadow ray
-    /// to each delta sun, point and spot light, and one light sample each of the emitters, sun
-    /// discs and environment (next-event estimation).
-    fn light_samples(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>, radiance: &mut Vec3) {
-        // Delta suns: gathered by a shadow ray only.
-        for sun in &self.suns {
-            let to_sun = -sun.direction;
-            if let Some(origin) = v.origin_towards(to_sun) {
-                let f = v.bsdf.eval(v.wo, v.frame.to_local(to_sun));
-                if f != Vec3::ZERO {
-                    let contribution = v.throughput * f * sun.irradiance;
-                    *radiance += contribution * self.transmittance(origin, to_sun, f32::INFINITY, v.medium);
-                }
-            }
-        }
-
-        // Point and spot lights, delta lights too: a shadow ray to each, or to one chosen by
-        // power (`--point-lights one`; none to choose when no light has power).
-        if !self.point_lights.is_empty() {
-            *radiance += if self.one_point_light {
-                self.sample_point_light(pixel, index, event, v)
-            } else {
-                self.gather_point_lights(v)
-            };
-        }
-
-        // Emitters, sun discs and the environment: one light sample each.
-        if self.settings.light_sampling != LightSampling::Bsdf
-            && (self.emitters.is_some() || !self.sun_discs.is_empty() || self.env_sampler.is_some())
-        {
-            if self.emitters.is_some() {
-                *radiance += self.sample_emitter(pixel, index, event, v);
-            }
-            if !self.sun_discs.is_empty() {
-                *radiance += self.sample_sun_discs(pixel, index, event, v);
-            }
-            if self.env_sampler.is_some() {
-                *radiance += self.sample_environment(pixel, index, event, v);
-            }
-        }
-    }
-
     /// `Geometry::shading_normal` over the pre-decoded normals (same arithmetic, same bits).
     #[inline]
     fn shading_normal(&self, t: usize, b1: f32, b2: f32) -> Option<Vec3> {
@@ -656,58 +398,6 @@ impl CpuRenderer {
         } else {
             self.bvh.closest_hit(origin, direction, f32::INFINITY)
         }
-    }
-
-    /// What the point and spot lights add at a scattering event (throughput included): a
-    /// shadow ray to each, stopping `SHADOW_EPSILON·d` short of it; a contribution that is not
-    /// finite (a light on the surface, d → 0) adds nothing. Summed over the lights first (the
-    /// WGSL twin does so for many lights; for a few it adds each light's share after its queued
-    /// shadow ray: the same to float rounding).
-    fn gather_point_lights(&self, v: &Vertex<'_>) -> Vec3 {
-        let mut sum = Vec3::ZERO;
-        for light in &self.point_lights {
-            sum += self.point_light(light, v);
-        }
-        sum
-    }
-
-    /// What one point or spot light, chosen by power with the sampler's dimension
-    /// [`layout::point_light`] of event `event`, adds at a scattering event: its share divided
-    /// by the probability of the choice (`--point-lights one`; the WGSL twin chooses with the
-    /// same table and comparisons).
-    fn sample_point_light(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>) -> Vec3 {
-        let Some(choice) = &self.point_choice else {
-            return Vec3::ZERO;
-        };
-        let u = self.sampler.value(pixel, index, layout::point_light(self.settings.bounces, event));
-        let (k, pmf) = choice.sample(u);
-        self.point_light(&self.point_lights[k], v) / pmf
-    }
-
-    /// What `light` adds at a scattering event (throughput included): its shadow ray stops
-    /// `SHADOW_EPSILON·d` short of it; a contribution that is not finite (a light on the
-    /// surface, d → 0) adds nothing.
-    #[inline]
-    fn point_light(&self, light: &furnace_scene::PointLight, v: &Vertex<'_>) -> Vec3 {
-        let to_light = light.position - v.surface.position;
-        let d2 = to_light.length_squared();
-        if !(d2 > 0.0) {
-            return Vec3::ZERO;
-        }
-        let d = d2.sqrt();
-        let wi = to_light / d;
-        if let Some(origin) = v.origin_towards(wi) {
-            let li = light.intensity_towards(-wi, d);
-            if li != Vec3::ZERO {
-                let f = v.bsdf.eval(v.wo, v.frame.to_local(wi));
-                let contribution = v.throughput * f * li / d2;
-                if f != Vec3::ZERO && contribution.is_finite() {
-                    let t_max = d * (1.0 - furnace_render::SHADOW_EPSILON);
-                    return contribution * self.transmittance(origin, wi, t_max, v.medium);
-                }
-            }
-        }
-        Vec3::ZERO
     }
 
     /// The fraction of light a shadow ray from `origin` along `direction` carries over
@@ -818,107 +508,20 @@ fn absorption(sigma: Vec3, t: f32) -> Vec3 {
     Vec3::new(f(sigma.x), f(sigma.y), f(sigma.z))
 }
 
-/// The BSDF at a hit: the opaque glTF material, or one that transmits
-/// (KHR_materials_transmission).
-#[derive(Debug, Clone, Copy)]
-pub(crate) enum HitBsdf {
-    Opaque(MetallicRoughness),
-    /// The mixture, and whether it bounds a solid (KHR_materials_volume).
-    Transmissive(Transmissive, bool),
-}
-
-impl HitBsdf {
-    /// The BSDF times `|cos θi|`.
-    #[inline]
-    pub(crate) fn eval(&self, wo: Vec3, wi: Vec3) -> Vec3 {
-        match self {
-            Self::Opaque(b) => b.eval(wo, wi),
-            Self::Transmissive(b, _) => b.eval(wo, wi),
-        }
-    }
-
-    /// The density of the non-delta part of `sample`.
-    #[inline]
-    pub(crate) fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match self {
-            Self::Opaque(b) => b.pdf(wo, wi),
-            Self::Transmissive(b, _) => b.pdf(wo, wi),
-        }
-    }
-
-    /// Samples a direction; the lobe number `uc` is drawn only where it decides something.
-    #[inline]
-    fn sample(&self, wo: Vec3, u: Vec2, uc: impl FnOnce() -> f32) -> Option<ScatterSample> {
-        match self {
-            Self::Opaque(b) => b.sample_lazy(wo, u, uc).map(ScatterSample::from),
-            Self::Transmissive(b, _) => b.sample(wo, uc(), u),
-        }
-    }
-
-    /// Only delta lobes: no light sample can reach a direction.
-    #[inline]
-    fn is_delta(&self) -> bool {
-        matches!(self, Self::Transmissive(b, _) if b.is_delta())
-    }
-
-    /// A thin-walled sheet or an η = 1 interface: straight passes are no events.
-    #[inline]
-    fn is_straight(&self) -> bool {
-        matches!(self, Self::Transmissive(b, _) if b.dielectric.is_straight())
-    }
-
-    /// The interface of a solid.
-    #[inline]
-    fn is_volume(&self) -> bool {
-        matches!(self, Self::Transmissive(_, true))
-    }
-
-    /// Light samples may arrive from behind the surface (a rough solid interface).
-    #[inline]
-    fn transmits_light_samples(&self) -> bool {
-        matches!(self, Self::Transmissive(b, true) if b.dielectric.interface == Interface::Rough)
-    }
-
-    /// What a shadow ray crossing a sheet (or an η = 1 interface) at cosine `cos` keeps:
-    /// `g·T′·tint + (1 − g)·0`.
-    fn sheet_transmittance(&self, cos: f32) -> Vec3 {
-        match self {
-            Self::Transmissive(b, _) => b.weight * b.dielectric.shadow_transmittance(cos),
-            _ => Vec3::ZERO,
-        }
-    }
-}
-
-/// The BSDF of evaluated material parameters: the glTF metallic-roughness material, mixed with
-/// a dielectric interface where it transmits.
+/// The BSDF of a hit's evaluated material parameters ([`HitBsdf::new`]).
+#[inline]
 fn bsdf(params: &MaterialSample, material: &furnace_scene::Material, specular: SpecularOptions) -> HitBsdf {
-    let mr = |metallic: f32| {
-        MetallicRoughness::new(
-            MetallicRoughnessParams {
-                base_color: params.base_color,
-                metallic,
-                roughness: params.roughness,
-                specular_factor: params.specular_factor,
-                specular_color: params.specular_color,
-            },
-            specular,
-        )
-    };
-    let metallic = params.metallic.clamp(0.0, 1.0);
-    let g = params.transmission.clamp(0.0, 1.0) * (1.0 - metallic);
-    if !(g > 0.0) {
-        return HitBsdf::Opaque(mr(params.metallic));
-    }
-    let roughness = params.roughness.clamp(0.0, 1.0);
-    // Sheets are smooth (the loader warns about rough ones).
-    let dielectric = Dielectric::new(
-        material.ior,
-        roughness * roughness,
-        !material.volume,
-        specular.masking,
-        params.base_color,
-    );
-    // The opaque rest: metal m and the untransmitted dielectric (1 − m)(1 − T), renormalised.
-    let opaque = mr(if g < 1.0 { (metallic / (1.0 - g)).min(1.0) } else { 0.0 });
-    HitBsdf::Transmissive(Transmissive { dielectric, opaque, weight: g.min(1.0) }, material.volume)
+    HitBsdf::new(
+        &LayeredParams {
+            base_color: params.base_color,
+            metallic: params.metallic,
+            roughness: params.roughness,
+            specular_factor: params.specular_factor,
+            specular_color: params.specular_color,
+            transmission: params.transmission,
+            ior: material.ior,
+            volume: material.volume,
+        },
+        specular,
+    )
 }

@@ -18,8 +18,9 @@
 //!    interpolated shading normal `Ns` (with the material's normal map applied through the
 //!    vertex tangents when it has one). For a double-sided material both normals are turned to
 //!    the side the ray came from; the back of a single-sided material is black and ends the
-//!    path. The material is evaluated at the hit's UV (`Material::evaluate`) into a
-//!    `MetallicRoughness` BSDF with [`RenderSettings::specular`](furnace_render::RenderSettings::specular).
+//!    path. The material is evaluated at the hit's UV (`Material::evaluate`) into the layered
+//!    glTF BSDF `furnace_brdf::HitBsdf` (`MetallicRoughness`, mixed with a dielectric where it
+//!    transmits) with [`RenderSettings::specular`](furnace_render::RenderSettings::specular).
 //! 4. **Emission**: `throughput · emissive` is added — on the front of the surface only (emission
 //!    is one-sided, as in the references' conventions; the back of a double-sided emitter is dark).
 //!    Reached by a BSDF-sampled ray (not the camera's), it is weighted by the power heuristic

@@ -2,7 +2,8 @@
 //! [`BsdfParams`], the option flags and lobe codes, and the Turquin table a shader receives.
 //!
 //! The WGSL module is a twin of `furnace-brdf`'s [`MetallicRoughness`] (Lambert + one merged GGX
-//! lobe, all [`SpecularOptions`]); `tests/brdf_parity.rs` runs both on the same inputs. Its API:
+//! lobe, all [`SpecularOptions`]), one `.wgsl` file per Rust file of `furnace-brdf`;
+//! `tests/brdf_parity.rs` runs both on the same inputs. Its API:
 //!
 //! ```wgsl
 //! fn bsdf_eval(m: BsdfParams, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32>    // Bsdf::eval
@@ -102,9 +103,19 @@ crate::gpu_struct! {
 }
 
 /// The WGSL declarations [`crate::wgsl::BRDF`] needs before it, generated: the `BSDF_FLAG_*`,
-/// `BSDF_SAMPLING_*` and `BSDF_LOBE_*` constants and `struct BsdfParams`.
+/// `BSDF_SAMPLING_*` and `BSDF_LOBE_*` constants, `BSDF_LUMINANCE` ([`luminance_const`]) and
+/// `struct BsdfParams`.
 pub fn declarations() -> String {
-    consts_wgsl() + &wgsl_struct::<BsdfParams>(false)
+    consts_wgsl() + &luminance_const("BSDF_LUMINANCE") + &wgsl_struct::<BsdfParams>(false)
+}
+
+/// The WGSL line `const NAME: vec3<f32> = vec3<f32>(…);` of the Rec. 709 luminance weights
+/// [`furnace_sampling::LUMINANCE`], for every shader module that weighs colours by luminance.
+/// The literals are Rust's shortest round-trip spelling of each `f32`, so WGSL reads the same
+/// values.
+pub fn luminance_const(name: &str) -> String {
+    let [r, g, b] = furnace_sampling::LUMINANCE;
+    format!("const {name}: vec3<f32> = vec3<f32>({r:?}, {g:?}, {b:?});\n")
 }
 
 const _: () = assert!(size_of::<BsdfParams>() == 64);

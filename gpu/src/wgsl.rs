@@ -14,8 +14,19 @@ pub const SAMPLING: &str = include_str!("wgsl/sampling.wgsl");
 
 /// `furnace-brdf`'s BSDFs: Lambert, GGX (NDF / VNDF / spherical-cap sampling, separable and
 /// height-correlated Smith masking, Schlick Fresnel), Turquin compensation, glTF
-/// metallic-roughness. Needs [`SAMPLING`] (warps).
-pub const BRDF: &str = include_str!("wgsl/brdf.wgsl");
+/// metallic-roughness. Needs [`SAMPLING`] (warps) and [`crate::brdf::declarations`].
+///
+/// One WGSL file per Rust file of `furnace-brdf` (`brdf.wgsl` is the twin of its `lib.rs`),
+/// concatenated in dependency order.
+pub const BRDF: &str = concat!(
+    include_str!("wgsl/brdf.wgsl"),
+    include_str!("wgsl/fresnel.wgsl"),
+    include_str!("wgsl/ggx.wgsl"),
+    include_str!("wgsl/turquin.wgsl"),
+    include_str!("wgsl/specular.wgsl"),
+    include_str!("wgsl/lambert.wgsl"),
+    include_str!("wgsl/metallic_roughness.wgsl"),
+);
 
 /// `furnace-brdf`'s dielectric module: exact Fresnel, smooth / rough / thin-walled interfaces
 /// and the glTF transmissive mixture. Needs [`BRDF`].
@@ -47,8 +58,11 @@ pub const TRAVERSE: &str = include_str!("wgsl/traverse.wgsl");
 /// survival probability (`furnace_render::russian_roulette_survival`). Needs the `FRAME_*`
 /// constants and a `params: FrameParams` (see [`crate::integrator`]).
 pub const PATH: &str = include_str!("wgsl/path.wgsl");
-/// The BSDF at a hit (`HitBsdf`, `hit_bsdf`, `hit_eval`, `hit_pdf`): furnace-cpu's `HitBsdf`.
-pub const MATERIAL: &str = include_str!("wgsl/material.wgsl");
+
+/// The BSDF at a hit (`HitBsdf`, `hit_bsdf`, `hit_eval`, `hit_pdf`): the glTF material's
+/// layering, the twin of `furnace_brdf::HitBsdf` (`brdf/src/layered.rs`). Needs [`BRDF`], and
+/// [`DIELECTRIC`] where its `// #if TRANSMISSION` blocks are kept.
+pub const MATERIAL: &str = include_str!("wgsl/layered.wgsl");
 
 /// Concatenates WGSL modules (in the order given) into one shader source.
 pub fn compose(parts: &[&str]) -> String {

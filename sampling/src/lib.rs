@@ -75,6 +75,13 @@ pub use pmj02::{PMJ02_XORS, Pmj02, pmj02_coordinate};
 pub use random::{RandomSampler, RandomStream};
 pub use sobol::{OwenSobol, SOBOL_DIRECTIONS, sobol_bits, sobol_bits_by_matrix};
 
+/// The Rec. 709 luminance weights of linear RGB: `Y = 0.2126 R + 0.7152 G + 0.0722 B`.
+///
+/// Every sampling decision that weighs colours by one number uses them (the BSDF's lobe choice,
+/// the light selection by power, the adaptive sampler's noise estimate), on the CPU and, as a
+/// generated WGSL `const`, on the GPU. Defined here, the lowest crate those share.
+pub const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
+
 /// An addressable sampler: a sample is a pure function of `(pixel, index, dimension)`.
 ///
 /// * `pixel` — any `u32` naming the pixel (e.g. `y * width + x`); different pixels get

@@ -461,9 +461,9 @@ fn ulp_spread<T: Copy>(wo: Vec3, wi: Vec3, f: impl Fn(Vec3, Vec3) -> T, metric: 
 }
 
 /// Absolute rounding bound of a reflected direction's z: `ωi = 2(ωo·ωm)ωm − ωo` from unit
-/// vectors, terms of magnitude ≤ 2, so f32 with or without fused multiply-adds (the H100's
-/// compiler contracts where the Rust does not) gives z within a few ulps of 2 (2.4e-7 each);
-/// 1e-6 is ≈ 4 of them. Measured on the H100: the flips it admits have |ωi.z| ≈ 1e-7.
+/// vectors, terms of magnitude ≤ 2, so f32 with or without fused multiply-adds (a GPU
+/// compiler may contract where the Rust does not) gives z within a few ulps of 2 (2.4e-7 each);
+/// 1e-6 is ≈ 4 of them. Measured: the flips it admits have |ωi.z| ≈ 1e-7.
 const HORIZON_ROUNDING: f32 = 1e-6;
 
 /// A `None`/sample flip decided by rounding at the horizon: the side that sampled produced a
@@ -589,7 +589,7 @@ fn check(
         let pole = s.wi.z >= 1.0 - 1e-6 && wi_err <= POLE_DIR_TOL;
         // A view within 1e-4 of the horizon: VNDF's stretched view has z = cos θo/α, and its
         // frame and projection divide by it, so a few ulps of rounding move the direction by up
-        // to ~ulp·α/cos θo (measured on the H100: 3.7e-5 at cos θo = 3e-7, pdf and weight
+        // to ~ulp·α/cos θo (measured on hardware: 3.7e-5 at cos θo = 3e-7, pdf and weight
         // identical).
         let grazing = rec.wo.z < 1e-4 && wi_err <= POLE_DIR_TOL;
         if ok(wi_err, wi_spread) && ok(pdf_err, pdf_spread) && ok(weight_err, weight_spread) {
@@ -753,6 +753,23 @@ fn constants_and_bindings_match_rust() {
     f("BRDF_TAU", std::f32::consts::TAU);
     f("BRDF_FRAC_1_PI", std::f32::consts::FRAC_1_PI);
     f("BRDF_F32_MAX", f32::MAX);
+    // The generated luminance weights are `furnace_sampling::LUMINANCE` bit for bit.
+    let (_, luminance) = module
+        .constants
+        .iter()
+        .find(|(_, c)| c.name.as_deref() == Some("BSDF_LUMINANCE"))
+        .expect("no const BSDF_LUMINANCE");
+    let naga::Expression::Compose { ref components, .. } = module.global_expressions[luminance.init] else {
+        panic!("BSDF_LUMINANCE is not a vector: {:?}", module.global_expressions[luminance.init]);
+    };
+    let weights: Vec<u32> = components
+        .iter()
+        .map(|&h| match module.global_expressions[h] {
+            naga::Expression::Literal(naga::Literal::F32(v)) => v.to_bits(),
+            ref e => panic!("BSDF_LUMINANCE component {e:?}"),
+        })
+        .collect();
+    assert_eq!(weights, furnace_sampling::LUMINANCE.map(f32::to_bits));
     // The flags encode every option distinctly.
     let flags: std::collections::HashSet<u32> = configs().into_iter().map(brdf::options_flags).collect();
     assert_eq!(flags.len(), 12);

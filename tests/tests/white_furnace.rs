@@ -3,9 +3,10 @@
 //! analytic albedo and with `furnace-brdf` on the same uniform numbers (`docs/stability.md`,
 //! "White furnace across all α and angles, both backends").
 //!
-//! Configurations: α ∈ {1e-4, 1e-3, 1e-2, 0.1, 0.5, 1} × μo ∈ {1e-4, 1e-3, 1e-2, 0.1, 0.5, 1} ×
-//! the 12 `SpecularOptions` combinations of a white metal (base colour 1, metallic 1: F = 1), plus
-//! a white glTF Lambert (metallic 0, specularFactor 0) at each μo. Each configuration takes the
+//! Configurations, one row of the table [`LOBES`] per lobe: α ∈ {1e-4, 1e-3, 1e-2, 0.1, 0.5, 1} ×
+//! μo ∈ {1e-4, 1e-3, 1e-2, 0.1, 0.5, 1} × the 12 `SpecularOptions` combinations of a white metal
+//! (base colour 1, metallic 1: F = 1), plus a white glTF Lambert (metallic 0, specularFactor 0)
+//! at each μo. Each configuration takes the
 //! 1024 cell centres of a 32 × 32 grid as `u` (the same on both sides; `uc` stratified too), one
 //! invocation per sample; the means are summed on the host in f64.
 //!
@@ -98,57 +99,72 @@ struct Config {
     bound: f64,
 }
 
+/// The GGX lobe alone, white: a white metal (base colour 1, metallic 1: F = 1) at every α of
+/// [`ALPHAS`] and every option combination, against `directional_albedo` (times Turquin's factor
+/// when compensated).
+fn white_metal(mu: f32) -> Vec<Config> {
+    // The compensation table's error (`tests/stability.rs::white_furnace_full_range`).
+    let table_error = |mu: f32| if mu >= 1e-3 { 0.005 } else { 0.035 };
+    let mut configs = vec![];
+    for &alpha in &ALPHAS {
+        for o in options() {
+            let params = MetallicRoughnessParams {
+                base_color: Rgb::ONE,
+                metallic: 1.0,
+                roughness: alpha.sqrt(),
+                ..Default::default()
+            };
+            // The lobe's own α (roughness² of the rounded square root).
+            let a = MetallicRoughness::new(params, o).specular.ggx.alpha();
+            let e = directional_albedo(mu, a, o.masking, 128);
+            let comp =
+                if o.compensation { turquin::compensation(Rgb::ONE, mu, a, o.masking).x as f64 } else { 1.0 };
+            configs.push(Config {
+                name: format!("metal α {alpha:e} {:?}/{:?}/comp {}", o.masking, o.sampling, o.compensation),
+                params,
+                options: o,
+                mu,
+                analytic: comp * e,
+                bound: if o.sampling == SpecularSampling::Ndf { 0.08 } else { 0.02 }
+                    + if o.compensation { table_error(mu) } else { 0.0 },
+            });
+        }
+    }
+    configs
+}
+
+/// The Lambert lobe alone, white: a glTF Lambert (metallic 0, specularFactor 0), albedo 1.
+fn white_lambert(mu: f32) -> Vec<Config> {
+    let params = MetallicRoughnessParams {
+        base_color: Rgb::ONE,
+        metallic: 0.0,
+        specular_factor: 0.0,
+        ..Default::default()
+    };
+    vec![Config {
+        name: "Lambert".into(),
+        params,
+        options: SpecularOptions::default(),
+        mu,
+        analytic: 1.0,
+        bound: 0.02,
+    }]
+}
+
+/// The table of lobes: each row gives the white configurations of one lobe at a view cosine
+/// μo (the glTF material with only that lobe non-zero, its analytic albedo and the bound). A
+/// new lobe adds a row.
+const LOBES: [fn(f32) -> Vec<Config>; 2] = [white_metal, white_lambert];
+
 #[test]
 fn white_furnace_over_all_roughness_and_angles() {
     let Some(ctx) = test_context() else { return };
     eprintln!("adapter: {}", ctx.describe());
     let mut configs = vec![];
-    let table_error = |mu: f32| if mu >= 1e-3 { 0.005 } else { 0.035 };
     for &mu in &MUS {
-        for &alpha in &ALPHAS {
-            for o in options() {
-                let params = MetallicRoughnessParams {
-                    base_color: Rgb::ONE,
-                    metallic: 1.0,
-                    roughness: alpha.sqrt(),
-                    ..Default::default()
-                };
-                // The lobe's own α (roughness² of the rounded square root).
-                let a = MetallicRoughness::new(params, o).specular.ggx.alpha();
-                let e = directional_albedo(mu, a, o.masking, 128);
-                let comp = if o.compensation {
-                    turquin::compensation(Rgb::ONE, mu, a, o.masking).x as f64
-                } else {
-                    1.0
-                };
-                configs.push(Config {
-                    name: format!(
-                        "metal α {alpha:e} {:?}/{:?}/comp {}",
-                        o.masking, o.sampling, o.compensation
-                    ),
-                    params,
-                    options: o,
-                    mu,
-                    analytic: comp * e,
-                    bound: if o.sampling == SpecularSampling::Ndf { 0.08 } else { 0.02 }
-                        + if o.compensation { table_error(mu) } else { 0.0 },
-                });
-            }
+        for row in LOBES {
+            configs.extend(row(mu));
         }
-        let params = MetallicRoughnessParams {
-            base_color: Rgb::ONE,
-            metallic: 0.0,
-            specular_factor: 0.0,
-            ..Default::default()
-        };
-        configs.push(Config {
-            name: "Lambert".into(),
-            params,
-            options: SpecularOptions::default(),
-            mu,
-            analytic: 1.0,
-            bound: 0.02,
-        });
     }
     let materials: Vec<BsdfParams> = configs.iter().map(|c| BsdfParams::new(c.params, c.options)).collect();
     let input: Vec<u32> = configs.iter().enumerate().flat_map(|(k, c)| [k as u32, c.mu.to_bits()]).collect();

@@ -1,9 +1,11 @@
-//! Light samples of the CPU path tracer: next-event estimation of emissive triangles, sun discs
-//! and the environment map, with the MIS weights of both strategies
+//! Light samples of the CPU path tracer: shadow rays to delta suns, point and spot lights, and
+//! next-event estimation of emissive triangles, sun discs and the environment map, with the MIS
+//! weights of both strategies
 //! ([`furnace_render::LightSampling`], [`furnace_render::EnvSampling`]).
 
-use super::{CpuRenderer, HitBsdf};
-use furnace_brdf::Frame;
+use super::CpuRenderer;
+use furnace_brdf::{Frame, HitBsdf};
+use furnace_render::LightSampling;
 use furnace_render::layout::{
     self, LIGHT_EMITTER_BIN, LIGHT_EMITTER_POINT, LIGHT_ENVIRONMENT, LIGHT_SUN_DISC,
 };
@@ -84,6 +86,107 @@ impl Vertex<'_> {
 }
 
 impl CpuRenderer {
+    /// The lights gathered at a non-delta scattering event (throughput included): a shadow ray
+    /// to each delta sun, point and spot light, and one light sample each of the emitters, sun
+    /// discs and environment (next-event estimation).
+    pub(super) fn light_samples(
+        &self,
+        pixel: u32,
+        index: u32,
+        event: u32,
+        v: &Vertex<'_>,
+        radiance: &mut Vec3,
+    ) {
+        // Delta suns: gathered by a shadow ray only.
+        for sun in &self.suns {
+            let to_sun = -sun.direction;
+            if let Some(origin) = v.origin_towards(to_sun) {
+                let f = v.bsdf.eval(v.wo, v.frame.to_local(to_sun));
+                if f != Vec3::ZERO {
+                    let contribution = v.throughput * f * sun.irradiance;
+                    *radiance += contribution * self.transmittance(origin, to_sun, f32::INFINITY, v.medium);
+                }
+            }
+        }
+
+        // Point and spot lights, delta lights too: a shadow ray to each, or to one chosen by
+        // power (`--point-lights one`; none to choose when no light has power).
+        if !self.point_lights.is_empty() {
+            *radiance += if self.one_point_light {
+                self.sample_point_light(pixel, index, event, v)
+            } else {
+                self.gather_point_lights(v)
+            };
+        }
+
+        // Emitters, sun discs and the environment: one light sample each.
+        if self.settings.light_sampling != LightSampling::Bsdf
+            && (self.emitters.is_some() || !self.sun_discs.is_empty() || self.env_sampler.is_some())
+        {
+            if self.emitters.is_some() {
+                *radiance += self.sample_emitter(pixel, index, event, v);
+            }
+            if !self.sun_discs.is_empty() {
+                *radiance += self.sample_sun_discs(pixel, index, event, v);
+            }
+            if self.env_sampler.is_some() {
+                *radiance += self.sample_environment(pixel, index, event, v);
+            }
+        }
+    }
+
+    /// What the point and spot lights add at a scattering event (throughput included): a
+    /// shadow ray to each, stopping `SHADOW_EPSILON·d` short of it; a contribution that is not
+    /// finite (a light on the surface, d → 0) adds nothing. Summed over the lights first (the
+    /// WGSL twin does so for many lights; for a few it adds each light's share after its queued
+    /// shadow ray: the same to float rounding).
+    fn gather_point_lights(&self, v: &Vertex<'_>) -> Vec3 {
+        let mut sum = Vec3::ZERO;
+        for light in &self.point_lights {
+            sum += self.point_light(light, v);
+        }
+        sum
+    }
+
+    /// What one point or spot light, chosen by power with the sampler's dimension
+    /// [`layout::point_light`] of event `event`, adds at a scattering event: its share divided
+    /// by the probability of the choice (`--point-lights one`; the WGSL twin chooses with the
+    /// same table and comparisons).
+    fn sample_point_light(&self, pixel: u32, index: u32, event: u32, v: &Vertex<'_>) -> Vec3 {
+        let Some(choice) = &self.point_choice else {
+            return Vec3::ZERO;
+        };
+        let u = self.sampler.value(pixel, index, layout::point_light(self.settings.bounces, event));
+        let (k, pmf) = choice.sample(u);
+        self.point_light(&self.point_lights[k], v) / pmf
+    }
+
+    /// What `light` adds at a scattering event (throughput included): its shadow ray stops
+    /// `SHADOW_EPSILON·d` short of it; a contribution that is not finite (a light on the
+    /// surface, d → 0) adds nothing.
+    #[inline]
+    fn point_light(&self, light: &furnace_scene::PointLight, v: &Vertex<'_>) -> Vec3 {
+        let to_light = light.position - v.surface.position;
+        let d2 = to_light.length_squared();
+        if !(d2 > 0.0) {
+            return Vec3::ZERO;
+        }
+        let d = d2.sqrt();
+        let wi = to_light / d;
+        if let Some(origin) = v.origin_towards(wi) {
+            let li = light.intensity_towards(-wi, d);
+            if li != Vec3::ZERO {
+                let f = v.bsdf.eval(v.wo, v.frame.to_local(wi));
+                let contribution = v.throughput * f * li / d2;
+                if f != Vec3::ZERO && contribution.is_finite() {
+                    let t_max = d * (1.0 - furnace_render::SHADOW_EPSILON);
+                    return contribution * self.transmittance(origin, wi, t_max, v.medium);
+                }
+            }
+        }
+        Vec3::ZERO
+    }
+
     /// One light sample of an emissive triangle at scattering event `event` (throughput
     /// included): the triangle chosen by the light BVH or by power
     /// ([`furnace_render::LightSelection`]), a point on it uniform in solid angle or in area

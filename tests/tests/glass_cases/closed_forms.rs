@@ -1,5 +1,5 @@
-//! Glass in the integrators, against closed forms (the CPU; the GPU where it is cheap on
-//! lavapipe — it traces the CPU's paths from the same samples, `tests/integrator.rs`):
+//! Glass in the integrators, against closed forms (the CPU; the GPU where it is cheap on a
+//! software adapter — it traces the CPU's paths from the same samples, `tests/integrator.rs`):
 //!
 //! * **Beer–Lambert and Fresnel along one ray**: a sphere of radius r and absorption σ seen
 //!   through its centre by a camera with a 10⁻⁴ rad field of view (every sample's ray within
@@ -96,7 +96,7 @@ fn beer_lambert_and_fresnel_along_one_ray() {
     let cases = [(1.0f32, 0.5f32), (1e-5, 1e3), (1e3, 1e-2)];
     // The CPU only: the GPU traces the CPU's paths through absorbing, smooth, rough and
     // thin-walled glass from the same samples (`tests/integrator.rs`), and a GPU renderer per
-    // case costs lavapipe seconds each.
+    // case costs seconds each on a software adapter.
     for backend in [Backend::Cpu] {
         for &(radius, sigma) in &cases {
             for (eta, bounces) in [(1.0f32, 0u32), (1.0, 3), (1.5, 2), (1.5, 8)] {

@@ -1,6 +1,6 @@
 //! Parity of the WGSL dielectric (`gpu/src/wgsl/dielectric.wgsl`, `furnace_gpu::wgsl::DIELECTRIC`)
 //! with its Rust twin `furnace_brdf::dielectric`, on the same inputs, in one kernel (one
-//! dispatch: a shader compile on lavapipe costs seconds):
+//! dispatch: a shader compile on a software adapter costs seconds):
 //!
 //! * `fresnel_dielectric(cos_i, η)` (all four fields) and `thin_reflectance` over a grid of
 //!   `cos_i ∈ [−1, 1]` with 0, −0, ±1, tiny and subnormal cosines and cosines within a few ulps
@@ -43,9 +43,9 @@
 //! rough direction (the spherical cap's far end, `u.y → 1`; Heitz VNDF's rim for the opaque
 //! part) only the GPU's pdf and weight at its own direction ("rim"). Every count is bounded.
 //!
-//! Measured on lavapipe (llvmpipe, Mesa 22.3.6, LLVM 15, x86-64), 508 991 records, about 1.5 s
-//! (the compile and the dispatch 0.7 s); `cargo test -p furnace-tests --test all dielectric_parity::
-//! -- --nocapture` prints the table per group:
+//! The errors the tolerances allow for, measured on a software adapter (llvmpipe, x86-64) over
+//! 508 991 records; `cargo test -p furnace-tests --test all dielectric_parity:: -- --nocapture`
+//! prints the table per group:
 //! * bit-identical: every Fresnel field, R′, the shadow transmittance, `dielectric_new`, and the
 //!   dielectric's eval and pdf (the same operations, correctly rounded on both sides); the
 //!   mixture's eval and pdf within 1.5e-7 and 2.2e-7 (its opaque part);

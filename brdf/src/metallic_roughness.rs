@@ -71,10 +71,10 @@ fn sanitize(x: f32, lo: f32, hi: f32, default: f32) -> f32 {
     if x.is_nan() { default } else { x.clamp(lo, hi) }
 }
 
-/// Rec. 709 luminance.
+/// Rec. 709 luminance ([`furnace_sampling::LUMINANCE`]).
 #[inline]
 pub fn luminance(c: Rgb) -> f32 {
-    c.dot(Rgb::new(0.2126, 0.7152, 0.0722))
+    c.dot(Rgb::from_array(furnace_sampling::LUMINANCE))
 }
 
 impl MetallicRoughness {

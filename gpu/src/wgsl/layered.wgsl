@@ -1,8 +1,9 @@
-// The BSDF at a hit, assembled from the material (furnace-cpu's `HitBsdf`): composed after the
-// generated bindings and before integrator.wgsl, with the TRANSMISSION parts only when a scene has them.
+// furnace-gpu: the glTF material's layering, the twin of `furnace-brdf`'s src/layered.rs
+// (`HitBsdf`): which lobes a hit has and their weights. Composed after the generated bindings
+// and before integrator.wgsl, with the TRANSMISSION parts only when a scene has them.
 
-// The BSDF at a hit and what light samples need of it besides (furnace-cpu's HitBsdf and
-// Vertex): the opaque record, or with TRANSMISSION the transmissive mixture.
+// The BSDF at a hit and what light samples need of it besides (furnace_brdf::HitBsdf and
+// furnace-cpu's Vertex): the opaque record, or with TRANSMISSION the transmissive mixture.
 struct HitBsdf {
     m: BsdfParams,
     // #if TRANSMISSION
@@ -17,7 +18,7 @@ struct HitBsdf {
     // #endif
 }
 
-// furnace-cpu's `bsdf`: the material's BSDF at a hit.
+// `HitBsdf::new`: the material's BSDF at a hit.
 fn hit_bsdf(ms: MaterialSample, material: u32, uv: vec2<f32>) -> HitBsdf {
     var b: HitBsdf;
     b.m = bsdf_params(ms.base_color, ms.metallic, ms.roughness, ms.specular_factor, ms.specular_color,

@@ -1,0 +1,314 @@
+//! The path tracing loop of the CPU path tracer, in stages: the ray that escapes, the surface it
+//! hits (AOVs, absorption, emission), the BSDF there and its light samples
+//! ([`super::lights`]), and the scattered ray that continues the path.
+
+use super::lights::Vertex;
+use super::{CpuRenderer, Shading, absorption, bsdf};
+use furnace_accel::offset_ray_origin_scaled;
+use furnace_brdf::{Frame, HitBsdf};
+use furnace_render::AovSample;
+use furnace_render::layout::{self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE};
+use furnace_sampling::Sampler;
+use furnace_scene::{Material, SurfacePoint};
+use glam::{Vec2, Vec3};
+
+/// What a path carries from one ray to the next.
+struct Path {
+    /// Where the current ray starts.
+    origin: Vec3,
+    /// Where the current ray goes (unit length).
+    direction: Vec3,
+    /// The radiance gathered so far.
+    radiance: Vec3,
+    /// The product of the sample weights so far.
+    throughput: Vec3,
+    /// The scattering events so far; the loop body handles one ray.
+    event: u32,
+    /// The solid-angle pdf of the BSDF sample that made the ray (`None`: the camera's, or a
+    /// delta event's), for the MIS weights of the lights it reaches.
+    bsdf_pdf: Option<f32>,
+    /// The receiving side (geometric normal) of the vertex the ray left, for the light BVH's
+    /// probabilities in those weights (zero: both sides).
+    normal: Vec3,
+    /// Where that vertex took its light samples from (`origin` unless the ray crossed a
+    /// surface since), for the same weights.
+    mis_origin: Option<Vec3>,
+    /// The absorption coefficient of the volume the ray travels in (0: air).
+    medium: Vec3,
+    /// The surface point the ray left (its offset origin would shorten the path by the offset).
+    left_from: Vec3,
+    /// Passes straight through thin-walled sheets since the last event (not events
+    /// themselves).
+    passes: u32,
+    /// The lobe number those passes left unused for the next choice.
+    carried_uc: Option<f32>,
+}
+
+impl CpuRenderer {
+    /// The path tracing loop: radiance arriving at `origin` from direction `-direction`. With
+    /// `aov`, what the first ray hits is written there (it is left as it is for a miss).
+    pub(super) fn trace(
+        &self,
+        pixel: u32,
+        index: u32,
+        origin: Vec3,
+        direction: Vec3,
+        mut aov: Option<&mut AovSample>,
+    ) -> Vec3 {
+        let scene = &self.scene;
+        let mut path = Path {
+            origin,
+            direction,
+            radiance: Vec3::ZERO,
+            throughput: Vec3::ONE,
+            event: 0,
+            bsdf_pdf: None,
+            normal: Vec3::ZERO,
+            mis_origin: None,
+            medium: Vec3::ZERO,
+            left_from: origin,
+            passes: 0,
+            carried_uc: None,
+        };
+        loop {
+            let Some(hit) = self.closest_hit(path.origin, path.direction) else {
+                self.escape(&mut path);
+                break;
+            };
+            let material_index = self.triangle_materials[hit.triangle as usize] as usize;
+            let material = &scene.materials[material_index];
+            // Textured materials are evaluated at the hit's UV; the others were built once.
+            let (uv, shading) = match &self.constant_materials[material_index] {
+                Some(c) => (Vec2::ZERO, Shading::Constant(c)),
+                None => {
+                    let uv = scene.geometry.uv(hit.triangle as usize, hit.barycentrics.x, hit.barycentrics.y);
+                    (uv, Shading::Evaluated(material.evaluate(uv, &scene.textures, &scene.images)))
+                }
+            };
+            let t = hit.triangle as usize;
+            let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
+            let interpolated = self.shading_normal(t, b1, b2);
+            let surface = scene.surface_point(t, (b1, b2), material, uv, path.direction, interpolated);
+            if let Some(aov) = aov.take() {
+                *aov = first_hit_aov(&shading, surface.as_ref(), hit.t);
+            }
+            // Borrowed, not moved out of the `Option`: the move copied it through memory in
+            // pieces that did not match the stores that wrote it (a store-forwarding stall).
+            let Some(surface) = &surface else {
+                // The back of a single-sided surface: black, like a one-sided BSDF.
+                break;
+            };
+            if path.medium != Vec3::ZERO {
+                // Beer–Lambert over the segment inside the volume, surface to surface.
+                path.throughput *= absorption(path.medium, (surface.position - path.left_from).length());
+            }
+            self.add_emission(&mut path, &shading, surface, material_index, t, hit.t);
+            let evaluated;
+            let bsdf = match &shading {
+                Shading::Constant(c) => &c.bsdf,
+                Shading::Evaluated(params) => {
+                    evaluated = bsdf(params, material, self.settings.specular);
+                    &evaluated
+                }
+            };
+            // A sheet (or an η = 1 interface) can still be passed after the last event (the
+            // pass is none).
+            let last = path.event == self.settings.bounces;
+            if last && !bsdf.is_straight() {
+                break;
+            }
+            let vertex = self.vertex(&path, bsdf, surface);
+            if !last && !bsdf.is_delta() {
+                self.light_samples(pixel, index, path.event, &vertex, &mut path.radiance);
+            }
+            if !self.scatter(pixel, index, &mut path, &vertex, material, last) {
+                break;
+            }
+        }
+        path.radiance
+    }
+
+    /// The ray leaves the scene: the absorption of the volume it is in, then the sky, the
+    /// environment and the sun discs it sees.
+    #[inline]
+    fn escape(&self, path: &mut Path) {
+        if path.medium != Vec3::ZERO {
+            path.throughput *= absorption(path.medium, f32::INFINITY);
+        }
+        path.radiance += path.throughput * self.sky;
+        if let Some(env) = &self.environment {
+            path.radiance +=
+                path.throughput * self.environment_seen(env, path.direction, path.bsdf_pdf, path.event == 0);
+        }
+        if !self.sun_discs.is_empty() {
+            path.radiance += path.throughput * self.sun_discs_seen(path.direction, path.bsdf_pdf);
+        }
+    }
+
+    /// The emission the ray sees at the hit (`distance` along it). Emission is one-sided: the
+    /// back of a double-sided emitter does not emit. Reached by a BSDF sample, it is weighted
+    /// against the light sample that could have found it.
+    #[inline]
+    fn add_emission(
+        &self,
+        path: &mut Path,
+        shading: &Shading<'_>,
+        surface: &SurfacePoint,
+        material_index: usize,
+        t: usize,
+        distance: f32,
+    ) {
+        let emission = match shading {
+            Shading::Constant(c) => c.emission,
+            Shading::Evaluated(params) => params.emission,
+        };
+        if !surface.back_face {
+            if self.emitters.is_some() && emission != Vec3::ZERO {
+                let cos_light = -surface.geometric.dot(path.direction);
+                // The distance from where the light samples were taken (the ray's own
+                // length unless it crossed a surface on the way).
+                let (from, distance) = match path.mis_origin {
+                    Some(o) => (o, (surface.position - o).length()),
+                    None => (path.origin, distance),
+                };
+                let w = self.emission_weight(
+                    path.bsdf_pdf,
+                    from,
+                    path.normal,
+                    material_index,
+                    t,
+                    distance,
+                    cos_light,
+                );
+                path.radiance += path.throughput * emission * w;
+            } else {
+                path.radiance += path.throughput * emission;
+            }
+        }
+    }
+
+    /// The scattering event at `surface`: its shading frame and the offset origins that rays
+    /// leave it from.
+    #[inline]
+    fn vertex<'a>(&self, path: &Path, bsdf: &'a HitBsdf, surface: &'a SurfacePoint) -> Vertex<'a> {
+        // A solid's interface is shaded in its outward frame (the side of index 1), where
+        // `wo` may be inside; every other surface in the frame facing the ray.
+        let outward = if bsdf.is_volume() && surface.back_face { -surface.shading } else { surface.shading };
+        let frame = Frame::new(outward);
+        let wo = frame.to_local(-path.direction);
+        let leave = offset_ray_origin_scaled(surface.position, surface.geometric, self.offset_scale);
+        Vertex {
+            throughput: path.throughput,
+            bsdf,
+            wo,
+            frame,
+            surface,
+            leave,
+            leave_behind: bsdf.transmits_light_samples().then(|| self.behind(surface)),
+            medium: path.medium,
+        }
+    }
+
+    /// The offset origin of rays leaving `surface` on the side opposite its geometric normal.
+    #[inline]
+    fn behind(&self, surface: &SurfacePoint) -> Vec3 {
+        offset_ray_origin_scaled(surface.position, -surface.geometric, self.offset_scale)
+    }
+
+    /// Continues the path by sampling the BSDF at `v`: the next ray, or `false` where the path
+    /// ends (no sample, a direction the surface does not allow, the last event, Russian
+    /// roulette).
+    #[inline]
+    fn scatter(
+        &self,
+        pixel: u32,
+        index: u32,
+        path: &mut Path,
+        v: &Vertex<'_>,
+        material: &Material,
+        last: bool,
+    ) -> bool {
+        let (bsdf, surface) = (v.bsdf, v.surface);
+        let dim = layout::bounce(path.event);
+        let [u1, u2] = self.sampler.value_2d(pixel, index, dim + BOUNCE_BSDF_DIRECTION);
+        // The lobe choice `uc` is drawn only where the material has two lobes (or left over
+        // by a pass through a sheet at this event).
+        let carried_uc = path.carried_uc;
+        let uc = || carried_uc.unwrap_or_else(|| self.sampler.value(pixel, index, dim + BOUNCE_BSDF_LOBE));
+        let Some(s) = bsdf.sample(v.wo, Vec2::new(u1, u2), uc) else { return false };
+        let wi = v.frame.to_world(s.wi);
+        // Reflections leave on the side the ray came from, transmissions on the other; a
+        // direction the shading normal allows but the surface does not ends the path —
+        // except at a solid's interface, where the ray goes on to whichever side it points
+        // (as Mitsuba's, which switches media by that side too).
+        let side = wi.dot(surface.geometric);
+        let crosses = if bsdf.is_volume() { side < 0.0 } else { s.transmitted };
+        if !(if crosses { side < 0.0 } else { side > 0.0 }) {
+            return false;
+        }
+        if s.delta && s.transmitted && bsdf.is_straight() {
+            // Straight through a sheet or an invisible interface: no event, the MIS state of
+            // the last one kept (a solid's medium changes).
+            if bsdf.is_volume() {
+                path.medium = if surface.back_face { Vec3::ZERO } else { material.absorption };
+            }
+            path.passes += 1;
+            if path.passes > furnace_render::MAX_SHEET_PASSES {
+                return false;
+            }
+            path.throughput *= s.weight;
+            path.carried_uc = Some(s.rest);
+            path.mis_origin.get_or_insert(path.origin);
+            path.origin = self.behind(surface);
+            path.left_from = surface.position;
+            return true;
+        }
+        if last {
+            return false;
+        }
+        path.throughput *= s.weight;
+        path.bsdf_pdf = (!s.delta).then_some(s.pdf);
+        path.event += 1;
+        path.passes = 0;
+        path.carried_uc = None;
+        if crosses && bsdf.is_volume() {
+            // Into the solid from outside, or out of it.
+            path.medium = if surface.back_face { Vec3::ZERO } else { material.absorption };
+        }
+        if self.settings.russian_roulette && path.event >= 3 {
+            let survive = furnace_render::russian_roulette_survival(path.throughput);
+            if !(self.sampler.value(pixel, index, dim + BOUNCE_RUSSIAN_ROULETTE) < survive) {
+                return false;
+            }
+            path.throughput /= survive;
+        }
+        path.normal = v.receiver_normal();
+        path.left_from = surface.position;
+        if crosses {
+            path.origin = self.behind(surface);
+            path.mis_origin = Some(v.leave);
+        } else {
+            path.origin = v.leave;
+            path.mis_origin = None;
+        }
+        path.direction = wi;
+        true
+    }
+}
+
+/// The AOVs of the first hit: the albedo (1 on the front of an emitter: its colour is its
+/// light, like the sky's), the shading normal (none on the back of a single-sided surface,
+/// which is black) and the depth.
+#[inline]
+fn first_hit_aov(shading: &Shading<'_>, surface: Option<&SurfacePoint>, depth: f32) -> AovSample {
+    let (base_color, emission) = match shading {
+        Shading::Constant(c) => (c.base_color, c.emission),
+        Shading::Evaluated(params) => (params.base_color, params.emission),
+    };
+    let emits = emission != Vec3::ZERO && surface.is_some_and(|s| !s.back_face);
+    AovSample {
+        albedo: if emits { Vec3::ONE } else { base_color },
+        normal: surface.map_or(Vec3::ZERO, |s| s.shading),
+        depth: Some(depth),
+    }
+}
