@@ -764,7 +764,7 @@ const WIDE_NODE_LIMIT: usize = 16_384;
 /// roundings (the triangle test's `t` is good to ~1e-5 relative even near grazing angles,
 /// `tests/queries.rs`) and visits a negligible number of extra boxes; the hit itself is still
 /// decided by exact comparisons of the triangle test's `t`.
-const CULL_SLACK: f32 = 1.0 + 1.0 / 4096.0;
+pub const CULL_SLACK: f32 = 1.0 + 1.0 / 4096.0;
 
 /// The scalar form of `safe_recip3`, which the traversal uses; kept as its test reference.
 #[cfg(test)]

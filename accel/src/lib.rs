@@ -74,7 +74,7 @@ mod offset;
 mod traverse;
 mod triangle;
 
-pub use bvh::{BuildOptions, BuildQuality, Bvh, Hit, Layout, MAX_BUILD_COORDINATE};
+pub use bvh::{BuildOptions, BuildQuality, Bvh, CULL_SLACK, Hit, Layout, MAX_BUILD_COORDINATE};
 pub use gpu::{GpuCwbvhNode, GpuTriangle};
 pub use offset::{
     FLOAT_SCALE, INT_SCALE, ORIGIN, offset_ray_origin, offset_ray_origin_scaled, offset_scale,

@@ -627,8 +627,8 @@ mod tests {
                 for lane in (0..4).rev() {
                     if hits.mask & (1 << lane) != 0 && hits.t[lane] < got.map_or(f32::INFINITY, |b| b.1) {
                         got = Some((first + lane, hits.t[lane]));
-                        // Cull slightly beyond the hit, as `Bvh` does (CULL_SLACK, 2^-12).
-                        cull = hits.t[lane] * (1.0 + 1.0 / 4096.0);
+                        // Cull slightly beyond the hit, as `Bvh` does.
+                        cull = hits.t[lane] * crate::bvh::CULL_SLACK;
                     }
                 }
                 cull
@@ -637,7 +637,7 @@ mod tests {
             // Any-hit up to a distance short of and past the closest hit.
             for t_any in [1.0f32, 3.0] {
                 let brute_any = tris.iter().any(|t| intersect_triangle(o, d, *t, t_any).is_some());
-                let any_ray = Ray { tmax: t_any * (1.0 + 1.0 / 4096.0), ..ray };
+                let any_ray = Ray { tmax: t_any * crate::bvh::CULL_SLACK, ..ray };
                 let got_any = any::<false>(&nodes, &any_ray, |block, _| {
                     blocks[block].intersect(o.into(), d.into(), t_any).mask != 0
                 });

@@ -23,6 +23,19 @@ use furnace_brdf::{
     Lobe, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions, SpecularSampling,
 };
 
+/// The WGSL of `furnace-brdf` ([`crate::wgsl::BRDF`]): one file per Rust file of the crate
+/// (`brdf.wgsl` is the twin of its `lib.rs`), concatenated in dependency order. A new lobe adds
+/// its file here.
+pub const WGSL: &str = concat!(
+    include_str!("wgsl/brdf.wgsl"),
+    include_str!("wgsl/fresnel.wgsl"),
+    include_str!("wgsl/ggx.wgsl"),
+    include_str!("wgsl/turquin.wgsl"),
+    include_str!("wgsl/specular.wgsl"),
+    include_str!("wgsl/lambert.wgsl"),
+    include_str!("wgsl/metallic_roughness.wgsl"),
+);
+
 crate::wgsl_consts! {
     /// The WGSL `const` declarations of the flag and lobe codes below (`BSDF_` + the Rust
     /// name), composed by [`declarations`].

@@ -40,12 +40,14 @@ impl FilmPrecision {
         if ctx.shader_f64 { Self::F64 } else { Self::F32Pass }
     }
 
-    /// The WGSL module defining `film_add(pixel: u32, value: vec3<f32>)`.
-    pub fn wgsl(self) -> &'static str {
-        match self {
+    /// The WGSL module defining `film_add(pixel: u32, value: vec3<f32>)`, with its generated
+    /// `FILM_LUMINANCE`.
+    pub fn wgsl(self) -> String {
+        let module = match self {
             Self::F64 => include_str!("wgsl/film_f64.wgsl"),
             Self::F32Pass => include_str!("wgsl/film_f32.wgsl"),
-        }
+        };
+        crate::brdf::luminance_const("FILM_LUMINANCE") + module
     }
 
     /// The film's two bindings, `film_sum` and `film_count` (both `read_write` storage).

@@ -451,8 +451,13 @@ impl NoiseEstimator {
             bind_group_layouts: &[Some(&layout)],
             immediate_size: 0,
         });
-        let source =
-            [&wgsl_struct::<NoiseParams>(true), &table.wgsl(), include_str!("wgsl/noise.wgsl")].concat();
+        let source = [
+            &wgsl_struct::<NoiseParams>(true),
+            &table.wgsl(),
+            &crate::brdf::luminance_const("NOISE_LUMINANCE"),
+            include_str!("wgsl/noise.wgsl"),
+        ]
+        .concat();
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some("noise"),
             source: wgpu::ShaderSource::Wgsl(source.into()),

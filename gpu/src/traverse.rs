@@ -90,7 +90,17 @@ pub fn bindings(group: u32, first: u32) -> String {
 /// generated from furnace-accel's [`GpuCwbvhNode`] and [`GpuTriangle`] (composed by
 /// [`bindings`]).
 pub fn declarations() -> String {
-    wgsl_struct::<GpuCwbvhNode>(false) + &wgsl_struct::<GpuTriangle>(false)
+    wgsl_struct::<GpuCwbvhNode>(false) + &wgsl_struct::<GpuTriangle>(false) + &constants_wgsl()
+}
+
+/// The traversal's constants shared with furnace-accel, defined there once: the culling slack
+/// and `offset_ray_origin`'s origin and scales (printed exactly: Rust's shortest round-trip form).
+fn constants_wgsl() -> String {
+    use furnace_accel::{CULL_SLACK, FLOAT_SCALE, INT_SCALE, ORIGIN};
+    format!(
+        "const TRV_CULL_SLACK: f32 = {CULL_SLACK:?};\nconst TRV_ORIGIN: f32 = {ORIGIN:?};\n\
+         const TRV_FLOAT_SCALE: f32 = {FLOAT_SCALE:?};\nconst TRV_INT_SCALE: f32 = {INT_SCALE:?};\n"
+    )
 }
 
 /// `vec2<u32>` holding eight bytes, one per child slot (slots 0–3 in `.x`, 4–7 in `.y`).

@@ -17,16 +17,9 @@ pub const SAMPLING: &str = include_str!("wgsl/sampling.wgsl");
 /// metallic-roughness. Needs [`SAMPLING`] (warps) and [`crate::brdf::declarations`].
 ///
 /// One WGSL file per Rust file of `furnace-brdf` (`brdf.wgsl` is the twin of its `lib.rs`),
-/// concatenated in dependency order.
-pub const BRDF: &str = concat!(
-    include_str!("wgsl/brdf.wgsl"),
-    include_str!("wgsl/fresnel.wgsl"),
-    include_str!("wgsl/ggx.wgsl"),
-    include_str!("wgsl/turquin.wgsl"),
-    include_str!("wgsl/specular.wgsl"),
-    include_str!("wgsl/lambert.wgsl"),
-    include_str!("wgsl/metallic_roughness.wgsl"),
-);
+/// concatenated in dependency order; the list lives beside the GPU record, in
+/// [`crate::brdf::WGSL`], so that a lobe's Rust side on the GPU is one file.
+pub const BRDF: &str = crate::brdf::WGSL;
 
 /// `furnace-brdf`'s dielectric module: exact Fresnel, smooth / rough / thin-walled interfaces
 /// and the glTF transmissive mixture. Needs [`BRDF`].

@@ -188,7 +188,7 @@ fn million_frames_do_not_drift() {
     }
     let mut failures = Vec::new();
     for precision in precisions {
-        let data = accumulate(&ctx, precision, precision.wgsl(), true);
+        let data = accumulate(&ctx, precision, &precision.wgsl(), true);
         let w = worst(&data, &exact, false);
         eprintln!("{precision:?}: worst relative error of the mean after {FRAMES} frames: {w:.3e}");
         if !(w < 1e-5) {

@@ -19,8 +19,8 @@
 pub const ADAPTIVE_STEP: u32 = 8;
 
 /// Rec. 709 luminance weights, of the noise estimate (the GPU film sums squared luminances with
-/// the same weights).
-pub const LUMINANCE: [f32; 3] = [0.2126, 0.7152, 0.0722];
+/// the same weights): furnace-sampling's one definition.
+pub use furnace_sampling::LUMINANCE;
 
 /// When pixels stop taking samples ([`crate::RenderSettings::adaptive`]).
 #[derive(Debug, Clone, Copy, PartialEq)]

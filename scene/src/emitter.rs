@@ -18,7 +18,8 @@ use glam::{Vec2, Vec3};
 
 /// Luminance of linear Rec. 709 RGB.
 pub fn luminance(c: Vec3) -> f32 {
-    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+    let [r, g, b] = furnace_sampling::LUMINANCE;
+    r * c.x + g * c.y + b * c.z
 }
 
 /// Area of the triangle `v0 v1 v2`, as every emitter computation forms it.

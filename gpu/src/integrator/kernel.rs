@@ -327,7 +327,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         &wgsl::select(wgsl::TRAVERSE, |name| features.enabled(name)),
         &light_bvh,
         &environment,
-        precision.wgsl(),
+        &precision.wgsl(),
         wgsl::PATH,
         &wgsl::select(wgsl::MATERIAL, |name| features.enabled(name)),
         &wgsl::select(SHADOW_WGSL, integrator_feature),

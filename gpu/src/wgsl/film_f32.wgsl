@@ -20,8 +20,7 @@ fn film_is_finite(v: vec3<f32>) -> bool {
     return all(e != vec3<u32>(0x7f800000u));
 }
 
-// Rec. 709 luminance weights (furnace_render::LUMINANCE).
-const FILM_LUMINANCE: vec3<f32> = vec3<f32>(0.2126, 0.7152, 0.0722);
+// FILM_LUMINANCE (Rec. 709) is generated before this module from furnace_sampling::LUMINANCE.
 
 // Adds one sample to `pixel`; a non-finite sample is rejected: not added, counted apart.
 fn film_add(pixel: u32, value: vec3<f32>) {

@@ -10,8 +10,8 @@
 // noise_partial).
 
 const NOISE_GROUP: u32 = 256u;
-// The f32 weights of film_f64.wgsl's squares, widened: S1 and S2 weigh alike.
-const NOISE_LUMINANCE: vec3<f32> = vec3<f32>(0.2126, 0.7152, 0.0722);
+// NOISE_LUMINANCE, the f32 weights of film_f64.wgsl's squares (S1 and S2 weigh alike), is
+// generated before this module from furnace_sampling::LUMINANCE.
 
 var<workgroup> noise_acc: array<vec4<f32>, NOISE_GROUP>;
 

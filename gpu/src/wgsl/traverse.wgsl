@@ -89,10 +89,10 @@ var<private> trace_stats: TraceStats;
 /// to test the overflow path: keep its form.
 const TRV_STACK_SIZE: u32 = 16u;
 
-/// `accel`'s CULL_SLACK, 1 + 2^-12: boxes are culled only beyond t_best · (1 + 2^-12), so that
-/// a triangle a few ULPs nearer than the best hit, in a box whose computed entry is a few ULPs
-/// farther, is still found (near-ties at shared edges).
-const TRV_CULL_SLACK: f32 = 1.000244140625;
+/// TRV_CULL_SLACK (`furnace_accel::CULL_SLACK`, 1 + 2^-12, generated before this module): boxes
+/// are culled only beyond t_best · (1 + 2^-12), so that a triangle a few ULPs nearer than the
+/// best hit, in a box whose computed entry is a few ULPs farther, is still found (near-ties at
+/// shared edges).
 
 /// Largest finite f32: an infinite t_max (bit pattern from a buffer) is clamped to it, since
 /// some drivers treat infinities as undefined in arithmetic.
@@ -102,10 +102,8 @@ const TRV_F32_MAX: f32 = 3.40282347e38;
 const TRV_TINY: f32 = 7.888609e-31;
 const TRV_HUGE: f32 = 1.2676506e30;
 
-/// offset_ray_origin constants (`furnace_accel::{ORIGIN, FLOAT_SCALE, INT_SCALE}`).
-const TRV_ORIGIN: f32 = 0.03125;
-const TRV_FLOAT_SCALE: f32 = 1.52587890625e-5;
-const TRV_INT_SCALE: f32 = 256.0;
+/// offset_ray_origin's constants TRV_ORIGIN, TRV_FLOAT_SCALE, TRV_INT_SCALE are generated before
+/// this module from `furnace_accel::{ORIGIN, FLOAT_SCALE, INT_SCALE}`.
 
 /// Whether x is finite, from its bits (robust where a driver assumes no NaN / infinity).
 fn trv_is_finite(x: f32) -> bool {
