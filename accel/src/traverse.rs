@@ -265,7 +265,7 @@ const OCTANT_INV: [usize; 8] = [7, 3, 5, 1, 6, 2, 4, 0];
 /// twin's behaviour (`gpu/src/wgsl/traverse.wgsl`, "Traversal stack and its overflow"). A fixed
 /// stack that overwrites its top entry when full (obvhs's `StackStack`) would lose every hit
 /// below it; the sweep costs almost nothing on trees that never overflow, less than a heap
-/// spill (BENCHMARKS.md, "Traversal").
+/// spill.
 ///
 /// `WIDE` picks the node test: [`WideNode::intersect8`] (for code compiled with AVX2) or
 /// [`WideNode::intersect`]; both give the same masks.

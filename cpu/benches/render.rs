@@ -1,11 +1,10 @@
 //! Path-tracing throughput of the CPU integrator.
 //!
 //! `cargo bench -p furnace-cpu` renders the built-in reference Cornell box at 256×256 with 4
-//! bounces on a 2-thread rayon pool (the developers' machine has 2 cores; Mitsuba 3 on such
-//! machines: `scalar_rgb` 1.87, `llvm_ad_rgb` 1.7–5.25 Msamples/s by the day and the CPU's
-//! AVX-512, `tests/data/references/README.md`; compare only side by side, with
-//! `docs/bench/cpu-vs-mitsuba.sh`) and prints Msamples/s (camera paths per second, not rays) for the random and Sobol samplers:
-//! the best of 3 passes of 16 samples per pixel, after a warm-up pass.
+//! bounces on a 2-thread rayon pool (the developers' machine has 2 cores; against Mitsuba 3 and
+//! Cycles compare only side by side, with `docs/bench/cpu-peers.sh`) and prints Msamples/s
+//! (camera paths per second, not rays) for the random and Sobol samplers: the best of 3 passes
+//! of 16 samples per pixel, after a warm-up pass.
 //!
 //! Flags: `--quick` (one pass of 4 samples per pixel), `--threads N`, `--bounces B`,
 //! `--size S` (S×S pixels), `--spp N` (samples per pixel per pass), `--passes N`,

@@ -19,7 +19,7 @@ fn check(settings: RenderSettings) {
     let (Some(mut stopped), Some(mut plain)) = (renderer(settings), renderer(settings)) else { return };
     if furnace_gpu::context::is_hardware(&stopped.context().info) {
         // A hardware adapter renders this image in one dispatch, which nothing interrupts; the
-        // device script `docs/device/interrupt.sh` stops real 4K passes there.
+        // 4K render of 1024-bounce paths on such an adapter is where a pass gets split and stopped.
         eprintln!("skipped: one dispatch per pass on a hardware adapter");
         return;
     }
