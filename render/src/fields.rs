@@ -36,8 +36,8 @@ pub struct Field {
     pub key: &'static str,
     /// The flag's help.
     pub help: &'static str,
-    /// The flag's value name in the help (`None`: the flag in capitals).
-    pub value_name: Option<&'static str>,
+    /// The flag's value name in the help (`LIGHT_SAMPLING`, `X`).
+    pub value_name: &'static str,
     /// The command line's default, as the flag is given (`None`: unset).
     pub default: Option<&'static str>,
     /// The values it takes, with a line of help each (empty: a number).
@@ -97,7 +97,7 @@ pub static FIELDS: &[Field] = &[
         key: "furnace.bounces",
         help: "Scattering events per path (0: only what the camera sees directly; 1: direct lighting; at \
                most 1024)",
-        value_name: None,
+        value_name: "BOUNCES",
         default: Some("4"),
         choices: none,
         requires: None,
@@ -115,7 +115,7 @@ pub static FIELDS: &[Field] = &[
         flag: "sampler",
         key: "furnace.sampler",
         help: "Sampler: random, hammersley, cmj, pmj02, sobol",
-        value_name: None,
+        value_name: "SAMPLER",
         default: Some("sobol"),
         choices: none,
         requires: None,
@@ -133,7 +133,7 @@ pub static FIELDS: &[Field] = &[
         flag: "seed",
         key: "furnace.seed",
         help: "Seed of the sampler's scrambling",
-        value_name: None,
+        value_name: "SEED",
         default: Some("0"),
         choices: none,
         requires: None,
@@ -151,7 +151,7 @@ pub static FIELDS: &[Field] = &[
         flag: "masking",
         key: "furnace.masking",
         help: "Smith masking-shadowing of the GGX lobes",
-        value_name: None,
+        value_name: "MASKING",
         default: Some("height-correlated"),
         choices: choices::<furnace_brdf::Masking>,
         requires: None,
@@ -169,7 +169,7 @@ pub static FIELDS: &[Field] = &[
         flag: "compensation",
         key: "furnace.compensation",
         help: "Turquin energy compensation of the GGX lobes",
-        value_name: None,
+        value_name: "COMPENSATION",
         default: Some("on"),
         choices: on_off,
         requires: None,
@@ -187,7 +187,7 @@ pub static FIELDS: &[Field] = &[
         flag: "specular-sampling",
         key: "furnace.specular_sampling",
         help: "How the GGX lobes sample microfacet normals",
-        value_name: None,
+        value_name: "SPECULAR_SAMPLING",
         default: Some("caps"),
         choices: choices::<furnace_brdf::SpecularSampling>,
         requires: None,
@@ -205,7 +205,7 @@ pub static FIELDS: &[Field] = &[
         flag: "russian-roulette",
         key: "furnace.russian_roulette",
         help: "Russian roulette from the third scattering event on (unbiased; faster, noisier)",
-        value_name: None,
+        value_name: "RUSSIAN_ROULETTE",
         default: Some("off"),
         choices: on_off,
         requires: None,
@@ -224,7 +224,7 @@ pub static FIELDS: &[Field] = &[
         key: "furnace.light_sampling",
         help: "How light of emitters and sun discs is found: bsdf (only by sampled rays that hit them), nee \
                (only by light samples with shadow rays) or mis (both, by the power heuristic)",
-        value_name: None,
+        value_name: "LIGHT_SAMPLING",
         default: Some("mis"),
         choices: choices::<crate::LightSampling>,
         requires: None,
@@ -244,7 +244,7 @@ pub static FIELDS: &[Field] = &[
         key: "furnace.triangle_sampling",
         help: "How a light sample picks its point on an emissive triangle: solid-angle (uniform in the solid \
                angle it subtends, where that is precise) or area (uniform on its area)",
-        value_name: None,
+        value_name: "TRIANGLE_SAMPLING",
         default: Some("solid-angle"),
         choices: choices::<crate::TriangleSampling>,
         requires: None,
@@ -265,7 +265,7 @@ pub static FIELDS: &[Field] = &[
         help: "How a light sample chooses the emissive triangle: bvh (default) descends a light BVH by each \
                node's importance at the shading point (power, distance, orientation; Conty Estevez & Kulla \
                2018), power picks in proportion to power by an alias table",
-        value_name: None,
+        value_name: "LIGHT_SELECTION",
         default: Some("bvh"),
         choices: choices::<crate::LightSelection>,
         requires: None,
@@ -287,7 +287,7 @@ pub static FIELDS: &[Field] = &[
                (one light chosen in proportion to its power: one shadow ray per event whatever the number \
                of lights, more noise per sample) or auto (all up to 4 lights, one beyond: the faster to a \
                given noise, measured)",
-        value_name: None,
+        value_name: "POINT_LIGHTS",
         default: Some("auto"),
         choices: choices::<crate::PointLightSampling>,
         requires: None,
@@ -307,7 +307,7 @@ pub static FIELDS: &[Field] = &[
         key: "furnace.clamp",
         help: "Clamp each sample so that its largest channel is at most X (firefly suppression; off by \
                default because it is biased: it darkens caustics and small bright lights)",
-        value_name: Some("X"),
+        value_name: "X",
         default: None,
         choices: none,
         requires: None,
@@ -329,7 +329,7 @@ pub static FIELDS: &[Field] = &[
                render ends when every pixel has (or at --spp / --time-limit). A pixel whose first samples \
                all miss its rare bright paths can stop too dark (--min-spp guards against it; measured in \
                docs/accuracy.md)",
-        value_name: Some("T"),
+        value_name: "T",
         default: None,
         choices: none,
         requires: None,
@@ -350,8 +350,8 @@ pub static FIELDS: &[Field] = &[
         flag: "min-spp",
         key: "furnace.minSpp",
         help: "Adaptive sampling: no pixel stops before this many samples",
-        value_name: Some("N"),
-        default: Some("8"),
+        value_name: "N",
+        default: Some("16"),
         choices: none,
         requires: Some("noise-threshold"),
         absent: Absent::NotGiven,
@@ -374,7 +374,7 @@ pub static FIELDS: &[Field] = &[
                (also light samples in proportion to its luminance, weighted by --light-sampling), \
                compensated (the default: light samples where it outshines its mean, MIS compensation; \
                with --light-sampling nee the plain importance distribution is used)",
-        value_name: None,
+        value_name: "ENV_SAMPLING",
         default: Some("compensated"),
         choices: choices::<crate::EnvSampling>,
         requires: None,
@@ -416,6 +416,8 @@ mod tests {
             assert_eq!(s, default, "{}", f.flag);
             assert!((f.get)(&default).is_none() || (f.get)(&default).as_deref() == f.default, "{}", f.flag);
         }
+        let min = AdaptiveSampling::DEFAULT_MIN_SAMPLES.to_string();
+        assert_eq!(field("min-spp").unwrap().default, Some(min.as_str()));
     }
 
     #[test]
