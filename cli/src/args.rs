@@ -1,12 +1,18 @@
-//! Command-line arguments (clap derive) and their value parsers.
+//! Command-line arguments (clap derive) and their value parsers. The render settings' flags
+//! are built from the settings' own description (`settings`).
 
+mod chart;
+mod settings;
+
+pub use chart::{ChartArgs, ChartBackend, ChartTime, Threshold};
+pub use settings::{Bench, Render, SettingsArgs, choice};
+
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 use clap::{Args, Parser, Subcommand, ValueEnum};
-use furnace_brdf::{Masking, SpecularSampling};
+use furnace_cli::backend::BackendChoice;
+use furnace_denoise::DeviceKind;
 use furnace_post::Tonemap;
-use furnace_render::{
-    EnvSampling, LightSampling, LightSelection, PointLightSampling, SampleRange, TriangleSampling,
-};
-use furnace_sampling::SamplerKind;
+use furnace_render::SampleRange;
 use furnace_scene::Camera;
 use glam::Vec3;
 use std::collections::BTreeSet;
@@ -72,23 +78,17 @@ pub struct RenderArgs {
     /// (`furnace merge` adds the parts up to the film of a single run). --spp is then the whole
     /// render's sample count (default B; the fixed-N samplers hammersley and cmj need it given).
     /// The part is recorded in the EXR; --resume continues it up to B.
-    #[arg(long, value_name = "A..B", conflicts_with = "noise_threshold")]
+    #[arg(long, value_name = "A..B", conflicts_with = "noise-threshold")]
     pub samples: Option<SampleRange>,
     /// Also save the render so far (EXR and PNG, atomically) every SECONDS of rendering, so that
     /// a process killed without warning (SIGKILL, a lost node) loses at most that much work.
     /// Ctrl-C and SIGTERM (a scheduler's cancel, preemption or time limit) always save.
     #[arg(long, allow_negative_numbers = true, value_name = "SECONDS", value_parser = parse_interval)]
     pub checkpoint: Option<f64>,
-    /// Scattering events per path (0: only what the camera sees directly; 1: direct lighting;
-    /// at most 1024).
-    #[arg(long, allow_negative_numbers = true, default_value_t = 4, value_parser = parse_bounces)]
-    pub bounces: u32,
-    /// Sampler: random, hammersley, cmj, pmj02, sobol.
-    #[arg(long, default_value_t = furnace_render::RenderSettings::default().sampler)]
-    pub sampler: SamplerKind,
-    /// Seed of the sampler's scrambling.
-    #[arg(long, default_value_t = 0)]
-    pub seed: u32,
+    // The render settings (--bounces, --sampler, --seed, the material model, the light
+    // sampling, --clamp, adaptive sampling), from `furnace_render::fields`.
+    #[command(flatten)]
+    pub settings: SettingsArgs<Render>,
     /// Image width in pixels [default: 512, or from --height and the camera's aspect ratio].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIDE as i64))]
     pub width: Option<u32>,
@@ -102,15 +102,6 @@ pub struct RenderArgs {
     /// Tone map of the PNG: aces, pbr-neutral, clamp.
     #[arg(long, default_value_t = Tonemap::default())]
     pub tonemap: Tonemap,
-    /// Smith masking-shadowing of the GGX lobes.
-    #[arg(long, value_enum, default_value_t = MaskingArg::HeightCorrelated)]
-    pub masking: MaskingArg,
-    /// Turquin energy compensation of the GGX lobes.
-    #[arg(long, value_enum, default_value_t = Switch::On)]
-    pub compensation: Switch,
-    /// How the GGX lobes sample microfacet normals.
-    #[arg(long, value_enum, default_value_t = SamplingArg::Caps)]
-    pub specular_sampling: SamplingArg,
     /// Which of the scene's cameras to render (0-based, in `furnace info` order) [default: the
     /// first; a scene without one is framed around its geometry].
     #[arg(long, value_name = "INDEX")]
@@ -129,43 +120,6 @@ pub struct RenderArgs {
     /// the scene's first perspective camera's, else 45].
     #[arg(long, allow_negative_numbers = true, value_name = "DEG", requires = "look_at", value_parser = parse_yfov)]
     pub yfov: Option<f32>,
-    /// Russian roulette from the third scattering event on (unbiased; faster, noisier).
-    #[arg(long, value_enum, default_value_t = Switch::Off)]
-    pub russian_roulette: Switch,
-    /// How light of emitters and sun discs is found: bsdf (only by sampled rays that hit them),
-    /// nee (only by light samples with shadow rays) or mis (both, by the power heuristic).
-    #[arg(long, value_enum, default_value_t = LightSamplingArg::Mis)]
-    pub light_sampling: LightSamplingArg,
-    /// How a light sample picks its point on an emissive triangle: solid-angle (uniform in the
-    /// solid angle it subtends, where that is precise) or area (uniform on its area).
-    #[arg(long, value_enum, default_value_t = TriangleSamplingArg::SolidAngle)]
-    pub triangle_sampling: TriangleSamplingArg,
-    /// How a light sample chooses the emissive triangle: bvh (default) descends a light BVH by
-    /// each node's importance at the shading point (power, distance, orientation; Conty Estevez &
-    /// Kulla 2018), power picks in proportion to power by an alias table.
-    #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
-    pub light_selection: LightSelectionArg,
-    /// How a scattering event gathers the point and spot lights: all (a shadow ray to each),
-    /// one (one light chosen in proportion to its power: one shadow ray per event whatever the
-    /// number of lights, more noise per sample) or auto (all up to 4 lights, one beyond: the
-    /// faster to a given noise, measured).
-    #[arg(long, value_enum, default_value_t = PointLightsArg::Auto)]
-    pub point_lights: PointLightsArg,
-    /// Clamp each sample so that its largest channel is at most X (firefly suppression; off by
-    /// default because it is biased: it darkens caustics and small bright lights).
-    #[arg(long, allow_negative_numbers = true, value_name = "X", value_parser = parse_clamp)]
-    pub clamp: Option<f32>,
-    /// Adaptive sampling: a pixel stops taking samples once the relative standard error of its
-    /// luminance is below T (0.01: about 1 %), tested every 8 samples from --min-spp on; the
-    /// render ends when every pixel has (or at --spp / --time-limit). A pixel whose first
-    /// samples all miss its rare bright paths can stop too dark (--min-spp guards against it;
-    /// measured in docs/accuracy.md).
-    #[arg(long, allow_negative_numbers = true, value_name = "T", value_parser = parse_noise_threshold)]
-    pub noise_threshold: Option<f32>,
-    /// Adaptive sampling: no pixel stops before this many samples.
-    #[arg(long, value_name = "N", default_value_t = furnace_render::AdaptiveSampling::DEFAULT_MIN_SAMPLES,
-          requires = "noise_threshold")]
-    pub min_spp: u32,
     /// Denoise the finished image with Intel Open Image Denoise, guided by the albedo and normal
     /// AOVs (so it implies --aovs): writes PATH.denoised.png and the EXR layer denoised.R/G/B;
     /// the raw image stays exact and resumable. Needs a furnace built with `--features denoise`.
@@ -173,8 +127,8 @@ pub struct RenderArgs {
     pub denoise: bool,
     /// Where Open Image Denoise runs: auto (a GPU it can drive, else the CPU), cpu, cuda, hip,
     /// sycl, metal.
-    #[arg(long, value_enum, default_value_t = DenoiseDeviceArg::Auto, value_name = "DEVICE")]
-    pub denoise_device: DenoiseDeviceArg,
+    #[arg(long, value_parser = denoise_device(), default_value = "auto", value_name = "DEVICE")]
+    pub denoise_device: DeviceKind,
     /// Denoise the albedo and normal guides first (for noisy guides: a few samples per pixel,
     /// textures finer than a pixel; about 3× the denoising time).
     #[arg(long)]
@@ -193,17 +147,11 @@ pub struct RenderArgs {
     // --env-visible).
     #[command(flatten)]
     pub environment: EnvArgs,
-    /// How light samples gather the environment map: off (only BSDF rays that escape),
-    /// importance (also light samples in proportion to its luminance, weighted by
-    /// --light-sampling), compensated (the default: light samples where it outshines its mean,
-    /// MIS compensation; with --light-sampling nee the plain importance distribution is used).
-    #[arg(long, value_enum, default_value_t = EnvSamplingArg::Compensated)]
-    pub env_sampling: EnvSamplingArg,
     /// Where to render: cpu (the reference integrator), gpu (wgpu: Vulkan, Metal or DX12), or
     /// auto (a hardware GPU if there is one, else the CPU; software GPUs such as lavapipe are
     /// slower than the CPU integrator and used only when asked for).
-    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
-    pub backend: BackendArg,
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
     /// The GPU adapter: a part of its name (case-insensitive), its PCI address (0000:18:00.0, as
     /// `nvidia-smi --query-gpu=pci.bus_id` prints it) or its index in the list that an unknown
     /// name prints; implies --backend gpu when --backend is auto.
@@ -237,34 +185,26 @@ impl RenderArgs {
     }
 }
 
-/// `--denoise-device`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum DenoiseDeviceArg {
-    /// A GPU Open Image Denoise can drive, else the CPU.
-    Auto,
-    /// The CPU.
-    Cpu,
-    /// An NVIDIA GPU (CUDA).
-    Cuda,
-    /// An AMD GPU (HIP).
-    Hip,
-    /// An Intel GPU (SYCL).
-    Sycl,
-    /// An Apple GPU (Metal).
-    Metal,
-}
+/// The values of `--denoise-device`: its name, help and device.
+const DENOISE_DEVICES: [(&str, &str, DeviceKind); 6] = [
+    ("auto", "A GPU Open Image Denoise can drive, else the CPU", DeviceKind::Default),
+    ("cpu", "The CPU", DeviceKind::Cpu),
+    ("cuda", "An NVIDIA GPU (CUDA)", DeviceKind::Cuda),
+    ("hip", "An AMD GPU (HIP)", DeviceKind::Hip),
+    ("sycl", "An Intel GPU (SYCL)", DeviceKind::Sycl),
+    ("metal", "An Apple GPU (Metal)", DeviceKind::Metal),
+];
 
-impl From<DenoiseDeviceArg> for furnace_denoise::DeviceKind {
-    fn from(d: DenoiseDeviceArg) -> Self {
-        match d {
-            DenoiseDeviceArg::Auto => Self::Default,
-            DenoiseDeviceArg::Cpu => Self::Cpu,
-            DenoiseDeviceArg::Cuda => Self::Cuda,
-            DenoiseDeviceArg::Hip => Self::Hip,
-            DenoiseDeviceArg::Sycl => Self::Sycl,
-            DenoiseDeviceArg::Metal => Self::Metal,
-        }
-    }
+/// `--denoise-device`: a device of [`DENOISE_DEVICES`] by name.
+fn denoise_device() -> impl TypedValueParser<Value = DeviceKind> {
+    PossibleValuesParser::new(DENOISE_DEVICES.map(|(name, help, _)| PossibleValue::new(name).help(help)))
+        .try_map(|s| {
+            DENOISE_DEVICES
+                .iter()
+                .find(|d| d.0 == s)
+                .map(|d| d.2)
+                .ok_or_else(|| format!("'{s}' is not a device"))
+        })
 }
 
 /// `--look-at`: a perspective camera's pose, from an eye, a target and an up direction.
@@ -425,8 +365,8 @@ pub struct MergeArgs {
     #[arg(long)]
     pub denoise: bool,
     /// Where Open Image Denoise runs: auto, cpu, cuda, hip, sycl, metal.
-    #[arg(long, value_enum, default_value_t = DenoiseDeviceArg::Auto, value_name = "DEVICE")]
-    pub denoise_device: DenoiseDeviceArg,
+    #[arg(long, value_parser = denoise_device(), default_value = "auto", value_name = "DEVICE")]
+    pub denoise_device: DeviceKind,
     /// No summary (errors are still printed).
     #[arg(long, short)]
     pub quiet: bool,
@@ -436,8 +376,8 @@ pub struct MergeArgs {
 #[derive(Debug, Clone, Args)]
 pub struct BenchArgs {
     /// Where to run: cpu, gpu or auto (as `furnace render --backend`).
-    #[arg(long, value_enum, default_value_t = BackendArg::Auto)]
-    pub backend: BackendArg,
+    #[arg(long, value_enum, default_value_t = BackendChoice::Auto)]
+    pub backend: BackendChoice,
     /// The GPU adapter: a part of its name or its index; implies --backend gpu when auto.
     #[arg(long, value_name = "NAME|INDEX")]
     pub adapter: Option<String>,
@@ -462,34 +402,13 @@ pub struct BenchArgs {
     /// Without --spp: render passes until this many seconds have passed.
     #[arg(long, allow_negative_numbers = true, value_name = "SECONDS", default_value_t = 2.0, value_parser = parse_seconds)]
     pub min_seconds: f64,
-    /// Scattering events per path (at most 1024).
-    #[arg(long, allow_negative_numbers = true, default_value_t = 4, value_parser = parse_bounces)]
-    pub bounces: u32,
-    /// Sampler: random, hammersley, cmj, pmj02, sobol (the fixed-N ones need --spp).
-    #[arg(long, default_value_t = furnace_render::RenderSettings::default().sampler)]
-    pub sampler: SamplerKind,
-    /// How light of emitters and sun discs is found: bsdf, nee or mis (as `furnace render`).
-    #[arg(long, value_enum, default_value_t = LightSamplingArg::Mis)]
-    pub light_sampling: LightSamplingArg,
-    /// How a light sample picks its point on an emissive triangle: solid-angle or area (as
-    /// `furnace render`).
-    #[arg(long, value_enum, default_value_t = TriangleSamplingArg::SolidAngle)]
-    pub triangle_sampling: TriangleSamplingArg,
-    /// How a light sample chooses the emissive triangle: bvh (by a light BVH's importance at the
-    /// shading point) or power (in proportion to power; as `furnace render`).
-    #[arg(long, value_enum, default_value_t = LightSelectionArg::Bvh)]
-    pub light_selection: LightSelectionArg,
-    /// How a scattering event gathers the point and spot lights: auto, all (a shadow ray to
-    /// each) or one (one chosen by power; as `furnace render`).
-    #[arg(long, value_enum, default_value_t = PointLightsArg::Auto)]
-    pub point_lights: PointLightsArg,
+    // The settings whose speed it measures (--bounces, --sampler, the light sampling), as
+    // `furnace render` takes them.
+    #[command(flatten)]
+    pub settings: SettingsArgs<Bench>,
     // The environment map and how it is placed (as `furnace render`).
     #[command(flatten)]
     pub environment: EnvArgs,
-    /// How light samples gather the environment map: off, importance or compensated (as
-    /// `furnace render`) [default: compensated; importance with --light-sampling nee].
-    #[arg(long, value_enum)]
-    pub env_sampling: Option<EnvSamplingArg>,
     /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
@@ -511,150 +430,6 @@ pub struct BenchArgs {
     /// No progress line on stderr.
     #[arg(long, short)]
     pub quiet: bool,
-}
-
-/// `furnace chart`.
-#[derive(Debug, Clone, Args)]
-#[command(after_long_help = "\
-Fixed-N samplers (hammersley, cmj) need the sample count in advance: each checkpoint is rendered \
-as its own render with N = that checkpoint (how they are meant to be used), so they cost about \
-twice the samples of a progressive sampler, and their time at a checkpoint is that render's.
-
-Errors, against the reference, over all pixels and channels (as `furnace compare`): RMSE = sqrt(mean (x − r)²); relative MSE = mean (x − r)² / (r² + ε), \
-ε = 1e-2. Slopes: least squares of ln(error) against ln(spp) over the checkpoints.
-
-Time is the wall time of the render passes only: no scene load, BVH build, upload, pipeline \
-creation, film read-back or error computation.
-
---external FILE.csv adds peer series (e.g. another renderer timed on the same machine) to the \
-charts. Format: a header line `label,spp,seconds,rmse,relmse`, then one point per line; empty \
-fields are allowed (a point without seconds is left out of the time charts, one without rmse out \
-of the RMSE charts); lines starting with # are comments; no quoting. relmse must use ε = 1e-2 \
-(as `furnace compare`).
-
-Example (Mitsuba's reference of the built-in Cornell box, Mitsuba's BRDF model):
-  furnace chart --reference cbox_ref_bounces4.exr --masking separable --compensation off \\
-      --samplers sobol,pmj02,random,hammersley --sampling caps,vndf,ndf --spp 64 --out chart
-
-Example (the light-sampling strategies on a Cornell box lit by an area light):
-  furnace chart --reference cbox_area_ref_bounces4.exr --scene cbox_area.gltf --masking separable \\
-      --compensation off --samplers sobol --sampling caps --light-sampling bsdf,nee,mis --spp 64 \\
-      --out chart_lights")]
-pub struct ChartArgs {
-    /// The reference image (.exr; its size is the study's image size): a long render of the
-    /// same scene, e.g. Mitsuba's, or one of furnace's own (then its recorded settings are
-    /// checked: scene, bounces, camera, model).
-    #[arg(long, value_name = "REF.exr")]
-    pub reference: PathBuf,
-    /// A second reference, rendered with energy compensation on, for the configurations with
-    /// --compensation on (--reference then serves those with it off).
-    #[arg(long, value_name = "REF.exr")]
-    pub reference_compensated: Option<PathBuf>,
-    /// Whether --reference was rendered with energy compensation, when it is not a furnace
-    /// render (which records it) [default: off, as Mitsuba and other renderers].
-    #[arg(long, value_enum, value_name = "on|off")]
-    pub reference_compensation: Option<Switch>,
-    /// The scene: cbox (the built-in reference Cornell box), interior:N, or a .gltf/.glb path.
-    #[arg(long, default_value = "cbox", value_parser = parse_scene)]
-    pub scene: SceneArg,
-    /// Smith masking of every configuration; match the reference's renderer (Mitsuba:
-    /// separable) [default: the reference's, if furnace rendered it; else height-correlated].
-    #[arg(long, value_enum)]
-    pub masking: Option<MaskingArg>,
-    /// Samplers, comma-separated: random, hammersley, cmj, pmj02, sobol.
-    #[arg(long, value_delimiter = ',', default_value = "sobol,pmj02,random,hammersley,cmj")]
-    pub samplers: Vec<SamplerKind>,
-    /// BRDF (GGX) sampling methods, comma-separated: ndf, vndf, caps.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "caps,vndf,ndf")]
-    pub sampling: Vec<SamplingArg>,
-    /// Energy compensation, comma-separated: on, off [default: the reference's; with
-    /// --reference-compensated, off and on].
-    #[arg(long, value_enum, value_delimiter = ',')]
-    pub compensation: Vec<Switch>,
-    /// How light of emitters and sun discs is found, comma-separated: bsdf, nee, mis (as
-    /// `furnace render --light-sampling`).
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "mis")]
-    pub light_sampling: Vec<LightSamplingArg>,
-    /// How a light sample picks its point on an emissive triangle, comma-separated:
-    /// solid-angle, area (as `furnace render --triangle-sampling`).
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "solid-angle")]
-    pub triangle_sampling: Vec<TriangleSamplingArg>,
-    /// How a light sample chooses the emissive triangle, comma-separated: bvh, power (as
-    /// `furnace render --light-selection`).
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "bvh")]
-    pub light_selection: Vec<LightSelectionArg>,
-    /// How the point and spot lights are gathered, comma-separated: auto, all, one (as
-    /// `furnace render --point-lights`).
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "auto")]
-    pub point_lights: Vec<PointLightsArg>,
-    /// How light samples gather the environment map, comma-separated: off, importance,
-    /// compensated (as `furnace render --env-sampling`; compensated is not combined with
-    /// --light-sampling nee).
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "compensated")]
-    pub env_sampling: Vec<EnvSamplingArg>,
-    // The environment map of the study's scene and how it is placed (as `furnace render`; the
-    // reference must have been rendered with the same).
-    #[command(flatten)]
-    pub environment: EnvArgs,
-    /// Backends, comma-separated: cpu, gpu.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "cpu")]
-    pub backends: Vec<ChartBackend>,
-    /// The GPU adapter for --backends gpu: a part of its name or its index.
-    /// Adaptive sampling (render --noise-threshold): off and/or thresholds, each its own
-    /// configuration (checkpoints at the same spp; fewer samples taken, so less time).
-    #[arg(long, value_delimiter = ',', default_value = "off", value_parser = parse_threshold_choice)]
-    pub noise_threshold: Vec<Threshold>,
-    /// Denoising with Open Image Denoise (render --denoise, guided by the AOVs): off and/or on,
-    /// each its own configuration; a denoised checkpoint's time includes the denoising.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "off")]
-    pub denoise: Vec<Switch>,
-    #[arg(long, value_name = "NAME|INDEX")]
-    pub adapter: Option<String>,
-    /// Samples per pixel of the last checkpoint (checkpoints: 1, 2, 4, … and this).
-    #[arg(long, default_value_t = 256, value_parser = clap::value_parser!(u32).range(1..=MAX_SPP as i64))]
-    pub spp: u32,
-    /// Scattering events per path, at most 1024 [default: the reference's, if furnace rendered
-    /// it; else 4].
-    #[arg(long, allow_negative_numbers = true, value_parser = parse_bounces)]
-    pub bounces: Option<u32>,
-    /// Seed of the samplers' scrambling (1, not render's 0: a reference rendered with furnace's
-    /// defaults is then independent of the study).
-    #[arg(long, default_value_t = 1)]
-    pub seed: u32,
-    /// The study's directory: chart.csv, chart.json, and the charts (rmse_vs_spp, rmse_vs_time,
-    /// relmse_vs_spp, relmse_vs_time; .png and .svg). An existing study there is resumed.
-    #[arg(long, value_name = "DIR", default_value = "chart")]
-    pub out: PathBuf,
-    /// Peer series to draw on the same axes (CSV: label,spp,seconds,rmse,relmse); repeatable.
-    #[arg(long, value_name = "FILE.csv")]
-    pub external: Vec<PathBuf>,
-    /// The time axis of the error-vs-time charts: wall (wall time of the render passes) or cpu
-    /// (the process's CPU time over them, all threads: steadier than wall time on a machine
-    /// shared with other work, meaningless for the GPU backend). Both are recorded; this only
-    /// picks what the charts show (--external seconds are drawn on the same axis).
-    #[arg(long, value_enum, default_value_t = ChartTime::Wall)]
-    pub time: ChartTime,
-    /// No progress bar and no summary table (warnings and errors are still printed).
-    #[arg(long, short)]
-    pub quiet: bool,
-}
-
-/// `furnace chart --backends`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ChartBackend {
-    /// The CPU reference integrator.
-    Cpu,
-    /// The wgpu integrator (`--adapter` picks the adapter; else the best one, software too).
-    Gpu,
-}
-
-/// `furnace chart --time`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum ChartTime {
-    /// Wall time.
-    Wall,
-    /// Process CPU time (user + system, all threads).
-    Cpu,
 }
 
 /// `furnace bench --scene`.
@@ -706,160 +481,6 @@ pub(crate) fn parse_scene(s: &str) -> Result<SceneArg, String> {
 /// (`furnace_post::MAX_IMAGE_SIDE`), so that every render can be resumed, merged and compared.
 /// A 16384² film takes 8 GiB of sums and counts, more with AOVs or adaptive sampling.
 pub const MAX_SIDE: u32 = furnace_post::MAX_IMAGE_SIDE;
-
-/// `--bounces N`: at most `furnace_render::MAX_BOUNCES`.
-pub(crate) fn parse_bounces(s: &str) -> Result<u32, String> {
-    let max = furnace_render::MAX_BOUNCES;
-    let n: u32 = s.trim().parse().map_err(|_| format!("'{s}' is not a whole number from 0 to {max}"))?;
-    if n > max {
-        return Err(format!(
-            "at most {max} scattering events per path (beyond that a path's light is negligible, \
-             and a pass can take hours)"
-        ));
-    }
-    Ok(n)
-}
-
-/// The largest `furnace chart --spp`.
-const MAX_SPP: u32 = 1 << 20;
-
-/// `--backend`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum BackendArg {
-    /// The CPU reference integrator (rayon).
-    Cpu,
-    /// The wgpu integrator.
-    Gpu,
-    /// A hardware GPU if present, else the CPU.
-    Auto,
-}
-
-impl From<BackendArg> for furnace_cli::backend::BackendChoice {
-    fn from(b: BackendArg) -> Self {
-        match b {
-            BackendArg::Cpu => Self::Cpu,
-            BackendArg::Gpu => Self::Gpu,
-            BackendArg::Auto => Self::Auto,
-        }
-    }
-}
-
-/// `--masking`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum MaskingArg {
-    /// G1(ωo)·G1(ωi) (the thesis, Mitsuba 3).
-    Separable,
-    /// 1/(1 + Λ(ωo) + Λ(ωi)) (glTF, pbrt-v4).
-    HeightCorrelated,
-}
-
-impl From<MaskingArg> for Masking {
-    fn from(m: MaskingArg) -> Self {
-        match m {
-            MaskingArg::Separable => Masking::Separable,
-            MaskingArg::HeightCorrelated => Masking::HeightCorrelated,
-        }
-    }
-}
-
-/// `--light-sampling`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum LightSamplingArg {
-    /// BSDF sampling only.
-    Bsdf,
-    /// Next-event estimation only.
-    Nee,
-    /// Both, weighted by multiple importance sampling (power heuristic).
-    Mis,
-}
-
-impl From<LightSamplingArg> for LightSampling {
-    fn from(m: LightSamplingArg) -> Self {
-        match m {
-            LightSamplingArg::Bsdf => LightSampling::Bsdf,
-            LightSamplingArg::Nee => LightSampling::Nee,
-            LightSamplingArg::Mis => LightSampling::Mis,
-        }
-    }
-}
-
-/// `--triangle-sampling`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum TriangleSamplingArg {
-    /// Uniform on the triangle's area.
-    Area,
-    /// Uniform in the solid angle the triangle subtends (by area where that is imprecise).
-    SolidAngle,
-}
-
-impl From<TriangleSamplingArg> for TriangleSampling {
-    fn from(m: TriangleSamplingArg) -> Self {
-        match m {
-            TriangleSamplingArg::Area => TriangleSampling::Area,
-            TriangleSamplingArg::SolidAngle => TriangleSampling::SolidAngle,
-        }
-    }
-}
-
-/// `--light-selection`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum LightSelectionArg {
-    /// In proportion to the triangles' power, by an alias table (the same choice everywhere).
-    Power,
-    /// By a light BVH's importance at the shading point (power, distance, orientation).
-    Bvh,
-}
-
-impl From<LightSelectionArg> for LightSelection {
-    fn from(m: LightSelectionArg) -> Self {
-        match m {
-            LightSelectionArg::Power => LightSelection::Power,
-            LightSelectionArg::Bvh => LightSelection::Bvh,
-        }
-    }
-}
-
-/// `--point-lights`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum PointLightsArg {
-    /// All up to 4 lights, one beyond.
-    Auto,
-    /// A shadow ray to every point and spot light at every scattering event.
-    All,
-    /// One light per event, chosen in proportion to its power.
-    One,
-}
-
-impl From<PointLightsArg> for PointLightSampling {
-    fn from(m: PointLightsArg) -> Self {
-        match m {
-            PointLightsArg::Auto => PointLightSampling::Auto,
-            PointLightsArg::All => PointLightSampling::All,
-            PointLightsArg::One => PointLightSampling::One,
-        }
-    }
-}
-
-/// `--env-sampling`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum EnvSamplingArg {
-    /// Only BSDF-sampled rays that escape.
-    Off,
-    /// Also light samples in proportion to the map's luminance × sin θ.
-    Importance,
-    /// Light samples of the MIS-compensated distribution (needs --light-sampling mis).
-    Compensated,
-}
-
-impl From<EnvSamplingArg> for EnvSampling {
-    fn from(m: EnvSamplingArg) -> Self {
-        match m {
-            EnvSamplingArg::Off => EnvSampling::Off,
-            EnvSamplingArg::Importance => EnvSampling::Importance,
-            EnvSamplingArg::Compensated => EnvSampling::Compensated,
-        }
-    }
-}
 
 /// `--env`: a map file, the built-in studio, or no environment.
 #[derive(Debug, Clone, PartialEq)]
@@ -941,27 +562,6 @@ fn parse_env_rotation(s: &str) -> Result<f32, String> {
     }
 }
 
-/// `--specular-sampling`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
-pub enum SamplingArg {
-    /// The distribution of normals (the thesis).
-    Ndf,
-    /// Visible normals (Heitz 2018).
-    Vndf,
-    /// Visible normals by spherical caps (Dupuy & Benyoub 2023).
-    Caps,
-}
-
-impl From<SamplingArg> for SpecularSampling {
-    fn from(s: SamplingArg) -> Self {
-        match s {
-            SamplingArg::Ndf => SpecularSampling::Ndf,
-            SamplingArg::Vndf => SpecularSampling::Vndf,
-            SamplingArg::Caps => SpecularSampling::SphericalCaps,
-        }
-    }
-}
-
 /// An on/off switch.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Switch {
@@ -988,48 +588,6 @@ fn parse_sun_angle(s: &str) -> Result<f32, String> {
     } else {
         Err(format!("the sun's angular diameter must be between 0 and 180 degrees (got {s})"))
     }
-}
-
-/// A `chart --noise-threshold` value: `off`, or a threshold (its `f32` bits: `Eq` for the axes).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub struct Threshold(pub Option<u32>);
-
-impl Threshold {
-    /// The threshold, `None` for off.
-    pub fn value(self) -> Option<f32> {
-        self.0.map(f32::from_bits)
-    }
-
-    /// `off` or the number.
-    pub fn name(self) -> String {
-        self.value().map_or_else(|| "off".to_string(), |t| t.to_string())
-    }
-}
-
-/// `off` or a finite number above 0.
-fn parse_threshold_choice(s: &str) -> Result<Threshold, String> {
-    if s.trim().eq_ignore_ascii_case("off") {
-        return Ok(Threshold(None));
-    }
-    parse_noise_threshold(s).map(|t| Threshold(Some(t.to_bits())))
-}
-
-/// `--noise-threshold T`: a finite T > 0.
-fn parse_noise_threshold(s: &str) -> Result<f32, String> {
-    s.trim()
-        .parse::<f32>()
-        .ok()
-        .filter(|t| t.is_finite() && *t > 0.0)
-        .ok_or_else(|| format!("'{s}': the noise threshold must be a finite number above 0 (0.01: 1 %)"))
-}
-
-/// `--clamp X`: a finite X > 0.
-fn parse_clamp(s: &str) -> Result<f32, String> {
-    s.trim()
-        .parse::<f32>()
-        .ok()
-        .filter(|x| x.is_finite() && *x > 0.0)
-        .ok_or_else(|| format!("'{s}': the clamp must be a finite number above 0"))
 }
 
 fn parse_exposure(s: &str) -> Result<f32, String> {
@@ -1073,13 +631,18 @@ mod tests {
     fn defaults_match_the_library_defaults() {
         let cli = Cli::try_parse_from(["furnace", "render"]).unwrap();
         let Command::Render(a) = cli.command else { panic!("not render") };
-        let spec = furnace_brdf::SpecularOptions::default();
-        assert_eq!(Masking::from(a.masking), spec.masking);
-        assert_eq!(SpecularSampling::from(a.specular_sampling), spec.sampling);
-        assert_eq!(a.compensation == Switch::On, spec.compensation);
-        assert_eq!(a.sampler, furnace_render::RenderSettings::default().sampler);
+        assert_eq!(a.settings.settings, furnace_render::RenderSettings::default());
+        assert!(a.settings.given.is_empty());
         assert_eq!(a.tonemap, Tonemap::Aces);
-        assert_eq!((a.spp, a.bounces, a.exposure), (64, 4, 0.0));
+        assert_eq!((a.spp, a.exposure), (64, 0.0));
+        let cli = Cli::try_parse_from(["furnace", "bench", "--light-selection", "power"]).unwrap();
+        let Command::Bench(b) = cli.command else { panic!("not bench") };
+        assert_eq!(b.settings.settings.light_selection, furnace_render::LightSelection::Power);
+        assert!(b.settings.given("light-selection") && !b.settings.given("bounces"));
+        assert!(
+            Cli::try_parse_from(["furnace", "bench", "--seed", "1"]).is_err(),
+            "bench measures at seed 0"
+        );
     }
 
     #[test]

@@ -8,17 +8,20 @@ use furnace_render::{CancelFlag, Film, Integrator, RenderError, RenderSettings};
 use furnace_scene::{Camera, Scene};
 use std::sync::Arc;
 
-/// Where to render.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// Where to render (`--backend`; the value's help is what the command line lists).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, clap::ValueEnum)]
 pub enum BackendChoice {
-    /// A hardware GPU if there is one (or the adapter named), else the CPU: software adapters
-    /// such as lavapipe are slower than the CPU integrator and used only when asked for.
-    #[default]
-    Auto,
     /// The CPU reference integrator.
+    #[value(help = "The CPU reference integrator (rayon)")]
     Cpu,
     /// The wgpu integrator on the best adapter (or the adapter named), software ones included.
+    #[value(help = "The wgpu integrator")]
     Gpu,
+    /// A hardware GPU if there is one (or the adapter named), else the CPU: software adapters
+    /// are slower than the CPU integrator and used only when asked for.
+    #[default]
+    #[value(help = "A hardware GPU if present, else the CPU")]
+    Auto,
 }
 
 /// The GPU context `choice` and `adapter` ask for: `None` for the CPU.
@@ -45,7 +48,7 @@ pub enum GpuSet {
     /// all there is).
     All,
     /// Adapters as `--adapter` names them: an index, a PCI address, or a part of a name, which
-    /// takes every adapter whose name contains it (`H200`: all of them).
+    /// takes every adapter whose name contains it (`NVIDIA`: all of them).
     List(Vec<String>),
 }
 

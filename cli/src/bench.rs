@@ -29,8 +29,8 @@ use std::time::Instant;
 /// Pixels and samples per pixel of the render on which CPU rays per sample are counted on a
 /// hardware GPU: 65 536 paths.
 const ESTIMATE: (f64, u32) = (4096.0, 16);
-/// The same on a software adapter (lavapipe: about 0.01 Msamples/s on two cores): 4096 paths,
-/// rays per sample within a few percent.
+/// The same on a software adapter, whose rate is a few hundredths of a hardware GPU's: 4096
+/// paths, enough for rays per sample within a few percent.
 const ESTIMATE_SOFTWARE: (f64, u32) = (1024.0, 4);
 
 /// One benchmark's results.
@@ -323,15 +323,16 @@ fn load(scene: &SceneArg) -> Result<Scene, String> {
 }
 
 pub fn run(a: &BenchArgs) -> Result<(), String> {
-    if a.sampler.needs_sample_count() && a.spp.is_none() {
+    let given = &a.settings.settings;
+    if given.sampler.needs_sample_count() && a.spp.is_none() {
         return Err(format!(
             "the {} sampler needs the sample count in advance: give --spp (or use sobol, pmj02 or random)",
-            a.sampler
+            given.sampler
         ));
     }
     // Compensated given with nee is refused; the default under nee is the plain distribution.
-    if let Some(e) = a.env_sampling {
-        crate::env::check_sampling(e, a.light_sampling)?;
+    if a.settings.given("env-sampling") {
+        crate::env::check_sampling(given.env_sampling, given.light_sampling)?;
     }
     let start = Instant::now();
     let mut scene = load(&a.scene)?;
@@ -349,17 +350,9 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     let settings = RenderSettings {
         width,
         height,
-        bounces: a.bounces,
-        sampler: a.sampler,
-        seed: 0,
         // The warm-up frame and the measured samples.
-        sample_count: a.sampler.needs_sample_count().then(|| a.spp.map_or(1, |n| n.saturating_add(1))),
-        light_sampling: a.light_sampling.into(),
-        triangle_sampling: a.triangle_sampling.into(),
-        light_selection: a.light_selection.into(),
-        point_lights: a.point_lights.into(),
-        env_sampling: a.env_sampling.map_or_else(Default::default, Into::into),
-        ..RenderSettings::default()
+        sample_count: given.sampler.needs_sample_count().then(|| a.spp.map_or(1, |n| n.saturating_add(1))),
+        ..*given
     };
     let triangles = scene.geometry.triangle_count() as u64;
     let scene_point_lights = scene.point_lights().count();
@@ -371,7 +364,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     let scene = Arc::new(scene);
     let opening = Instant::now();
     let mut engine = backend::open_chosen(
-        a.backend.into(),
+        a.backend,
         a.adapter.as_deref(),
         a.gpus.as_ref(),
         scene.clone(),
@@ -425,7 +418,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         // Passes of the measured size where the sampler allows (a fixed-N sampler's N counts
         // only the measured samples): the renderer's choice of invocations per pixel, made by
         // timing its first passes of that size, is then made here.
-        let warm_spp = if a.sampler.needs_sample_count() { 1 } else { per_pass };
+        let warm_spp = if settings.sampler.needs_sample_count() { 1 } else { per_pass };
         let warm = Instant::now();
         while warm.elapsed().as_secs_f64() < WARM_UP_SECONDS {
             engine.render_pass(0, warm_spp).map_err(|e| e.to_string())?;
@@ -509,8 +502,8 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         triangles,
         width,
         height,
-        bounces: a.bounces,
-        sampler: a.sampler.to_string(),
+        bounces: settings.bounces,
+        sampler: settings.sampler.to_string(),
         light_sampling: settings.light_sampling.name(),
         triangle_sampling: settings.triangle_sampling.name(),
         light_selection: settings.light_selection.name(),

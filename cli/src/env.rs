@@ -2,7 +2,8 @@
 //! the default light: how `furnace render`, `bench` and `chart` set up a scene's environment
 //! map, and the check of `--env-sampling` against `--light-sampling`.
 
-use crate::args::{EnvArg, EnvArgs, EnvSamplingArg, LightSamplingArg, Switch};
+use crate::args::{EnvArg, EnvArgs, Switch};
+use furnace_render::{EnvSampling, LightSampling};
 use furnace_scene::{Environment, EnvironmentMap, Scene};
 use std::sync::Arc;
 
@@ -109,8 +110,8 @@ fn scene_file_name(scene: &Scene) -> String {
 
 /// `Err` for `--env-sampling compensated` with `--light-sampling nee`: MIS compensation leaves
 /// the environment's dim part to BSDF rays, which NEE alone does not count.
-pub fn check_sampling(env: EnvSamplingArg, light: LightSamplingArg) -> Result<(), String> {
-    if env == EnvSamplingArg::Compensated && light == LightSamplingArg::Nee {
+pub fn check_sampling(env: EnvSampling, light: LightSampling) -> Result<(), String> {
+    if env == EnvSampling::Compensated && light == LightSampling::Nee {
         return Err("--env-sampling compensated needs --light-sampling mis: compensation leaves the \
                     environment's dim part to BSDF rays, which --light-sampling nee does not count (use \
                     --env-sampling importance with nee)"
@@ -169,9 +170,9 @@ mod tests {
 
     #[test]
     fn compensation_needs_mis() {
-        assert!(check_sampling(EnvSamplingArg::Compensated, LightSamplingArg::Nee).is_err());
-        assert!(check_sampling(EnvSamplingArg::Compensated, LightSamplingArg::Mis).is_ok());
-        assert!(check_sampling(EnvSamplingArg::Compensated, LightSamplingArg::Bsdf).is_ok());
-        assert!(check_sampling(EnvSamplingArg::Importance, LightSamplingArg::Nee).is_ok());
+        assert!(check_sampling(EnvSampling::Compensated, LightSampling::Nee).is_err());
+        assert!(check_sampling(EnvSampling::Compensated, LightSampling::Mis).is_ok());
+        assert!(check_sampling(EnvSampling::Compensated, LightSampling::Bsdf).is_ok());
+        assert!(check_sampling(EnvSampling::Importance, LightSampling::Nee).is_ok());
     }
 }

@@ -81,7 +81,7 @@ impl Part {
             }
             (None, None) => SampleRange::new(0, spp).into_iter().collect(),
         };
-        if metadata.extra.contains_key(resume::NOISE_THRESHOLD) {
+        if metadata.extra.contains_key(resume::key("noise-threshold")) {
             return Err(format!(
                 "{p}: rendered with adaptive sampling (--noise-threshold), whose pixels stop by the samples \
                  before: such a render cannot be split or merged"

@@ -1,7 +1,7 @@
 //! What `render`, `view` and `merge` write: the output paths of `--out`, checked before
 //! rendering; the EXR (image, metadata, resume state) and PNG written together; denoising.
 
-use crate::args::{DenoiseDeviceArg, RenderArgs};
+use crate::args::RenderArgs;
 use furnace_post::{ExtraChannel, Metadata, Tonemap, stage_exr_with_state_and, stage_png, to_srgb8};
 use furnace_render::Film;
 use glam::Vec3;
@@ -34,12 +34,11 @@ impl Look {
 }
 
 /// Open Image Denoise's options for `--denoise-device` and `--denoise-prefilter`.
-pub(crate) fn denoise_options(device: DenoiseDeviceArg, prefilter_guides: bool) -> furnace_denoise::Options {
-    furnace_denoise::Options {
-        device: device.into(),
-        prefilter_guides,
-        ..furnace_denoise::Options::default()
-    }
+pub(crate) fn denoise_options(
+    device: furnace_denoise::DeviceKind,
+    prefilter_guides: bool,
+) -> furnace_denoise::Options {
+    furnace_denoise::Options { device, prefilter_guides, ..furnace_denoise::Options::default() }
 }
 
 /// Writes the EXR (RGB, metadata and the resume state) and the tone-mapped PNG, each atomically.

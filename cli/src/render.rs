@@ -1,12 +1,11 @@
 //! `furnace render`: load, render in passes with a progress bar, write EXR + PNG.
 
-use crate::args::{BackendArg, RenderArgs, Switch};
+use crate::args::RenderArgs;
 use crate::interrupt::Interrupt;
 use crate::outputs::{Look, check_outputs, output_paths, write_outputs};
 use crate::resume;
 use crate::shared::{Outcome, image_size};
-use furnace_brdf::SpecularOptions;
-use furnace_cli::backend;
+use furnace_cli::backend::{self, BackendChoice};
 use furnace_post::{ExrWithState, Metadata, read_exr_with_state};
 use furnace_render::{Budget, Film, Integrator, RenderSettings, SAMPLER_LAYOUT_VERSION, Session, Stop};
 use furnace_scene::{Camera, Projection, Scene, builtin};
@@ -29,28 +28,15 @@ impl Job {
     /// The EXR metadata of a render of this job with `spp` samples per pixel done.
     pub(crate) fn metadata(&self, spp: u32, render_time_s: f64, rejected: u64) -> Metadata {
         let a = &self.args;
-        let s = &self.settings;
-        Metadata {
+        let metadata = Metadata {
             spp: Some(spp),
-            sampler: Some(s.sampler.to_string()),
-            bounces: Some(s.bounces),
-            seed: Some(u64::from(s.seed)),
             scene: Some(self.scene_name.clone()),
             render_time_s: Some(render_time_s),
             rejected_samples: Some(rejected),
             extra: [
                 (resume::SCENE_HASH, self.scene_hash.clone()),
                 (resume::SAMPLER_LAYOUT, SAMPLER_LAYOUT_VERSION.to_string()),
-                (resume::MASKING, resume::cli_name(&a.masking)),
-                (resume::COMPENSATION, resume::cli_name(&a.compensation)),
-                (resume::SPECULAR_SAMPLING, resume::cli_name(&a.specular_sampling)),
                 (resume::CAMERA, self.camera.clone()),
-                (resume::RUSSIAN_ROULETTE, resume::cli_name(&a.russian_roulette)),
-                (resume::LIGHT_SAMPLING, resume::cli_name(&a.light_sampling)),
-                (resume::TRIANGLE_SAMPLING, resume::cli_name(&a.triangle_sampling)),
-                (resume::LIGHT_SELECTION, resume::cli_name(&a.light_selection)),
-                (resume::POINT_LIGHTS, resume::cli_name(&a.point_lights)),
-                (resume::ENV_SAMPLING, resume::cli_name(&a.env_sampling)),
                 (resume::TARGET_SPP, a.spp.to_string()),
                 (resume::TONEMAP, a.tonemap.to_string()),
                 (resume::EXPOSURE, a.exposure.to_string()),
@@ -58,13 +44,12 @@ impl Job {
             .into_iter()
             .chain(a.samples.map(|r| (resume::SAMPLE_RANGE, r.to_string())))
             .chain(a.sun_angle.map(|d| (resume::SUN_ANGLE, d.to_string())))
-            .chain(a.clamp.map(|x| (resume::CLAMP, x.to_string())))
-            .chain(a.noise_threshold.map(|t| (resume::NOISE_THRESHOLD, t.to_string())))
-            .chain(a.noise_threshold.map(|_| (resume::MIN_SPP, a.min_spp.to_string())))
             .chain(resume::env_records(&a.environment))
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
-        }
+            ..Metadata::default()
+        };
+        resume::with_settings(metadata, &self.settings)
     }
 }
 
@@ -114,8 +99,11 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
 
     // Compensated given with nee is refused; by default (or from a file's record) it means the
     // plain distribution under nee (`EnvSampling::effective`).
-    if args.given("env_sampling") {
-        crate::env::check_sampling(args.env_sampling, args.light_sampling)?;
+    if args.given("env-sampling") {
+        crate::env::check_sampling(
+            args.settings.settings.env_sampling,
+            args.settings.settings.light_sampling,
+        )?;
     }
     check_samples(&mut args)?;
     let mut scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
@@ -135,39 +123,22 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
     }
     crate::env::apply(&mut scene, &args.environment)?;
     let samples_lights = scene.samples_lights();
-    let chooses_point_lights =
-        furnace_render::PointLightSampling::from(args.point_lights).chooses(scene.point_lights().count());
+    let chooses_point_lights = args.settings.settings.point_lights.chooses(scene.point_lights().count());
     let scene_hash = scene.content_hash();
     let (camera, view) = select_camera(&scene, &args)?;
     let (width, height) = image_size(&view, args.width, args.height)?;
+    let sampler = args.settings.settings.sampler;
     let settings = RenderSettings {
         width,
         height,
-        bounces: args.bounces,
-        sampler: args.sampler,
-        seed: args.seed,
-        sample_count: args.sampler.needs_sample_count().then_some(args.spp),
-        specular: SpecularOptions {
-            masking: args.masking.into(),
-            sampling: args.specular_sampling.into(),
-            compensation: args.compensation == Switch::On,
-        },
-        russian_roulette: args.russian_roulette == Switch::On,
-        light_sampling: args.light_sampling.into(),
-        triangle_sampling: args.triangle_sampling.into(),
-        light_selection: args.light_selection.into(),
-        point_lights: args.point_lights.into(),
-        env_sampling: args.env_sampling.into(),
-        clamp: args.clamp,
+        sample_count: sampler.needs_sample_count().then_some(args.spp),
         // The file's AOVs are kept when resuming; they cannot be added to a file without them
         // (they must sum the same samples as the image, from the first).
         // --denoise takes the albedo and normal as guides: AOVs on for a new render.
         aovs: args.aovs
             || (args.denoise && resumed.is_none())
             || resumed.as_ref().and_then(|f| f.state.as_ref()).is_some_and(Film::has_aovs),
-        adaptive: args
-            .noise_threshold
-            .map(|threshold| furnace_render::AdaptiveSampling { threshold, min_samples: args.min_spp }),
+        ..args.settings.settings
     };
     if let Some(file) = &resumed
         && args.aovs
@@ -201,11 +172,11 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
 fn check_samples(args: &mut RenderArgs) -> Result<(), String> {
     let Some(range) = args.samples else { return Ok(()) };
     if !args.given("spp") && args.resume.is_none() {
-        if args.sampler.needs_sample_count() {
+        if args.settings.settings.sampler.needs_sample_count() {
             return Err(format!(
                 "--samples {range}: the {} sampler builds one pattern of N samples per pixel, so a part \
                  needs the whole render's N: give --spp N",
-                args.sampler
+                args.settings.settings.sampler
             ));
         }
         args.spp = range.end;
@@ -249,15 +220,15 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         return Ok(Outcome::Done);
     }
 
-    if a.sampler.needs_sample_count() && a.time_limit.is_some() {
+    if settings.sampler.needs_sample_count() && a.time_limit.is_some() {
         eprintln!(
             "warning: the {} sampler builds one pattern of N = {} samples per pixel; if --time-limit \
              stops the render before N, the partial pattern is poorly stratified (prefer sobol or pmj02)",
-            a.sampler, a.spp
+            settings.sampler, a.spp
         );
     }
     // Memory planned before the BVH is built and the film allocated.
-    let on_cpu = a.backend != BackendArg::Gpu;
+    let on_cpu = a.backend != BackendChoice::Gpu;
     let plan = crate::memory::Plan::new(&settings, scene.geometry.triangle_count(), on_cpu);
     if let Some((free, limit)) = crate::memory::free_memory() {
         plan.check(&settings, free, limit)?;
@@ -267,7 +238,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         None => (None, start, 0.0, None),
     };
     let mut backend = backend::open_chosen(
-        a.backend.into(),
+        a.backend,
         a.adapter.as_deref(),
         a.gpus.as_ref(),
         Arc::new(scene),
@@ -334,8 +305,8 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         eprintln!(
             "{}: {width}×{height}, {held}{from}{stopped}, {} bounces, {} sampler, {} backend: {:.2} s ({rate:.2} Msamples/s)",
             job.scene_name,
-            a.bounces,
-            a.sampler,
+            settings.bounces,
+            settings.sampler,
             backend.name(),
             pass.seconds,
         );
@@ -345,7 +316,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
             eprintln!(
                 "adaptive sampling: {:.1} % of pixels converged below {}, {mean_spp:.1} spp per pixel on average",
                 100.0 * converged as f64 / pixels,
-                a.noise_threshold.unwrap_or_default()
+                settings.adaptive.map_or(0.0, |t| t.threshold)
             );
         }
         if film.rejected() > 0 {
@@ -499,14 +470,8 @@ pub(crate) fn restore(path: &Path, file: ExrWithState) -> Result<Saved, String> 
     if let Some(c) = film.counts().iter().find(|&&c| c > u64::from(spp)) {
         return Err(format!("{p}: a pixel has {c} samples but the file says {spp} spp; it was modified"));
     }
-    if let Some(b) = meta.bounces
-        && b > furnace_render::MAX_BOUNCES
-    {
-        return Err(format!(
-            "{p}: attribute 'furnace.bounces' = {b} is more than furnace renders (at most {}); it was \
-             modified",
-            furnace_render::MAX_BOUNCES
-        ));
+    if let Some(e) = resume::modified_bounces(path, meta) {
+        return Err(e);
     }
     // A render holds at most its part's samples, or the whole render's.
     let whole = meta.extra.get(resume::TARGET_SPP).and_then(|v| v.parse::<u32>().ok());

@@ -3,11 +3,11 @@
 //! Every EXR `furnace render` writes carries (besides R, G, B) the film's exact state — the
 //! `f64` sums and the counts of every pixel, in the `furnace.resume.*` channels
 //! (`furnace_post::write_exr_with_state`) — and, as `furnace.*` text attributes, every setting
-//! that decides the film: scene identity (name and a hash of its loaded content), size,
-//! bounces, sampler, seed, masking, compensation, specular sampling, camera, Russian roulette,
-//! light sampling, triangle sampling, light selection, environment sampling, the environment
-//! options given (`--env`, `--env-intensity`, `--env-rotation`, `--env-visible`), and N for the
-//! fixed-N samplers. The scene hash covers the environment itself (its texels, intensity,
+//! that decides the film: scene identity (name and a hash of its loaded content), camera, the
+//! environment options given (`--env`, `--env-intensity`, `--env-rotation`, `--env-visible`),
+//! and the render settings as their one description records them (`furnace_render::fields`:
+//! bounces, sampler, seed, material model, light sampling, clamp, adaptive sampling; the size
+//! and, for the fixed-N samplers, N are in `furnace_render::resume::identity`). The scene hash covers the environment itself (its texels, intensity,
 //! rotation and visibility), so the same options rebuild the same scene, the default studio
 //! light of a scene without one included.
 //! `--resume` restores the film from the sums and continues at sample index `furnace.spp`: each
@@ -23,16 +23,14 @@
 //! render to the float rounding of each path, not bit for bit (`tests/gpu.rs` checks it). The
 //! record keeps every backend that added samples, and `--resume` says when it changes.
 
-use crate::args::{
-    EnvArgs, EnvSamplingArg, LightSamplingArg, LightSelectionArg, LookAt, MaskingArg, PointLightsArg,
-    RenderArgs, SamplingArg, Switch, TriangleSamplingArg,
-};
+use crate::args::{EnvArgs, LookAt, RenderArgs};
 use clap::ValueEnum;
 use furnace_post::{Metadata, printable_excerpt};
-use furnace_render::{SampleRange, resume};
-use furnace_sampling::SamplerKind;
+use furnace_render::resume::{self, Attributes, Identity, RecordError};
+use furnace_render::{MAX_BOUNCES, SampleRange};
 use std::path::{Path, PathBuf};
-use std::str::FromStr;
+
+pub use furnace_render::resume::TARGET_SPP;
 
 /// The name `furnace_scene::builtin::cornell_box` gives its scene (the scene of `furnace
 /// render` without a file).
@@ -44,46 +42,11 @@ pub const SCENE_HASH: &str = "furnace.scene_hash";
 /// (`furnace_render::SAMPLER_LAYOUT_VERSION`; absent in files of layout 1 written before it was
 /// recorded).
 pub const SAMPLER_LAYOUT: &str = "furnace.sampler_layout";
-/// `--masking`.
-pub const MASKING: &str = "furnace.masking";
-/// `--compensation`.
-pub const COMPENSATION: &str = "furnace.compensation";
-/// `--specular-sampling`.
-pub const SPECULAR_SAMPLING: &str = "furnace.specular_sampling";
 /// The camera: `--camera`'s index (`0` by default), [`FRAMED`] for a scene without cameras, or
 /// for `--look-at` its [`look_at_record`].
 pub const CAMERA: &str = "furnace.camera";
-/// `--russian-roulette`.
-pub const RUSSIAN_ROULETTE: &str = "furnace.russian_roulette";
-/// `--light-sampling`.
-pub const LIGHT_SAMPLING: &str = "furnace.light_sampling";
-/// `--triangle-sampling`.
-pub const TRIANGLE_SAMPLING: &str = "furnace.triangle_sampling";
-/// The triangle sampling of files that do not record one (made before the choice existed).
-pub const OLD_TRIANGLE_SAMPLING: &str = "area";
-/// `--light-selection`.
-pub const LIGHT_SELECTION: &str = "furnace.light_selection";
-/// The light selection of files that do not record one (made before the light BVH existed,
-/// when every light sample chose its triangle in proportion to power).
-pub const OLD_LIGHT_SELECTION: &str = "power";
-/// `--point-lights`.
-pub const POINT_LIGHTS: &str = "furnace.point_lights";
-/// The point-light sampling of files that do not record one (made before the choice existed,
-/// when every event gathered every point light).
-pub const OLD_POINT_LIGHTS: &str = "all";
-/// The `--clamp` given (absent: no sample clamp).
-pub const CLAMP: &str = "furnace.clamp";
-/// The `--noise-threshold` given (absent: no adaptive sampling).
-pub const NOISE_THRESHOLD: &str = "furnace.noiseThreshold";
-/// The `--min-spp` of an adaptive render.
-pub const MIN_SPP: &str = "furnace.minSpp";
 /// The `--sun-angle` given (absent: the scene's own).
 pub const SUN_ANGLE: &str = "furnace.sun_angle_deg";
-/// `--env-sampling`.
-pub const ENV_SAMPLING: &str = "furnace.env_sampling";
-/// The environment sampling of files that do not record one (made before environment maps, when
-/// no scene had one; importance is today's default).
-pub const OLD_ENV_SAMPLING: &str = "importance";
 /// The `--env` given, as given: the map's path, `studio` or `none` (absent: the scene's own, or
 /// the default studio for a scene without a light of its own).
 pub const ENV: &str = "furnace.env";
@@ -93,8 +56,6 @@ pub const ENV_INTENSITY: &str = "furnace.env_intensity";
 pub const ENV_ROTATION: &str = "furnace.env_rotation_deg";
 /// The `--env-visible` given, `on` or `off` (absent: the scene's own, else on).
 pub const ENV_VISIBLE: &str = "furnace.env_visible";
-/// Attribute: the `--spp` target (for a fixed-N sampler, its N).
-pub const TARGET_SPP: &str = "furnace.target_spp";
 /// A part of a split render: the `--samples A..B` it renders (absent: the whole render,
 /// `0..furnace.target_spp`). Its film holds samples `A..A+furnace.spp`.
 pub const SAMPLE_RANGE: &str = "furnace.sample_range";
@@ -146,49 +107,76 @@ pub fn cli_name(v: &impl ValueEnum) -> String {
     v.to_possible_value().map(|p| p.get_name().to_string()).unwrap_or_default()
 }
 
+/// The EXR attribute of the render setting of flag `flag` (`furnace_render::fields`).
+pub fn key(flag: &str) -> &'static str {
+    furnace_render::fields::field(flag)
+        .map_or_else(|| unreachable!("the settings have a field {flag}"), |f| f.key)
+}
+
+/// Whether `key` is one of the settings' attributes that [`Metadata`] keeps in a field of its own.
+fn typed(key: &str) -> bool {
+    ["bounces", "sampler", "seed"].iter().any(|&flag| self::key(flag) == key)
+}
+
+/// Every text attribute of `meta` by name, its own fields' included.
+pub fn attributes(meta: &Metadata) -> Attributes {
+    let mut attributes = meta.extra.clone();
+    let own = [
+        ("bounces", meta.bounces.map(|b| b.to_string())),
+        ("sampler", meta.sampler.clone()),
+        ("seed", meta.seed.map(|s| s.to_string())),
+    ];
+    for (flag, value) in own {
+        if let Some(v) = value {
+            attributes.insert(key(flag).to_string(), v);
+        }
+    }
+    attributes
+}
+
+/// `meta` with the record of `settings` (`furnace_render::fields::record`) added.
+pub fn with_settings(mut meta: Metadata, settings: &furnace_render::RenderSettings) -> Metadata {
+    meta.sampler = Some(settings.sampler.to_string());
+    meta.bounces = Some(settings.bounces);
+    meta.seed = Some(u64::from(settings.seed));
+    let record = furnace_render::fields::record(settings).into_iter().filter(|(k, _)| !typed(k));
+    meta.extra.extend(record.map(|(k, v)| (k.to_string(), v)));
+    meta
+}
+
 /// The settings that decide the film, as `(setting, value)` pairs read from `meta` and the
 /// image size: two renders continue each other exactly when their lists are equal. A value the
-/// file lacks is `None`.
-pub fn identity(meta: &Metadata, width: u32, height: u32) -> Vec<(&'static str, Option<String>)> {
+/// file lacks is `None`. The scene's part (its name, content, camera and options) is here; the
+/// settings' part is `furnace_render::resume::identity`'s.
+pub fn identity(meta: &Metadata, width: u32, height: u32) -> Identity {
     let extra = |k: &str| meta.extra.get(k).cloned();
     let scene_name = meta.scene.as_deref().map(|s| {
         // The file name only: the same file given by another relative path is the same scene
         // (the hash checks the content).
         Path::new(s).file_name().map_or_else(|| s.to_string(), |n| n.to_string_lossy().into_owned())
     });
-    let mut out = vec![
+    let scene = vec![
         ("scene", scene_name),
         ("scene content hash", extra(SCENE_HASH)),
-        ("width", Some(width.to_string())),
-        ("height", Some(height.to_string())),
-        ("bounces", meta.bounces.map(|b| b.to_string())),
-        ("sampler", meta.sampler.clone()),
-        ("seed", meta.seed.map(|s| s.to_string())),
-        ("masking", extra(MASKING)),
-        ("compensation", extra(COMPENSATION)),
-        ("specular sampling", extra(SPECULAR_SAMPLING)),
         ("camera", extra(CAMERA)),
-        ("russian roulette", extra(RUSSIAN_ROULETTE)),
-        // Files from before light sampling had no choice to record.
-        ("light sampling", extra(LIGHT_SAMPLING).or_else(|| Some("mis".into()))),
-        ("triangle sampling", extra(TRIANGLE_SAMPLING).or_else(|| Some(OLD_TRIANGLE_SAMPLING.into()))),
-        ("light selection", extra(LIGHT_SELECTION).or_else(|| Some(OLD_LIGHT_SELECTION.into()))),
-        ("point lights", extra(POINT_LIGHTS).or_else(|| Some(OLD_POINT_LIGHTS.into()))),
         ("sun angle", extra(SUN_ANGLE)),
-        ("sample clamp", extra(CLAMP)),
-        ("noise threshold", extra(NOISE_THRESHOLD)),
-        ("minimum spp of adaptive sampling", extra(MIN_SPP)),
         ("environment", extra(ENV)),
         ("environment intensity", extra(ENV_INTENSITY)),
         ("environment rotation (degrees)", extra(ENV_ROTATION)),
         ("environment visible", extra(ENV_VISIBLE)),
-        ("environment sampling", extra(ENV_SAMPLING).or_else(|| Some(OLD_ENV_SAMPLING.into()))),
     ];
-    let fixed_n = meta.sampler.as_deref().and_then(|s| SamplerKind::from_str(s).ok());
-    if fixed_n.is_some_and(|k| k.needs_sample_count()) {
-        out.push(("sample count N of the fixed-N sampler (--spp)", extra(TARGET_SPP)));
-    }
-    out
+    resume::identity(scene, &attributes(meta), width, height)
+}
+
+/// The error of a file whose `furnace.bounces` is more than furnace renders (`None` if it is not).
+pub fn modified_bounces(file: &Path, meta: &Metadata) -> Option<String> {
+    meta.bounces.filter(|&b| b > MAX_BOUNCES).map(|b| {
+        format!(
+            "{}: attribute 'furnace.bounces' = {b} is more than furnace renders (at most {MAX_BOUNCES}); it \
+             was modified",
+            file.display()
+        )
+    })
 }
 
 /// The EXR records of the environment options given (none for those not given).
@@ -239,9 +227,6 @@ pub fn apply_recorded(
         format!("{}: attribute '{key}' = {} is not a valid value", file.display(), printable_excerpt(v))
     };
     let extra = |key: &'static str| meta.extra.get(key).map(String::as_str).ok_or_else(|| missing(key));
-    fn enum_value<T: ValueEnum>(v: &str) -> Option<T> {
-        T::from_str(v, false).ok()
-    }
     if !a.given("scene") {
         let name = meta.scene.as_deref().ok_or_else(|| missing("furnace.scene"))?;
         a.scene = (name != BUILTIN_CBOX).then(|| PathBuf::from(name));
@@ -252,29 +237,18 @@ pub fn apply_recorded(
     if !a.given("height") {
         a.height = Some(height);
     }
-    if !a.given("bounces") {
-        a.bounces = meta.bounces.ok_or_else(|| missing("furnace.bounces"))?;
+    if !a.given("bounces")
+        && let Some(e) = modified_bounces(file, meta)
+    {
+        return Err(e);
     }
-    if !a.given("sampler") {
-        let s = meta.sampler.as_deref().ok_or_else(|| missing("furnace.sampler"))?;
-        a.sampler = SamplerKind::from_str(s).map_err(|_| invalid("furnace.sampler", s))?;
-    }
-    if !a.given("seed") {
-        let seed = meta.seed.ok_or_else(|| missing("furnace.seed"))?;
-        a.seed = u32::try_from(seed).map_err(|_| invalid("furnace.seed", &seed.to_string()))?;
-    }
-    if !a.given("masking") {
-        let v = extra(MASKING)?;
-        a.masking = enum_value::<MaskingArg>(v).ok_or_else(|| invalid(MASKING, v))?;
-    }
-    if !a.given("compensation") {
-        let v = extra(COMPENSATION)?;
-        a.compensation = enum_value::<Switch>(v).ok_or_else(|| invalid(COMPENSATION, v))?;
-    }
-    if !a.given("specular_sampling") {
-        let v = extra(SPECULAR_SAMPLING)?;
-        a.specular_sampling = enum_value::<SamplingArg>(v).ok_or_else(|| invalid(SPECULAR_SAMPLING, v))?;
-    }
+    let given = a.given.clone();
+    resume::restore(&mut a.settings.settings, &attributes(meta), |flag| given.contains(flag)).map_err(
+        |e| match e {
+            RecordError::Invalid { key, value } => invalid(key, &value),
+            e => format!("{}: {e}", file.display()),
+        },
+    )?;
     if !a.given("camera") && !a.given("look_at") {
         let v = extra(CAMERA)?;
         (a.camera, a.look_at, a.yfov) = match v {
@@ -292,58 +266,10 @@ pub fn apply_recorded(
         // The same pose given again: the field of view is the file's unless given.
         a.yfov = Some(yfov);
     }
-    if !a.given("russian_roulette") {
-        let v = extra(RUSSIAN_ROULETTE)?;
-        a.russian_roulette = enum_value::<Switch>(v).ok_or_else(|| invalid(RUSSIAN_ROULETTE, v))?;
-    }
-    if !a.given("light_sampling")
-        && let Some(v) = meta.extra.get(LIGHT_SAMPLING)
-    {
-        a.light_sampling = enum_value::<LightSamplingArg>(v).ok_or_else(|| invalid(LIGHT_SAMPLING, v))?;
-    }
-    if !a.given("triangle_sampling") {
-        let v = meta.extra.get(TRIANGLE_SAMPLING).map_or(OLD_TRIANGLE_SAMPLING, String::as_str);
-        a.triangle_sampling =
-            enum_value::<TriangleSamplingArg>(v).ok_or_else(|| invalid(TRIANGLE_SAMPLING, v))?;
-    }
-    if !a.given("light_selection") {
-        let v = meta.extra.get(LIGHT_SELECTION).map_or(OLD_LIGHT_SELECTION, String::as_str);
-        a.light_selection = enum_value::<LightSelectionArg>(v).ok_or_else(|| invalid(LIGHT_SELECTION, v))?;
-    }
-    if !a.given("point_lights") {
-        let v = meta.extra.get(POINT_LIGHTS).map_or(OLD_POINT_LIGHTS, String::as_str);
-        a.point_lights = enum_value::<PointLightsArg>(v).ok_or_else(|| invalid(POINT_LIGHTS, v))?;
-    }
-    if !a.given("clamp")
-        && let Some(v) = meta.extra.get(CLAMP)
-    {
-        a.clamp = Some(
-            v.parse().ok().filter(|x: &f32| x.is_finite() && *x > 0.0).ok_or_else(|| invalid(CLAMP, v))?,
-        );
-    }
-    if !a.given("noise_threshold")
-        && let Some(v) = meta.extra.get(NOISE_THRESHOLD)
-    {
-        a.noise_threshold = Some(
-            v.parse()
-                .ok()
-                .filter(|x: &f32| x.is_finite() && *x > 0.0)
-                .ok_or_else(|| invalid(NOISE_THRESHOLD, v))?,
-        );
-    }
-    if !a.given("min_spp")
-        && let Some(v) = meta.extra.get(MIN_SPP)
-    {
-        a.min_spp = v.parse().map_err(|_| invalid(MIN_SPP, v))?;
-    }
     if !a.given("sun_angle")
         && let Some(v) = meta.extra.get(SUN_ANGLE)
     {
         a.sun_angle = Some(v.parse().map_err(|_| invalid(SUN_ANGLE, v))?);
-    }
-    if !a.given("env_sampling") {
-        let v = meta.extra.get(ENV_SAMPLING).map_or(OLD_ENV_SAMPLING, String::as_str);
-        a.env_sampling = enum_value::<EnvSamplingArg>(v).ok_or_else(|| invalid(ENV_SAMPLING, v))?;
     }
     let e = &mut a.environment;
     if !a.given.contains("env")
@@ -370,7 +296,7 @@ pub fn apply_recorded(
     if !a.given.contains("env_visible")
         && let Some(v) = meta.extra.get(ENV_VISIBLE)
     {
-        e.env_visible = Some(enum_value::<Switch>(v).ok_or_else(|| invalid(ENV_VISIBLE, v))?);
+        e.env_visible = Some(crate::args::Switch::from_str(v, false).map_err(|_| invalid(ENV_VISIBLE, v))?);
     }
     if let Some(v) = meta.extra.get(SAMPLES) {
         return Err(format!(
@@ -442,8 +368,8 @@ mod tests {
         let e = check_same(file, &m, &identity(&m, 8, 8), &identity(&n, 8, 6), false, false).unwrap_err();
         assert_eq!(
             e,
-            "dir/r.exr: cannot resume with different settings: height is 8 in the file but 6 now; \
-             bounces is 4 in the file but 2 now; camera is 0 in the file but 1 now"
+            "dir/r.exr: cannot resume with different settings: camera is 0 in the file but 1 now; \
+             height is 8 in the file but 6 now; bounces is 4 in the file but 2 now"
         );
     }
 
@@ -516,9 +442,9 @@ mod tests {
         // Files made before the light BVH record no light selection: they chose by power.
         let old = Metadata::default();
         let mut bvh = old.clone();
-        bvh.extra.insert(LIGHT_SELECTION.into(), "bvh".into());
+        bvh.extra.insert(key("light-selection").into(), "bvh".into());
         let mut power = old.clone();
-        power.extra.insert(LIGHT_SELECTION.into(), "power".into());
+        power.extra.insert(key("light-selection").into(), "power".into());
         let file = Path::new("old.exr");
         assert!(check_same(file, &old, &identity(&old, 2, 2), &identity(&power, 2, 2), false, false).is_ok());
         let e =

@@ -7,9 +7,7 @@ use std::path::Path;
 
 /// Untimed rendering before a timed measurement (`bench`, `chart`): an idle GPU's clocks take
 /// about a second to ramp up, so a measurement that starts right after a pipeline's compile or a
-/// scene load (seconds of an idle GPU) reads low — on the H200, 1-second bench runs right after
-/// the compile gave 20–30 % less than the same runs repeated, and a chart configuration that
-/// compiled its own pipeline had its error-against-time curve 2–5× off (BENCHMARKS.md, "Speed").
+/// scene load (seconds of an idle GPU) reads low (BENCHMARKS.md, "Speed").
 pub const WARM_UP_SECONDS: f64 = 1.0;
 
 /// Default image width (and height for a square camera such as the built-in Cornell box's).

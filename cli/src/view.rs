@@ -1,26 +1,20 @@
 //! `furnace view`: the render's options, a window instead of files (`furnace_view`); Ctrl+S
 //! saves what `furnace render` writes, resumable with `furnace render --resume`.
 
-use crate::args::{
-    EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, PointLightsArg, SamplingArg, Switch,
-    TriangleSamplingArg, ViewArgs,
-};
+use crate::args::ViewArgs;
 use crate::interrupt::Interrupt;
 use crate::outputs::{Look, output_paths, write_outputs};
 use crate::render::{Job, Prepared, prepare};
 use crate::resume;
 use crate::shared::Outcome;
-use furnace_brdf::{Masking, SpecularSampling};
 use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
-use furnace_render::{
-    EnvSampling, LightSampling, LightSelection, PointLightSampling, RenderSettings, TriangleSampling,
-};
+use furnace_render::RenderSettings;
 use furnace_scene::Scene;
 use furnace_view::{CameraPose, SaveRequest, ScriptSource, ViewConfig, ViewHost};
 
 pub fn run(v: &ViewArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     let a = &v.render;
-    if a.backend == crate::args::BackendArg::Cpu {
+    if a.backend == furnace_cli::backend::BackendChoice::Cpu {
         return Err(
             "furnace view draws the GPU integrator's film as it accumulates: it needs a GPU adapter \
              (Mesa's lavapipe counts); use `furnace render --backend cpu` for the CPU integrator"
@@ -52,12 +46,12 @@ pub fn run(v: &ViewArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         ));
     }
     // Without --spp the viewer accumulates until closed; the fixed-N samplers need N.
-    let target_spp =
-        (a.given("spp") || a.sampler.needs_sample_count() || a.resume.is_some()).then_some(a.spp);
-    if a.sampler.needs_sample_count() && !a.given("spp") && a.resume.is_none() {
+    let sampler = job.settings.sampler;
+    let target_spp = (a.given("spp") || sampler.needs_sample_count() || a.resume.is_some()).then_some(a.spp);
+    if sampler.needs_sample_count() && !a.given("spp") && a.resume.is_none() {
         eprintln!(
-            "note: the {} sampler builds one pattern of N samples per pixel: N = --spp = {}",
-            a.sampler, a.spp
+            "note: the {sampler} sampler builds one pattern of N samples per pixel: N = --spp = {}",
+            a.spp
         );
     }
     let choice = match &a.adapter {
@@ -151,57 +145,16 @@ impl ViewHost for CliHost<'_> {
     }
 }
 
-/// Writes the viewer's settings, display, environment and camera into the job's arguments, so
-/// that its metadata is what `furnace render` with those options records.
+/// Writes the viewer's settings, display, environment and camera into the job and its
+/// arguments, so that its metadata is what `furnace render` with those options records.
 fn apply_settings(job: &mut Job, r: &SaveRequest) -> Result<(), String> {
     let s: &RenderSettings = &r.settings;
+    job.settings = *s;
     let a = &mut job.args;
-    a.bounces = s.bounces;
-    a.sampler = s.sampler;
-    a.seed = s.seed;
+    a.settings.settings = *s;
     a.width = Some(s.width);
     a.height = Some(s.height);
-    if let Some(n) = s.sample_count {
-        a.spp = n;
-    } else {
-        a.spp = r.spp;
-    }
-    a.masking = match s.specular.masking {
-        Masking::Separable => MaskingArg::Separable,
-        Masking::HeightCorrelated => MaskingArg::HeightCorrelated,
-    };
-    a.specular_sampling = match s.specular.sampling {
-        SpecularSampling::Ndf => SamplingArg::Ndf,
-        SpecularSampling::Vndf => SamplingArg::Vndf,
-        SpecularSampling::SphericalCaps => SamplingArg::Caps,
-    };
-    let switch = |on: bool| if on { Switch::On } else { Switch::Off };
-    a.compensation = switch(s.specular.compensation);
-    a.russian_roulette = switch(s.russian_roulette);
-    a.light_sampling = match s.light_sampling {
-        LightSampling::Bsdf => LightSamplingArg::Bsdf,
-        LightSampling::Nee => LightSamplingArg::Nee,
-        LightSampling::Mis => LightSamplingArg::Mis,
-    };
-    a.triangle_sampling = match s.triangle_sampling {
-        TriangleSampling::Area => TriangleSamplingArg::Area,
-        TriangleSampling::SolidAngle => TriangleSamplingArg::SolidAngle,
-    };
-    a.light_selection = match s.light_selection {
-        LightSelection::Power => LightSelectionArg::Power,
-        LightSelection::Bvh => LightSelectionArg::Bvh,
-    };
-    a.point_lights = match s.point_lights {
-        PointLightSampling::Auto => PointLightsArg::Auto,
-        PointLightSampling::All => PointLightsArg::All,
-        PointLightSampling::One => PointLightsArg::One,
-    };
-    a.env_sampling = match s.env_sampling {
-        EnvSampling::Off => EnvSamplingArg::Off,
-        EnvSampling::Importance => EnvSamplingArg::Importance,
-        EnvSampling::Compensated => EnvSamplingArg::Compensated,
-    };
-    a.clamp = s.clamp;
+    a.spp = s.sample_count.unwrap_or(r.spp);
     a.exposure = r.exposure;
     a.tonemap = r.tonemap;
     if let Some(i) = r.env_intensity {

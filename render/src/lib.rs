@@ -5,6 +5,9 @@
 //! output (`furnace-post`) and the `furnace` binary share:
 //!
 //! * [`RenderSettings`] — image size, path length, sampler, material-model switches;
+//! * [`fields`] — the one description of the settings' user-facing fields (flag, help, EXR
+//!   attribute, parsing, resume identity), from which the command line, the EXR record and the
+//!   resume check are derived; [`Choice`] — the named values of a setting;
 //! * [`Film`] — the one accumulation buffer: per-pixel `f64` sums and counts, rejected samples,
 //!   and optionally the first-hit AOVs ([`AovSample`]: albedo, normal, depth) of the same samples;
 //! * [`layout`] — which sampler dimension each random decision of a path reads, with its
@@ -60,6 +63,8 @@
 //! ```
 
 mod adaptive;
+mod choice;
+pub mod fields;
 mod film;
 mod integrator;
 pub mod layout;
@@ -69,6 +74,7 @@ mod settings;
 pub mod split;
 
 pub use adaptive::{ADAPTIVE_STEP, AdaptiveSampling, LUMINANCE, luminance, relative_noise};
+pub use choice::{Choice, choices, on_off, on_off_name, parse_choice, parse_on_off};
 pub use film::{AovImages, AovMean, AovSample, AovSum, Film, FilmRow, FilmSizeError};
 pub use integrator::{CancelFlag, Integrator, RenderError};
 pub use layout::SAMPLER_LAYOUT_VERSION;

@@ -7,16 +7,96 @@
 //! order — only when the identity now equals the recorded one ([`check_same`],
 //! [`check_layout`]).
 //!
+//! The settings' part of the identity, and how a record fills the settings a continuation was
+//! not given, come from the one description of the settings ([`crate::fields::FIELDS`]):
+//! [`identity`], [`restore`].
+//!
 //! The backend is recorded too ([`backend_record`]) but is not part of the identity: both
 //! integrators trace the same sample indices, so a render continued on another backend adds
 //! exactly the missing samples, computed there — an unbiased estimate of the same image, equal
 //! to an uninterrupted render to the rounding of each path, not bit for bit.
 
-use crate::SAMPLER_LAYOUT_VERSION;
+use crate::fields::{Absent, FIELDS};
+use crate::{RenderSettings, SAMPLER_LAYOUT_VERSION};
+use std::collections::BTreeMap;
+use std::str::FromStr;
 
 /// The settings that decide a film, as `(setting, value)` pairs in a fixed order; a value a
 /// saved render lacks is `None`.
 pub type Identity = Vec<(&'static str, Option<String>)>;
+
+/// A saved render's record: its text attributes by name.
+pub type Attributes = BTreeMap<String, String>;
+
+/// The attribute of the render's target samples per pixel (for a fixed-N sampler, its N).
+pub const TARGET_SPP: &str = "furnace.target_spp";
+
+/// Why a record cannot fill the settings.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[non_exhaustive]
+pub enum RecordError {
+    /// A field recorded from the start is missing.
+    #[error("no '{0}' attribute; this file's render cannot be resumed")]
+    Missing(&'static str),
+    /// A field's recorded value is not one of its values.
+    #[error("attribute '{key}' = {value} is not a valid value")]
+    Invalid {
+        /// The attribute.
+        key: &'static str,
+        /// Its value, as recorded.
+        value: String,
+    },
+}
+
+/// The identity of a render of `width` × `height` pixels recorded by `attributes`: the image
+/// size, every field of the settings' description that decides the film (a field the record
+/// lacks as [`Absent`] says), and for a fixed-N sampler its N ([`TARGET_SPP`]), after `scene`
+/// (what the caller records of the scene: its name, content hash, camera, options).
+pub fn identity(scene: Identity, attributes: &Attributes, width: u32, height: u32) -> Identity {
+    let mut out = scene;
+    out.push(("width", Some(width.to_string())));
+    out.push(("height", Some(height.to_string())));
+    for f in FIELDS.iter().filter(|f| f.identity) {
+        let recorded = attributes.get(f.key).cloned();
+        out.push((
+            f.name,
+            match f.absent {
+                Absent::Means(old) => recorded.or_else(|| Some(old.to_string())),
+                Absent::Required | Absent::NotGiven => recorded,
+            },
+        ));
+    }
+    let sampler =
+        attributes.get("furnace.sampler").and_then(|s| furnace_sampling::SamplerKind::from_str(s).ok());
+    if sampler.is_some_and(|k| k.needs_sample_count()) {
+        out.push(("sample count N of the fixed-N sampler (--spp)", attributes.get(TARGET_SPP).cloned()));
+    }
+    out
+}
+
+/// Fills every field of `settings` that the continuation was not `given` (by its flag) from the
+/// record: its recorded value, or what a record without it means ([`Absent`]). A field given
+/// keeps its value, for [`check_same`] to compare.
+///
+/// # Errors
+/// A required field missing, or a recorded value that is not one of the field's.
+pub fn restore(
+    settings: &mut RenderSettings,
+    attributes: &Attributes,
+    given: impl Fn(&str) -> bool,
+) -> Result<(), RecordError> {
+    for f in FIELDS.iter().filter(|f| !given(f.flag)) {
+        let value = match (attributes.get(f.key), f.absent) {
+            (Some(v), _) => v.as_str(),
+            (None, Absent::Required) => return Err(RecordError::Missing(f.key)),
+            (None, Absent::Means(old)) => old,
+            (None, Absent::NotGiven) => continue,
+        };
+        (f.set)(settings, value)
+            .map_err(|_| RecordError::Invalid { key: f.key, value: value.to_string() })?;
+    }
+    Ok(())
+}
 
 /// Separates the backends of a backend record when a render was continued on another one.
 pub const BACKEND_SEPARATOR: &str = " → ";
@@ -116,6 +196,53 @@ pub fn backend_record(recorded: Option<&str>, now: &str) -> (String, bool) {
 mod tests {
     use super::*;
 
+    fn attributes(pairs: &[(&str, &str)]) -> Attributes {
+        pairs.iter().map(|(k, v)| (k.to_string(), v.to_string())).collect()
+    }
+
+    #[test]
+    fn a_record_fills_what_was_not_given() {
+        let file = attributes(&[
+            ("furnace.bounces", "3"),
+            ("furnace.sampler", "pmj02"),
+            ("furnace.seed", "5"),
+            ("furnace.masking", "separable"),
+            ("furnace.compensation", "off"),
+            ("furnace.specular_sampling", "ndf"),
+            ("furnace.russian_roulette", "on"),
+            ("furnace.clamp", "2"),
+        ]);
+        let mut s = RenderSettings { bounces: 6, ..RenderSettings::default() };
+        restore(&mut s, &file, |flag| flag == "bounces").unwrap();
+        assert_eq!((s.bounces, s.seed, s.clamp, s.russian_roulette), (6, 5, Some(2.0), true));
+        // Files from before a choice existed: what every render then used.
+        assert_eq!(s.light_selection, crate::LightSelection::Power);
+        assert_eq!(s.point_lights, crate::PointLightSampling::All);
+        let mut partial = file.clone();
+        partial.remove("furnace.masking");
+        assert_eq!(
+            restore(&mut s, &partial, |_| false).unwrap_err().to_string(),
+            "no 'furnace.masking' attribute; this file's render cannot be resumed"
+        );
+        partial.insert("furnace.masking".into(), "Separable".into());
+        assert_eq!(
+            restore(&mut s, &partial, |_| false),
+            Err(RecordError::Invalid { key: "furnace.masking", value: "Separable".into() })
+        );
+    }
+
+    #[test]
+    fn the_identity_names_what_a_file_lacks() {
+        let old = attributes(&[("furnace.sampler", "hammersley"), (TARGET_SPP, "64")]);
+        let id = identity(vec![("scene", Some("a.glb".into()))], &old, 4, 2);
+        let get = |name: &str| id.iter().find(|(n, _)| *n == name).map(|(_, v)| v.clone());
+        assert_eq!(get("scene"), Some(Some("a.glb".into())));
+        assert_eq!(get("height"), Some(Some("2".into())));
+        assert_eq!(get("light selection"), Some(Some("power".into())));
+        assert_eq!(get("sample clamp"), Some(None));
+        assert_eq!(get("sample count N of the fixed-N sampler (--spp)"), Some(Some("64".into())));
+    }
+
     #[test]
     fn differences_name_the_setting_and_both_values() {
         let a: Identity = vec![("height", Some("8".into())), ("bounces", Some("4".into())), ("camera", None)];
@@ -144,7 +271,7 @@ mod tests {
 
     #[test]
     fn backend_record_grows_only_when_the_backend_changes() {
-        let gpu = "gpu: NVIDIA H100 80GB HBM3 (DiscreteGpu, Vulkan, driver NVIDIA 580)";
+        let gpu = "gpu: Some GPU (DiscreteGpu, Vulkan, driver 580)";
         assert_eq!(backend_record(None, "cpu"), ("cpu".to_string(), false));
         // Files written before the record existed, or with an empty value.
         assert_eq!(backend_record(Some(""), "cpu"), ("cpu".to_string(), false));

@@ -1,5 +1,6 @@
 //! [`RenderSettings`]: image size, path length, sampler and material-model switches.
 
+use crate::choice::impl_choice;
 use furnace_brdf::SpecularOptions;
 use furnace_sampling::SamplerKind;
 
@@ -46,11 +47,11 @@ pub const MAX_BOUNCES: u32 = 1024;
 /// compensation), no Russian roulette, MIS of light and BSDF samples, emissive triangles chosen
 /// by the light BVH and sampled by solid angle.
 ///
-/// Sobol is the default by measurement (furnace-cpu's `examples/sampler_study.rs`, BENCHMARKS.md "Sampler
-/// choice (cbox)"): on the Cornell box it has the lowest error at equal time of the progressive
-/// samplers, within 1% of PMJ02 at equal samples (a difference within the seeds' spread) and
-/// 2–3× below random over 16–256 spp; Hammersley's ~9% lower error needs N in advance, which
-/// progressive rendering (and these settings, without `sample_count`) cannot give.
+/// Sobol is the default by measurement (furnace-cpu's `examples/sampler_study.rs`, BENCHMARKS.md
+/// "Sampler choice (cbox)"): on the Cornell box it has the lowest error at equal time of the
+/// progressive samplers, level with PMJ02 at equal samples and well below random; Hammersley's
+/// lower error needs N in advance, which progressive rendering (and these settings, without
+/// `sample_count`) cannot give.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RenderSettings {
     /// Image width in pixels.
@@ -149,6 +150,12 @@ impl LightSampling {
 
 named_choice!(LightSampling, "light sampling");
 
+impl_choice!(LightSampling {
+    Bsdf => "BSDF sampling only",
+    Nee => "Next-event estimation only",
+    Mis => "Both, weighted by multiple importance sampling (power heuristic)",
+});
+
 /// How a light sample of an emissive triangle chooses its point: uniformly on the triangle's
 /// **area**, or uniformly in the **solid angle** it subtends at the shading point (spherical
 /// triangles, Arvo 1995; [`furnace_sampling::warp::square_to_spherical_triangle`]). Solid
@@ -203,6 +210,11 @@ impl TriangleSampling {
 
 named_choice!(TriangleSampling, "triangle sampling");
 
+impl_choice!(TriangleSampling {
+    Area => "Uniform on the triangle's area",
+    SolidAngle => "Uniform in the solid angle the triangle subtends (by area where that is imprecise)",
+});
+
 /// How a light sample chooses the emissive triangle it samples: in proportion to the
 /// triangles' **power** (an alias table, the same choice at every shading point), or by a
 /// **light BVH** (Conty Estevez & Kulla 2018, pbrt-v4's `BVHLightSampler`) that descends a tree
@@ -235,6 +247,11 @@ impl LightSelection {
 
 named_choice!(LightSelection, "light selection");
 
+impl_choice!(LightSelection {
+    Power => "In proportion to the triangles' power, by an alias table (the same choice everywhere)",
+    Bvh => "By a light BVH's importance at the shading point (power, distance, orientation)",
+});
+
 /// How a scattering event gathers the point and spot lights (delta lights: only a shadow ray
 /// finds them): a shadow ray to **all** of them, or to **one**, chosen in proportion to its
 /// power (`furnace_scene::PointLightDistribution`) and weighted by the inverse of that
@@ -254,10 +271,9 @@ pub enum PointLightSampling {
     One,
 }
 
-/// The most point and spot lights [`PointLightSampling::Auto`] gathers all of. Measured on the
-/// H200 (BENCHMARKS.md, "One point light per event"): on the point-light box with 2, 4, 5, 8,
-/// 16 and 32 lights, 1 / (MSE × time) of `All` over `One` is 1.46, 1.06, 0.89, 0.88, 0.63 and
-/// 0.43 — `All` wins up to 4 lights, `One` from 5.
+/// The most point and spot lights [`PointLightSampling::Auto`] gathers all of: by measurement
+/// of error at equal time on the point-light box (BENCHMARKS.md, "One point light per event"),
+/// `All` is the better up to 4 lights and `One` from 5.
 pub const POINT_LIGHTS_ALL_UP_TO: usize = 4;
 
 impl PointLightSampling {
@@ -291,6 +307,12 @@ impl PointLightSampling {
 
 named_choice!(PointLightSampling, "point-light sampling");
 
+impl_choice!(PointLightSampling {
+    Auto => "All up to 4 lights, one beyond",
+    All => "A shadow ray to every point and spot light at every scattering event",
+    One => "One light per event, chosen in proportion to its power",
+});
+
 /// How paths gather an environment map (`furnace_scene::Environment`): by BSDF-sampled rays
 /// that escape only (**off**), or also by light samples of the map's importance distribution
 /// (luminance × sin θ over its texels, pbrt's and Mitsuba's `envmap`) combined with them by
@@ -300,10 +322,9 @@ named_choice!(PointLightSampling, "point-light sampling");
 /// rest). Compensation needs MIS: with [`LightSampling::Nee`] the plain distribution is used
 /// ([`EnvSampling::effective`]).
 ///
-/// Compensated is the default by measurement (docs/accuracy.md, "Environment maps"): on the
-/// H200 it halved the MSE at equal samples on the reference sky (RMSE 0.0298 against 0.0414 at
-/// 1024 spp) and on a map with a 0.1° sun in one texel (0.0447 against 0.0659), and was 12 %
-/// faster per sample (fewer shadow rays sent to the dim sky, which BSDF rays find anyway).
+/// Compensated is the default by measurement (docs/accuracy.md, "Environment maps"): it has
+/// the lower error at equal samples on the reference sky and on a map with a tiny sun, and is
+/// cheaper per sample (fewer shadow rays sent to the dim sky, which BSDF rays find anyway).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Default)]
 pub enum EnvSampling {
     /// BSDF-sampled rays only.
@@ -359,6 +380,12 @@ impl EnvSampling {
 }
 
 named_choice!(EnvSampling, "environment sampling");
+
+impl_choice!(EnvSampling {
+    Off => "Only BSDF-sampled rays that escape",
+    Importance => "Also light samples in proportion to the map's luminance × sin θ",
+    Compensated => "Light samples of the MIS-compensated distribution (needs --light-sampling mis)",
+});
 
 /// Veach's power heuristic with β = 2 for one sample of each strategy: `a² / (a² + b²)`,
 /// formed as `1 / (1 + (b/a)²)` so that pdfs near `f32::MAX` (a tiny emitter seen from afar)

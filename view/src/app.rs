@@ -1,15 +1,20 @@
 //! The window, its event loop and the frame: input → changes → a pass → the film and the panels
 //! drawn.
 
+mod input;
+mod scripted;
+
 use crate::budget::{FrameBudget, INTERACTIVE_SECONDS, STILL_SECONDS};
 use crate::camera::CameraRig;
-use crate::script::{self, Command, DragButton};
+use crate::script::{self, DragButton};
 use crate::ui::{self, Action, Controls, Hud};
 use crate::{CameraPose, Outcome, SaveRequest, ScriptSource, ViewConfig, ViewError, ViewHost};
 use furnace_gpu::GpuRenderer;
 use furnace_gpu::present::{FilmPresenter, NoiseEstimator, Placement};
 use furnace_render::{Integrator, RenderSettings};
 use furnace_scene::{Camera, Projection, Scene};
+use input::{fly_key, key_name};
+use scripted::{Wait, spawn_stdin_reader};
 use std::collections::{HashSet, VecDeque};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -17,7 +22,6 @@ use winit::application::ApplicationHandler;
 use winit::dpi::PhysicalSize;
 use winit::event::{ElementState, MouseButton, MouseScrollDelta, WindowEvent};
 use winit::event_loop::{ActiveEventLoop, ControlFlow, EventLoop, EventLoopProxy};
-use winit::keyboard::{Key, NamedKey};
 use winit::window::{Window, WindowId};
 
 /// How often the noise estimate is refreshed.
@@ -71,14 +75,6 @@ struct Window_ {
     egui_renderer: egui_wgpu::Renderer,
 }
 
-/// A scripted wait in progress.
-#[derive(Debug, Clone, Copy)]
-enum Wait {
-    Spp(u32),
-    Frames(u64),
-    Until(Instant),
-}
-
 struct App<'h> {
     host: &'h mut dyn ViewHost,
     renderer: GpuRenderer,
@@ -121,20 +117,6 @@ struct App<'h> {
     proxy: EventLoopProxy<UserEvent>,
     outcome: Outcome,
     error: Option<ViewError>,
-}
-
-/// The key names of the help (and of the script's `key` / `hold`).
-fn key_name(key: &Key, ctrl: bool) -> Option<String> {
-    let base = match key {
-        Key::Named(NamedKey::Space) => "space".to_string(),
-        Key::Named(NamedKey::Escape) => "escape".to_string(),
-        Key::Named(NamedKey::Home) => "home".to_string(),
-        Key::Named(NamedKey::Tab) => "tab".to_string(),
-        Key::Named(NamedKey::F1) => "f1".to_string(),
-        Key::Character(c) => c.to_lowercase(),
-        _ => return None,
-    };
-    Some(if ctrl { format!("ctrl+{base}") } else { base })
 }
 
 impl<'h> App<'h> {
@@ -479,192 +461,6 @@ impl<'h> App<'h> {
         self.hud.initial_env
     }
 
-    /// Keys: actions on press; fly keys held.
-    fn key(&mut self, el: &ActiveEventLoop, name: &str, pressed: bool) -> Result<(), ViewError> {
-        if let Some(c) = fly_key(name) {
-            if pressed {
-                self.held.insert(c);
-            } else {
-                self.held.remove(&c);
-            }
-            self.interacted();
-            return Ok(());
-        }
-        if !pressed {
-            return Ok(());
-        }
-        let action = match name {
-            "ctrl+s" => Action::Save(None),
-            "r" => Action::Reset,
-            "home" => Action::ResetCamera,
-            "c" => Action::PrintCamera,
-            "space" => Action::TogglePause,
-            "tab" => Action::ToggleUi,
-            "?" | "f1" => Action::ToggleHelp,
-            "[" => Action::Exposure(-0.5),
-            "]" => Action::Exposure(0.5),
-            "escape" => Action::Quit,
-            _ => return Ok(()),
-        };
-        self.act(el, action)
-    }
-
-    /// A drag of `dx`, `dy` pixels with `button` (Shift + left pans).
-    fn drag(&mut self, button: DragButton, dx: f32, dy: f32) {
-        let height = self.win.as_ref().map_or(self.applied.height, |w| w.config.height);
-        match button {
-            DragButton::Left if self.shift => self.rig.pan(dx, dy, height),
-            DragButton::Left => self.rig.orbit(dx, dy),
-            DragButton::Middle => self.rig.pan(dx, dy, height),
-            DragButton::Right => self.rig.look(dx, dy),
-        }
-        self.interacted();
-    }
-
-    /// Moves the camera by the fly keys held, for `seconds`.
-    fn fly(&mut self, seconds: f32) {
-        let now = Instant::now();
-        let released: Vec<char> =
-            self.held_until.iter().filter(|(_, t)| *t <= now).map(|(c, _)| *c).collect();
-        self.held_until.retain(|(_, t)| *t > now);
-        for c in released {
-            self.held.remove(&c);
-        }
-        if self.held.is_empty() {
-            return;
-        }
-        let axis = |plus: char, minus: char| {
-            f32::from(u8::from(self.held.contains(&plus))) - f32::from(u8::from(self.held.contains(&minus)))
-        };
-        let (f, r, u) = (axis('w', 's'), axis('d', 'a'), axis('e', 'q'));
-        self.rig.fly(f, r, u, seconds.min(0.1), self.shift);
-        self.last_input = now;
-    }
-
-    /// Runs script commands until one has to wait.
-    fn step_script(&mut self, el: &ActiveEventLoop) -> Result<(), ViewError> {
-        loop {
-            if let Some((line, wait)) = self.waiting.clone() {
-                let done = match wait {
-                    Wait::Spp(n) => self.spp >= n || !self.accumulating(),
-                    Wait::Frames(f) => self.frame >= f,
-                    Wait::Until(t) => Instant::now() >= t,
-                };
-                if !done {
-                    return Ok(());
-                }
-                self.waiting = None;
-                self.ack(&line);
-            }
-            let Some(line) = self.script.pop_front() else {
-                if self.script_ended && self.script_stdin {
-                    // Standard input closed: the session is over.
-                    el.exit();
-                }
-                return Ok(());
-            };
-            let wait = match &line.command {
-                Command::WaitSpp(n) => Some(Wait::Spp(*n)),
-                Command::WaitFrames(n) => Some(Wait::Frames(self.frame + u64::from(*n))),
-                Command::WaitSeconds(s) => Some(Wait::Until(Instant::now() + Duration::from_secs_f64(*s))),
-                Command::Drag { button, dx, dy } => {
-                    self.drag(*button, *dx, *dy);
-                    None
-                }
-                Command::Scroll(steps) => {
-                    self.rig.dolly(*steps);
-                    self.interacted();
-                    None
-                }
-                Command::Key(name) => {
-                    self.key(el, name, true)?;
-                    self.key(el, name, false)?;
-                    None
-                }
-                Command::Hold { key, seconds } => {
-                    let c = fly_key(key).ok_or_else(|| {
-                        ViewError::Script(format!(
-                            "line {}: 'hold' takes a fly key (w a s d q e), not '{key}'",
-                            line.number
-                        ))
-                    })?;
-                    self.held.insert(c);
-                    let until = Instant::now() + Duration::from_secs_f64(*seconds);
-                    self.held_until.push((c, until));
-                    Some(Wait::Until(until))
-                }
-                Command::Set { name, value } => {
-                    ui::set(&mut self.controls, name, value)
-                        .map_err(|e| ViewError::Script(format!("line {}: {e}", line.number)))?;
-                    self.interacted();
-                    None
-                }
-                Command::Save(path) => {
-                    // Bring the film up to the commands before (a camera move, a setting).
-                    self.apply_changes()?;
-                    let message = self.save(path.clone())?;
-                    println!("{message}");
-                    if message.starts_with("error:") {
-                        return Err(ViewError::Script(format!("line {}: {message}", line.number)));
-                    }
-                    None
-                }
-                Command::Resize(w, h) => {
-                    if let Some(win) = &self.win {
-                        let _ = win.window.request_inner_size(PhysicalSize::new(*w, *h));
-                    }
-                    // Acknowledged once the window has the size (or after a second).
-                    Some(Wait::Until(Instant::now() + Duration::from_millis(500)))
-                }
-                Command::Print => {
-                    println!("{}", self.state_line());
-                    None
-                }
-                Command::Quit => {
-                    self.ack(&line);
-                    el.exit();
-                    return Ok(());
-                }
-            };
-            // The command's change (a camera move, a setting) takes effect now, so that a wait
-            // after it counts the samples of the new film.
-            self.apply_changes()?;
-            match wait {
-                Some(w) => self.waiting = Some((line, w)),
-                None => self.ack(&line),
-            }
-        }
-    }
-
-    fn state_line(&self) -> String {
-        let s = &self.applied;
-        format!(
-            "state: spp={} resets={} frame={} size={}x{} bounces={} sampler={} exposure={} tonemap={} paused={} noise={} \
-             frame_ms={:.2} max_frame_ms={:.2} spp_per_frame={} msamples_per_s={}",
-            self.spp,
-            self.resets,
-            self.frame,
-            s.width,
-            s.height,
-            s.bounces,
-            s.sampler,
-            self.controls.exposure,
-            self.controls.tonemap,
-            self.controls.paused,
-            self.hud.noise.map_or_else(|| "-".to_string(), |n| format!("{n:.6}")),
-            self.hud.frame_ms,
-            self.hud.max_frame_ms,
-            self.hud.samples_per_frame,
-            self.hud.rate.map_or_else(|| "-".to_string(), |r| format!("{r:.1}")),
-        )
-    }
-
-    fn ack(&self, line: &script::Line) {
-        println!("script: {} -> spp={} resets={} frame={}", line.text, self.spp, self.resets, self.frame);
-        use std::io::Write;
-        let _ = std::io::stdout().flush();
-    }
-
     /// One frame: input held, script, changes, a pass, the noise estimate, the drawing.
     fn frame(&mut self, el: &ActiveEventLoop) -> Result<(), ViewError> {
         if self.host.interrupted() {
@@ -804,36 +600,6 @@ pub(crate) struct HudState {
     pub seconds: f64,
     pub accumulating: bool,
     pub film: (u32, u32),
-}
-
-/// The fly keys: forward, left, back, right, down, up.
-fn fly_key(name: &str) -> Option<char> {
-    match name {
-        "w" | "a" | "s" | "d" | "q" | "e" => name.chars().next(),
-        _ => None,
-    }
-}
-
-/// Reads standard input line by line into the loop.
-fn spawn_stdin_reader(proxy: EventLoopProxy<UserEvent>) {
-    std::thread::spawn(move || {
-        use std::io::BufRead;
-        let stdin = std::io::stdin();
-        for (i, line) in stdin.lock().lines().enumerate() {
-            let Ok(text) = line else { break };
-            let event = match script::parse_line(&text) {
-                Ok(None) => continue,
-                Ok(Some(command)) => {
-                    Ok(script::Line { number: i + 1, text: text.trim().to_string(), command })
-                }
-                Err(e) => Err(format!("<stdin>:{}: {e}", i + 1)),
-            };
-            if proxy.send_event(UserEvent::ScriptLine(event)).is_err() {
-                return;
-            }
-        }
-        let _ = proxy.send_event(UserEvent::ScriptEnd);
-    });
 }
 
 impl ApplicationHandler<UserEvent> for App<'_> {

@@ -3,7 +3,7 @@
 use crate::app::HudState;
 use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
-use furnace_render::{EnvSampling, LightSampling, LightSelection, RenderSettings, TriangleSampling};
+use furnace_render::{Choice, EnvSampling, LightSampling, LightSelection, RenderSettings, TriangleSampling};
 use furnace_sampling::SamplerKind;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -87,22 +87,11 @@ impl Hud {
 }
 
 const SAMPLERS: [SamplerKind; 5] = SamplerKind::ALL;
-const MASKINGS: [(Masking, &str); 2] =
-    [(Masking::HeightCorrelated, "height-correlated"), (Masking::Separable, "separable")];
-const SPECULAR_SAMPLINGS: [(SpecularSampling, &str); 3] = [
-    (SpecularSampling::SphericalCaps, "caps"),
-    (SpecularSampling::Vndf, "vndf"),
-    (SpecularSampling::Ndf, "ndf"),
-];
-
-/// The command-line spelling of a masking function.
-fn masking_name(m: Masking) -> &'static str {
-    MASKINGS.iter().find(|(k, _)| *k == m).map_or("?", |(_, n)| n)
-}
-
-fn specular_name(s: SpecularSampling) -> &'static str {
-    SPECULAR_SAMPLINGS.iter().find(|(k, _)| *k == s).map_or("?", |(_, n)| n)
-}
+/// The panel's order of the masking functions (the default first).
+const MASKINGS: [Masking; 2] = [Masking::HeightCorrelated, Masking::Separable];
+/// The panel's order of the GGX sampling methods (the default first).
+const SPECULAR_SAMPLINGS: [SpecularSampling; 3] =
+    [SpecularSampling::SphericalCaps, SpecularSampling::Vndf, SpecularSampling::Ndf];
 
 /// Sets control `name` to `value` (the script's `set`, with the command line's spellings).
 ///
@@ -135,18 +124,12 @@ pub(crate) fn set(c: &mut Controls, name: &str, value: &str) -> Result<(), Strin
             set_sampler(c, k)?;
         }
         "masking" => {
-            s.specular.masking = MASKINGS
-                .iter()
-                .find(|(_, n)| *n == value)
-                .map(|(m, _)| *m)
+            s.specular.masking = Masking::from_name(value)
                 .ok_or_else(|| format!("masking: '{value}' (height-correlated or separable)"))?;
         }
         "compensation" => s.specular.compensation = on_off(value)?,
         "specular-sampling" => {
-            s.specular.sampling = SPECULAR_SAMPLINGS
-                .iter()
-                .find(|(_, n)| *n == value)
-                .map(|(m, _)| *m)
+            s.specular.sampling = SpecularSampling::from_name(value)
                 .ok_or_else(|| format!("specular-sampling: '{value}' (caps, vndf or ndf)"))?;
         }
         "russian-roulette" => s.russian_roulette = on_off(value)?,
@@ -310,21 +293,22 @@ pub(crate) fn draw(
                 let _ = set_sampler(c, sampler);
             }
             let s = &mut c.settings;
-            egui::ComboBox::from_label("masking").selected_text(masking_name(s.specular.masking)).show_ui(
+            egui::ComboBox::from_label("masking").selected_text(s.specular.masking.name()).show_ui(
                 ui,
                 |ui| {
-                    for (m, n) in MASKINGS {
-                        ui.selectable_value(&mut s.specular.masking, m, n);
+                    for m in MASKINGS {
+                        ui.selectable_value(&mut s.specular.masking, m, m.name());
                     }
                 },
             );
-            egui::ComboBox::from_label("GGX sampling")
-                .selected_text(specular_name(s.specular.sampling))
-                .show_ui(ui, |ui| {
-                    for (m, n) in SPECULAR_SAMPLINGS {
-                        ui.selectable_value(&mut s.specular.sampling, m, n);
+            egui::ComboBox::from_label("GGX sampling").selected_text(s.specular.sampling.name()).show_ui(
+                ui,
+                |ui| {
+                    for m in SPECULAR_SAMPLINGS {
+                        ui.selectable_value(&mut s.specular.sampling, m, m.name());
                     }
-                });
+                },
+            );
             ui.checkbox(&mut s.specular.compensation, "energy compensation");
             ui.checkbox(&mut s.russian_roulette, "Russian roulette");
             egui::ComboBox::from_label("light sampling").selected_text(s.light_sampling.to_string()).show_ui(

@@ -4,11 +4,12 @@
 use super::data::{self, ExternalPoint, Row, rows_of, slope};
 use super::plot::{self, Labels, Marker, Series, Style};
 use super::study::{Config, Study, dedup};
-use crate::args::{
-    ChartBackend, ChartTime, EnvSamplingArg, LightSamplingArg, LightSelectionArg, PointLightsArg,
-    SamplingArg, Switch, TriangleSamplingArg,
-};
+use crate::args::{ChartBackend, ChartTime, Switch};
 use crate::resume;
+use furnace_brdf::SpecularSampling;
+use furnace_render::{
+    Choice, EnvSampling, LightSampling, LightSelection, PointLightSampling, TriangleSampling,
+};
 use furnace_sampling::SamplerKind;
 use plotters::style::RGBColor;
 
@@ -42,50 +43,50 @@ fn mix(c: RGBColor, to: RGBColor, t: f64) -> RGBColor {
 }
 
 /// `c` shaded by light sampling: lighter for bsdf, darker for nee, as is for mis.
-fn shade(c: RGBColor, light: LightSamplingArg) -> RGBColor {
+fn shade(c: RGBColor, light: LightSampling) -> RGBColor {
     // Towards white by half, towards black by 40%.
     match light {
-        LightSamplingArg::Bsdf => mix(c, RGBColor(255, 255, 255), 0.5),
-        LightSamplingArg::Nee => mix(c, RGBColor(0, 0, 0), 0.4),
-        LightSamplingArg::Mis => c,
+        LightSampling::Bsdf => mix(c, RGBColor(255, 255, 255), 0.5),
+        LightSampling::Nee => mix(c, RGBColor(0, 0, 0), 0.4),
+        LightSampling::Mis => c,
     }
 }
 
 /// `c` tinted by triangle sampling: towards amber for area, as is for solid-angle (a tint, not
 /// a lightness, so that it stays apart from the light-sampling shades, grey included).
-fn tint(c: RGBColor, triangle: TriangleSamplingArg) -> RGBColor {
+fn tint(c: RGBColor, triangle: TriangleSampling) -> RGBColor {
     match triangle {
-        TriangleSamplingArg::Area => mix(c, RGBColor(230, 160, 0), 0.45),
-        TriangleSamplingArg::SolidAngle => c,
+        TriangleSampling::Area => mix(c, RGBColor(230, 160, 0), 0.45),
+        TriangleSampling::SolidAngle => c,
     }
 }
 
 /// `c` tinted by light selection: towards violet for power, as is for bvh (a hue of its own,
 /// apart from the light-sampling shades and the triangle-sampling amber).
-fn tint_selection(c: RGBColor, selection: LightSelectionArg) -> RGBColor {
+fn tint_selection(c: RGBColor, selection: LightSelection) -> RGBColor {
     match selection {
-        LightSelectionArg::Power => mix(c, RGBColor(148, 0, 211), 0.45),
-        LightSelectionArg::Bvh => c,
+        LightSelection::Power => mix(c, RGBColor(148, 0, 211), 0.45),
+        LightSelection::Bvh => c,
     }
 }
 
 /// `c` tinted by environment sampling: towards teal for off, towards crimson for compensated,
 /// as is for importance (hues of their own, apart from the other axes' shades and tints).
-fn tint_env(c: RGBColor, env: EnvSamplingArg) -> RGBColor {
+fn tint_env(c: RGBColor, env: EnvSampling) -> RGBColor {
     match env {
-        EnvSamplingArg::Off => mix(c, RGBColor(0, 150, 136), 0.45),
-        EnvSamplingArg::Importance => c,
-        EnvSamplingArg::Compensated => mix(c, RGBColor(200, 0, 60), 0.45),
+        EnvSampling::Off => mix(c, RGBColor(0, 150, 136), 0.45),
+        EnvSampling::Importance => c,
+        EnvSampling::Compensated => mix(c, RGBColor(200, 0, 60), 0.45),
     }
 }
 
 /// `c` tinted by point-light gathering: towards olive for all, towards navy for one, as is for
 /// auto.
-fn tint_points(c: RGBColor, points: PointLightsArg) -> RGBColor {
+fn tint_points(c: RGBColor, points: PointLightSampling) -> RGBColor {
     match points {
-        PointLightsArg::Auto => c,
-        PointLightsArg::All => mix(c, RGBColor(128, 128, 0), 0.45),
-        PointLightsArg::One => mix(c, RGBColor(0, 0, 128), 0.45),
+        PointLightSampling::Auto => c,
+        PointLightSampling::All => mix(c, RGBColor(128, 128, 0), 0.45),
+        PointLightSampling::One => mix(c, RGBColor(0, 0, 128), 0.45),
     }
 }
 
@@ -131,22 +132,22 @@ impl Varying {
         let vary = |n: usize| n > 1;
         let mut parts = vec![c.sampler.to_string()];
         if vary(self.sampling) {
-            parts.push(resume::cli_name(&c.sampling));
+            parts.push(Choice::name(c.sampling).to_string());
         }
         if vary(self.light_sampling) {
-            parts.push(resume::cli_name(&c.light_sampling));
+            parts.push(Choice::name(c.light_sampling).to_string());
         }
         if vary(self.triangle_sampling) {
-            parts.push(resume::cli_name(&c.triangle_sampling));
+            parts.push(Choice::name(c.triangle_sampling).to_string());
         }
         if vary(self.light_selection) {
-            parts.push(resume::cli_name(&c.light_selection));
+            parts.push(Choice::name(c.light_selection).to_string());
         }
         if vary(self.env_sampling) {
-            parts.push(format!("env {}", resume::cli_name(&c.env_sampling)));
+            parts.push(format!("env {}", Choice::name(c.env_sampling)));
         }
         if vary(self.point_lights) {
-            parts.push(format!("points {}", resume::cli_name(&c.point_lights)));
+            parts.push(format!("points {}", Choice::name(c.point_lights)));
         }
         if vary(self.compensations) {
             parts.push(format!("comp {}", resume::cli_name(&c.compensation)));
@@ -253,9 +254,9 @@ fn config_series(
         let style = Style {
             color,
             marker: match c.sampling {
-                SamplingArg::Caps => Marker::Circle,
-                SamplingArg::Vndf => Marker::Triangle,
-                SamplingArg::Ndf => Marker::Square,
+                SpecularSampling::SphericalCaps => Marker::Circle,
+                SpecularSampling::Vndf => Marker::Triangle,
+                SpecularSampling::Ndf => Marker::Square,
             },
             dashed: c.compensation == Switch::On || c.denoise == Switch::On,
             hollow: c.backend == ChartBackend::Gpu,

@@ -24,15 +24,15 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
         sampler: c.sampler,
         sample_count: n,
         specular: SpecularOptions {
-            masking: study.masking.into(),
-            sampling: c.sampling.into(),
+            masking: study.masking,
+            sampling: c.sampling,
             compensation: c.compensation == Switch::On,
         },
-        light_sampling: c.light_sampling.into(),
-        triangle_sampling: c.triangle_sampling.into(),
-        light_selection: c.light_selection.into(),
-        env_sampling: c.env_sampling.into(),
-        point_lights: c.point_lights.into(),
+        light_sampling: c.light_sampling,
+        triangle_sampling: c.triangle_sampling,
+        light_selection: c.light_selection,
+        env_sampling: c.env_sampling,
+        point_lights: c.point_lights,
         aovs: c.denoise == Switch::On,
         adaptive: c.noise_threshold.value().map(|threshold| furnace_render::AdaptiveSampling {
             threshold,
@@ -50,13 +50,11 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
         backend::open(choice, adapter, study.scene.clone(), &camera, settings).map_err(|e| e.to_string())?;
     // Untimed warm-up passes, then discarded: the first passes of a process pay costs that are
     // not the method's — the driver compiling the pipeline on first dispatch, rayon starting
-    // its threads, and above all an idle GPU's clocks ramping up (on the H100 the first
-    // configuration's checkpoints took 3–5× the same work later, and a 1-spp warm-up did not
-    // help): every configuration renders one pass, the first of each backend in the process
+    // its threads, and above all an idle GPU's clocks ramping up (a 1-spp warm-up is too short
+    // for them): every configuration renders one pass, the first of each backend in the process
     // passes for WARM_UP_SECONDS, and so does every GPU configuration: one that needs a pipeline
     // of its own (another light selection, say) leaves the GPU idle for the seconds of its
-    // compile, and on the H200 the first checkpoints after that ran several times slower than
-    // the same work warm (a whole configuration's error-vs-time curve 5x off at 16 spp).
+    // compile, after which the first checkpoints would run several times slower than warm.
     static WARM: [std::sync::atomic::AtomicBool; 2] =
         [std::sync::atomic::AtomicBool::new(false), std::sync::atomic::AtomicBool::new(false)];
     let first = !WARM[c.backend as usize].swap(true, std::sync::atomic::Ordering::Relaxed);

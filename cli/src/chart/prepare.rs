@@ -4,9 +4,11 @@
 
 use super::reference::Reference;
 use super::study::{Config, Study, checkpoints, dedup};
-use crate::args::{ChartArgs, EnvSamplingArg, LightSamplingArg, MaskingArg, SceneArg, Switch};
+use crate::args::{ChartArgs, SceneArg, Switch};
 use crate::resume;
+use furnace_brdf::Masking;
 use furnace_render::RenderSettings;
+use furnace_render::{Choice, EnvSampling, LightSampling};
 use furnace_scene::{Scene, builtin};
 
 fn load_scene(scene: &SceneArg) -> Result<(Scene, String), String> {
@@ -60,15 +62,15 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
                 for triangle_sampling in dedup(&a.triangle_sampling) {
                     for light_selection in dedup(&a.light_selection) {
                         for mut env_sampling in dedup(&a.env_sampling) {
-                            if env_sampling == EnvSamplingArg::Compensated
-                                && light_sampling == LightSamplingArg::Nee
+                            if env_sampling == EnvSampling::Compensated
+                                && light_sampling == LightSampling::Nee
                             {
                                 // Compensation needs MIS: under nee a render samples the plain
                                 // distribution (EnvSampling::effective), once.
-                                if a.env_sampling.contains(&EnvSamplingArg::Importance) {
+                                if a.env_sampling.contains(&EnvSampling::Importance) {
                                     continue;
                                 }
-                                env_sampling = EnvSamplingArg::Importance;
+                                env_sampling = EnvSampling::Importance;
                             }
                             for sampling in dedup(&a.sampling) {
                                 for sampler in dedup(&a.samplers) {
@@ -110,8 +112,8 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
         );
     }
     if dedup(&a.env_sampling).len() > 1
-        && dedup(&a.env_sampling).contains(&EnvSamplingArg::Compensated)
-        && dedup(&a.light_sampling).contains(&LightSamplingArg::Nee)
+        && dedup(&a.env_sampling).contains(&EnvSampling::Compensated)
+        && dedup(&a.light_sampling).contains(&LightSampling::Nee)
     {
         eprintln!(
             "note: under --light-sampling nee the environment is sampled by importance (compensation \
@@ -233,7 +235,7 @@ fn check_recorded(
 
 /// The study's masking: `--masking`, else the reference's, else height-correlated (with a
 /// note); warns about each reference rendered with another.
-fn study_masking(a: &ChartArgs, reference: &Reference, compensated: Option<&Reference>) -> MaskingArg {
+fn study_masking(a: &ChartArgs, reference: &Reference, compensated: Option<&Reference>) -> Masking {
     let masking = match (a.masking, reference.masking) {
         (Some(m), _) => m,
         (None, Some(m)) => m,
@@ -245,7 +247,7 @@ fn study_masking(a: &ChartArgs, reference: &Reference, compensated: Option<&Refe
                 reference.path.display(),
                 resume::cli_name(&reference.compensation)
             );
-            MaskingArg::HeightCorrelated
+            Masking::HeightCorrelated
         }
     };
     for r in std::iter::once(reference).chain(compensated) {
@@ -254,8 +256,8 @@ fn study_masking(a: &ChartArgs, reference: &Reference, compensated: Option<&Refe
                 "warning: {} was rendered with --masking {}, the study uses {}: every configuration is biased \
                  against it (reference_matches = false)",
                 r.path.display(),
-                resume::cli_name(&m),
-                resume::cli_name(&masking)
+                m.name(),
+                masking.name()
             );
         }
     }

@@ -1,9 +1,11 @@
 //! A reference image and the BRDF model it was rendered with (recorded by furnace, or
 //! declared on the command line).
 
-use crate::args::{MaskingArg, Switch};
+use crate::args::Switch;
 use crate::resume;
 use clap::ValueEnum;
+use furnace_brdf::Masking;
+use furnace_render::Choice;
 use glam::Vec3;
 use serde_json::{Value, json};
 use std::path::{Path, PathBuf};
@@ -18,7 +20,7 @@ pub(super) struct Reference {
     pub(super) hash: String,
     pub(super) compensation: Switch,
     /// The masking it records (a furnace render), `None` when unknown.
-    pub(super) masking: Option<MaskingArg>,
+    pub(super) masking: Option<Masking>,
     pub(super) metadata: furnace_post::Metadata,
     /// Whether furnace wrote it (it carries `furnace.scene_hash`).
     pub(super) furnace: bool,
@@ -30,7 +32,7 @@ impl Reference {
         let p = path.display();
         let recorded = |key: &str| metadata.extra.get(key).map(String::as_str);
         let furnace = recorded(resume::SCENE_HASH).is_some();
-        let compensation = match recorded(resume::COMPENSATION) {
+        let compensation = match recorded(resume::key("compensation")) {
             Some(v) => {
                 let c = Switch::from_str(v, false).map_err(|_| format!("{p}: unknown compensation '{v}'"))?;
                 if let Some(d) = declared.filter(|&d| d != c) {
@@ -43,8 +45,8 @@ impl Reference {
             }
             None => declared.unwrap_or(default),
         };
-        let masking = recorded(resume::MASKING)
-            .map(|v| MaskingArg::from_str(v, false).map_err(|_| format!("{p}: unknown masking '{v}'")))
+        let masking = recorded(resume::key("masking"))
+            .map(|v| Masking::from_name(v).ok_or_else(|| format!("{p}: unknown masking '{v}'")))
             .transpose()?;
         Ok(Self {
             path: path.to_path_buf(),
@@ -63,7 +65,7 @@ impl Reference {
         json!({
             "pixels_hash": self.hash,
             "compensation": resume::cli_name(&self.compensation),
-            "masking": self.masking.map(|m| resume::cli_name(&m)),
+            "masking": self.masking.map(Choice::name),
         })
     }
 

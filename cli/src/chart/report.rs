@@ -3,7 +3,7 @@
 
 use super::data::{Row, rows_of, slope};
 use super::study::Study;
-use crate::resume;
+use furnace_render::Choice;
 
 /// Prints the study's scene, settings and number of configurations (and, when resumed, how
 /// many are already complete) on stderr.
@@ -16,7 +16,7 @@ pub(super) fn announce(study: &Study, skipped: usize, resumed: bool) {
         s.width,
         s.height,
         s.bounces,
-        resume::cli_name(&study.masking),
+        Choice::name(study.masking),
         s.seed,
         a.spp,
         study.configs.len(),

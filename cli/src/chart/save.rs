@@ -5,6 +5,7 @@ use super::data::{self, Row, rows_of, slope};
 use super::study::Study;
 use crate::resume;
 use crate::shared::write_atomically;
+use furnace_render::Choice;
 use serde_json::{Value, json};
 use std::path::Path;
 
@@ -89,12 +90,12 @@ fn configs_json(study: &Study, rows: &[Row]) -> Vec<Value> {
             json!({
                 "config": name,
                 "sampler": c.sampler.to_string(),
-                "sampling": resume::cli_name(&c.sampling),
-                "light_sampling": resume::cli_name(&c.light_sampling),
-                "triangle_sampling": resume::cli_name(&c.triangle_sampling),
-                "light_selection": resume::cli_name(&c.light_selection),
-                "env_sampling": resume::cli_name(&c.env_sampling),
-                "point_lights": resume::cli_name(&c.point_lights),
+                "sampling": Choice::name(c.sampling),
+                "light_sampling": Choice::name(c.light_sampling),
+                "triangle_sampling": Choice::name(c.triangle_sampling),
+                "light_selection": Choice::name(c.light_selection),
+                "env_sampling": Choice::name(c.env_sampling),
+                "point_lights": Choice::name(c.point_lights),
                 "compensation": resume::cli_name(&c.compensation),
                 "backend": resume::cli_name(&c.backend),
                 "reference": r.path.display().to_string(),

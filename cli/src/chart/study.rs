@@ -4,11 +4,12 @@
 
 use super::data::{Row, config_name, rows_of};
 use super::reference::Reference;
-use crate::args::{
-    ChartArgs, ChartBackend, EnvSamplingArg, LightSamplingArg, LightSelectionArg, MaskingArg, PointLightsArg,
-    SamplingArg, Switch, Threshold, TriangleSamplingArg,
-};
+use crate::args::{ChartArgs, ChartBackend, Switch, Threshold};
 use crate::resume;
+use furnace_brdf::{Masking, SpecularSampling};
+use furnace_render::{
+    Choice, EnvSampling, LightSampling, LightSelection, PointLightSampling, TriangleSampling,
+};
 use furnace_render::{RenderSettings, Timing};
 use furnace_sampling::SamplerKind;
 use furnace_scene::Scene;
@@ -18,12 +19,12 @@ use serde_json::{Value, json};
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(super) struct Config {
     pub(super) sampler: SamplerKind,
-    pub(super) sampling: SamplingArg,
-    pub(super) light_sampling: LightSamplingArg,
-    pub(super) triangle_sampling: TriangleSamplingArg,
-    pub(super) light_selection: LightSelectionArg,
-    pub(super) env_sampling: EnvSamplingArg,
-    pub(super) point_lights: PointLightsArg,
+    pub(super) sampling: SpecularSampling,
+    pub(super) light_sampling: LightSampling,
+    pub(super) triangle_sampling: TriangleSampling,
+    pub(super) light_selection: LightSelection,
+    pub(super) env_sampling: EnvSampling,
+    pub(super) point_lights: PointLightSampling,
     pub(super) compensation: Switch,
     pub(super) backend: ChartBackend,
     pub(super) noise_threshold: Threshold,
@@ -37,8 +38,8 @@ impl Config {
     /// `/denoised` when denoised (absent otherwise: older studies' names stay valid).
     pub(super) fn name(&self) -> String {
         let mut name = self.base_name();
-        if self.point_lights != PointLightsArg::Auto {
-            name.push_str(&format!("/points-{}", resume::cli_name(&self.point_lights)));
+        if self.point_lights != PointLightSampling::Auto {
+            name.push_str(&format!("/points-{}", Choice::name(self.point_lights)));
         }
         if let Some(t) = self.noise_threshold.value() {
             name.push_str(&format!("/adaptive-{t}"));
@@ -52,11 +53,11 @@ impl Config {
     fn base_name(&self) -> String {
         config_name(
             &self.sampler.to_string(),
-            &resume::cli_name(&self.sampling),
-            &resume::cli_name(&self.light_sampling),
-            &resume::cli_name(&self.triangle_sampling),
-            &resume::cli_name(&self.light_selection),
-            &resume::cli_name(&self.env_sampling),
+            Choice::name(self.sampling),
+            Choice::name(self.light_sampling),
+            Choice::name(self.triangle_sampling),
+            Choice::name(self.light_selection),
+            Choice::name(self.env_sampling),
             &resume::cli_name(&self.compensation),
             &resume::cli_name(&self.backend),
         )
@@ -75,12 +76,12 @@ impl Config {
         Row {
             config: self.name(),
             sampler: self.sampler.to_string(),
-            sampling: resume::cli_name(&self.sampling),
-            light_sampling: resume::cli_name(&self.light_sampling),
-            triangle_sampling: resume::cli_name(&self.triangle_sampling),
-            light_selection: resume::cli_name(&self.light_selection),
-            env_sampling: resume::cli_name(&self.env_sampling),
-            point_lights: resume::cli_name(&self.point_lights),
+            sampling: Choice::name(self.sampling).to_string(),
+            light_sampling: Choice::name(self.light_sampling).to_string(),
+            triangle_sampling: Choice::name(self.triangle_sampling).to_string(),
+            light_selection: Choice::name(self.light_selection).to_string(),
+            env_sampling: Choice::name(self.env_sampling).to_string(),
+            point_lights: Choice::name(self.point_lights).to_string(),
             compensation: resume::cli_name(&self.compensation),
             backend: resume::cli_name(&self.backend),
             spp,
@@ -120,7 +121,7 @@ pub(super) struct Study {
     pub(super) scene: std::sync::Arc<Scene>,
     pub(super) scene_name: String,
     pub(super) settings: RenderSettings,
-    pub(super) masking: MaskingArg,
+    pub(super) masking: Masking,
     pub(super) checkpoints: Vec<u32>,
     pub(super) configs: Vec<Config>,
     pub(super) reference: Reference,
@@ -155,18 +156,18 @@ impl Study {
             "height": self.settings.height,
             "bounces": self.settings.bounces,
             "seed": self.settings.seed,
-            "masking": resume::cli_name(&self.masking),
+            "masking": Choice::name(self.masking),
             "russian_roulette": "off",
             "spp": self.args.spp,
             "checkpoints": self.checkpoints,
             "samplers": names(dedup(&self.args.samplers).iter().map(ToString::to_string).collect()),
-            "sampling": names(dedup(&self.args.sampling).iter().map(resume::cli_name).collect()),
-            "light_sampling": names(dedup(&self.args.light_sampling).iter().map(resume::cli_name).collect()),
+            "sampling": names(dedup(&self.args.sampling).iter().map(|v| v.name().to_string()).collect()),
+            "light_sampling": names(dedup(&self.args.light_sampling).iter().map(|v| v.name().to_string()).collect()),
             "triangle_sampling":
-                names(dedup(&self.args.triangle_sampling).iter().map(resume::cli_name).collect()),
+                names(dedup(&self.args.triangle_sampling).iter().map(|v| v.name().to_string()).collect()),
             "light_selection":
-                names(dedup(&self.args.light_selection).iter().map(resume::cli_name).collect()),
-            "env_sampling": names(dedup(&self.args.env_sampling).iter().map(resume::cli_name).collect()),
+                names(dedup(&self.args.light_selection).iter().map(|v| v.name().to_string()).collect()),
+            "env_sampling": names(dedup(&self.args.env_sampling).iter().map(|v| v.name().to_string()).collect()),
             "compensation": names(self.compensations().iter().map(resume::cli_name).collect()),
             "backends": names(dedup(&self.args.backends).iter().map(resume::cli_name).collect()),
             "adapter": self.args.adapter,
@@ -182,10 +183,10 @@ impl Study {
         // The point-light axis too, and wherever `auto` is not what a study from before it did
         // (gather every light): there such a study is not resumed as `auto`.
         let points = dedup(&self.args.point_lights);
-        if points != [PointLightsArg::Auto]
+        if points != [PointLightSampling::Auto]
             || self.scene.point_lights().count() > furnace_render::POINT_LIGHTS_ALL_UP_TO
         {
-            v["point_lights"] = names(points.iter().map(resume::cli_name).collect());
+            v["point_lights"] = names(points.iter().map(|v| v.name().to_string()).collect());
         }
         let denoise = dedup(&self.args.denoise);
         if denoise != [Switch::Off] {
