@@ -263,60 +263,71 @@ pub struct SceneBuffers {
     pub transmission: Vec<GpuTransmission>,
 }
 
-impl SceneBuffers {
-    /// Packs `scene`, checking every buffer against `max_binding` bytes (pass
-    /// [`GpuContext::max_storage_binding`], or a small value to test the error) before
-    /// allocating it.
-    ///
-    /// Only what shading reads is kept: UVs only when some material is textured, tangents only
-    /// when some material has a normal map (and the scene has tangents), images only when a
-    /// material slot uses them. Triangles' material indices are clamped to the last material
-    /// (glTF's default), as furnace-cpu does; a texture or image index out of range makes the
-    /// slot untextured (the CPU's lookup then returns white too).
-    ///
-    /// # Errors
-    /// [`GpuError::TooLarge`] naming the first buffer over `max_binding` bytes (or over the
-    /// 2³² texel words a `u32` index reaches).
-    pub fn new(scene: &Scene, max_binding: u64) -> Result<Self, GpuError> {
-        let g = &scene.geometry;
-        let limit = max_binding;
-        let check = |what: String, bytes: u64| {
-            if bytes > limit { Err(GpuError::TooLarge { what, bytes, limit }) } else { Ok(()) }
-        };
-        let textured = scene.materials.iter().any(|m| m.uses_textures());
-        let has_tangents = !g.tangents.is_empty();
-        let normal_mapped = has_tangents && scene.materials.iter().any(|m| m.normal_texture.is_some());
-        let nv = g.positions.len() as u64;
-        let nt = g.triangles.len() as u64;
-        check(format!("the scene's triangle buffer ({nt} triangles)"), nt * 16)?;
-        check(format!("the scene's vertex buffer ({nv} vertices)"), nv * 16)?;
-        if textured {
-            check(format!("the scene's UV buffer ({nv} vertices)"), nv * 8)?;
-        }
-        if normal_mapped {
-            check(format!("the scene's tangent buffer ({nv} vertices)"), nv * 8)?;
-        }
-        check(format!("the scene's material buffer ({} materials)", scene.materials.len()), {
-            scene.materials.len() as u64 * 256
-        })?;
+/// Which optional vertex attributes a scene's shading reads: UVs only when some material is
+/// textured, tangents only when some material has a normal map (and the scene has tangents).
+#[derive(Clone, Copy)]
+struct Kept {
+    textured: bool,
+    normal_mapped: bool,
+}
 
-        // Images some slot uses, in first-use order, and where each starts.
-        let mut image_offset: Vec<Option<u64>> = vec![None; scene.images.len()];
+impl Kept {
+    fn of(scene: &Scene) -> Self {
+        let has_tangents = !scene.geometry.tangents.is_empty();
+        Self {
+            textured: scene.materials.iter().any(|m| m.uses_textures()),
+            normal_mapped: has_tangents && scene.materials.iter().any(|m| m.normal_texture.is_some()),
+        }
+    }
+}
+
+/// Checks the geometry and material buffers against `limit` bytes before any is allocated.
+fn check_sizes(scene: &Scene, kept: Kept, limit: u64) -> Result<(), GpuError> {
+    let check = |what: String, bytes: u64| {
+        if bytes > limit { Err(GpuError::TooLarge { what, bytes, limit }) } else { Ok(()) }
+    };
+    let g = &scene.geometry;
+    let nv = g.positions.len() as u64;
+    let nt = g.triangles.len() as u64;
+    check(format!("the scene's triangle buffer ({nt} triangles)"), nt * 16)?;
+    check(format!("the scene's vertex buffer ({nv} vertices)"), nv * 16)?;
+    if kept.textured {
+        check(format!("the scene's UV buffer ({nv} vertices)"), nv * 8)?;
+    }
+    if kept.normal_mapped {
+        check(format!("the scene's tangent buffer ({nv} vertices)"), nv * 8)?;
+    }
+    check(format!("the scene's material buffer ({} materials)", scene.materials.len()), {
+        scene.materials.len() as u64 * 256
+    })
+}
+
+/// The images some material slot uses, in first-use order, and where each starts in the texel
+/// buffer (after the two 256-entry decode tables).
+struct ImageLayout {
+    offset: Vec<Option<u64>>,
+    used: Vec<usize>,
+    words: u64,
+}
+
+impl ImageLayout {
+    fn of(scene: &Scene, kept: Kept, limit: u64) -> Result<Self, GpuError> {
+        let mut offset: Vec<Option<u64>> = vec![None; scene.images.len()];
         let mut used = Vec::new();
         let mut words = u64::from(TABLE_WORDS);
         for m in &scene.materials {
             let slots = [
                 &m.base_color_texture,
                 &m.metallic_roughness_texture,
-                if normal_mapped { &m.normal_texture } else { &None },
+                if kept.normal_mapped { &m.normal_texture } else { &None },
                 &m.emissive_texture,
                 &m.transmission_texture,
             ];
             for slot in slots {
                 if let Some((_, tex)) = resolve(scene, slot) {
                     let i = tex.image as usize;
-                    if image_offset[i].is_none() {
-                        image_offset[i] = Some(words);
+                    if offset[i].is_none() {
+                        offset[i] = Some(words);
                         used.push(i);
                         let img = &scene.images[i];
                         words += u64::from(img.width) * u64::from(img.height);
@@ -332,36 +343,148 @@ impl SceneBuffers {
                 limit: texel_limit,
             });
         }
+        Ok(Self { offset, used, words })
+    }
 
-        let last = scene.materials.len().saturating_sub(1) as u32;
-        let triangles = g
-            .triangles
-            .iter()
-            .enumerate()
-            .map(|(t, &[i0, i1, i2])| GpuSceneTriangle {
-                i0,
-                i1,
-                i2,
-                material: g.triangle_materials.get(t).copied().unwrap_or(last).min(last),
-            })
-            .collect();
-        let vertices = g
-            .positions
-            .iter()
-            .enumerate()
-            .map(|(i, p)| GpuVertex {
-                position: p.to_array(),
-                // A vertex without a normal cannot come from the loader; +Z as oct_encode's
-                // fallback.
-                normal: g.normals.get(i).copied().unwrap_or(furnace_scene::oct_encode(glam::Vec3::Z)),
-            })
-            .collect();
-        let uvs = if textured {
+    /// The GPU record of a texture slot (zero: untextured).
+    fn texture_ref(&self, scene: &Scene, slot: &Option<TextureRef>) -> GpuTextureRef {
+        let Some((r, tex)) = resolve(scene, slot) else { return GpuTextureRef::zeroed() };
+        let img = &scene.images[tex.image as usize];
+        let mut flags = TEXTURE_PRESENT
+            | (wrap_code(tex.wrap_s) << WRAP_S_SHIFT)
+            | (wrap_code(tex.wrap_t) << WRAP_T_SHIFT);
+        if r.color_space == ColorSpace::Srgb {
+            flags |= TEXTURE_SRGB;
+        }
+        let mut transform = [1.0, 0.0, 0.0, 1.0, 0.0, 0.0];
+        if let Some(t) = &r.transform {
+            flags |= TEXTURE_TRANSFORM;
+            let m = t.matrix();
+            transform = [m.x_axis.x, m.x_axis.y, m.y_axis.x, m.y_axis.y, m.z_axis.x, m.z_axis.y];
+        }
+        GpuTextureRef {
+            // Fits: the texel buffer was checked against 2³² words.
+            texel_offset: self.offset[tex.image as usize].unwrap_or(0) as u32,
+            width: img.width.max(1),
+            height: img.height.max(1),
+            flags,
+            transform,
+            pad: [0; 2],
+        }
+    }
+
+    /// The texel buffer: the sRGB and linear decode tables, then each used image's texels.
+    fn texels(&self, scene: &Scene) -> Vec<u32> {
+        let mut texels = Vec::with_capacity(self.words as usize);
+        texels.extend((0..256).map(|i| srgb_to_linear(i as f32 / 255.0).to_bits()));
+        texels.extend((0..256u32).map(|i| (i as f32 / 255.0).to_bits()));
+        for &i in &self.used {
+            let img = &scene.images[i];
+            let n = img.width as usize * img.height as usize;
+            texels.extend(img.texels.iter().take(n).map(|&t| u32::from_le_bytes(t)));
+            // A short image reads as transparent black on the CPU (`Image::texel`'s ZERO).
+            texels.resize(texels.len() + n.saturating_sub(img.texels.len()), 0);
+        }
+        debug_assert_eq!(texels.len() as u64, self.words);
+        texels
+    }
+}
+
+/// The triangle and vertex records. Triangles' material indices are clamped to the last material
+/// (glTF's default), as furnace-cpu does.
+fn geometry(scene: &Scene) -> (Vec<GpuSceneTriangle>, Vec<GpuVertex>) {
+    let g = &scene.geometry;
+    let last = scene.materials.len().saturating_sub(1) as u32;
+    let triangles = g
+        .triangles
+        .iter()
+        .enumerate()
+        .map(|(t, &[i0, i1, i2])| GpuSceneTriangle {
+            i0,
+            i1,
+            i2,
+            material: g.triangle_materials.get(t).copied().unwrap_or(last).min(last),
+        })
+        .collect();
+    let vertices = g
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(i, p)| GpuVertex {
+            position: p.to_array(),
+            // A vertex without a normal cannot come from the loader; +Z as oct_encode's
+            // fallback.
+            normal: g.normals.get(i).copied().unwrap_or(furnace_scene::oct_encode(glam::Vec3::Z)),
+        })
+        .collect();
+    (triangles, vertices)
+}
+
+/// A material's GPU record, its texture slots through `texture_ref`.
+fn material_record(
+    m: &furnace_scene::Material,
+    kept: Kept,
+    texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
+) -> GpuMaterial {
+    let (alpha, cutoff) = match m.alpha_mode {
+        AlphaMode::Opaque => (ALPHA_OPAQUE, 0.0),
+        AlphaMode::Mask { cutoff } => (ALPHA_MASK, cutoff),
+        AlphaMode::Blend => (ALPHA_BLEND, 0.0),
+    };
+    let mut flags = alpha;
+    if m.double_sided {
+        flags |= MATERIAL_DOUBLE_SIDED;
+    }
+    if m.uses_textures() {
+        flags |= MATERIAL_TEXTURED;
+    }
+    GpuMaterial {
+        base_color_factor: m.base_color_factor.to_array(),
+        emissive: m.emissive.to_array(),
+        normal_scale: m.normal_scale,
+        specular_color_factor: m.specular_color_factor.to_array(),
+        specular_factor: m.specular_factor,
+        metallic_factor: m.metallic_factor,
+        roughness_factor: m.roughness_factor,
+        alpha_cutoff: cutoff,
+        flags,
+        base_color_texture: texture_ref(&m.base_color_texture),
+        metallic_roughness_texture: texture_ref(&m.metallic_roughness_texture),
+        normal_texture: if kept.normal_mapped {
+            texture_ref(&m.normal_texture)
+        } else {
+            GpuTextureRef::zeroed()
+        },
+        emissive_texture: texture_ref(&m.emissive_texture),
+    }
+}
+
+impl SceneBuffers {
+    /// Packs `scene`, checking every buffer against `max_binding` bytes (pass
+    /// [`GpuContext::max_storage_binding`], or a small value to test the error) before
+    /// allocating it.
+    ///
+    /// Only what shading reads is kept: UVs only when some material is textured, tangents only
+    /// when some material has a normal map (and the scene has tangents), images only when a
+    /// material slot uses them. Triangles' material indices are clamped to the last material
+    /// (glTF's default), as furnace-cpu does; a texture or image index out of range makes the
+    /// slot untextured (the CPU's lookup then returns white too).
+    ///
+    /// # Errors
+    /// [`GpuError::TooLarge`] naming the first buffer over `max_binding` bytes (or over the
+    /// 2³² texel words a `u32` index reaches).
+    pub fn new(scene: &Scene, max_binding: u64) -> Result<Self, GpuError> {
+        let kept = Kept::of(scene);
+        check_sizes(scene, kept, max_binding)?;
+        let images = ImageLayout::of(scene, kept, max_binding)?;
+        let (triangles, vertices) = geometry(scene);
+        let g = &scene.geometry;
+        let uvs = if kept.textured {
             (0..g.positions.len()).map(|i| g.uvs.get(i).map_or([0.0; 2], |uv| uv.to_array())).collect()
         } else {
             Vec::new()
         };
-        let tangents = if normal_mapped {
+        let tangents = if kept.normal_mapped {
             (0..g.positions.len())
                 .map(|i| {
                     // A missing tangent reads as None on the CPU; zero here gives the same (no
@@ -373,70 +496,8 @@ impl SceneBuffers {
         } else {
             Vec::new()
         };
-
-        let texture_ref = |slot: &Option<TextureRef>| {
-            let Some((r, tex)) = resolve(scene, slot) else { return GpuTextureRef::zeroed() };
-            let img = &scene.images[tex.image as usize];
-            let mut flags = TEXTURE_PRESENT
-                | (wrap_code(tex.wrap_s) << WRAP_S_SHIFT)
-                | (wrap_code(tex.wrap_t) << WRAP_T_SHIFT);
-            if r.color_space == ColorSpace::Srgb {
-                flags |= TEXTURE_SRGB;
-            }
-            let mut transform = [1.0, 0.0, 0.0, 1.0, 0.0, 0.0];
-            if let Some(t) = &r.transform {
-                flags |= TEXTURE_TRANSFORM;
-                let m = t.matrix();
-                transform = [m.x_axis.x, m.x_axis.y, m.y_axis.x, m.y_axis.y, m.z_axis.x, m.z_axis.y];
-            }
-            GpuTextureRef {
-                // Fits: the texel buffer was checked against 2³² words above.
-                texel_offset: image_offset[tex.image as usize].unwrap_or(0) as u32,
-                width: img.width.max(1),
-                height: img.height.max(1),
-                flags,
-                transform,
-                pad: [0; 2],
-            }
-        };
-        let materials = scene
-            .materials
-            .iter()
-            .map(|m| {
-                let (alpha, cutoff) = match m.alpha_mode {
-                    AlphaMode::Opaque => (ALPHA_OPAQUE, 0.0),
-                    AlphaMode::Mask { cutoff } => (ALPHA_MASK, cutoff),
-                    AlphaMode::Blend => (ALPHA_BLEND, 0.0),
-                };
-                let mut flags = alpha;
-                if m.double_sided {
-                    flags |= MATERIAL_DOUBLE_SIDED;
-                }
-                if m.uses_textures() {
-                    flags |= MATERIAL_TEXTURED;
-                }
-                GpuMaterial {
-                    base_color_factor: m.base_color_factor.to_array(),
-                    emissive: m.emissive.to_array(),
-                    normal_scale: m.normal_scale,
-                    specular_color_factor: m.specular_color_factor.to_array(),
-                    specular_factor: m.specular_factor,
-                    metallic_factor: m.metallic_factor,
-                    roughness_factor: m.roughness_factor,
-                    alpha_cutoff: cutoff,
-                    flags,
-                    base_color_texture: texture_ref(&m.base_color_texture),
-                    metallic_roughness_texture: texture_ref(&m.metallic_roughness_texture),
-                    normal_texture: if normal_mapped {
-                        texture_ref(&m.normal_texture)
-                    } else {
-                        GpuTextureRef::zeroed()
-                    },
-                    emissive_texture: texture_ref(&m.emissive_texture),
-                }
-            })
-            .collect();
-
+        let texture_ref = |slot: &Option<TextureRef>| images.texture_ref(scene, slot);
+        let materials = scene.materials.iter().map(|m| material_record(m, kept, &texture_ref)).collect();
         let transmission = if scene.materials.iter().any(|m| m.is_transmissive()) {
             scene
                 .materials
@@ -454,26 +515,14 @@ impl SceneBuffers {
         } else {
             Vec::new()
         };
-
-        let mut texels = Vec::with_capacity(words as usize);
-        texels.extend((0..256).map(|i| srgb_to_linear(i as f32 / 255.0).to_bits()));
-        texels.extend((0..256u32).map(|i| (i as f32 / 255.0).to_bits()));
-        for &i in &used {
-            let img = &scene.images[i];
-            let n = img.width as usize * img.height as usize;
-            texels.extend(img.texels.iter().take(n).map(|&t| u32::from_le_bytes(t)));
-            // A short image reads as transparent black on the CPU (`Image::texel`'s ZERO).
-            texels.resize(texels.len() + n.saturating_sub(img.texels.len()), 0);
-        }
-        debug_assert_eq!(texels.len() as u64, words);
         Ok(Self {
             triangles,
             vertices,
             uvs,
             tangents,
             materials,
-            texels,
-            image_count: used.len(),
+            texels: images.texels(scene),
+            image_count: images.used.len(),
             transmission,
         })
     }
