@@ -448,12 +448,12 @@ fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bo
         shadow_queued = 0u;
         shadow_next = 0u;
         shadow_runs = SHADOW_KINDS;
-        if hit.hit {
-            alive = shade_hit(&path, hit, pixel, index);
-        } else {
+        if !hit.hit {
             escape(&path);
             alive = false;
+            continue;
         }
+        alive = shade_hit(&path, hit, pixel, index);
     }
     return path.radiance;
 }
