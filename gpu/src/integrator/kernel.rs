@@ -374,7 +374,7 @@ impl ShaderChecks {
                 c
             }
             // SAFETY (of the value; creating a module with it is the unsafe step): see
-            // `integrator_pipeline`.
+            // `Kernel::new`.
             Self::Unchecked => wgpu::ShaderRuntimeChecks::unchecked(),
         }
     }
@@ -400,6 +400,7 @@ impl Kernel {
     ///
     /// # Errors
     /// A validation error of the device (the shader, its layout or a pipeline).
+    #[allow(unsafe_code)]
     pub(super) fn new(
         ctx: &GpuContext,
         precision: FilmPrecision,
@@ -408,67 +409,53 @@ impl Kernel {
         group_size: u32,
         stack_size: u32,
     ) -> Result<Self, GpuError> {
-        let (layout, main, converge) =
-            integrator_pipeline(ctx, precision, features, checks, group_size, stack_size)?;
-        Ok(Self { layout, main, converge, group_size })
+        let entries = binding_table(precision, features).layout_entries();
+        let device = &ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+            label: Some("integrator"),
+            entries: &entries,
+        });
+        let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("integrator"),
+            bind_group_layouts: &[Some(&layout)],
+            immediate_size: 0,
+        });
+        let desc = wgpu::ShaderModuleDescriptor {
+            label: Some("integrator"),
+            source: wgpu::ShaderSource::Wgsl(
+                pipeline_source(precision, features, group_size, stack_size).into(),
+            ),
+        };
+        let module = match checks {
+            ShaderChecks::Checked => device.create_shader_module(desc),
+            // SAFETY: the checks turned off guard against what this shader does not do. Every loop
+            // of the integrator ends (loops over counts, over the bits of a mask that each iteration
+            // clears, a binary search, the traversal of a finite tree built here, the path loop
+            // bounded by the bounces and MAX_SHEET_PASSES); with `Unchecked` (which the renderer
+            // does not use), its local arrays are indexed within bounds (the traversal stack by a depth kept
+            // below TRV_STACK_SIZE), integer divisions are by non-zero values (group_samples ≥ 1,
+            // the emitter count tested first), and buffer accesses stay in bounds on a device with
+            // robustBufferAccess2 regardless (wgpu leaves those checks to the driver there).
+            _ => unsafe { device.create_shader_module_trusted(desc, checks.runtime_checks()) },
+        };
+        let entry = |name: &str| {
+            device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some(name),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some(name),
+                compilation_options: Default::default(),
+                cache: None,
+            })
+        };
+        let pipeline = entry("main");
+        let converge = (features.adaptive && precision == FilmPrecision::F64).then(|| entry("converge"));
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(GpuError::Wgpu(e.to_string()));
+        }
+        Ok(Self { layout, main: pipeline, converge, group_size })
     }
-}
-
-/// The integrator's bind group layout and compute pipelines for a film precision and the scene
-/// features.
-#[allow(unsafe_code)]
-fn integrator_pipeline(
-    ctx: &GpuContext,
-    precision: FilmPrecision,
-    features: SceneFeatures,
-    checks: ShaderChecks,
-    group_size: u32,
-    stack_size: u32,
-) -> Result<(wgpu::BindGroupLayout, wgpu::ComputePipeline, Option<wgpu::ComputePipeline>), GpuError> {
-    let entries = binding_table(precision, features).layout_entries();
-    let device = &ctx.device;
-    let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("integrator"),
-        entries: &entries,
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("integrator"),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-    let desc = wgpu::ShaderModuleDescriptor {
-        label: Some("integrator"),
-        source: wgpu::ShaderSource::Wgsl(pipeline_source(precision, features, group_size, stack_size).into()),
-    };
-    let module = match checks {
-        ShaderChecks::Checked => device.create_shader_module(desc),
-        // SAFETY: the checks turned off guard against what this shader does not do. Every loop
-        // of the integrator ends (loops over counts, over the bits of a mask that each iteration
-        // clears, a binary search, the traversal of a finite tree built here, the path loop
-        // bounded by the bounces and MAX_SHEET_PASSES); with `Unchecked` (which the renderer
-        // does not use), its local arrays are indexed within bounds (the traversal stack by a depth kept
-        // below TRV_STACK_SIZE), integer divisions are by non-zero values (group_samples ≥ 1,
-        // the emitter count tested first), and buffer accesses stay in bounds on a device with
-        // robustBufferAccess2 regardless (wgpu leaves those checks to the driver there).
-        _ => unsafe { device.create_shader_module_trusted(desc, checks.runtime_checks()) },
-    };
-    let entry = |name: &str| {
-        device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
-            label: Some(name),
-            layout: Some(&pipeline_layout),
-            module: &module,
-            entry_point: Some(name),
-            compilation_options: Default::default(),
-            cache: None,
-        })
-    };
-    let pipeline = entry("main");
-    let converge = (features.adaptive && precision == FilmPrecision::F64).then(|| entry("converge"));
-    if let Some(e) = pollster::block_on(scope.pop()) {
-        return Err(GpuError::Wgpu(e.to_string()));
-    }
-    Ok((layout, pipeline, converge))
 }
 
 #[cfg(test)]
