@@ -371,19 +371,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         &camera,
         settings,
     )?;
-    let adapter = match &mut engine {
-        Backend::Gpu(g) => g.context().info.name.clone(),
-        Backend::Gpus(g) => {
-            let names: Vec<String> = g.renderers().map(|r| r.context().info.name.clone()).collect();
-            match names.first() {
-                Some(first) if names.iter().all(|n| n == first) => format!("{} × {first}", names.len()),
-                _ => names.join(" + "),
-            }
-        }
-        Backend::Cpu(_) => {
-            format!("{} threads", std::thread::available_parallelism().map_or(1, |n| n.get()))
-        }
-    };
+    let adapter = adapter_name(&mut engine);
     let open_seconds = opening.elapsed().as_secs_f64();
     let backend_name = engine.name();
     if !a.quiet {
@@ -396,105 +384,10 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     // The first frame's parts: making the scene, opening the backend (BVH, upload, pipeline)
     // and the first pass (with what the driver does at a pipeline's first dispatch).
     let first_frame = [scene_seconds, open_seconds, time_to_first_frame_s - scene_seconds - open_seconds];
-    if let Some(r) = engine.gpu()
-        && !a.no_rays
-    {
-        // The counting kernel is a pipeline of its own, built after the first frame (which
-        // rendering would show) and run once untimed: a software adapter compiles it at its
-        // first dispatch.
-        r.set_count_rays(true).map_err(|e| e.to_string())?;
-        engine.render_pass(0, 1).map_err(|e| e.to_string())?;
-    }
-    if let Some(r) = engine.gpu() {
-        r.set_group_samples(a.group_samples);
-    }
-    let per_pass = engine.pass_samples().max(1);
-    let hardware = match &mut engine {
-        Backend::Gpu(r) => furnace_gpu::context::is_hardware(&r.context().info),
-        Backend::Gpus(g) => g.renderers().all(|r| furnace_gpu::context::is_hardware(&r.context().info)),
-        Backend::Cpu(_) => false,
-    };
-    if hardware {
-        // Passes of the measured size where the sampler allows (a fixed-N sampler's N counts
-        // only the measured samples): the renderer's choice of invocations per pixel, made by
-        // timing its first passes of that size, is then made here.
-        let warm_spp = if settings.sampler.needs_sample_count() { 1 } else { per_pass };
-        let warm = Instant::now();
-        while warm.elapsed().as_secs_f64() < WARM_UP_SECONDS {
-            engine.render_pass(0, warm_spp).map_err(|e| e.to_string())?;
-        }
-    }
-
-    let mut timing = false;
-    if let Some(r) = engine.gpu() {
-        r.take_trace_counts().map_err(|e| e.to_string())?;
-        timing = r.set_timing(true);
-    }
-    if let Backend::Gpus(g) = &mut engine {
-        timing = g.set_timing(true);
-        g.reset_load();
-    }
-    let timer = Instant::now();
-    // Passes from sample 1 (after the warm-up frame): exactly --spp, or until --min-seconds.
-    let budget = match a.spp {
-        Some(n) => Budget::spp(n.saturating_add(1)),
-        None => Budget { min_seconds: Some(a.min_seconds), ..Budget::spp(u32::MAX) },
-    };
-    let (done, gpu_seconds) = {
-        let mut session = Session::new(&mut engine, 1);
-        session.run(&budget, &|| false, &mut |_| {}).map_err(|e| e.to_string())?;
-        (session.done() - 1, session.timing().device)
-    };
-    let seconds = timer.elapsed().as_secs_f64();
-
-    // The devices' loads in the timed passes, and the time of one collection of every
-    // device's film (which a render does at its end, at each checkpoint it saves and at each
-    // adaptive-sampling test).
-    let load = match &mut engine {
-        Backend::Gpus(g) => {
-            let load = g.load();
-            let t = Instant::now();
-            Integrator::film(g.as_mut()).map_err(|e| e.to_string())?;
-            Some((load, t.elapsed().as_secs_f64()))
-        }
-        _ => None,
-    };
-    let (rays, gpu, profile) = match &mut engine {
-        Backend::Gpu(r) => {
-            r.set_timing(false);
-            let counts = r.take_trace_counts().map_err(|e| e.to_string())?;
-            let memory = GpuMemory {
-                bytes_per_triangle: r.bytes_per_triangle(),
-                scene_bytes: r.scene_bytes(),
-                bvh_bytes: r.bvh_bytes(),
-            };
-            let profile = GpuProfile {
-                gpu_seconds: timing.then_some(gpu_seconds),
-                group_samples: r.group_samples(per_pass),
-                group_size: r.group_size(),
-                traversal_stack: r.traversal_stack_size(),
-                counts: (!a.no_rays).then_some(counts),
-            };
-            let rays =
-                if a.no_rays { Rays::None("--no-rays".to_string()) } else { Rays::Counted(counts.rays) };
-            (rays, Some(memory), Some(profile))
-        }
-        Backend::Gpus(g) => {
-            g.set_timing(false);
-            // The first device's kernel shape, for its own share of a pass (every device
-            // decides alike for one model).
-            let profile = g.renderers().next().map(|r| GpuProfile {
-                gpu_seconds: timing.then_some(gpu_seconds),
-                group_samples: r.group_samples(Integrator::pass_samples(r)),
-                group_size: r.group_size(),
-                traversal_stack: r.traversal_stack_size(),
-                counts: None,
-            });
-            (Rays::None("no ray counts on several GPUs".to_string()), None, profile)
-        }
-        Backend::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None, None),
-        Backend::Cpu(_) => (estimate_rays(a, &scene, &camera, settings), None, None),
-    };
+    let per_pass = warm_up(&mut engine, a, &settings)?;
+    let measured = measure(&mut engine, a)?;
+    let (rays, gpu, profile, load) =
+        results(&mut engine, a, &measured, per_pass, || estimate_rays(a, &scene, &camera, settings))?;
     let report = Report {
         backend: backend_name,
         adapter,
@@ -510,8 +403,8 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         // The method used: `auto` resolved by the scene's number of lights.
         point_lights: settings.point_lights.effective(scene_point_lights).name(),
         env_sampling: settings.env_sampling.effective(settings.light_sampling).name(),
-        spp: done,
-        seconds,
+        spp: measured.spp,
+        seconds: measured.seconds,
         time_to_first_frame_s,
         first_frame,
         rays,
@@ -519,8 +412,155 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         profile,
         load,
     };
+    write_report(&report, a.json.as_deref())
+}
+
+/// The adapter (or adapters, or CPU threads) the backend runs on, in words.
+fn adapter_name(engine: &mut Backend) -> String {
+    match engine {
+        Backend::Gpu(g) => g.context().info.name.clone(),
+        Backend::Gpus(g) => {
+            let names: Vec<String> = g.renderers().map(|r| r.context().info.name.clone()).collect();
+            match names.first() {
+                Some(first) if names.iter().all(|n| n == first) => format!("{} × {first}", names.len()),
+                _ => names.join(" + "),
+            }
+        }
+        Backend::Cpu(_) => {
+            format!("{} threads", std::thread::available_parallelism().map_or(1, |n| n.get()))
+        }
+    }
+}
+
+/// The untimed passes after the first frame: the counting kernel's first dispatch, and on a
+/// hardware GPU passes of the measured size for [`WARM_UP_SECONDS`]. Returns the backend's
+/// samples per pixel of a pass.
+fn warm_up(engine: &mut Backend, a: &BenchArgs, settings: &RenderSettings) -> Result<u32, String> {
+    if let Some(r) = engine.gpu()
+        && !a.no_rays
+    {
+        // The counting kernel is a pipeline of its own, built after the first frame (which
+        // rendering would show) and run once untimed: a software adapter compiles it at its
+        // first dispatch.
+        r.set_count_rays(true).map_err(|e| e.to_string())?;
+        engine.render_pass(0, 1).map_err(|e| e.to_string())?;
+    }
+    if let Some(r) = engine.gpu() {
+        r.set_group_samples(a.group_samples);
+    }
+    let per_pass = engine.pass_samples().max(1);
+    let hardware = match engine {
+        Backend::Gpu(r) => furnace_gpu::context::is_hardware(&r.context().info),
+        Backend::Gpus(g) => g.renderers().all(|r| furnace_gpu::context::is_hardware(&r.context().info)),
+        Backend::Cpu(_) => false,
+    };
+    if hardware {
+        // Passes of the measured size where the sampler allows (a fixed-N sampler's N counts
+        // only the measured samples): the renderer's choice of invocations per pixel, made by
+        // timing its first passes of that size, is then made here.
+        let warm_spp = if settings.sampler.needs_sample_count() { 1 } else { per_pass };
+        let warm = Instant::now();
+        while warm.elapsed().as_secs_f64() < WARM_UP_SECONDS {
+            engine.render_pass(0, warm_spp).map_err(|e| e.to_string())?;
+        }
+    }
+    Ok(per_pass)
+}
+
+/// What the timed passes did.
+struct Measured {
+    /// Samples per pixel rendered.
+    spp: u32,
+    /// Their wall time.
+    seconds: f64,
+    /// Their GPU timestamps' sum, where the adapter has timestamps.
+    gpu_seconds: Option<f64>,
+}
+
+/// The timed passes from sample 1 (after the warm-up frame): exactly --spp, or until
+/// --min-seconds.
+fn measure(engine: &mut Backend, a: &BenchArgs) -> Result<Measured, String> {
+    let mut timing = false;
+    if let Some(r) = engine.gpu() {
+        r.take_trace_counts().map_err(|e| e.to_string())?;
+        timing = r.set_timing(true);
+    }
+    if let Backend::Gpus(g) = engine {
+        timing = g.set_timing(true);
+        g.reset_load();
+    }
+    let timer = Instant::now();
+    let budget = match a.spp {
+        Some(n) => Budget::spp(n.saturating_add(1)),
+        None => Budget { min_seconds: Some(a.min_seconds), ..Budget::spp(u32::MAX) },
+    };
+    let mut session = Session::new(engine, 1);
+    session.run(&budget, &|| false, &mut |_| {}).map_err(|e| e.to_string())?;
+    let (spp, device) = (session.done() - 1, session.timing().device);
+    Ok(Measured { spp, seconds: timer.elapsed().as_secs_f64(), gpu_seconds: timing.then_some(device) })
+}
+
+/// The rays, GPU memory, GPU profile and devices' loads of the timed passes
+/// (`estimate`: the CPU's rays, counted by a small GPU render).
+type Results = (Rays, Option<GpuMemory>, Option<GpuProfile>, Option<(furnace_gpu::multi::Load, f64)>);
+
+fn results(
+    engine: &mut Backend,
+    a: &BenchArgs,
+    measured: &Measured,
+    per_pass: u32,
+    estimate: impl FnOnce() -> Rays,
+) -> Result<Results, String> {
+    let gpu_seconds = measured.gpu_seconds;
+    Ok(match engine {
+        Backend::Gpu(r) => {
+            r.set_timing(false);
+            let counts = r.take_trace_counts().map_err(|e| e.to_string())?;
+            let memory = GpuMemory {
+                bytes_per_triangle: r.bytes_per_triangle(),
+                scene_bytes: r.scene_bytes(),
+                bvh_bytes: r.bvh_bytes(),
+            };
+            let profile = GpuProfile {
+                gpu_seconds,
+                group_samples: r.group_samples(per_pass),
+                group_size: r.group_size(),
+                traversal_stack: r.traversal_stack_size(),
+                counts: (!a.no_rays).then_some(counts),
+            };
+            let rays =
+                if a.no_rays { Rays::None("--no-rays".to_string()) } else { Rays::Counted(counts.rays) };
+            (rays, Some(memory), Some(profile), None)
+        }
+        Backend::Gpus(g) => {
+            // The devices' loads in the timed passes, and the time of one collection of every
+            // device's film (which a render does at its end, at each checkpoint it saves and
+            // at each adaptive-sampling test).
+            let load = g.load();
+            let t = Instant::now();
+            Integrator::film(g.as_mut()).map_err(|e| e.to_string())?;
+            let load = Some((load, t.elapsed().as_secs_f64()));
+            g.set_timing(false);
+            // The first device's kernel shape, for its own share of a pass (every device
+            // decides alike for one model).
+            let profile = g.renderers().next().map(|r| GpuProfile {
+                gpu_seconds,
+                group_samples: r.group_samples(Integrator::pass_samples(r)),
+                group_size: r.group_size(),
+                traversal_stack: r.traversal_stack_size(),
+                counts: None,
+            });
+            (Rays::None("no ray counts on several GPUs".to_string()), None, profile, load)
+        }
+        Backend::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None, None, None),
+        Backend::Cpu(_) => (estimate(), None, None, None),
+    })
+}
+
+/// The table on stdout, and the JSON to `json` (`-`: the JSON on stdout, the table on stderr).
+fn write_report(report: &Report, json_path: Option<&Path>) -> Result<(), String> {
     let json = report.json();
-    match a.json.as_deref() {
+    match json_path {
         Some(p) if p == Path::new("-") => {
             eprint!("{}", report.table());
             print!("{json}");
