@@ -8,14 +8,10 @@
 //! below the horizon or a back-facing NDF normal) go to the harness's rejection cell, which
 //! expects the pdf mass missing from the sphere; a sample where the pdf is 0 fails outright.
 //!
-//! The matrix:
-//!
-//! * [`Lambert`] × θo ∈ {0°, 30°, 60°, 80°, 89°};
-//! * [`GgxSpecular`] × every [`SpecularSampling`] × α ∈ {0.02, 0.1, 0.3, 0.6, 1} × the same
-//!   θo, with F0 = 1 and compensation off. Neither F0, compensation nor masking changes how
-//!   the lobe samples or its pdf; masking is the default, height-correlated;
-//! * [`MetallicRoughness`] (one-sample mixture of its diffuse and specular lobes) for four
-//!   materials × θo ∈ {0°, 45°, 80°, 89°}.
+//! The matrix is the table of lobes [`LOBES`] (`furnace_tests::lobes`), which the consistency,
+//! white-furnace and GPU parity tests iterate too: each row's `chi2` gives its configurations
+//! (Lambert; GGX for every sampling method and α from 0.02 to 1; four glTF materials), their
+//! view angles (down to 89°) and its first seed, so a new lobe adds a row there.
 //!
 //! **Significance.** Every configuration is one test of the family ([`family_size`]); each must
 //! reach the Šidák-corrected p-value `1 − 0.99^(1/N)` for a family of N, so the chance that any of them fails
@@ -31,59 +27,20 @@
 //! every configuration here. (At 89° the pdf's own `f32` rounding is a few 10⁻⁵, so a much
 //! tighter tolerance could not converge.)
 //!
-//! The matrix is a table, [`LOBES`]: one row per lobe (its groups of configurations built from
-//! the lobe's parameters, its view angles, its first seed), so a new lobe adds a row. One test
-//! runs every group in parallel.
+//! One test runs every configuration of every row, the configurations in parallel.
 //! On failure every failing configuration's report is printed and its tables are written to
 //! `target/test-output/chi2-brdf/<name>.{txt,csv,ppm}`. Run with `--nocapture` to see the
 //! p-value of every configuration.
 
-use furnace_brdf::{
-    Bsdf, GgxSpecular, Lambert, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions,
-    SpecularSampling,
-};
+use furnace_brdf::{Bsdf, GgxSpecular, SpecularOptions, SpecularSampling};
 use furnace_tests::chi2::{ChiSquareResult, ChiSquareTest};
+use furnace_tests::lobes::LOBES;
 use glam::Vec3;
 use std::path::PathBuf;
 
-/// View angles θo in degrees for Lambert and GGX. 0° is exactly `+z`.
-const THETAS: [f32; 5] = [0.0, 30.0, 60.0, 80.0, 89.0];
-
-/// GGX roughness α (not the glTF perceptual roughness).
-const ALPHAS: [f32; 5] = [0.02, 0.1, 0.3, 0.6, 1.0];
-
-/// The sampling methods of the specular lobe.
-const METHODS: [SpecularSampling; 3] =
-    [SpecularSampling::Ndf, SpecularSampling::Vndf, SpecularSampling::SphericalCaps];
-
-/// View angles θo in degrees for the metallic-roughness materials.
-const MATERIAL_THETAS: [f32; 4] = [0.0, 45.0, 80.0, 89.0];
-
-/// A BSDF under test, shared with the thread that tests it.
-type BoxedBsdf = Box<dyn Bsdf + Send + Sync>;
-
-/// One row of the table of lobes: the chi-square family is every configuration of every row.
-struct LobeRow {
-    /// Its groups of configurations: a label and the BSDF, built from the lobe's parameters.
-    groups: fn() -> Vec<(String, BoxedBsdf)>,
-    /// The view angles θo (degrees) every group is tested at; configuration `(g, t)` is
-    /// labelled `<group label>_theta<θo>`.
-    thetas: &'static [f32],
-    /// The seed of the first configuration; configuration `(g, t)` gets
-    /// `seed + g·thetas.len() + t`.
-    seed: u32,
-}
-
-/// The lobes of `furnace-brdf` and the glTF material that mixes them. A new lobe adds a row.
-static LOBES: [LobeRow; 3] = [
-    LobeRow { groups: lambert_groups, thetas: &THETAS, seed: 100 },
-    LobeRow { groups: ggx_groups, thetas: &THETAS, seed: 1000 },
-    LobeRow { groups: metallic_roughness_groups, thetas: &MATERIAL_THETAS, seed: 2000 },
-];
-
 /// Number of chi-square tests of the table: the Šidák family.
 fn family_size() -> usize {
-    LOBES.iter().map(|row| (row.groups)().len() * row.thetas.len()).sum()
+    LOBES.iter().map(|row| (row.chi2.configs)().len() * row.chi2.thetas.len()).sum()
 }
 
 /// The azimuth of every `wo` that is not the normal: an arbitrary angle, so that the lobe is
@@ -159,100 +116,23 @@ fn check_all(results: &[(String, ChiSquareResult)]) {
     );
 }
 
-/// A Lambert lobe of a coloured albedo.
-fn lambert_groups() -> Vec<(String, BoxedBsdf)> {
-    vec![("lambert".to_string(), Box::new(Lambert::new(Vec3::new(0.8, 0.5, 0.2))))]
-}
-
-/// The GGX lobe for every sampling method and α, F0 = 1, compensation off.
-fn ggx_groups() -> Vec<(String, BoxedBsdf)> {
-    let mut groups: Vec<(String, BoxedBsdf)> = Vec::new();
-    for method in METHODS {
-        for alpha in ALPHAS {
-            let options =
-                SpecularOptions { masking: Masking::HeightCorrelated, sampling: method, compensation: false };
-            let bsdf = GgxSpecular::new(alpha, Vec3::ONE, options);
-            groups.push((format!("ggx_{method:?}_alpha{alpha}"), Box::new(bsdf)));
-        }
-    }
-    groups
-}
-
-/// The metallic-roughness materials, one group each.
-fn metallic_roughness_groups() -> Vec<(String, BoxedBsdf)> {
-    [
-        // A plain dielectric (glTF's common case): grey base, α = 0.25, defaults (spherical
-        // caps, height-correlated, compensation on).
-        (
-            "dielectric",
-            MetallicRoughnessParams {
-                base_color: Vec3::splat(0.8),
-                metallic: 0.0,
-                roughness: 0.5,
-                ..Default::default()
-            },
-            SpecularOptions::default(),
-        ),
-        // Half metallic, coloured, α = 0.09, Heitz VNDF.
-        (
-            "half_metallic",
-            MetallicRoughnessParams {
-                base_color: Vec3::new(0.9, 0.6, 0.3),
-                metallic: 0.5,
-                roughness: 0.3,
-                ..Default::default()
-            },
-            SpecularOptions { sampling: SpecularSampling::Vndf, ..SpecularOptions::default() },
-        ),
-        // A rough metal (copper, α = 1): no diffuse lobe, so the specular lobe alone.
-        (
-            "rough_metal",
-            MetallicRoughnessParams {
-                base_color: Vec3::new(0.95, 0.64, 0.54),
-                metallic: 1.0,
-                roughness: 1.0,
-                ..Default::default()
-            },
-            SpecularOptions::default(),
-        ),
-        // A glossy blue dielectric (α = 0.0225, a sharp lobe over the diffuse one) sampled by
-        // the NDF, which also rejects, with the Mitsuba switches (separable, no compensation:
-        // the lobe choice then uses E_ss) and a tinted KHR_materials_specular.
-        (
-            "glossy_dielectric_ndf",
-            MetallicRoughnessParams {
-                base_color: Vec3::new(0.2, 0.4, 0.8),
-                metallic: 0.0,
-                roughness: 0.15,
-                specular_factor: 0.7,
-                specular_color: Vec3::new(1.0, 0.8, 0.6),
-            },
-            SpecularOptions { sampling: SpecularSampling::Ndf, ..SpecularOptions::mitsuba() },
-        ),
-    ]
-    .into_iter()
-    .map(|(name, params, options)| {
-        let bsdf: BoxedBsdf = Box::new(MetallicRoughness::new(params, options));
-        (format!("metallic_roughness_{name}"), bsdf)
-    })
-    .collect()
-}
-
-/// Every group of every row of [`LOBES`] at every θo of its row, the groups in parallel; one
-/// report for all.
+/// Every configuration of every row of [`LOBES`] at every θo of its row, the configurations
+/// in parallel; one report for all.
 #[test]
 fn chi2_every_lobe() {
     let results: Vec<(String, ChiSquareResult)> = std::thread::scope(|scope| {
         let mut handles = Vec::new();
         for row in &LOBES {
-            for (g, (label, bsdf)) in (row.groups)().into_iter().enumerate() {
+            let chi2 = &row.chi2;
+            for (g, config) in (chi2.configs)().into_iter().enumerate() {
                 handles.push(scope.spawn(move || {
-                    row.thetas
+                    chi2.thetas
                         .iter()
                         .enumerate()
                         .map(|(t, &theta)| {
-                            let seed = row.seed + (g * row.thetas.len() + t) as u32;
-                            (format!("{label}_theta{theta}"), run(bsdf.as_ref(), view(theta), seed))
+                            let seed = chi2.seed + (g * chi2.thetas.len() + t) as u32;
+                            let bsdf = config.bsdf.as_ref();
+                            (format!("{}_theta{theta}", config.label), run(bsdf, view(theta), seed))
                         })
                         .collect::<Vec<_>>()
                 }));

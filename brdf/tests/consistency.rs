@@ -15,6 +15,13 @@
 //! check the bookkeeping around it, which a renderer relies on and the histogram cannot see
 //! (a weight off by a constant factor, a pdf that disagrees with the sample's own).
 //!
+//! The configurations are the table of lobes [`LOBES`] (`furnace_tests::lobes`), which the
+//! chi-square, white-furnace and GPU parity tests iterate too: each row's `consistency` gives the
+//! configurations of the sample checks and their first seed, the groups of `∫ pdf` checks and
+//! the configurations of the reciprocity check, so a new lobe adds a row there. (Every GGX lobe
+//! and glTF material is checked for every sampling method, masking form and compensation switch,
+//! at α from `ALPHA_MIN` to 1.)
+//!
 //! Uniform numbers come from fixed-seed [`RandomStream`]s, so every run checks the same
 //! inputs. Run with `--nocapture` to see, per case, the worst error against its tolerance.
 //!
@@ -24,17 +31,11 @@
 
 use crate::common;
 use common::Worst;
-use furnace_brdf::{
-    Bsdf, GgxSpecular, Lambert, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions,
-    SpecularSampling,
-};
+use furnace_brdf::{Bsdf, MetallicRoughness, MetallicRoughnessParams, SpecularOptions};
 use furnace_sampling::RandomStream;
 use furnace_tests::chi2::ChiSquareTest;
+use furnace_tests::lobes::{Config, IntegralConfig, LOBES};
 use glam::{Vec2, Vec3};
-
-/// GGX roughnesses of the sample/eval/pdf checks: the clamp `ALPHA_MIN` (= 1e-4), sharp,
-/// medium, rough.
-const ALPHAS: [f32; 6] = [1e-4, 0.02, 0.1, 0.3, 0.6, 1.0];
 
 /// View angles (degrees from the normal) of the strict checks, down to 0.1° above the
 /// horizon.
@@ -58,18 +59,6 @@ const ONE_MINUS: f32 = 1.0 - f32::EPSILON / 2.0;
 /// Uniform numbers at the edges of `[0, 1)`.
 const EDGE_UNIFORMS: [f32; 4] = [0.0, 0.5, 0.999, ONE_MINUS];
 
-const SAMPLINGS: [SpecularSampling; 3] =
-    [SpecularSampling::Ndf, SpecularSampling::Vndf, SpecularSampling::SphericalCaps];
-const MASKINGS: [Masking; 2] = [Masking::Separable, Masking::HeightCorrelated];
-
-/// A BSDF under test.
-struct Case {
-    name: String,
-    bsdf: Box<dyn Bsdf>,
-    /// The smallest GGX α among its lobes (`None` for Lambert): sets the pdf tolerance.
-    alpha: Option<f32>,
-}
-
 /// The view direction `theta_deg` from the normal at azimuth `phi`; exactly `+z` at 0°.
 fn view(theta_deg: f32, phi: f32) -> Vec3 {
     if theta_deg == 0.0 {
@@ -80,100 +69,9 @@ fn view(theta_deg: f32, phi: f32) -> Vec3 {
     Vec3::new(st * cp, st * sp, ct)
 }
 
-/// A coloured specular F0, so that the channels differ.
-const F0: Vec3 = Vec3::new(0.9, 0.6, 0.3);
-
-fn lambert() -> Case {
-    Case { name: "lambert".into(), bsdf: Box::new(Lambert::new(Vec3::new(0.8, 0.5, 0.2))), alpha: None }
-}
-
-/// One row of the table of lobes: the cases of one lobe, built from its parameters, and the
-/// first seed of their strict sample checks (case `i` gets `seed + i`).
-struct LobeRow {
-    cases: fn() -> Vec<Case>,
-    seed: u32,
-}
-
-/// The lobes of `furnace-brdf` and the glTF material that mixes them: every test below that
-/// runs "every lobe" iterates this table, so a new lobe adds a row.
-const LOBES: [LobeRow; 3] = [
-    LobeRow { cases: || vec![lambert()], seed: 1 },
-    LobeRow { cases: ggx_cases, seed: 100 },
-    LobeRow { cases: material_cases, seed: 1000 },
-];
-
-/// Every case of every row of [`LOBES`], in table order.
-fn all_cases() -> Vec<Case> {
-    LOBES.iter().flat_map(|row| (row.cases)()).collect()
-}
-
-/// Every GGX lobe configuration: α × sampling × masking × compensation.
-fn ggx_cases() -> Vec<Case> {
-    let mut cases = Vec::new();
-    for &alpha in &ALPHAS {
-        for &sampling in &SAMPLINGS {
-            for &masking in &MASKINGS {
-                for compensation in [false, true] {
-                    let options = SpecularOptions { masking, sampling, compensation };
-                    cases.push(Case {
-                        name: format!("ggx a={alpha} {sampling:?} {masking:?} comp={compensation}"),
-                        bsdf: Box::new(GgxSpecular::new(alpha, F0, options)),
-                        alpha: Some(alpha),
-                    });
-                }
-            }
-        }
-    }
-    cases
-}
-
-/// Representative metallic-roughness materials: (name, parameters).
-fn materials() -> Vec<(&'static str, MetallicRoughnessParams)> {
-    let p = |base: Vec3, metallic: f32, roughness: f32| MetallicRoughnessParams {
-        base_color: base,
-        metallic,
-        roughness,
-        ..Default::default()
-    };
-    vec![
-        ("dielectric", p(Vec3::splat(0.8), 0.0, 0.5)),
-        ("half_metallic", p(Vec3::new(0.9, 0.6, 0.3), 0.5, 0.3)),
-        ("rough_metal", p(Vec3::new(0.95, 0.64, 0.54), 1.0, 1.0)),
-        (
-            "glossy_tinted_specular",
-            MetallicRoughnessParams {
-                base_color: Vec3::new(0.2, 0.4, 0.8),
-                metallic: 0.0,
-                roughness: 0.15,
-                specular_factor: 0.7,
-                specular_color: Vec3::new(1.0, 0.8, 0.6),
-            },
-        ),
-        ("mirror_metal", p(Vec3::new(1.0, 0.78, 0.34), 1.0, 0.0)),
-        ("mirror_dielectric", p(Vec3::new(0.1, 0.5, 0.1), 0.0, 0.0)),
-        ("black_dielectric", p(Vec3::ZERO, 0.0, 0.4)),
-    ]
-}
-
-/// Every material × sampling × masking × compensation.
-fn material_cases() -> Vec<Case> {
-    let mut cases = Vec::new();
-    for (name, params) in materials() {
-        for &sampling in &SAMPLINGS {
-            for &masking in &MASKINGS {
-                for compensation in [false, true] {
-                    let options = SpecularOptions { masking, sampling, compensation };
-                    let bsdf = MetallicRoughness::new(params, options);
-                    cases.push(Case {
-                        name: format!("material {name} {sampling:?} {masking:?} comp={compensation}"),
-                        alpha: Some(bsdf.specular.ggx.alpha()),
-                        bsdf: Box::new(bsdf),
-                    });
-                }
-            }
-        }
-    }
-    cases
+/// Every configuration of the sample checks of every row of [`LOBES`], in table order.
+fn all_cases() -> Vec<Config> {
+    LOBES.iter().flat_map(|row| (row.consistency.configs)()).collect()
 }
 
 /// `|a − b| / max(|a|, |b|)` (0 when both are 0).
@@ -285,7 +183,7 @@ fn uniforms(seed: u32, v: u32) -> Vec<(f32, Vec2)> {
 
 /// Checks every sample of `case` from `views`; returns a description of every failure, and
 /// prints the worst error / tolerance of each kind.
-fn check_samples(case: &Case, views: &[Vec3], seed: u32, checks: Checks) -> Vec<String> {
+fn check_samples(case: &Config, views: &[Vec3], seed: u32, checks: Checks) -> Vec<String> {
     let mut failures = Vec::new();
     let (mut worst_weight, mut worst_pdf, mut worst_unit) =
         (Worst::default(), Worst::default(), Worst::default());
@@ -294,7 +192,7 @@ fn check_samples(case: &Case, views: &[Vec3], seed: u32, checks: Checks) -> Vec<
         for (uc, u) in uniforms(seed, v as u32) {
             let Some(s) = case.bsdf.sample(wo, uc, u) else { continue };
             accepted += 1;
-            let what = || format!("{}: wo = {wo:?}, uc = {uc:?}, u = {u:?} -> {s:?}", case.name);
+            let what = || format!("{}: wo = {wo:?}, uc = {uc:?}, u = {u:?} -> {s:?}", case.label);
             let wi = s.wi;
             if !(wi.is_finite() && wi.z > 0.0) {
                 failures.push(format!("wi not finite or not above the horizon: {}", what()));
@@ -333,7 +231,7 @@ fn check_samples(case: &Case, views: &[Vec3], seed: u32, checks: Checks) -> Vec<
     }
     println!(
         "{:<58} {accepted:>6} samples; worst error / tolerance: weight {:.3}, pdf {:.3}, unit {:.3}",
-        case.name, worst_weight.ratio, worst_pdf.ratio, worst_unit.ratio
+        case.label, worst_weight.ratio, worst_pdf.ratio, worst_unit.ratio
     );
     failures
 }
@@ -345,11 +243,11 @@ fn every_lobe_sample_matches_eval_and_pdf() {
     let failures: Vec<String> = LOBES
         .iter()
         .flat_map(|row| {
-            (row.cases)()
+            (row.consistency.configs)()
                 .iter()
                 .enumerate()
                 .flat_map(|(i, case)| {
-                    let seed = row.seed + i as u32;
+                    let seed = row.consistency.seed + i as u32;
                     check_samples(case, &strict_views(seed), seed, Checks::All)
                 })
                 .collect::<Vec<_>>()
@@ -385,7 +283,7 @@ fn samples_are_valid_at_grazing_views() {
 fn pdf_is_positive_for_sampled_directions_at_grazing_views() {
     let views: Vec<Vec3> = GRAZING_THETAS.iter().map(|&t| view(t, 1.0)).collect();
     // The lobes with a microfacet part.
-    let cases: Vec<Case> = all_cases().into_iter().filter(|case| case.alpha.is_some()).collect();
+    let cases: Vec<Config> = all_cases().into_iter().filter(|case| case.alpha.is_some()).collect();
     let mut failures = Vec::new();
     for (i, case) in cases.iter().enumerate() {
         let mut zero = 0;
@@ -409,7 +307,7 @@ fn pdf_is_positive_for_sampled_directions_at_grazing_views() {
         if zero > 0 {
             failures.push(format!(
                 "{}: {zero} of {total} samples have pdf(wo, wi) = 0, e.g. {example}",
-                case.name
+                case.label
             ));
         }
     }
@@ -424,13 +322,13 @@ fn views_at_or_below_the_horizon_reflect_nothing() {
     for case in &cases {
         for wo in [Vec3::X, Vec3::new(0.6, 0.0, -0.8), -Vec3::Z, Vec3::new(0.0, 1.0, -0.0)] {
             for (uc, u) in uniforms(9000, 0).into_iter().take(64) {
-                assert!(case.bsdf.sample(wo, uc, u).is_none(), "{}: wo = {wo:?}", case.name);
+                assert!(case.bsdf.sample(wo, uc, u).is_none(), "{}: wo = {wo:?}", case.label);
             }
-            assert_eq!(case.bsdf.eval(wo, wi), Vec3::ZERO, "{}: wo = {wo:?}", case.name);
-            assert_eq!(case.bsdf.pdf(wo, wi), 0.0, "{}: wo = {wo:?}", case.name);
+            assert_eq!(case.bsdf.eval(wo, wi), Vec3::ZERO, "{}: wo = {wo:?}", case.label);
+            assert_eq!(case.bsdf.pdf(wo, wi), 0.0, "{}: wo = {wo:?}", case.label);
             // And a light direction at or below the horizon contributes nothing.
-            assert_eq!(case.bsdf.eval(wi, wo), Vec3::ZERO, "{}: wi = {wo:?}", case.name);
-            assert_eq!(case.bsdf.pdf(wi, wo), 0.0, "{}: wi = {wo:?}", case.name);
+            assert_eq!(case.bsdf.eval(wi, wo), Vec3::ZERO, "{}: wi = {wo:?}", case.label);
+            assert_eq!(case.bsdf.pdf(wi, wo), 0.0, "{}: wi = {wo:?}", case.label);
         }
     }
 }
@@ -440,25 +338,19 @@ fn views_at_or_below_the_horizon_reflect_nothing() {
 /// Samples of the Monte Carlo estimate of the probability that `sample` returns a direction.
 const ACCEPTANCE_SAMPLES: u32 = 1_000_000;
 
-/// The view angles of the integral checks for a lobe of roughness α. For α = 1e-4 (the clamp)
-/// two views are left out, because the pdf cannot be integrated over `(cos θ, φ)` cells
-/// there: at normal incidence the lobe is a ring of `1 − cos θ ≈ 2α² = 2·10⁻⁸` around the pole,
-/// narrower than the harness's finest interval (2⁻²³); at 89° the pdf's own `f32` noise
-/// (about `(2/α)·u/cos θo` ≈ 7% relative, see [`U`]) exceeds any useful quadrature tolerance.
-/// 0.5° replaces 0°.
-fn integral_thetas(alpha: f32) -> &'static [f32] {
-    if alpha < 0.01 { &[0.5, 30.0, 60.0, 80.0] } else { &[0.0, 30.0, 60.0, 80.0, 89.0] }
-}
-
 /// The quadrature's relative tolerance: the harness's default 1e-4, and 1e-3 for α = 1e-4,
 /// whose pdf has `f32` noise of about `(2/α)·u` ≈ 1e-3 even at normal incidence (a tighter
-/// tolerance only chases rounding and never converges).
-fn quadrature_tolerance(alpha: f32) -> f64 {
-    if alpha < 0.01 { 1e-3 } else { 1e-4 }
+/// tolerance only chases rounding and never converges). `alpha` is the lobe's smallest GGX α
+/// (`None`: no microfacet lobe).
+fn quadrature_tolerance(alpha: Option<f32>) -> f64 {
+    match alpha {
+        Some(alpha) if alpha < 0.01 => 1e-3,
+        _ => 1e-4,
+    }
 }
 
-/// `∫ pdf dω` by the harness's adaptive quadrature against the fraction of
-/// [`ACCEPTANCE_SAMPLES`] samples that `sample` accepts.
+/// `∫ pdf dω` of `config` seen from `wo`, by the harness's adaptive quadrature, against the
+/// fraction of [`ACCEPTANCE_SAMPLES`] samples that `sample` accepts.
 ///
 /// Tolerance: 5 binomial standard deviations of the fraction, `5·√(p(1 − p)/n)` (at least
 /// `5/n`; two-sided 5σ is a 6·10⁻⁷ chance per check, for ~150 deterministic checks) plus twice
@@ -466,8 +358,9 @@ fn quadrature_tolerance(alpha: f32) -> f64 {
 /// coarser estimate; the kept one was measured within 0.7 of the tolerance in the worst case,
 /// a lobe near the pole). The quadrature must have converged in every cell, and the integral
 /// must not exceed 1 by more than that quadrature allowance.
-fn check_integral(name: &str, bsdf: &dyn Bsdf, alpha: f32, wo: Vec3, seed: u32) -> Result<f64, String> {
-    let tolerance = quadrature_tolerance(alpha);
+fn check_integral(name: &str, config: &Config, wo: Vec3, seed: u32) -> Result<f64, String> {
+    let bsdf = config.bsdf.as_ref();
+    let tolerance = quadrature_tolerance(config.alpha);
     let test = ChiSquareTest { quadrature_tolerance: tolerance, ..ChiSquareTest::default() };
     let integral = test.integrate_pdf(|wi| bsdf.pdf(wo, wi));
     let mut streams = [0, 1, 2].map(|d| RandomStream::new(seed, d, 11));
@@ -503,108 +396,36 @@ fn check_integral(name: &str, bsdf: &dyn Bsdf, alpha: f32, wo: Vec3, seed: u32) 
     Ok(deviation / allowed)
 }
 
-/// An integral case: name, BSDF, its GGX α, and the view angles to check.
-type IntegralCase = (String, Box<dyn Bsdf>, f32, &'static [f32]);
-
-/// Runs [`check_integral`] for every case and view angle.
-fn check_integrals(cases: &[IntegralCase], seed: u32) {
+/// Runs [`check_integral`] for every configuration and its view angles; returns every failure.
+fn check_integrals(configs: &[IntegralConfig], seed: u32) -> Vec<String> {
     let mut failures = Vec::new();
-    for (i, (name, bsdf, alpha, thetas)) in cases.iter().enumerate() {
+    for (i, IntegralConfig { config, thetas }) in configs.iter().enumerate() {
         for (t, &theta) in thetas.iter().enumerate() {
-            let label = format!("{name} theta={theta}");
+            let label = format!("{} theta={theta}", config.label);
             let seed = seed + (i * 8 + t) as u32;
-            if let Err(e) = check_integral(&label, bsdf.as_ref(), *alpha, view(theta, 1.0), seed) {
+            if let Err(e) = check_integral(&label, config, view(theta, 1.0), seed) {
                 failures.push(e);
             }
         }
     }
+    failures
+}
+
+/// [`check_integrals`] on every group of `∫ pdf` checks of every row of [`LOBES`] (the view
+/// angles of each configuration are the row's: see `furnace_tests::lobes` for the views left
+/// out where the quadrature cannot resolve the lobe), the groups in parallel; fails with every
+/// failure.
+#[test]
+fn every_lobe_pdf_integrates_to_acceptance() {
+    let failures: Vec<String> = std::thread::scope(|scope| {
+        let handles: Vec<_> = LOBES
+            .iter()
+            .flat_map(|row| row.consistency.integrals)
+            .map(|group| scope.spawn(move || check_integrals(&(group.configs)(), group.seed)))
+            .collect();
+        handles.into_iter().flat_map(|h| h.join().expect("an integral thread panicked")).collect()
+    });
     assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
-}
-
-#[test]
-fn lambert_pdf_integrates_to_acceptance() {
-    let case = lambert();
-    check_integrals(&[(case.name, case.bsdf, 1.0, integral_thetas(1.0))], 20_000);
-}
-
-/// The GGX lobe with one sampling method (masking and compensation do not change the pdf),
-/// at every α of [`ALPHAS`].
-fn ggx_integrals(sampling: SpecularSampling, seed: u32) {
-    let cases: Vec<IntegralCase> = ALPHAS
-        .iter()
-        .map(|&alpha| {
-            let options = SpecularOptions { sampling, ..SpecularOptions::default() };
-            let bsdf: Box<dyn Bsdf> = Box::new(GgxSpecular::new(alpha, F0, options));
-            (format!("ggx a={alpha} {sampling:?}"), bsdf, alpha, integral_thetas(alpha))
-        })
-        .collect();
-    check_integrals(&cases, seed);
-}
-
-#[test]
-fn ggx_ndf_pdf_integrates_to_acceptance() {
-    ggx_integrals(SpecularSampling::Ndf, 21_000);
-}
-
-#[test]
-fn ggx_vndf_pdf_integrates_to_acceptance() {
-    ggx_integrals(SpecularSampling::Vndf, 22_000);
-}
-
-#[test]
-fn ggx_spherical_caps_pdf_integrates_to_acceptance() {
-    ggx_integrals(SpecularSampling::SphericalCaps, 23_000);
-}
-
-/// The materials `range` of [`materials`] with the default switches, or with the Mitsuba ones
-/// (separable, no compensation — the lobe choice then uses `E_ss`) sampled by the NDF.
-///
-/// The near-mirror materials (α = 1e-4) are not checked near the pole: there a lobe 10⁻⁴ wide
-/// on top of a diffuse background is a needle the quadrature never sees — near the pole its
-/// nodes are ~0.03 rad apart in θ, and the GGX tails that would reveal the lobe are below the
-/// background's tolerance — so coarse and fine estimates agree without it (the integral came
-/// out 0.90 for a sampler that accepts everything). Without the background (the plain GGX lobe
-/// above, or the mirror metal) the tails alone drive the refinement and 0.5° integrates fine.
-fn material_integrals(mitsuba: bool, range: std::ops::Range<usize>, seed: u32) {
-    let options = if mitsuba {
-        SpecularOptions { sampling: SpecularSampling::Ndf, ..SpecularOptions::mitsuba() }
-    } else {
-        SpecularOptions::default()
-    };
-    let label = if mitsuba { "mitsuba_ndf" } else { "default" };
-    let cases: Vec<IntegralCase> = materials()[range]
-        .iter()
-        .map(|&(name, params)| {
-            let bsdf = MetallicRoughness::new(params, options);
-            let alpha = bsdf.specular.ggx.alpha();
-            let has_diffuse = bsdf.diffuse.albedo != Vec3::ZERO;
-            let thetas: &'static [f32] =
-                if alpha < 0.01 && has_diffuse { &[30.0, 60.0, 80.0] } else { integral_thetas(alpha) };
-            let bsdf: Box<dyn Bsdf> = Box::new(bsdf);
-            (format!("material {name} {label}"), bsdf, alpha, thetas)
-        })
-        .collect();
-    check_integrals(&cases, seed);
-}
-
-#[test]
-fn material_pdf_integrates_to_acceptance_common() {
-    material_integrals(false, 0..4, 24_000);
-}
-
-#[test]
-fn material_pdf_integrates_to_acceptance_common_mitsuba() {
-    material_integrals(true, 0..4, 25_000);
-}
-
-#[test]
-fn material_pdf_integrates_to_acceptance_extreme() {
-    material_integrals(false, 4..7, 26_000);
-}
-
-#[test]
-fn material_pdf_integrates_to_acceptance_extreme_mitsuba() {
-    material_integrals(true, 4..7, 27_000);
 }
 
 // --- reciprocity -----------------------------------------------------------------------------
@@ -649,33 +470,13 @@ fn direction_pairs(seed: u32) -> Vec<(Vec3, Vec3)> {
     pairs
 }
 
-/// `eval(ωo, ωi)/cos θi = eval(ωi, ωo)/cos θo` (the BRDF itself is symmetric) for GGX with
-/// both maskings, Lambert, and every material, all without compensation (Turquin's factor
-/// depends on `cos θo` alone and is not reciprocal).
+/// `eval(ωo, ωi)/cos θi = eval(ωi, ωo)/cos θo` (the BRDF itself is symmetric) for every
+/// reciprocity configuration of every row of [`LOBES`] (Lambert, GGX with both maskings, every
+/// material), all without compensation (Turquin's factor depends on `cos θo` alone and is not
+/// reciprocal).
 #[test]
 fn eval_is_reciprocal_without_compensation() {
-    let mut cases = vec![lambert()];
-    for &alpha in &ALPHAS {
-        for &masking in &MASKINGS {
-            let options = SpecularOptions { masking, compensation: false, ..SpecularOptions::default() };
-            cases.push(Case {
-                name: format!("ggx a={alpha} {masking:?}"),
-                bsdf: Box::new(GgxSpecular::new(alpha, F0, options)),
-                alpha: Some(alpha),
-            });
-        }
-    }
-    for (name, params) in materials() {
-        for &masking in &MASKINGS {
-            let options = SpecularOptions { masking, compensation: false, ..SpecularOptions::default() };
-            let bsdf = MetallicRoughness::new(params, options);
-            cases.push(Case {
-                name: format!("material {name} {masking:?}"),
-                alpha: None,
-                bsdf: Box::new(bsdf),
-            });
-        }
-    }
+    let cases: Vec<Config> = LOBES.iter().flat_map(|row| (row.consistency.reciprocal)()).collect();
     let pairs = direction_pairs(1);
     let mut failures = Vec::new();
     for case in &cases {
@@ -685,7 +486,7 @@ fn eval_is_reciprocal_without_compensation() {
             let forward = case.bsdf.eval(wo, wi) / wi.z;
             let backward = case.bsdf.eval(wi, wo) / wo.z;
             if !(forward.is_finite() && backward.is_finite()) {
-                failures.push(format!("{}: not finite for wo = {wo:?}, wi = {wi:?}", case.name));
+                failures.push(format!("{}: not finite for wo = {wo:?}, wi = {wi:?}", case.label));
                 continue;
             }
             let scale = forward.abs().max(backward.abs()).max_element();
@@ -698,10 +499,10 @@ fn eval_is_reciprocal_without_compensation() {
                 });
             }
         }
-        println!("{:<40} {nonzero:>5} nonzero pairs; worst error / tolerance {:.3}", case.name, worst.ratio);
+        println!("{:<40} {nonzero:>5} nonzero pairs; worst error / tolerance {:.3}", case.label, worst.ratio);
         if !(worst.ratio <= 1.0) {
             failures
-                .push(format!("{}: error {:.3}x the tolerance at {}", case.name, worst.ratio, worst.what));
+                .push(format!("{}: error {:.3}x the tolerance at {}", case.label, worst.ratio, worst.what));
         }
     }
     assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));

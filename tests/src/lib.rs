@@ -10,7 +10,9 @@
 //! tests' seeded generator), [`gltf`] (glTF scenes written in memory, PNG textures),
 //! [`chi2`] (the chi-square harness of every sampling routine, with its file output),
 //! [`cbox`] (the Cornell box references and the z statistics), [`gpu`] (the GPU test context
-//! and small compute kernels), [`layout`] (WGSL struct layouts by reflection).
+//! and small compute kernels), [`layout`] (WGSL struct layouts by reflection), [`lobes`] (the
+//! table of BSDF lobes that the chi-square, consistency, white-furnace and GPU parity tests
+//! iterate).
 //!
 //! Crates below this one in the graph use the fixtures from their own integration tests through
 //! a dev-dependency (a cycle through dev-dependencies only, which Cargo allows).
@@ -22,6 +24,7 @@ pub mod data;
 pub mod gltf;
 pub mod gpu;
 pub mod layout;
+pub mod lobes;
 pub mod rng;
 
 pub use rng::Rng;

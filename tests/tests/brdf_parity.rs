@@ -1,6 +1,13 @@
 //! Parity of the WGSL BSDF (`src/wgsl/brdf.wgsl`) with `furnace-brdf`'s `MetallicRoughness`:
-//! eval, pdf and sample on the same inputs, for every `SpecularOptions` combination, plus the
-//! WGSL constructor, the Turquin lookup, the constants and the record layout.
+//! eval, pdf and sample on the same inputs, for every row of the table of lobes [`LOBES`]
+//! (`furnace_tests::lobes`, shared with the chi-square, consistency and white-furnace tests; a
+//! new lobe adds a row there) and each of its `SpecularOptions` combinations, plus the WGSL
+//! constructor, the Turquin lookup, the constants and the record layout.
+//!
+//! The WGSL evaluates every lobe inside the glTF record `BsdfParams`, so a row's records are
+//! materials drawn by the row with only its lobe on (Lambert: metallic 0, specularFactor 0; GGX:
+//! metallic 1), and the glTF material's row draws the whole mixture with its edges; each group
+//! (row × options) is checked and reported on its own, each row's counts bounded on their own.
 //!
 //! `cargo test -p furnace-tests --test all brdf_parity:: -- --nocapture` prints the table of maximum
 //! errors per function and configuration.
@@ -26,6 +33,7 @@ use furnace_brdf::{
 use furnace_gpu::brdf::{self, BsdfParams};
 use furnace_gpu::wgsl;
 use furnace_tests::gpu::{self as kernel, test_context};
+use furnace_tests::lobes::{LOBES, all_options, gltf_params};
 use glam::{Vec2, Vec3};
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
@@ -48,32 +56,14 @@ const ABS_FLOOR: f32 = 1e-20;
 /// error of 1e-11 in a path weight changes no radiance a renderer resolves.
 const WEIGHT_FLOOR: f32 = 1e-6;
 
-/// Inputs per configuration: each record runs eval, pdf and sample, so every function sees
-/// `RECORDS_PER_CONFIG` inputs for each of the 12 `SpecularOptions` combinations.
-const RECORDS_PER_CONFIG: usize = 100_000;
-
-/// Materials per configuration (records pick one at random).
+/// Materials per group (row × options; records pick one at random). Each record runs eval,
+/// pdf and sample, so every function sees a row's `records_per_option` inputs per group.
 const MATERIALS_PER_CONFIG: usize = 2048;
 
 /// Words per input record: material index, wo (3), wi (3), uc, u (2).
 const IN_WORDS: usize = 10;
 /// Words per output record: eval (3), pdf, sample wi (3), pdf, weight (3), lobe.
 const OUT_WORDS: usize = 12;
-
-// Helpers on the shared generator (`furnace_tests::layout::Rng`, SplitMix64).
-
-/// All 12 `SpecularOptions` combinations.
-fn configs() -> Vec<SpecularOptions> {
-    let mut v = Vec::new();
-    for masking in [Masking::Separable, Masking::HeightCorrelated] {
-        for sampling in [SpecularSampling::Ndf, SpecularSampling::Vndf, SpecularSampling::SphericalCaps] {
-            for compensation in [false, true] {
-                v.push(SpecularOptions { masking, sampling, compensation });
-            }
-        }
-    }
-    v
-}
 
 fn config_name(o: SpecularOptions) -> String {
     let m = match o.masking {
@@ -86,42 +76,6 @@ fn config_name(o: SpecularOptions) -> String {
         SpecularSampling::SphericalCaps => "caps",
     };
     format!("{m}/{s}/{}", if o.compensation { "comp" } else { "nocomp" })
-}
-
-/// Material parameters with the edges: metallic 0/1, α at ALPHA_MIN (roughness 0 and below
-/// √ALPHA_MIN) and 1, specular factor 0/1, specular colours that saturate F0, black and white.
-fn random_params(rng: &mut Rng) -> MetallicRoughnessParams {
-    let colour = |rng: &mut Rng| match rng.next_u64() % 10 {
-        0 => Vec3::ONE,
-        1 => Vec3::ZERO,
-        2 => Vec3::new(1.0, 0.5 * rng.f32(), 0.0),
-        _ => Vec3::new(rng.f32(), rng.f32(), rng.f32()),
-    };
-    let base_color = colour(rng);
-    let metallic = match rng.next_u64() % 10 {
-        0..=2 => 0.0,
-        3..=5 => 1.0,
-        _ => rng.f32(),
-    };
-    let roughness = match rng.next_u64() % 20 {
-        0..=2 => 0.0,          // α = 0 → ALPHA_MIN
-        3 => ALPHA_MIN.sqrt(), // α = ALPHA_MIN
-        4 => 1e-3,             // α = 1e-6 → ALPHA_MIN
-        5 => 1.0,              // α = 1
-        6 => 0.03 * rng.f32(), // α < 1e-3: sharp lobes
-        _ => rng.f32(),
-    };
-    let specular_factor = match rng.next_u64() % 5 {
-        0 => 0.0,
-        1 | 2 => 1.0,
-        _ => rng.f32(),
-    };
-    let specular_color = match rng.next_u64() % 10 {
-        0..=4 => Vec3::ONE,
-        5 => Vec3::splat(30.0), // 0.04·30 > 1: F0 saturates
-        _ => 2.0 * colour(rng),
-    };
-    MetallicRoughnessParams { base_color, metallic, roughness, specular_factor, specular_color }
 }
 
 /// A direction with cosine `z` and azimuth `phi` (f64, rounded once).
@@ -171,7 +125,21 @@ fn random_u(rng: &mut Rng) -> f32 {
     }
 }
 
+/// One group of records: a row of [`LOBES`] and one option combination.
+struct Group {
+    /// The row's index in [`LOBES`].
+    row: usize,
+    options: SpecularOptions,
+}
+
+impl Group {
+    fn name(&self) -> String {
+        format!("{} {}", LOBES[self.row].name, config_name(self.options))
+    }
+}
+
 struct Record {
+    group: usize,
     material: u32,
     wo: Vec3,
     wi: Vec3,
@@ -292,44 +260,52 @@ fn describe(
 fn eval_pdf_sample_match_furnace_brdf() {
     let Some(ctx) = test_context() else { return };
     eprintln!("adapter: {}", ctx.describe());
-    let configs = configs();
-    let mut rng = Rng(0x5eed_b5df);
-
-    // Materials: MATERIALS_PER_CONFIG per configuration, the Rust records built by BsdfParams::new.
+    // Per row: MATERIALS_PER_CONFIG materials per option combination (the Rust records built by
+    // BsdfParams::new), then the row's records, all from the row's generator.
+    let mut groups = Vec::new();
     let mut params = Vec::new();
     let mut records_gpu = Vec::new();
-    for &o in &configs {
-        for _ in 0..MATERIALS_PER_CONFIG {
-            let p = random_params(&mut rng);
-            records_gpu.push(BsdfParams::new(p, o));
-            params.push((p, o));
+    let total: usize =
+        LOBES.iter().map(|row| (row.parity.options)().len() * row.parity.records_per_option).sum();
+    let mut records = Vec::with_capacity(total);
+    let mut input = Vec::with_capacity(total * IN_WORDS);
+    for (r, row) in LOBES.iter().enumerate() {
+        let parity = &row.parity;
+        let mut rng = Rng(parity.seed);
+        let options = (parity.options)();
+        let (first_group, first_material) = (groups.len(), params.len());
+        for &o in &options {
+            groups.push(Group { row: r, options: o });
+            for _ in 0..MATERIALS_PER_CONFIG {
+                let p = (parity.params)(&mut rng);
+                records_gpu.push(BsdfParams::new(p, o));
+                params.push((p, o));
+            }
+        }
+        for c in 0..options.len() {
+            for _ in 0..parity.records_per_option {
+                let material = (first_material + c * MATERIALS_PER_CONFIG) as u32
+                    + (rng.next_u64() % MATERIALS_PER_CONFIG as u64) as u32;
+                let wo = dir(random_cos(&mut rng), TAU * rng.f64());
+                let wi = random_wi(&mut rng, wo, records_gpu[material as usize].alpha);
+                let rec = Record {
+                    group: first_group + c,
+                    material,
+                    wo,
+                    wi,
+                    uc: random_u(&mut rng),
+                    u: Vec2::new(random_u(&mut rng), random_u(&mut rng)),
+                };
+                input.push(material);
+                for x in [wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, rec.uc, rec.u.x, rec.u.y] {
+                    input.push(x.to_bits());
+                }
+                records.push(rec);
+            }
         }
     }
     let bsdfs: Vec<MetallicRoughness> = params.iter().map(|&(p, o)| MetallicRoughness::new(p, o)).collect();
-
-    let n = configs.len() * RECORDS_PER_CONFIG;
-    let mut records = Vec::with_capacity(n);
-    let mut input = Vec::with_capacity(n * IN_WORDS);
-    for c in 0..configs.len() {
-        for _ in 0..RECORDS_PER_CONFIG {
-            let material =
-                (c * MATERIALS_PER_CONFIG) as u32 + (rng.next_u64() % MATERIALS_PER_CONFIG as u64) as u32;
-            let wo = dir(random_cos(&mut rng), TAU * rng.f64());
-            let wi = random_wi(&mut rng, wo, records_gpu[material as usize].alpha);
-            let rec = Record {
-                material,
-                wo,
-                wi,
-                uc: random_u(&mut rng),
-                u: Vec2::new(random_u(&mut rng), random_u(&mut rng)),
-            };
-            input.push(material);
-            for x in [wo.x, wo.y, wo.z, wi.x, wi.y, wi.z, rec.uc, rec.u.x, rec.u.y] {
-                input.push(x.to_bits());
-            }
-            records.push(rec);
-        }
-    }
+    let n = records.len();
 
     let table = brdf::turquin_table();
     let t0 = std::time::Instant::now();
@@ -344,7 +320,7 @@ fn eval_pdf_sample_match_furnace_brdf() {
     .unwrap();
     eprintln!("GPU: {} records in {:.2?}", n, t0.elapsed());
 
-    check(&configs, &params, &bsdfs, &records, &out);
+    check(&groups, &params, &bsdfs, &records, &out);
 }
 
 /// One sampler step: `to_unit_f32` resolves `u` to 2⁻²⁴.
@@ -485,15 +461,15 @@ fn dir_err(a: Vec3, b: Vec3) -> f32 {
 }
 
 fn check(
-    configs: &[SpecularOptions],
+    groups: &[Group],
     params: &[(MetallicRoughnessParams, SpecularOptions)],
     bsdfs: &[MetallicRoughness],
     records: &[Record],
     out: &[u32],
 ) {
-    let mut stats = vec![ConfigStats::default(); configs.len()];
+    let mut stats = vec![ConfigStats::default(); groups.len()];
     for (k, rec) in records.iter().enumerate() {
-        let st = &mut stats[k / RECORDS_PER_CONFIG];
+        let st = &mut stats[rec.group];
         let bsdf = &bsdfs[rec.material as usize];
         let o = &out[k * OUT_WORDS..(k + 1) * OUT_WORDS];
 
@@ -523,7 +499,7 @@ fn check(
                 || grazes_within_rounding(rust.map(|s| s.wi), &g)
             {
                 st.validity_flips += 1;
-            } else if is_rim(configs[k / RECORDS_PER_CONFIG], rec) {
+            } else if is_rim(groups[rec.group].options, rec) {
                 st.rim += 1; // the direction rounding decides may be valid on one side only
             } else {
                 st.failures.push((k, "None on one side only, also one sampler step away".into()));
@@ -583,7 +559,7 @@ fn check(
         // unstretching by α ≤ 1e-3 magnifies it into a direction anywhere on the lobe's
         // silhouette. Where rounding alone decides the direction, the GPU's wi is not compared;
         // its pdf and weight still must match the Rust's at that wi.
-        let rim = is_rim(configs[k / RECORDS_PER_CONFIG], rec);
+        let rim = is_rim(groups[rec.group].options, rec);
         // At the pole (a reflection straight up): sin θ = √(1 − z²) of a z rounded to 1 or to
         // 1 − 2⁻²⁴ is 0 or 3.45e-4, so directions within POLE_DIR_TOL are the same sample.
         let pole = s.wi.z >= 1.0 - 1e-6 && wi_err <= POLE_DIR_TOL;
@@ -619,8 +595,8 @@ fn check(
         " pdf direct | ill-conditioned samples (edge u) | rim/pole | None/Some flips | lobe on boundary | failures |"
     );
     let _ = writeln!(table, "|---|{}---|---|---|---|---|---|", "---|".repeat(FUNCS.len()));
-    for (st, o) in stats.iter().zip(configs) {
-        let _ = write!(table, "| {} |", config_name(*o));
+    for (st, g) in stats.iter().zip(groups) {
+        let _ = write!(table, "| {} ({} records) |", g.name(), LOBES[g.row].parity.records_per_option);
         for f in &st.worst {
             let _ = write!(table, " {:.1e} |", f.err);
         }
@@ -637,8 +613,8 @@ fn check(
         );
     }
     eprintln!(
-        "max relative error per function, WGSL vs furnace-brdf, {RECORDS_PER_CONFIG} records per \
-         configuration (sample columns: over the well-conditioned samples; counts of the others):\n{table}"
+        "max relative error per function, WGSL vs furnace-brdf, per row and option combination \
+         (sample columns: over the well-conditioned samples; counts of the others):\n{table}"
     );
 
     let show = |k: usize| {
@@ -651,39 +627,43 @@ fn check(
             &out[k * OUT_WORDS..],
         )
     };
+    // Per row: its groups' failures and its counts against bounds from its own records.
     let mut failures = String::new();
-    let (mut ill, mut flips, mut boundary) = (0, 0, 0);
-    for (st, o) in stats.iter().zip(configs) {
-        ill += st.ill + st.rim;
-        flips += st.validity_flips;
-        boundary += st.boundary;
+    let mut counts = vec![(0usize, 0usize, 0usize, 0usize); LOBES.len()];
+    for (st, g) in stats.iter().zip(groups) {
+        let (n, ill, flips, boundary) = &mut counts[g.row];
+        *n += LOBES[g.row].parity.records_per_option;
+        *ill += st.ill + st.rim;
+        *flips += st.validity_flips;
+        *boundary += st.boundary;
         for (f, name) in FUNCS.iter().enumerate() {
             let w = &st.worst[f];
             if !(w.err <= REL_TOL) {
-                let _ = writeln!(
-                    failures,
-                    "{} {name}: error {:e}\n{}",
-                    config_name(*o),
-                    w.err,
-                    show(w.at.unwrap_or(0))
-                );
+                let _ =
+                    writeln!(failures, "{} {name}: error {:e}\n{}", g.name(), w.err, show(w.at.unwrap_or(0)));
             }
         }
         for (k, why) in st.failures.iter().take(3) {
-            let _ = writeln!(failures, "{} sample: {why}\n{}", config_name(*o), show(*k));
+            let _ = writeln!(failures, "{} sample: {why}\n{}", g.name(), show(*k));
         }
     }
-    let n = records.len();
-    // uc within 1e-6 of p: expected ~1e-7 of the samples (p differs by an ulp or so); allow 1e-5.
-    let boundary_bound = (n as f64 * 1e-5).ceil() as usize;
-    // Ill-conditioned samples and validity flips: edge u values (5% of each coordinate) and
-    // grazing reflections; allow 0.5% of the records each.
-    let ill_bound = n / 200;
-    assert!(
-        failures.is_empty() && boundary <= boundary_bound && ill <= ill_bound && flips <= ill_bound,
-        "WGSL BSDF differs from furnace-brdf (lobe flips on the boundary {boundary}, bound \
-         {boundary_bound}; ill-conditioned samples {ill}, None/Some flips {flips}, bound {ill_bound}):\n{failures}"
-    );
+    for (row, &(n, ill, flips, boundary)) in LOBES.iter().zip(&counts) {
+        // uc within 1e-6 of p: expected ~1e-7 of the samples (p differs by an ulp or so); allow
+        // 1e-5.
+        let boundary_bound = (n as f64 * 1e-5).ceil() as usize;
+        // Ill-conditioned samples and validity flips: edge u values (5% of each coordinate) and
+        // grazing reflections; allow 0.5% of the records each.
+        let ill_bound = n / 200;
+        if !(boundary <= boundary_bound && ill <= ill_bound && flips <= ill_bound) {
+            let _ = writeln!(
+                failures,
+                "{}: lobe flips on the boundary {boundary}, bound {boundary_bound}; ill-conditioned samples \
+                 {ill}, None/Some flips {flips}, bound {ill_bound} ({n} records)",
+                row.name
+            );
+        }
+    }
+    assert!(failures.is_empty(), "WGSL BSDF differs from furnace-brdf:\n{failures}");
 }
 
 /// The specular lobe's value with its Fresnel factor at its largest reflectance in every
@@ -771,7 +751,7 @@ fn constants_and_bindings_match_rust() {
         .collect();
     assert_eq!(weights, furnace_sampling::LUMINANCE.map(f32::to_bits));
     // The flags encode every option distinctly.
-    let flags: std::collections::HashSet<u32> = configs().into_iter().map(brdf::options_flags).collect();
+    let flags: std::collections::HashSet<u32> = all_options().into_iter().map(brdf::options_flags).collect();
     assert_eq!(flags.len(), 12);
     // The module declares no bindings: the only global is the table the composing shader adds.
     let globals: Vec<_> = module.global_variables.iter().filter_map(|(_, g)| g.name.clone()).collect();
@@ -795,10 +775,10 @@ fn wgsl_constructor_matches_rust() {
     let Some(ctx) = test_context() else { return };
     let mut rng = Rng(0xc0ff_ee00);
     let odd = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY, -0.5, -0.0, 1.5, 1e30, f32::MAX, 0.0, 1.0];
-    let configs = configs();
+    let configs = all_options();
     let mut cases = Vec::new();
     for k in 0..100_000 {
-        let mut p = random_params(&mut rng);
+        let mut p = gltf_params(&mut rng);
         if k % 4 == 0 {
             // One odd value in one field.
             let x = rng.pick(&odd);

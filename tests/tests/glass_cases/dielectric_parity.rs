@@ -75,6 +75,7 @@ use furnace_gpu::brdf;
 use furnace_gpu::wgsl;
 use furnace_tests::Rng;
 use furnace_tests::gpu::{self as kernel, test_context};
+use furnace_tests::lobes::all_options;
 use glam::{DVec3, Vec2, Vec3};
 
 /// Relative tolerance of every floating-point comparison (as `brdf_parity`). Both sides evaluate
@@ -374,8 +375,8 @@ fn random_tint(rng: &mut Rng) -> Vec3 {
     }
 }
 
-/// Opaque metallic-roughness parameters with the edges (as `brdf_parity`): metallic 0/1,
-/// roughness 0, √ALPHA_MIN, 1, specular factor 0/1, saturating specular colours.
+/// Opaque metallic-roughness parameters with the edges (as `furnace_tests::lobes::gltf_params`):
+/// metallic 0/1, roughness 0, √ALPHA_MIN, 1, specular factor 0/1, saturating specular colours.
 fn random_params(rng: &mut Rng) -> MetallicRoughnessParams {
     let colour = |rng: &mut Rng| match rng.below(10) {
         0 => Vec3::ONE,
@@ -405,19 +406,6 @@ fn random_params(rng: &mut Rng) -> MetallicRoughnessParams {
         _ => 2.0 * colour(rng),
     };
     MetallicRoughnessParams { base_color, metallic, roughness, specular_factor, specular_color }
-}
-
-/// All 12 `SpecularOptions` combinations.
-fn all_options() -> Vec<SpecularOptions> {
-    let mut v = Vec::new();
-    for masking in [Masking::Separable, Masking::HeightCorrelated] {
-        for sampling in [SpecularSampling::Ndf, SpecularSampling::Vndf, SpecularSampling::SphericalCaps] {
-            for compensation in [false, true] {
-                v.push(SpecularOptions { masking, sampling, compensation });
-            }
-        }
-    }
-    v
 }
 
 /// The Fresnel grid's cosines for `eta`: a uniform grid of [−1, 1], the edges (also beyond ±1),
