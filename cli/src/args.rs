@@ -4,7 +4,7 @@
 mod chart;
 mod settings;
 
-pub use chart::{ChartArgs, ChartBackend, ChartTime, Threshold};
+pub use chart::{ChartArgs, ChartBackend, ChartTime};
 pub use settings::{Bench, Render, SettingsArgs, choice};
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
