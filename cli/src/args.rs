@@ -4,7 +4,7 @@
 mod chart;
 mod settings;
 
-pub use chart::{ChartArgs, ChartBackend, ChartTime, Threshold};
+pub use chart::{ChartArgs, ChartBackend, ChartTime};
 pub use settings::{Bench, Render, SettingsArgs, choice};
 
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
@@ -39,7 +39,8 @@ pub enum Command {
     /// (Ctrl+S: what `render` writes, resumable with `render --resume`). Takes render's options;
     /// without --spp it accumulates until closed. Press ? in the window for the controls.
     View(ViewArgs),
-    /// Print a scene's triangles, materials, textures, lights, camera and loader warnings.
+    /// Print a scene's triangles, materials, textures, lights, camera and loader warnings, and
+    /// the render settings that render's settings flags (given here too) make.
     Info(InfoArgs),
     /// Score a candidate EXR against a reference EXR (furnace_post::metrics): RMSE,
     /// relative MSE, per-channel mean ratio and, with --stderr, per-pixel z-score statistics.
@@ -317,6 +318,10 @@ pub struct ViewArgs {
 pub struct InfoArgs {
     /// The .gltf or .glb scene.
     pub scene: PathBuf,
+    // The render settings' flags, as `furnace render` takes them: the settings they make are
+    // printed after the scene.
+    #[command(flatten)]
+    pub settings: SettingsArgs<Render>,
 }
 
 /// `furnace compare`.

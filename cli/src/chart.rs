@@ -28,6 +28,7 @@
 //!   saved). Different settings are refused. Ctrl-C finishes the current pass, saves the data
 //!   and charts, and exits with code 130.
 
+mod axes;
 mod data;
 mod figures;
 mod measure;

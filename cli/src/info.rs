@@ -1,13 +1,39 @@
-//! `furnace info`: what a scene holds, as the loader sees it.
+//! `furnace info`: what a scene holds, as the loader sees it, and the render settings that the
+//! settings flags make (one line per row of `furnace_render::fields::FIELDS`).
 
 use crate::args::InfoArgs;
+use furnace_render::RenderSettings;
+use furnace_render::fields::FIELDS;
 use furnace_scene::{Camera, Projection, Scene};
 use glam::Vec3;
 
 pub fn run(a: &InfoArgs) -> Result<(), String> {
+    let settings = &a.settings.settings;
+    // Refused as `furnace render` refuses it.
+    if a.settings.given("env-sampling") {
+        crate::env::check_sampling(settings.env_sampling, settings.light_sampling)?;
+    }
     let scene = Scene::load(&a.scene).map_err(|e| e.to_string())?;
     print!("{}", describe(&scene));
+    print!("{}", describe_settings(settings));
     Ok(())
+}
+
+/// The render settings, one line per field: its flag and its value as the flag takes it
+/// (`not set` for an option that is off), marked `(default)` where it is the command line's
+/// default or the value of [`RenderSettings::default`] (an option not set).
+fn describe_settings(settings: &RenderSettings) -> String {
+    let defaults = RenderSettings::default();
+    let mut out =
+        String::from("settings        as `furnace render` takes them (the flags given, else the defaults)\n");
+    for f in FIELDS {
+        let value = (f.get)(settings);
+        let default = value.as_deref() == f.default || value == (f.get)(&defaults);
+        let flag = format!("--{}", f.flag);
+        let value = value.unwrap_or_else(|| "not set".into());
+        out.push_str(&format!("  {flag:<21}{value}{}\n", if default { " (default)" } else { "" }));
+    }
+    out
 }
 
 fn v3(v: Vec3) -> String {
@@ -135,6 +161,25 @@ mod tests {
             ),
             "{text}"
         );
+    }
+
+    /// A line per field, in the table's order, with its flag and value; `(default)` on those
+    /// left at the command line's default.
+    #[test]
+    fn describes_every_setting_from_the_table() {
+        let mut settings = RenderSettings { bounces: 7, clamp: Some(2.5), ..RenderSettings::default() };
+        settings.light_sampling = furnace_render::LightSampling::Nee;
+        let text = describe_settings(&settings);
+        let lines: Vec<&str> = text.lines().skip(1).collect();
+        assert_eq!(lines.len(), FIELDS.len(), "{text}");
+        for (line, f) in lines.iter().zip(FIELDS) {
+            assert!(line.starts_with(&format!("  --{} ", f.flag)), "{line}");
+        }
+        assert!(text.contains("  --bounces            7\n"), "{text}");
+        assert!(text.contains("  --sampler            sobol (default)\n"), "{text}");
+        assert!(text.contains("  --light-sampling     nee\n"), "{text}");
+        assert!(text.contains("  --clamp              2.5\n"), "{text}");
+        assert!(text.contains("  --noise-threshold    not set (default)\n"), "{text}");
     }
 
     #[test]

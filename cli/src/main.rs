@@ -15,7 +15,8 @@
 //!   converges, in a window (`furnace_view`): camera controls, a settings panel, a HUD; Ctrl+S
 //!   saves what `render` writes (`view.rs`).
 //! * `furnace info SCENE` prints a scene's sizes, lights, cameras (with their `--camera` index)
-//!   and loader warnings.
+//!   and loader warnings, then the render settings that render's settings flags (taken too)
+//!   make, a line per field of `furnace_render::fields::FIELDS`.
 //! * `furnace render --samples A..B` renders one part of a split render (global sample indices
 //!   A…B−1); `furnace merge PARTS… -o OUT` checks that the parts are of one render and disjoint,
 //!   lists missing samples, and adds their films into the single run's (`merge.rs`).

@@ -195,6 +195,39 @@ fn info_on_the_cornell_box_file() {
     assert!(text.contains("sun") && text.contains("W/m²"), "{text}");
 }
 
+/// `furnace info` takes render's settings flags and prints the settings they make after the
+/// scene: a line per field of the table, those not given marked as defaults; a value render
+/// refuses is refused.
+#[test]
+fn info_prints_the_settings_the_flags_make() {
+    let scene = data("Box/glTF-Binary/Box.glb");
+    let o =
+        furnace(&["info", &scene, "--bounces", "7", "--light-sampling", "nee", "--noise-threshold", "0.05"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let settings: Vec<&str> = text.lines().filter(|l| l.starts_with("  --")).collect();
+    assert_eq!(settings.len(), furnace_render::fields::FIELDS.len(), "{text}");
+    for line in [
+        "  --bounces            7",
+        "  --light-sampling     nee",
+        "  --noise-threshold    0.05",
+        "  --min-spp            16 (default)",
+        "  --sampler            sobol (default)",
+        "  --clamp              not set (default)",
+    ] {
+        assert!(settings.contains(&line), "{line}: {text}");
+    }
+    assert!(text.contains("triangles       12"), "the scene comes first: {text}");
+    for (args, needle) in [
+        (&["--bounces", "1025"][..], "at most 1024 scattering events"),
+        (&["--env-sampling", "compensated", "--light-sampling", "nee"][..], "needs --light-sampling mis"),
+    ] {
+        let o = furnace(&[&["info", scene.as_str()][..], args].concat());
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(stderr(&o).contains(needle), "{args:?}: {}", stderr(&o));
+    }
+}
+
 #[test]
 fn bad_flag_values_fail_clearly() {
     for (args, needle) in [

@@ -1,9 +1,13 @@
 //! The one description of [`RenderSettings`]' user-facing fields ([`FIELDS`]): for each, its
 //! name in messages, its command-line flag and help, its EXR attribute, how it is parsed and
 //! printed, what a record without it means, and whether it decides the film (the resume
-//! identity). The command line's flags, the EXR record, the resume identity and restore, the
-//! viewer's `set` and the chart's columns are all derived from this table, so a new setting is
-//! one row here (and its field in [`RenderSettings`]).
+//! identity). Derived from this table: the command line's settings flags (of `render`, `view`,
+//! `info` and, for the fields marked `bench`, `bench`), the EXR record, the resume identity and
+//! restore, `furnace info`'s lines of settings, the viewer's `set NAME VALUE` and the widgets of
+//! its panel for the fields that take named values, and the spelling, checks and keys of
+//! `furnace chart`'s axes that are settings. So a new setting is one row here (and its field in
+//! [`RenderSettings`]); making it an axis of `furnace chart` is a row of the chart's own list of
+//! axes (and its flag there, which takes a list of values).
 //!
 //! The image size is not in the table: its flags default from the camera and its record is the
 //! image itself. Neither is the sample count of the fixed-N samplers, which is the render's

@@ -1,9 +1,9 @@
 //! The panels: the HUD, the settings, the help; and `set NAME VALUE`, the settings by name.
 
 use crate::app::HudState;
-use furnace_brdf::{Masking, SpecularSampling};
 use furnace_post::Tonemap;
-use furnace_render::{Choice, EnvSampling, LightSampling, LightSelection, RenderSettings, TriangleSampling};
+use furnace_render::RenderSettings;
+use furnace_render::fields::{self, FIELDS, Field};
 use furnace_sampling::SamplerKind;
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
@@ -86,57 +86,26 @@ impl Hud {
     }
 }
 
-const SAMPLERS: [SamplerKind; 5] = SamplerKind::ALL;
-/// The panel's order of the masking functions (the default first).
-const MASKINGS: [Masking; 2] = [Masking::HeightCorrelated, Masking::Separable];
-/// The panel's order of the GGX sampling methods (the default first).
-const SPECULAR_SAMPLINGS: [SpecularSampling; 3] =
-    [SpecularSampling::SphericalCaps, SpecularSampling::Vndf, SpecularSampling::Ndf];
+/// The names `set` takes besides the render settings' flags (`furnace_render::fields::FIELDS`):
+/// the display's, the environment's intensity, the target and the pause.
+pub(crate) const VIEWER_SETTINGS: [&str; 5] = ["exposure", "tonemap", "env-intensity", "spp", "pause"];
 
-/// Sets control `name` to `value` (the script's `set`, with the command line's spellings).
+/// Sets control `name` to `value` (the script's `set`, with the command line's spellings): a
+/// render setting by its flag, through its row of `furnace_render::fields::FIELDS`, or one of
+/// [`VIEWER_SETTINGS`].
 ///
 /// # Errors
 /// An unknown name or a value out of range, saying what is accepted.
 pub(crate) fn set(c: &mut Controls, name: &str, value: &str) -> Result<(), String> {
-    let on_off = |v: &str| match v {
-        "on" | "true" | "1" => Ok(true),
-        "off" | "false" | "0" => Ok(false),
-        _ => Err(format!("{name}: '{v}' is not on or off")),
-    };
     let number = |v: &str| {
         v.parse::<f32>()
             .ok()
             .filter(|x| x.is_finite())
             .ok_or_else(|| format!("{name}: '{v}' is not a number"))
     };
-    let s = &mut c.settings;
     match name {
         "exposure" => c.exposure = number(value)?.clamp(-20.0, 20.0),
         "tonemap" => c.tonemap = value.parse().map_err(|e: furnace_post::PostError| e.to_string())?,
-        "bounces" => {
-            s.bounces = value.parse().ok().filter(|&b| b <= furnace_render::MAX_BOUNCES).ok_or_else(|| {
-                format!("bounces: '{value}' is not a whole number from 0 to {}", furnace_render::MAX_BOUNCES)
-            })?
-        }
-        "seed" => s.seed = value.parse().map_err(|_| format!("seed: '{value}' is not a whole number"))?,
-        "sampler" => {
-            let k: SamplerKind = value.parse().map_err(|e: furnace_sampling::SamplerError| e.to_string())?;
-            set_sampler(c, k)?;
-        }
-        "masking" => {
-            s.specular.masking = Masking::from_name(value)
-                .ok_or_else(|| format!("masking: '{value}' (height-correlated or separable)"))?;
-        }
-        "compensation" => s.specular.compensation = on_off(value)?,
-        "specular-sampling" => {
-            s.specular.sampling = SpecularSampling::from_name(value)
-                .ok_or_else(|| format!("specular-sampling: '{value}' (caps, vndf or ndf)"))?;
-        }
-        "russian-roulette" => s.russian_roulette = on_off(value)?,
-        "light-sampling" => s.light_sampling = value.parse::<LightSampling>()?,
-        "triangle-sampling" => s.triangle_sampling = value.parse::<TriangleSampling>()?,
-        "light-selection" => s.light_selection = value.parse::<LightSelection>()?,
-        "env-sampling" => s.env_sampling = value.parse::<EnvSampling>()?,
         "env-intensity" => {
             let v = number(value)?;
             if c.env_intensity.is_none() {
@@ -147,30 +116,50 @@ pub(crate) fn set(c: &mut Controls, name: &str, value: &str) -> Result<(), Strin
             }
             c.env_intensity = Some(v);
         }
-        "spp" => {
-            c.target_spp = match value {
-                "none" | "inf" => None,
-                v => Some(
-                    v.parse::<u32>()
-                        .ok()
-                        .filter(|n| *n > 0)
-                        .ok_or_else(|| format!("spp: '{v}' (a positive whole number or none)"))?,
-                ),
-            };
-            if s.sampler.needs_sample_count() {
-                s.sample_count = c.target_spp;
-                if c.target_spp.is_none() {
-                    return Err(format!("spp: the {} sampler needs a sample count", s.sampler));
-                }
+        "spp" => set_target(c, value)?,
+        "pause" => {
+            c.paused = match value {
+                "on" | "true" | "1" => true,
+                "off" | "false" | "0" => false,
+                _ => return Err(format!("pause: '{value}' is not on or off")),
             }
         }
-        "pause" => c.paused = on_off(value)?,
         _ => {
-            return Err(format!(
-                "unknown setting '{name}' (exposure, tonemap, bounces, seed, sampler, masking, compensation, \
-                 specular-sampling, russian-roulette, light-sampling, triangle-sampling, light-selection, \
-                 env-sampling, env-intensity, spp, pause)"
-            ));
+            let Some(f) = fields::field(name) else {
+                let names: Vec<&str> =
+                    VIEWER_SETTINGS.iter().copied().chain(FIELDS.iter().map(|f| f.flag)).collect();
+                return Err(format!("unknown setting '{name}' ({})", names.join(", ")));
+            };
+            // Parsed and checked by the field, on a copy: the sampler is then chosen by the
+            // viewer's rule (the fixed-N ones take the target as N).
+            let mut s = c.settings;
+            (f.set)(&mut s, value).map_err(|e| format!("{name}: {e}"))?;
+            if name == "sampler" {
+                set_sampler(c, s.sampler)?;
+            } else {
+                c.settings = s;
+            }
+        }
+    }
+    Ok(())
+}
+
+/// `set spp N|none`: the target, which is also N of a fixed-N sampler.
+fn set_target(c: &mut Controls, value: &str) -> Result<(), String> {
+    c.target_spp = match value {
+        "none" | "inf" => None,
+        v => Some(
+            v.parse::<u32>()
+                .ok()
+                .filter(|n| *n > 0)
+                .ok_or_else(|| format!("spp: '{v}' (a positive whole number or none)"))?,
+        ),
+    };
+    let s = &mut c.settings;
+    if s.sampler.needs_sample_count() {
+        s.sample_count = c.target_spp;
+        if c.target_spp.is_none() {
+            return Err(format!("spp: the {} sampler needs a sample count", s.sampler));
         }
     }
     Ok(())
@@ -223,22 +212,49 @@ pub(crate) fn draw(
     actions: &mut Vec<Action>,
 ) {
     if c.show_help {
-        egui::Window::new("Help").collapsible(false).anchor(egui::Align2::CENTER_CENTER, [0.0, 0.0]).show(
-            ctx,
-            |ui| {
-                egui::Grid::new("help").striped(true).show(ui, |ui| {
-                    for (k, what) in HELP {
-                        ui.monospace(*k);
-                        ui.label(*what);
-                        ui.end_row();
-                    }
-                });
-            },
-        );
+        draw_help(ctx);
     }
     if !c.show_ui {
         return;
     }
+    draw_status(ctx, c, hud, state);
+    egui::Window::new("settings").anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0]).default_open(false).show(
+        ctx,
+        |ui| {
+            ui.heading("display");
+            ui.add(egui::Slider::new(&mut c.exposure, -10.0..=10.0).text("exposure (EV)"));
+            egui::ComboBox::from_label("tone map").selected_text(c.tonemap.name()).show_ui(ui, |ui| {
+                for t in Tonemap::ALL {
+                    ui.selectable_value(&mut c.tonemap, t, t.name());
+                }
+            });
+            ui.separator();
+            ui.heading("render (restarts)");
+            render_settings(ui, c);
+            ui.separator();
+            accumulation(ui, c, state, actions);
+        },
+    );
+}
+
+/// The help window: the input of each action.
+fn draw_help(ctx: &egui::Context) {
+    egui::Window::new("Help").collapsible(false).anchor(egui::Align2::CENTER_CENTER, [0.0, 0.0]).show(
+        ctx,
+        |ui| {
+            egui::Grid::new("help").striped(true).show(ui, |ui| {
+                for (k, what) in HELP {
+                    ui.monospace(*k);
+                    ui.label(*what);
+                    ui.end_row();
+                }
+            });
+        },
+    );
+}
+
+/// The HUD: samples, speed, frame and render time, noise, film size and adapter, message.
+fn draw_status(ctx: &egui::Context, c: &Controls, hud: &Hud, state: &HudState) {
     egui::Window::new("furnace")
         .anchor(egui::Align2::LEFT_TOP, [8.0, 8.0])
         .resizable(false)
@@ -268,121 +284,106 @@ pub(crate) fn draw(
                 ui.label(&hud.message);
             }
         });
-    egui::Window::new("settings").anchor(egui::Align2::RIGHT_TOP, [-8.0, 8.0]).default_open(false).show(
-        ctx,
-        |ui| {
-            ui.heading("display");
-            ui.add(egui::Slider::new(&mut c.exposure, -10.0..=10.0).text("exposure (EV)"));
-            egui::ComboBox::from_label("tone map").selected_text(c.tonemap.name()).show_ui(ui, |ui| {
-                for t in Tonemap::ALL {
-                    ui.selectable_value(&mut c.tonemap, t, t.name());
-                }
-            });
-            ui.separator();
-            ui.heading("render (restarts)");
-            let s = &mut c.settings;
-            ui.add(egui::Slider::new(&mut s.bounces, 0..=32).text("bounces"));
-            let mut sampler = s.sampler;
-            egui::ComboBox::from_label("sampler").selected_text(sampler.to_string()).show_ui(ui, |ui| {
-                for k in SAMPLERS {
-                    let enabled = !k.needs_sample_count() || c.target_spp.is_some();
-                    ui.add_enabled_ui(enabled, |ui| ui.selectable_value(&mut sampler, k, k.to_string()));
-                }
-            });
-            if sampler != c.settings.sampler {
-                let _ = set_sampler(c, sampler);
+}
+
+/// The panel's most bounces: fewer than the command line's, so that the slider stays usable
+/// (`set bounces N` takes up to [`furnace_render::MAX_BOUNCES`]).
+const PANEL_MAX_BOUNCES: u32 = 32;
+
+/// The render settings: the bounces, the sampler (the fixed-N ones only with a target), a
+/// widget for every choice of `FIELDS` (a checkbox for an on/off switch, else a combo box;
+/// the environment sampling only when the scene has an environment map), and the
+/// environment's intensity.
+fn render_settings(ui: &mut egui::Ui, c: &mut Controls) {
+    ui.add(egui::Slider::new(&mut c.settings.bounces, 0..=PANEL_MAX_BOUNCES).text("bounces"));
+    sampler_choice(ui, c);
+    for f in FIELDS.iter().filter(|f| f.flag != "sampler") {
+        if f.flag == "env-sampling" && c.env_intensity.is_none() {
+            continue;
+        }
+        choice_widget(ui, &mut c.settings, f);
+    }
+    if let Some(i) = &mut c.env_intensity {
+        ui.add(egui::Slider::new(i, 0.0..=100.0).logarithmic(true).text("env intensity"));
+    }
+}
+
+/// The sampler's combo box: the fixed-N samplers are offered only with a target (their N).
+fn sampler_choice(ui: &mut egui::Ui, c: &mut Controls) {
+    let mut sampler = c.settings.sampler;
+    egui::ComboBox::from_label("sampler").selected_text(sampler.to_string()).show_ui(ui, |ui| {
+        for k in SamplerKind::ALL {
+            let enabled = !k.needs_sample_count() || c.target_spp.is_some();
+            ui.add_enabled_ui(enabled, |ui| ui.selectable_value(&mut sampler, k, k.to_string()));
+        }
+    });
+    if sampler != c.settings.sampler {
+        let _ = set_sampler(c, sampler);
+    }
+}
+
+/// The widget of field `f` if it takes named values (nothing for a number): labelled by its
+/// name, showing its value (`get`) and setting the one chosen (`set`).
+fn choice_widget(ui: &mut egui::Ui, settings: &mut RenderSettings, f: &Field) {
+    let choices = (f.choices)();
+    if choices.is_empty() {
+        return;
+    }
+    let current = (f.get)(settings).unwrap_or_default();
+    let mut chosen = current.clone();
+    if choices == furnace_render::on_off() {
+        let mut on = current == "on";
+        ui.checkbox(&mut on, f.name).on_hover_text(f.help);
+        chosen = furnace_render::on_off_name(on).to_string();
+    } else {
+        egui::ComboBox::from_label(f.name).selected_text(current.as_str()).show_ui(ui, |ui| {
+            for (name, help) in choices {
+                ui.selectable_value(&mut chosen, name.to_string(), name).on_hover_text(help);
             }
-            let s = &mut c.settings;
-            egui::ComboBox::from_label("masking").selected_text(s.specular.masking.name()).show_ui(
-                ui,
-                |ui| {
-                    for m in MASKINGS {
-                        ui.selectable_value(&mut s.specular.masking, m, m.name());
-                    }
-                },
-            );
-            egui::ComboBox::from_label("GGX sampling").selected_text(s.specular.sampling.name()).show_ui(
-                ui,
-                |ui| {
-                    for m in SPECULAR_SAMPLINGS {
-                        ui.selectable_value(&mut s.specular.sampling, m, m.name());
-                    }
-                },
-            );
-            ui.checkbox(&mut s.specular.compensation, "energy compensation");
-            ui.checkbox(&mut s.russian_roulette, "Russian roulette");
-            egui::ComboBox::from_label("light sampling").selected_text(s.light_sampling.to_string()).show_ui(
-                ui,
-                |ui| {
-                    for k in LightSampling::ALL {
-                        ui.selectable_value(&mut s.light_sampling, k, k.to_string());
-                    }
-                },
-            );
-            egui::ComboBox::from_label("light selection")
-                .selected_text(s.light_selection.to_string())
-                .show_ui(ui, |ui| {
-                    for k in LightSelection::ALL {
-                        ui.selectable_value(&mut s.light_selection, k, k.to_string());
-                    }
-                });
-            egui::ComboBox::from_label("triangle sampling")
-                .selected_text(s.triangle_sampling.to_string())
-                .show_ui(ui, |ui| {
-                    for k in TriangleSampling::ALL {
-                        ui.selectable_value(&mut s.triangle_sampling, k, k.to_string());
-                    }
-                });
-            if let Some(i) = &mut c.env_intensity {
-                egui::ComboBox::from_label("env sampling").selected_text(s.env_sampling.to_string()).show_ui(
-                    ui,
-                    |ui| {
-                        for k in EnvSampling::ALL {
-                            ui.selectable_value(&mut s.env_sampling, k, k.to_string());
-                        }
-                    },
-                );
-                ui.add(egui::Slider::new(i, 0.0..=100.0).logarithmic(true).text("env intensity"));
+        });
+    }
+    if chosen != current {
+        // A value of the field's own list: its `set` takes it.
+        let _ = (f.set)(settings, &chosen);
+    }
+}
+
+/// The target, the pause and the buttons.
+fn accumulation(ui: &mut egui::Ui, c: &mut Controls, state: &HudState, actions: &mut Vec<Action>) {
+    ui.horizontal(|ui| {
+        let mut unlimited = c.target_spp.is_none();
+        if ui.checkbox(&mut unlimited, "no spp target").changed() && !c.settings.sampler.needs_sample_count()
+        {
+            c.target_spp = if unlimited { None } else { Some(state.spp.max(1024)) };
+        }
+        if let Some(t) = &mut c.target_spp
+            && !c.settings.sampler.needs_sample_count()
+        {
+            ui.add(egui::DragValue::new(t).range(1..=1 << 24).suffix(" spp"));
+        }
+    });
+    ui.checkbox(&mut c.paused, "paused");
+    ui.horizontal(|ui| {
+        let buttons = [
+            ("save", Action::Save(None)),
+            ("restart", Action::Reset),
+            ("scene camera", Action::ResetCamera),
+            ("print camera", Action::PrintCamera),
+            ("help", Action::ToggleHelp),
+        ];
+        for (label, action) in buttons {
+            if ui.button(label).clicked() {
+                actions.push(action);
             }
-            ui.separator();
-            ui.horizontal(|ui| {
-                let mut unlimited = c.target_spp.is_none();
-                if ui.checkbox(&mut unlimited, "no spp target").changed()
-                    && !c.settings.sampler.needs_sample_count()
-                {
-                    c.target_spp = if unlimited { None } else { Some(state.spp.max(1024)) };
-                }
-                if let Some(t) = &mut c.target_spp
-                    && !c.settings.sampler.needs_sample_count()
-                {
-                    ui.add(egui::DragValue::new(t).range(1..=1 << 24).suffix(" spp"));
-                }
-            });
-            ui.checkbox(&mut c.paused, "paused");
-            ui.horizontal(|ui| {
-                if ui.button("save").clicked() {
-                    actions.push(Action::Save(None));
-                }
-                if ui.button("restart").clicked() {
-                    actions.push(Action::Reset);
-                }
-                if ui.button("scene camera").clicked() {
-                    actions.push(Action::ResetCamera);
-                }
-                if ui.button("print camera").clicked() {
-                    actions.push(Action::PrintCamera);
-                }
-                if ui.button("help").clicked() {
-                    actions.push(Action::ToggleHelp);
-                }
-            });
-        },
-    );
+        }
+    });
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use furnace_brdf::Masking;
+    use furnace_render::LightSampling;
 
     fn controls() -> Controls {
         Controls {
@@ -402,7 +403,7 @@ mod tests {
         let mut c = controls();
         set(&mut c, "exposure", "1.5").unwrap();
         set(&mut c, "tonemap", "pbr-neutral").unwrap();
-        assert!(set(&mut c, "bounces", "1025").unwrap_err().contains("0 to 1024"));
+        assert!(set(&mut c, "bounces", "1025").unwrap_err().contains("at most 1024"));
         set(&mut c, "bounces", "2").unwrap();
         set(&mut c, "masking", "separable").unwrap();
         set(&mut c, "compensation", "off").unwrap();
@@ -429,10 +430,40 @@ mod tests {
     #[test]
     fn bad_settings_say_what_is_accepted() {
         let mut c = controls();
-        assert!(set(&mut c, "bounce", "2").unwrap_err().contains("unknown setting 'bounce'"));
+        let e = set(&mut c, "bounce", "2").unwrap_err();
+        assert!(
+            e.contains("unknown setting 'bounce'") && e.contains("light-sampling, triangle-sampling"),
+            "{e}"
+        );
+        assert!(set(&mut c, "bounces", "x").unwrap_err().starts_with("bounces: 'x' is not a whole number"));
         assert!(set(&mut c, "compensation", "maybe").unwrap_err().contains("not on or off"));
         assert!(set(&mut c, "env-intensity", "-1").unwrap_err().contains("negative"));
         c.env_intensity = None;
         assert!(set(&mut c, "env-intensity", "1").unwrap_err().contains("no environment map"));
+    }
+
+    /// Every render setting's flag is a name of `set`, taking the command line's default; the
+    /// optional ones (no default: the clamp, the noise threshold) a number. Each sets what the
+    /// field itself sets, and every name the unknown-setting error lists is taken.
+    #[test]
+    fn set_takes_every_field_of_the_table() {
+        for f in FIELDS {
+            let value = f.default.unwrap_or("0.5");
+            let mut c = controls();
+            set(&mut c, f.flag, value).unwrap_or_else(|e| panic!("set {} {value}: {e}", f.flag));
+            let mut expected = RenderSettings::default();
+            (f.set)(&mut expected, value).unwrap();
+            assert_eq!(c.settings, expected, "{}", f.flag);
+        }
+        let e = set(&mut controls(), "no-such-setting", "1").unwrap_err();
+        let listed = e.split_once('(').unwrap().1.trim_end_matches(')');
+        for name in listed.split(", ") {
+            let value = match name {
+                "tonemap" => "aces",
+                n => fields::field(n).and_then(|f| f.default).unwrap_or("1"),
+            };
+            set(&mut controls(), name, value).unwrap_or_else(|e| panic!("set {name} {value}: {e}"));
+        }
+        assert_eq!(listed.split(", ").count(), VIEWER_SETTINGS.len() + FIELDS.len());
     }
 }

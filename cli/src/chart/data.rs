@@ -1,6 +1,8 @@
 //! The study's data: rows (one per configuration × checkpoint), the least-squares slope, the
-//! CSV and JSON files, and the `--external` CSV of peer series.
+//! CSV and JSON files, and the `--external` CSV of peer series. A row's configuration is its
+//! values of the study's axes (`axes::AXES`), which give its keys and columns.
 
+use super::axes::{self, AXES};
 use serde_json::{Value, json};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -9,26 +11,11 @@ use std::path::Path;
 #[derive(Debug, Clone, PartialEq)]
 pub struct Row {
     /// The configuration's name (`sobol/caps/mis/solid-angle/bvh/comp-off/cpu`, see
-    /// [`config_name`]).
+    /// `axes::name`).
     pub config: String,
-    /// Sampler name.
-    pub sampler: String,
-    /// BRDF sampling method (`ndf`, `vndf`, `caps`).
-    pub sampling: String,
-    /// Light sampling (`bsdf`, `nee`, `mis`).
-    pub light_sampling: String,
-    /// How a light sample picks its point on an emissive triangle (`solid-angle`, `area`).
-    pub triangle_sampling: String,
-    /// How a light sample chooses the emissive triangle (`bvh`, `power`).
-    pub light_selection: String,
-    /// How light samples gather the environment map (`off`, `importance`, `compensated`).
-    pub env_sampling: String,
-    /// How the point and spot lights are gathered (`auto`, `all`, `one`).
-    pub point_lights: String,
-    /// Energy compensation (`on`, `off`).
-    pub compensation: String,
-    /// Backend (`cpu`, `gpu`).
-    pub backend: String,
+    /// The configuration's value of each axis (sampler, GGX sampling, light sampling, …,
+    /// backend, denoising), in the order of `axes::AXES`, as the command line spells them.
+    pub axes: Vec<String>,
     /// Samples per pixel.
     pub spp: u32,
     /// Wall time of the render passes that produced this image (seconds).
@@ -44,127 +31,99 @@ pub struct Row {
     /// Whether the reference was rendered with this configuration's model (masking,
     /// compensation); `false`: the error has a bias floor that is not the method's.
     pub reference_matches: bool,
-    /// Adaptive sampling's noise threshold (`off`, or the number).
-    pub noise_threshold: String,
-    /// Whether the image was denoised (`on`, `off`).
-    pub denoise: String,
     /// Samples per pixel actually taken, on average (below `spp` under adaptive sampling).
     pub mean_spp: f64,
 }
 
-/// The light sampling of a row saved before the light-sampling axis existed: every
-/// configuration then rendered with the renderer's default, MIS.
-pub const OLD_LIGHT_SAMPLING: &str = "mis";
-
-/// The triangle sampling of a row saved before the triangle-sampling axis existed: light
-/// samples then picked their point on an emissive triangle by area.
-pub const OLD_TRIANGLE_SAMPLING: &str = "area";
-
-/// The light selection of a row saved before the light-selection axis existed: light samples
-/// then chose their emissive triangle in proportion to power.
-pub const OLD_LIGHT_SELECTION: &str = "power";
-
-/// The environment sampling of a row saved before the environment-sampling axis existed: no
-/// scene had an environment map then, so the method changed nothing; such rows are read as
-/// today's default for their light sampling ([`default_env_sampling`]), whose name has no part
-/// of its own. (The study-level record of such studies: this.)
-pub const OLD_ENV_SAMPLING: &str = "compensated";
+impl Row {
+    /// Its value of the axis of key `key` (`light_sampling`).
+    pub fn axis(&self, key: &str) -> &str {
+        &self.axes[index(key)]
+    }
+}
 
 /// The environment sampling a render uses by default with `light_sampling`: compensated, or
-/// importance under `nee` (compensation needs MIS).
+/// importance under `nee` (compensation needs MIS). A configuration's name leaves it out.
 pub fn default_env_sampling(light_sampling: &str) -> &'static str {
     if light_sampling == "nee" { "importance" } else { "compensated" }
 }
 
-/// A configuration's name from its axes' CLI names: `sobol/caps/mis/solid-angle/bvh/comp-off/cpu`
-/// (the light-selection part after the triangle sampling, the other part of the light sample).
-/// The environment sampling follows it as `env-off`, `env-importance` or `env-compensated`, and
-/// is left out where it is the default for the light sampling ([`default_env_sampling`]): a
-/// study's names from before the axis stay valid.
-#[allow(clippy::too_many_arguments)]
-pub fn config_name(
-    sampler: &str,
-    sampling: &str,
-    light_sampling: &str,
-    triangle_sampling: &str,
-    light_selection: &str,
-    env_sampling: &str,
-    compensation: &str,
-    backend: &str,
-) -> String {
-    let env = if env_sampling == default_env_sampling(light_sampling) {
-        String::new()
-    } else {
-        format!("env-{env_sampling}/")
-    };
-    format!(
-        "{sampler}/{sampling}/{light_sampling}/{triangle_sampling}/{light_selection}/{env}comp-{compensation}/{backend}"
-    )
+/// The columns of chart.csv as files have them (columns added later go at the end, so that a
+/// reader of the older columns by position still works): the measurements and the axes, by
+/// key. The axes not among them follow, in the order of `axes::AXES`.
+const CSV_COLUMNS: [&str; 19] = [
+    "config",
+    "sampler",
+    "sampling",
+    "compensation",
+    "backend",
+    "spp",
+    "seconds",
+    "rmse",
+    "relmse",
+    "reference_matches",
+    "cpu_seconds",
+    "light_sampling",
+    "triangle_sampling",
+    "light_selection",
+    "env_sampling",
+    "noise_threshold",
+    "denoise",
+    "mean_spp",
+    "point_lights",
+];
+
+/// The columns of the study's CSV file, in order.
+pub fn csv_columns() -> Vec<&'static str> {
+    let added = AXES.iter().map(|a| a.key).filter(|k| !CSV_COLUMNS.contains(k));
+    CSV_COLUMNS.iter().copied().chain(added).collect()
 }
 
-/// The CSV header of the study's data file (columns added later go at the end, so that a
-/// reader of the older columns by position still works).
-pub const CSV_HEADER: &str = concat!(
-    "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,",
-    "cpu_seconds,light_sampling,triangle_sampling,light_selection,env_sampling,noise_threshold,denoise,mean_spp,",
-    "point_lights"
-);
+/// A row's cell of column `key` in the CSV: numbers in Rust's shortest round-trip form, an
+/// unknown CPU time empty.
+fn csv_cell(r: &Row, key: &str) -> String {
+    match key {
+        "config" => r.config.clone(),
+        "spp" => r.spp.to_string(),
+        "seconds" => r.seconds.to_string(),
+        "cpu_seconds" if r.cpu_seconds.is_finite() => r.cpu_seconds.to_string(),
+        "cpu_seconds" => String::new(),
+        "rmse" => r.rmse.to_string(),
+        "relmse" => r.relmse.to_string(),
+        "reference_matches" => r.reference_matches.to_string(),
+        "mean_spp" => r.mean_spp.to_string(),
+        axis => r.axis(axis).to_string(),
+    }
+}
 
-/// The rows as CSV (with [`CSV_HEADER`]); numbers in Rust's shortest round-trip form.
+/// The rows as CSV, with the header of [`csv_columns`].
 pub fn to_csv(rows: &[Row]) -> String {
-    let mut s = String::from(CSV_HEADER);
+    let columns = csv_columns();
+    let mut s = columns.join(",");
     s.push('\n');
     for r in rows {
-        let _ = writeln!(
-            s,
-            "{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{},{}",
-            r.config,
-            r.sampler,
-            r.sampling,
-            r.compensation,
-            r.backend,
-            r.spp,
-            r.seconds,
-            r.rmse,
-            r.relmse,
-            r.reference_matches,
-            if r.cpu_seconds.is_finite() { r.cpu_seconds.to_string() } else { String::new() },
-            r.light_sampling,
-            r.triangle_sampling,
-            r.light_selection,
-            r.env_sampling,
-            r.noise_threshold,
-            r.denoise,
-            r.mean_spp,
-            r.point_lights
-        );
+        let cells: Vec<String> = columns.iter().map(|k| csv_cell(r, k)).collect();
+        let _ = writeln!(s, "{}", cells.join(","));
     }
     s
 }
 
-/// A row as a JSON object.
+/// A row as a JSON object: its measurements and its value of each axis.
 pub fn row_json(r: &Row) -> Value {
-    json!({
+    let mut v = json!({
         "config": r.config,
-        "sampler": r.sampler,
-        "sampling": r.sampling,
-        "light_sampling": r.light_sampling,
-        "triangle_sampling": r.triangle_sampling,
-        "light_selection": r.light_selection,
-        "env_sampling": r.env_sampling,
-        "point_lights": r.point_lights,
-        "compensation": r.compensation,
-        "backend": r.backend,
         "spp": r.spp,
         "seconds": finite(r.seconds),
         "cpu_seconds": finite(r.cpu_seconds),
         "rmse": finite(r.rmse),
         "relmse": finite(r.relmse),
         "reference_matches": r.reference_matches,
-        "noise_threshold": r.noise_threshold,
-        "denoise": r.denoise,
         "mean_spp": finite(r.mean_spp),
-    })
+    });
+    for (a, value) in AXES.iter().zip(&r.axes) {
+        v[a.key] = json!(value);
+    }
+    v
 }
 
 /// `x` as a JSON number, `null` when not finite (JSON has no NaN or infinity).
@@ -172,14 +131,11 @@ fn finite(x: f64) -> Value {
     if x.is_finite() { json!(x) } else { Value::Null }
 }
 
-/// A row read back from the JSON of a previous run. A row saved before the light-sampling axis
-/// has no `light_sampling`: it was rendered with [`OLD_LIGHT_SAMPLING`]; one saved before the
-/// triangle-sampling axis has no `triangle_sampling`: it was rendered with
-/// [`OLD_TRIANGLE_SAMPLING`]; one saved before the light-selection axis has no
-/// `light_selection`: it was rendered with [`OLD_LIGHT_SELECTION`]. Such a row's configuration
-/// is renamed to today's name for it, so that a resumed study finds it. One saved before the
-/// environment-sampling axis has no `env_sampling`: it is [`OLD_ENV_SAMPLING`], whose name has
-/// no part of its own (its name stays).
+/// A row read back from the JSON of a previous run. A row saved before an axis existed has no
+/// key of it: it was rendered with the axis's `before` value (an axis without one is
+/// required). Such a row's configuration is renamed to today's name for it, so that a resumed
+/// study finds it (the axes added since whose value has no part in the name leave it as it
+/// was).
 pub fn row_from_json(v: &Value) -> Result<Row, String> {
     let text = |k: &str| {
         v.get(k).and_then(Value::as_str).map(str::to_string).ok_or_else(|| format!("a row has no '{k}'"))
@@ -194,54 +150,41 @@ pub fn row_from_json(v: &Value) -> Result<Row, String> {
         .and_then(Value::as_u64)
         .and_then(|n| u32::try_from(n).ok())
         .ok_or_else(|| "a row has no valid 'spp'".to_string())?;
-    let (config, sampler, sampling, compensation, backend) =
-        (text("config")?, text("sampler")?, text("sampling")?, text("compensation")?, text("backend")?);
-    let axis = |k: &str, old: &str| match v.get(k) {
-        Some(_) => text(k).map(|t| (t, true)),
-        None => Ok((old.to_string(), false)),
-    };
-    let (light_sampling, light_saved) = axis("light_sampling", OLD_LIGHT_SAMPLING)?;
-    let (triangle_sampling, triangle_saved) = axis("triangle_sampling", OLD_TRIANGLE_SAMPLING)?;
-    let (light_selection, selection_saved) = axis("light_selection", OLD_LIGHT_SELECTION)?;
-    let (env_sampling, _) = axis("env_sampling", default_env_sampling(&light_sampling))?;
-    let config = if light_saved && triangle_saved && selection_saved {
-        config
-    } else {
-        config_name(
-            &sampler,
-            &sampling,
-            &light_sampling,
-            &triangle_sampling,
-            &light_selection,
-            &env_sampling,
-            &compensation,
-            &backend,
-        )
-    };
+    let config = text("config")?;
+    let mut absent = false;
+    let mut values = Vec::with_capacity(AXES.len());
+    for a in AXES {
+        values.push(match (v.get(a.key), a.before) {
+            (None, Some(before)) => {
+                absent = true;
+                before.to_string()
+            }
+            _ => text(a.key)?,
+        });
+    }
+    // Compensated environment sampling under nee is the plain importance
+    // (`EnvSampling::effective`): what a row with nee from before the axis rendered.
+    if v.get("env_sampling").is_none() {
+        let (light, env) = (index("light_sampling"), index("env_sampling"));
+        values[env] = default_env_sampling(&values[light]).to_string();
+    }
     Ok(Row {
-        config,
-        sampler,
-        sampling,
-        light_sampling,
-        triangle_sampling,
-        light_selection,
-        env_sampling,
-        // Rows saved before the point-light axis: the default's name (a study whose scene has
-        // lights `auto` would not gather all of is not resumed: `Study::settings_json`).
-        point_lights: v.get("point_lights").and_then(Value::as_str).unwrap_or("auto").to_string(),
-        compensation,
-        backend,
+        config: if absent { axes::name(&values) } else { config },
+        axes: values,
         spp,
         seconds: num("seconds")?,
         cpu_seconds: num("cpu_seconds").unwrap_or(f64::NAN),
         rmse: num("rmse")?,
         relmse: num("relmse")?,
         reference_matches: v.get("reference_matches").and_then(Value::as_bool).unwrap_or(true),
-        // Rows saved before these axes: no adaptive sampling, not denoised, every sample taken.
-        noise_threshold: v.get("noise_threshold").and_then(Value::as_str).unwrap_or("off").to_string(),
-        denoise: v.get("denoise").and_then(Value::as_str).unwrap_or("off").to_string(),
+        // Rows saved before adaptive sampling: every sample taken.
         mean_spp: num("mean_spp").unwrap_or(f64::from(spp)),
     })
+}
+
+/// The position of the axis of key `key` in `axes::AXES`.
+fn index(key: &str) -> usize {
+    AXES.iter().position(|a| a.key == key).unwrap_or_else(|| unreachable!("the study has an axis {key}"))
 }
 
 /// Least-squares slope of `ln y` against `ln x` over the points with `x > 0` and finite
@@ -386,67 +329,86 @@ mod tests {
         assert!((log_log_slope(pts).unwrap() + 1.0).abs() < 1e-12);
     }
 
-    #[test]
-    fn csv_and_json_rows_round_trip() {
-        let row = Row {
-            config: "sobol/caps/nee/area/power/comp-off/cpu".into(),
-            sampler: "sobol".into(),
-            sampling: "caps".into(),
-            light_sampling: "nee".into(),
-            triangle_sampling: "area".into(),
-            light_selection: "power".into(),
-            env_sampling: "importance".into(),
-            point_lights: "one".into(),
-            compensation: "off".into(),
-            backend: "cpu".into(),
-            spp: 8,
-            seconds: 0.125,
-            cpu_seconds: 0.25,
-            rmse: 0.1 + 0.2,
-            relmse: 1e-7,
-            reference_matches: false,
-            noise_threshold: "0.05".into(),
-            denoise: "on".into(),
-            mean_spp: 6.5,
+    /// A row of `config` with these axis values (by key; the others the defaults' names).
+    fn row(config: &str, given: &[(&str, &str)]) -> Row {
+        let defaults = [
+            ("sampler", "sobol"),
+            ("sampling", "caps"),
+            ("light_sampling", "mis"),
+            ("triangle_sampling", "solid-angle"),
+            ("light_selection", "bvh"),
+            ("env_sampling", "compensated"),
+            ("compensation", "off"),
+            ("backend", "cpu"),
+            ("point_lights", "auto"),
+            ("noise_threshold", "off"),
+            ("denoise", "off"),
+        ];
+        let value = |key: &str| {
+            given.iter().chain(&defaults).find(|(k, _)| *k == key).map(|(_, v)| v.to_string()).unwrap()
         };
-        assert_eq!(row_from_json(&row_json(&row)).unwrap(), row);
-        let csv = to_csv(std::slice::from_ref(&row));
-        assert_eq!(
-            csv,
-            format!(
-                "{CSV_HEADER}\nsobol/caps/nee/area/power/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee,area,power,importance,0.05,on,6.5,one\n"
-            )
-        );
-    }
-
-    /// A row as saved by an older version: `config` its name then, without the keys of `absent`.
-    fn old_row(config: &str, light_sampling: &str, triangle_sampling: &str, absent: &[&str]) -> Value {
-        let mut v = row_json(&Row {
+        Row {
             config: config.into(),
-            sampler: "sobol".into(),
-            sampling: "caps".into(),
-            light_sampling: light_sampling.into(),
-            triangle_sampling: triangle_sampling.into(),
-            light_selection: String::new(),
-            env_sampling: String::new(),
-            point_lights: "auto".into(),
-            compensation: "off".into(),
-            backend: "cpu".into(),
+            axes: AXES.iter().map(|a| value(a.key)).collect(),
             spp: 4,
             seconds: 0.5,
             cpu_seconds: f64::NAN,
             rmse: 0.25,
             relmse: 0.125,
             reference_matches: true,
-            noise_threshold: "off".into(),
-            denoise: "off".into(),
             mean_spp: 4.0,
-        });
-        v.as_object_mut().unwrap().remove("env_sampling");
-        for k in ["noise_threshold", "denoise", "mean_spp"] {
-            v.as_object_mut().unwrap().remove(k);
         }
-        for k in absent {
+    }
+
+    #[test]
+    fn csv_and_json_rows_round_trip() {
+        let row = Row {
+            spp: 8,
+            seconds: 0.125,
+            cpu_seconds: 0.25,
+            rmse: 0.1 + 0.2,
+            relmse: 1e-7,
+            reference_matches: false,
+            mean_spp: 6.5,
+            ..row(
+                "sobol/caps/nee/area/power/comp-off/cpu",
+                &[
+                    ("light_sampling", "nee"),
+                    ("triangle_sampling", "area"),
+                    ("light_selection", "power"),
+                    ("env_sampling", "importance"),
+                    ("point_lights", "one"),
+                    ("noise_threshold", "0.05"),
+                    ("denoise", "on"),
+                ],
+            )
+        };
+        assert_eq!(row_from_json(&row_json(&row)).unwrap(), row);
+        let csv = to_csv(std::slice::from_ref(&row));
+        // The columns of files written before the axes were listed, in their order.
+        let header = "config,sampler,sampling,compensation,backend,spp,seconds,rmse,relmse,reference_matches,\
+                      cpu_seconds,light_sampling,triangle_sampling,light_selection,env_sampling,noise_threshold,\
+                      denoise,mean_spp,point_lights";
+        assert_eq!(
+            csv,
+            format!(
+                "{header}\nsobol/caps/nee/area/power/comp-off/cpu,sobol,caps,off,cpu,8,0.125,0.30000000000000004,0.0000001,false,0.25,nee,area,power,importance,0.05,on,6.5,one\n"
+            )
+        );
+        // An unknown CPU time is an empty cell, null in the JSON.
+        let unknown = Row { cpu_seconds: f64::NAN, ..row.clone() };
+        assert!(to_csv(std::slice::from_ref(&unknown)).contains(",false,,nee,"));
+        assert!(row_from_json(&row_json(&unknown)).unwrap().cpu_seconds.is_nan());
+    }
+
+    /// A row as saved by an older version: `config` its name then, without the keys of `absent`
+    /// (nor those of the axes added after the environment sampling's).
+    fn old_row(config: &str, light_sampling: &str, triangle_sampling: &str, absent: &[&str]) -> Value {
+        let mut v = row_json(&row(
+            config,
+            &[("light_sampling", light_sampling), ("triangle_sampling", triangle_sampling)],
+        ));
+        for k in ["env_sampling", "noise_threshold", "denoise", "mean_spp"].iter().chain(absent) {
             v.as_object_mut().unwrap().remove(*k);
         }
         v
@@ -454,7 +416,7 @@ mod tests {
 
     /// A row's config, light sampling, triangle sampling and light selection.
     fn axes(row: &Row) -> (&str, &str, &str, &str) {
-        (&row.config, &row.light_sampling, &row.triangle_sampling, &row.light_selection)
+        (&row.config, row.axis("light_sampling"), row.axis("triangle_sampling"), row.axis("light_selection"))
     }
 
     #[test]
@@ -480,6 +442,8 @@ mod tests {
         let row = row_from_json(&v).unwrap();
         assert_eq!(axes(&row), ("sobol/caps/nee/area/power/comp-off/cpu", "nee", "area", "power"));
         assert_eq!((row.spp, row.rmse, row.relmse), (4, 0.25, 0.125));
+        // Under nee the environment was sampled by importance (compensation needs MIS).
+        assert_eq!(row.axis("env_sampling"), "importance");
     }
 
     #[test]
@@ -504,37 +468,82 @@ mod tests {
 
     #[test]
     fn a_row_saved_before_point_lights_is_auto_and_keeps_its_name() {
-        let mut v =
+        let v =
             old_row("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", "mis", "solid-angle", &["point_lights"]);
-        v["light_selection"] = "bvh".into();
         assert!(v.get("point_lights").is_none());
         let row = row_from_json(&v).unwrap();
         assert_eq!(
-            (row.config.as_str(), row.point_lights.as_str()),
+            (row.config.as_str(), row.axis("point_lights")),
             ("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", "auto")
         );
+        assert_eq!((row.axis("noise_threshold"), row.axis("denoise"), row.mean_spp), ("off", "off", 4.0));
     }
 
     #[test]
     fn a_row_saved_before_env_sampling_is_compensated_and_keeps_its_name() {
         let v = old_row("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", "mis", "solid-angle", &[]);
-        let mut v = v;
-        v["light_selection"] = "bvh".into();
         let row = row_from_json(&v).unwrap();
         assert_eq!(
-            (row.config.as_str(), row.env_sampling.as_str()),
+            (row.config.as_str(), row.axis("env_sampling")),
             ("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", "compensated")
         );
         // The other methods have a part of their own in the name.
-        assert_eq!(
-            config_name("sobol", "caps", "mis", "solid-angle", "bvh", "importance", "off", "cpu"),
-            "sobol/caps/mis/solid-angle/bvh/env-importance/comp-off/cpu"
-        );
-        let mut row = row;
-        row.env_sampling = "off".into();
-        row.config = config_name("sobol", "caps", "mis", "solid-angle", "bvh", "off", "off", "cpu");
+        let with_env = |env: &str| {
+            let mut values = row.axes.clone();
+            values[index("env_sampling")] = env.into();
+            axes::name(&values)
+        };
+        assert_eq!(with_env("importance"), "sobol/caps/mis/solid-angle/bvh/env-importance/comp-off/cpu");
+        let mut row = row.clone();
+        row.config = with_env("off");
+        row.axes[index("env_sampling")] = "off".into();
         let back = row_from_json(&row_json(&row)).unwrap();
-        assert_eq!((back.config, back.env_sampling), (row.config, row.env_sampling));
+        assert_eq!((back.config, back.axes), (row.config, row.axes));
+    }
+
+    #[test]
+    fn a_row_without_a_required_axis_is_refused() {
+        for key in ["sampler", "sampling", "compensation", "backend"] {
+            let mut v = row_json(&row("sobol/caps/mis/solid-angle/bvh/comp-off/cpu", &[]));
+            v.as_object_mut().unwrap().remove(key);
+            assert_eq!(row_from_json(&v).unwrap_err(), format!("a row has no '{key}'"));
+        }
+    }
+
+    /// Every `chart.json` under `dir`, recursively.
+    fn chart_files(dir: &Path, out: &mut Vec<std::path::PathBuf>) {
+        for entry in std::fs::read_dir(dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                chart_files(&path, out);
+            } else if path.file_name().is_some_and(|n| n == "chart.json") {
+                out.push(path);
+            }
+        }
+    }
+
+    /// The studies in docs/charts, written by earlier versions: every row reads back under the
+    /// name its axes give, and writes back the same value under every key it had (its name
+    /// aside where an axis was added since).
+    #[test]
+    fn the_committed_studies_read_back() {
+        let mut files = Vec::new();
+        chart_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../docs/charts"), &mut files);
+        assert!(!files.is_empty());
+        for path in files {
+            let doc: Value = serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+            for v in doc["rows"].as_array().unwrap() {
+                let row = row_from_json(v).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+                assert_eq!(row.config, axes::name(&row.axes), "{}", path.display());
+                let renamed = AXES.iter().any(|a| v.get(a.key).is_none());
+                let back = row_json(&row);
+                for (k, x) in v.as_object().unwrap() {
+                    if !(renamed && k == "config") {
+                        assert_eq!(&back[k], x, "{}: {k}", path.display());
+                    }
+                }
+            }
+        }
     }
 
     #[test]

@@ -1,9 +1,10 @@
 //! The study's four charts (RMSE and relative MSE, each against spp and against time): one
 //! series per configuration and per `--external` label, with the notes that explain them.
 
+use super::axes::Config;
 use super::data::{self, ExternalPoint, Row, rows_of, slope};
 use super::plot::{self, Labels, Marker, Series, Style};
-use super::study::{Config, Study, dedup};
+use super::study::{Study, dedup};
 use crate::args::{ChartBackend, ChartTime, Switch};
 use crate::resume;
 use furnace_brdf::SpecularSampling;
@@ -130,32 +131,33 @@ impl Varying {
     /// The legend text of configuration `c`.
     fn label(&self, c: &Config) -> String {
         let vary = |n: usize| n > 1;
-        let mut parts = vec![c.sampler.to_string()];
+        let s = &c.settings;
+        let mut parts = vec![s.sampler.to_string()];
         if vary(self.sampling) {
-            parts.push(Choice::name(c.sampling).to_string());
+            parts.push(Choice::name(s.specular.sampling).to_string());
         }
         if vary(self.light_sampling) {
-            parts.push(Choice::name(c.light_sampling).to_string());
+            parts.push(Choice::name(s.light_sampling).to_string());
         }
         if vary(self.triangle_sampling) {
-            parts.push(Choice::name(c.triangle_sampling).to_string());
+            parts.push(Choice::name(s.triangle_sampling).to_string());
         }
         if vary(self.light_selection) {
-            parts.push(Choice::name(c.light_selection).to_string());
+            parts.push(Choice::name(s.light_selection).to_string());
         }
         if vary(self.env_sampling) {
-            parts.push(format!("env {}", Choice::name(c.env_sampling)));
+            parts.push(format!("env {}", Choice::name(s.env_sampling)));
         }
         if vary(self.point_lights) {
-            parts.push(format!("points {}", Choice::name(c.point_lights)));
+            parts.push(format!("points {}", Choice::name(s.point_lights)));
         }
         if vary(self.compensations) {
-            parts.push(format!("comp {}", resume::cli_name(&c.compensation)));
+            parts.push(format!("comp {}", resume::cli_name(&c.compensation())));
         }
         if vary(self.backends) || c.backend == ChartBackend::Gpu {
             parts.push(resume::cli_name(&c.backend));
         }
-        if let Some(t) = c.noise_threshold.value() {
+        if let Some(t) = s.adaptive.map(|a| a.threshold) {
             parts.push(format!("adaptive {t}"));
         } else if vary(self.thresholds) {
             parts.push("all pixels".into());
@@ -225,40 +227,41 @@ fn config_series(
             .iter()
             .map(|r| (if by_time { time_of(r) } else { f64::from(r.spp) }, (metric.row)(r)))
             .collect();
-        let mut color = sampler_color(c.sampler);
+        let s = &c.settings;
+        let mut color = sampler_color(s.sampler);
         if varying.light_sampling > 1 {
-            color = shade(color, c.light_sampling);
+            color = shade(color, s.light_sampling);
         }
         if varying.triangle_sampling > 1 {
-            color = tint(color, c.triangle_sampling);
+            color = tint(color, s.triangle_sampling);
         }
         if varying.light_selection > 1 {
-            color = tint_selection(color, c.light_selection);
+            color = tint_selection(color, s.light_selection);
         }
         if varying.env_sampling > 1 {
-            color = tint_env(color, c.env_sampling);
+            color = tint_env(color, s.env_sampling);
         }
         if varying.point_lights > 1 {
-            color = tint_points(color, c.point_lights);
+            color = tint_points(color, s.point_lights);
         }
-        if c.noise_threshold.value().is_some() {
+        if let Some(adaptive) = s.adaptive {
             // Adaptive configurations: mixed with a colour of their own per threshold.
             let k = dedup(&study.args.noise_threshold)
                 .iter()
                 .filter(|t| t.value().is_some())
-                .position(|t| *t == c.noise_threshold);
+                .position(|t| t.value() == Some(adaptive.threshold));
             let own = [(44, 160, 44), (255, 127, 14), (148, 103, 189), (140, 86, 75)][k.unwrap_or(0) % 4];
             let mix = |a: u8, b: u8| ((u16::from(a) + 3 * u16::from(b)) / 4) as u8;
             color = RGBColor(mix(color.0, own.0), mix(color.1, own.1), mix(color.2, own.2));
         }
         let style = Style {
             color,
-            marker: match c.sampling {
+            marker: match s.specular.sampling {
                 SpecularSampling::SphericalCaps => Marker::Circle,
                 SpecularSampling::Vndf => Marker::Triangle,
                 SpecularSampling::Ndf => Marker::Square,
             },
-            dashed: c.compensation == Switch::On || c.denoise == Switch::On,
+            dashed: s.specular.compensation || c.denoise == Switch::On,
             hollow: c.backend == ChartBackend::Gpu,
         };
         series.push(Series { label: text, points, style });
@@ -373,7 +376,7 @@ fn note(study: &Study, varying: &Varying, metric: &Metric, by_time: bool) -> Str
              one (one chosen by power per event, tinted navy).",
         );
     }
-    if study.configs.iter().any(|c| c.compensation == Switch::On) {
+    if study.configs.iter().any(|c| c.settings.specular.compensation) {
         note.push_str(" Dashed: compensation on.");
     }
     if study.configs.iter().any(|c| c.backend == ChartBackend::Gpu) {

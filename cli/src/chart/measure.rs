@@ -2,13 +2,13 @@
 //! passes up to each checkpoint, the error against the reference, progress, and the rows
 //! saved after every checkpoint.
 
+use super::axes::Config;
 use super::data::Row;
 use super::save::save_data;
-use super::study::{Config, Study};
+use super::study::Study;
 use crate::args::{ChartBackend, Switch};
 use crate::interrupt::Interrupt;
 use crate::shared::WARM_UP_SECONDS;
-use furnace_brdf::SpecularOptions;
 use furnace_cli::backend::{self, Backend, BackendChoice};
 use furnace_post::metrics::score;
 use furnace_render::{Budget, Film, Integrator, RenderSettings, Session, Stop, Timing};
@@ -21,24 +21,10 @@ use std::time::Instant;
 /// `n` is N for a fixed-N sampler.
 fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, Option<String>), String> {
     let settings = RenderSettings {
-        sampler: c.sampler,
         sample_count: n,
-        specular: SpecularOptions {
-            masking: study.masking,
-            sampling: c.sampling,
-            compensation: c.compensation == Switch::On,
-        },
-        light_sampling: c.light_sampling,
-        triangle_sampling: c.triangle_sampling,
-        light_selection: c.light_selection,
-        env_sampling: c.env_sampling,
-        point_lights: c.point_lights,
+        // The albedo and normal guide the denoiser.
         aovs: c.denoise == Switch::On,
-        adaptive: c.noise_threshold.value().map(|threshold| furnace_render::AdaptiveSampling {
-            threshold,
-            min_samples: furnace_render::AdaptiveSampling::DEFAULT_MIN_SAMPLES,
-        }),
-        ..study.settings
+        ..c.settings
     };
     let choice = match c.backend {
         ChartBackend::Cpu => BackendChoice::Cpu,
@@ -156,7 +142,7 @@ impl Runner<'_> {
     /// with N = the checkpoint, a progressive one renders once through all of them. `false`
     /// if Ctrl-C stopped it.
     fn run_config(&mut self, c: &Config, left: &[u32]) -> Result<bool, String> {
-        let renders: Vec<(Option<u32>, &[u32])> = if c.sampler.needs_sample_count() {
+        let renders: Vec<(Option<u32>, &[u32])> = if c.settings.sampler.needs_sample_count() {
             left.iter().map(|n| (Some(*n), std::slice::from_ref(n))).collect()
         } else {
             vec![(None, left)]
@@ -224,7 +210,7 @@ impl Runner<'_> {
         };
         let mean_spp = film.counts().iter().sum::<u64>() as f64 / film.counts().len().max(1) as f64;
         self.rows.retain(|r| !(r.config == name && r.spp == spp));
-        self.rows.push(c.row(spp, time, rmse, relmse, matches, mean_spp));
+        self.rows.push(c.row(spp, time, (rmse, relmse), matches, mean_spp));
         if film.rejected() > 0 {
             self.progress
                 .bar

@@ -2,8 +2,9 @@
 //! furnace reference records, the model and bounces, the configurations, and warnings about
 //! biased or correlated comparisons.
 
+use super::axes::configurations;
 use super::reference::Reference;
-use super::study::{Config, Study, checkpoints, dedup};
+use super::study::{Study, checkpoints, dedup};
 use crate::args::{ChartArgs, SceneArg, Switch};
 use crate::resume;
 use furnace_brdf::Masking;
@@ -37,7 +38,7 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
         );
     }
     let bounces = a.bounces.or(recorded_bounces).unwrap_or(4);
-    let settings = RenderSettings {
+    let mut settings = RenderSettings {
         width: reference.width,
         height: reference.height,
         bounces,
@@ -45,62 +46,30 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
         russian_roulette: false,
         ..RenderSettings::default()
     };
+    settings.specular.masking = masking;
     let mut study = Study {
         args: a.clone(),
         scene: std::sync::Arc::new(scene),
         scene_name,
         settings,
-        masking,
         checkpoints: checkpoints(a.spp),
         configs: Vec::new(),
         reference,
         compensated,
     };
-    for backend in dedup(&a.backends) {
-        for compensation in study.compensations() {
-            for light_sampling in dedup(&a.light_sampling) {
-                for triangle_sampling in dedup(&a.triangle_sampling) {
-                    for light_selection in dedup(&a.light_selection) {
-                        for mut env_sampling in dedup(&a.env_sampling) {
-                            if env_sampling == EnvSampling::Compensated
-                                && light_sampling == LightSampling::Nee
-                            {
-                                // Compensation needs MIS: under nee a render samples the plain
-                                // distribution (EnvSampling::effective), once.
-                                if a.env_sampling.contains(&EnvSampling::Importance) {
-                                    continue;
-                                }
-                                env_sampling = EnvSampling::Importance;
-                            }
-                            for sampling in dedup(&a.sampling) {
-                                for sampler in dedup(&a.samplers) {
-                                    for noise_threshold in dedup(&a.noise_threshold) {
-                                        for denoise in dedup(&a.denoise) {
-                                            for point_lights in dedup(&a.point_lights) {
-                                                study.configs.push(Config {
-                                                    sampler,
-                                                    sampling,
-                                                    light_sampling,
-                                                    triangle_sampling,
-                                                    light_selection,
-                                                    env_sampling,
-                                                    point_lights,
-                                                    compensation,
-                                                    backend,
-                                                    noise_threshold,
-                                                    denoise,
-                                                });
-                                            }
-                                        }
-                                    }
-                                }
-                            }
-                        }
-                    }
-                }
+    let importance_listed = a.env_sampling.contains(&EnvSampling::Importance);
+    study.configs = configurations(&study, |mut c| {
+        let s = &mut c.settings;
+        if s.env_sampling == EnvSampling::Compensated && s.light_sampling == LightSampling::Nee {
+            // Compensation needs MIS: under nee a render samples the plain distribution
+            // (EnvSampling::effective), once.
+            if importance_listed {
+                return None;
             }
+            s.env_sampling = EnvSampling::Importance;
         }
-    }
+        Some(c)
+    })?;
     if a.denoise.contains(&Switch::On) && !furnace_denoise::available() {
         return Err(furnace_denoise::DenoiseError::NotBuilt.to_string());
     }
@@ -267,7 +236,8 @@ fn study_masking(a: &ChartArgs, reference: &Reference, compensated: Option<&Refe
 /// Warns about the compensation states scored against a reference rendered with the other.
 fn warn_compensation_mismatch(study: &Study) {
     for comp in study.compensations() {
-        let probe = Config { compensation: comp, ..study.configs[0] };
+        let mut probe = study.configs[0];
+        probe.settings.specular.compensation = comp == Switch::On;
         let (r, matches) = study.reference_for(&probe);
         if !matches && r.compensation != comp {
             eprintln!(
@@ -289,7 +259,7 @@ fn warn_correlated_seed(study: &Study) {
         let (Some(sampler), Some(seed)) = (&r.metadata.sampler, r.metadata.seed) else { continue };
         if r.furnace
             && seed == u64::from(seed_arg)
-            && study.configs.iter().any(|c| c.sampler.name() == sampler)
+            && study.configs.iter().any(|c| c.settings.sampler.name() == sampler)
         {
             eprintln!(
                 "warning: {} was rendered with the {sampler} sampler and seed {seed}, as this study's {sampler} \

@@ -16,7 +16,7 @@ pub(super) fn announce(study: &Study, skipped: usize, resumed: bool) {
         s.width,
         s.height,
         s.bounces,
-        Choice::name(study.masking),
+        Choice::name(s.specular.masking),
         s.seed,
         a.spp,
         study.configs.len(),

@@ -1,11 +1,10 @@
 //! The study's files in `--out`: `chart.json` (settings, machine, configurations and rows; the
 //! source of truth on resume) and `chart.csv`, each written atomically.
 
+use super::axes::AXES;
 use super::data::{self, Row, rows_of, slope};
 use super::study::Study;
-use crate::resume;
 use crate::shared::write_atomically;
-use furnace_render::Choice;
 use serde_json::{Value, json};
 use std::path::Path;
 
@@ -30,15 +29,14 @@ pub(super) fn load_saved(dir: &Path, now: &Value) -> Result<Vec<Row>, String> {
         return Err(format!("{p}: not a furnace chart file of format {FORMAT}"));
     }
     let mut recorded = v.get("settings").cloned().unwrap_or(Value::Null);
-    // A study saved before the light-sampling axis rendered every configuration with MIS; one
-    // saved before the triangle-sampling axis sampled emissive triangles by area; one saved
-    // before the light-selection axis chose them in proportion to power; one saved before the
-    // environment-sampling axis had the default, importance.
+    // A study saved before an axis that is always recorded rendered only the axis's value of
+    // then (an axis recorded only when used is absent from such a study and from today's).
     if let Some(s) = recorded.as_object_mut() {
-        s.entry("light_sampling").or_insert_with(|| json!([data::OLD_LIGHT_SAMPLING]));
-        s.entry("triangle_sampling").or_insert_with(|| json!([data::OLD_TRIANGLE_SAMPLING]));
-        s.entry("light_selection").or_insert_with(|| json!([data::OLD_LIGHT_SELECTION]));
-        s.entry("env_sampling").or_insert_with(|| json!([data::OLD_ENV_SAMPLING]));
+        for axis in AXES.iter().filter(|a| a.unrecorded.is_none()) {
+            if let Some(before) = axis.before {
+                s.entry(axis.list).or_insert_with(|| json!([before]));
+            }
+        }
     }
     if let Some((key, was, is)) = data::first_difference(&recorded, now) {
         return Err(format!(
@@ -78,7 +76,7 @@ pub(super) fn save_data(study: &Study, rows: &mut [Row], machine: &Value) -> Res
     write_atomically(&dir.join(CSV_NAME), data::to_csv(rows).as_bytes())
 }
 
-/// Each configuration's description, reference, completeness and slopes.
+/// Each configuration's name, value of each axis, reference, completeness and slopes.
 fn configs_json(study: &Study, rows: &[Row]) -> Vec<Value> {
     study
         .configs
@@ -87,23 +85,18 @@ fn configs_json(study: &Study, rows: &[Row]) -> Vec<Value> {
             let name = c.name();
             let mine = rows_of(rows, &name);
             let (r, matches) = study.reference_for(c);
-            json!({
+            let mut v = json!({
                 "config": name,
-                "sampler": c.sampler.to_string(),
-                "sampling": Choice::name(c.sampling),
-                "light_sampling": Choice::name(c.light_sampling),
-                "triangle_sampling": Choice::name(c.triangle_sampling),
-                "light_selection": Choice::name(c.light_selection),
-                "env_sampling": Choice::name(c.env_sampling),
-                "point_lights": Choice::name(c.point_lights),
-                "compensation": resume::cli_name(&c.compensation),
-                "backend": resume::cli_name(&c.backend),
                 "reference": r.path.display().to_string(),
                 "reference_matches": matches,
                 "complete": mine.len() == study.checkpoints.len(),
                 "slope_rmse_vs_spp": slope(&mine, |r| r.rmse),
                 "slope_relmse_vs_spp": slope(&mine, |r| r.relmse),
-            })
+            });
+            for axis in AXES {
+                v[axis.key] = json!(c.value(axis));
+            }
+            v
         })
         .collect()
 }
