@@ -265,6 +265,18 @@ fn ggx_chi2() -> Vec<Config> {
     configs
 }
 
+/// A glossy blue dielectric (α = 0.0225) with a tinted KHR_materials_specular: a sharp lobe
+/// over the diffuse one.
+fn glossy_tinted() -> MetallicRoughnessParams {
+    MetallicRoughnessParams {
+        base_color: Vec3::new(0.2, 0.4, 0.8),
+        metallic: 0.0,
+        roughness: 0.15,
+        specular_factor: 0.7,
+        specular_color: Vec3::new(1.0, 0.8, 0.6),
+    }
+}
+
 /// Four metallic-roughness materials (the one-sample mixture of the diffuse and specular
 /// lobes), one configuration each.
 fn material_chi2() -> Vec<Config> {
@@ -308,13 +320,7 @@ fn material_chi2() -> Vec<Config> {
         // the lobe choice then uses E_ss) and a tinted KHR_materials_specular.
         (
             "glossy_dielectric_ndf",
-            MetallicRoughnessParams {
-                base_color: Vec3::new(0.2, 0.4, 0.8),
-                metallic: 0.0,
-                roughness: 0.15,
-                specular_factor: 0.7,
-                specular_color: Vec3::new(1.0, 0.8, 0.6),
-            },
+            glossy_tinted(),
             SpecularOptions { sampling: SpecularSampling::Ndf, ..SpecularOptions::mitsuba() },
         ),
     ]
@@ -369,16 +375,7 @@ fn materials() -> Vec<(&'static str, MetallicRoughnessParams)> {
         ("dielectric", p(Vec3::splat(0.8), 0.0, 0.5)),
         ("half_metallic", p(Vec3::new(0.9, 0.6, 0.3), 0.5, 0.3)),
         ("rough_metal", p(Vec3::new(0.95, 0.64, 0.54), 1.0, 1.0)),
-        (
-            "glossy_tinted_specular",
-            MetallicRoughnessParams {
-                base_color: Vec3::new(0.2, 0.4, 0.8),
-                metallic: 0.0,
-                roughness: 0.15,
-                specular_factor: 0.7,
-                specular_color: Vec3::new(1.0, 0.8, 0.6),
-            },
-        ),
+        ("glossy_tinted_specular", glossy_tinted()),
         ("mirror_metal", p(Vec3::new(1.0, 0.78, 0.34), 1.0, 0.0)),
         ("mirror_dielectric", p(Vec3::new(0.1, 0.5, 0.1), 0.0, 0.0)),
         ("black_dielectric", p(Vec3::ZERO, 0.0, 0.4)),
