@@ -15,14 +15,16 @@ pub fn run(a: &InfoArgs) -> Result<(), String> {
     }
     let scene = Scene::load(&a.scene).map_err(|e| e.to_string())?;
     print!("{}", describe(&scene));
-    print!("{}", describe_settings(settings));
+    print!("{}", describe_settings(settings, scene.point_lights().count()));
     Ok(())
 }
 
 /// The render settings, one line per field: its flag and its value as the flag takes it
 /// (`not set` for an option that is off), marked `(default)` where it is the command line's
-/// default or the value of [`RenderSettings::default`] (an option not set).
-fn describe_settings(settings: &RenderSettings) -> String {
+/// default or the value of [`RenderSettings::default`] (an option not set), and followed by the
+/// method used where another setting or the scene decides it (`auto` point-light sampling for
+/// `point_lights` lights, compensated environment sampling without MIS).
+fn describe_settings(settings: &RenderSettings, point_lights: usize) -> String {
     let defaults = RenderSettings::default();
     let mut out =
         String::from("settings        as `furnace render` takes them (the flags given, else the defaults)\n");
@@ -31,9 +33,27 @@ fn describe_settings(settings: &RenderSettings) -> String {
         let default = value.as_deref() == f.default || value == (f.get)(&defaults);
         let flag = format!("--{}", f.flag);
         let value = value.unwrap_or_else(|| "not set".into());
-        out.push_str(&format!("  {flag:<21}{value}{}\n", if default { " (default)" } else { "" }));
+        let used = used(f.flag, settings, point_lights).map(|u| format!(", {u}")).unwrap_or_default();
+        out.push_str(&format!("  {flag:<21}{value}{}{used}\n", if default { " (default)" } else { "" }));
     }
     out
+}
+
+/// The method a setting resolves to where it is not the value given: `None` where it is.
+fn used(flag: &str, settings: &RenderSettings, point_lights: usize) -> Option<String> {
+    match flag {
+        "point-lights" => {
+            let used = settings.point_lights.effective(point_lights);
+            (used != settings.point_lights)
+                .then(|| format!("{} for this scene's {point_lights} point and spot lights", used.name()))
+        }
+        "env-sampling" => {
+            let used = settings.env_sampling.effective(settings.light_sampling);
+            (used != settings.env_sampling)
+                .then(|| format!("{} with --light-sampling {}", used.name(), settings.light_sampling.name()))
+        }
+        _ => None,
+    }
 }
 
 fn v3(v: Vec3) -> String {
@@ -169,7 +189,7 @@ mod tests {
     fn describes_every_setting_from_the_table() {
         let mut settings = RenderSettings { bounces: 7, clamp: Some(2.5), ..RenderSettings::default() };
         settings.light_sampling = furnace_render::LightSampling::Nee;
-        let text = describe_settings(&settings);
+        let text = describe_settings(&settings, 5);
         let lines: Vec<&str> = text.lines().skip(1).collect();
         assert_eq!(lines.len(), FIELDS.len(), "{text}");
         for (line, f) in lines.iter().zip(FIELDS) {
@@ -180,6 +200,21 @@ mod tests {
         assert!(text.contains("  --light-sampling     nee\n"), "{text}");
         assert!(text.contains("  --clamp              2.5\n"), "{text}");
         assert!(text.contains("  --noise-threshold    not set (default)\n"), "{text}");
+        // What another setting or the scene makes of them.
+        assert!(
+            text.contains(
+                "  --point-lights       auto (default), one for this scene's 5 point and spot lights\n"
+            ),
+            "{text}"
+        );
+        assert!(
+            text.contains(
+                "  --env-sampling       compensated (default), importance with --light-sampling nee\n"
+            ),
+            "{text}"
+        );
+        let text = describe_settings(&RenderSettings::default(), 0);
+        assert!(text.contains("  --env-sampling       compensated (default)\n"), "{text}");
     }
 
     #[test]

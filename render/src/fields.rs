@@ -85,6 +85,10 @@ fn parse_bounces(s: &str) -> Result<u32, String> {
 }
 
 /// A finite number above 0; `what` names it in the error.
+/// The value that unsets an optional number (the clamp, the noise threshold): what the viewer's
+/// `set` takes to turn it off again.
+const OFF: &str = "off";
+
 fn positive(s: &str, what: &str) -> Result<f32, String> {
     s.trim().parse::<f32>().ok().filter(|x| x.is_finite() && *x > 0.0).ok_or_else(|| format!("'{s}': {what}"))
 }
@@ -320,7 +324,10 @@ pub static FIELDS: &[Field] = &[
         bench: false,
         get: |s| s.clamp.map(|x| x.to_string()),
         set: |s, v| {
-            s.clamp = Some(positive(v, "the clamp must be a finite number above 0")?);
+            s.clamp = match v.trim() {
+                OFF => None,
+                v => Some(positive(v, "the clamp must be a finite number above 0, or off")?),
+            };
             Ok(())
         },
     },
@@ -342,7 +349,12 @@ pub static FIELDS: &[Field] = &[
         bench: false,
         get: |s| s.adaptive.map(|a| a.threshold.to_string()),
         set: |s, v| {
-            let threshold = positive(v, "the noise threshold must be a finite number above 0 (0.01: 1 %)")?;
+            if v.trim() == OFF {
+                s.adaptive = None;
+                return Ok(());
+            }
+            let threshold =
+                positive(v, "the noise threshold must be a finite number above 0 (0.01: 1 %), or off")?;
             let min_samples = s.adaptive.map_or(AdaptiveSampling::DEFAULT_MIN_SAMPLES, |a| a.min_samples);
             s.adaptive = Some(AdaptiveSampling { threshold, min_samples });
             Ok(())
@@ -457,7 +469,10 @@ mod tests {
         let set = |flag: &str, v: &str| (field(flag).unwrap().set)(&mut RenderSettings::default(), v);
         assert!(set("bounces", "1025").unwrap_err().contains("at most 1024 scattering events"));
         assert!(set("bounces", "x").unwrap_err().contains("whole number from 0 to 1024"));
-        assert_eq!(set("clamp", "-1").unwrap_err(), "'-1': the clamp must be a finite number above 0");
+        assert_eq!(
+            set("clamp", "-1").unwrap_err(),
+            "'-1': the clamp must be a finite number above 0, or off"
+        );
         assert!(set("noise-threshold", "nan").is_err());
         assert!(set("light-sampling", "MIS").is_err());
         assert!(set("compensation", "on").is_ok());
@@ -465,5 +480,18 @@ mod tests {
         let mut s = RenderSettings::default();
         (field("min-spp").unwrap().set)(&mut s, "4").unwrap();
         assert_eq!(s.adaptive, None);
+    }
+
+    #[test]
+    fn optional_numbers_are_unset_by_off() {
+        let mut s = RenderSettings::default();
+        for (flag, v) in [("clamp", "2"), ("noise-threshold", "0.01")] {
+            let f = field(flag).unwrap();
+            (f.set)(&mut s, v).unwrap();
+            assert_eq!((f.get)(&s).as_deref(), Some(v));
+            (f.set)(&mut s, "off").unwrap();
+            assert_eq!((f.get)(&s), None, "{flag}");
+        }
+        assert_eq!(s, RenderSettings::default());
     }
 }

@@ -443,8 +443,9 @@ mod tests {
     }
 
     /// Every render setting's flag is a name of `set`, taking the command line's default; the
-    /// optional ones (no default: the clamp, the noise threshold) a number. Each sets what the
-    /// field itself sets, and every name the unknown-setting error lists is taken.
+    /// optional ones (no default: the clamp, the noise threshold) a number, and off unsets them.
+    /// Each sets what the field itself sets, and every name the unknown-setting error lists is
+    /// taken.
     #[test]
     fn set_takes_every_field_of_the_table() {
         for f in FIELDS {
@@ -454,6 +455,10 @@ mod tests {
             let mut expected = RenderSettings::default();
             (f.set)(&mut expected, value).unwrap();
             assert_eq!(c.settings, expected, "{}", f.flag);
+            if f.default.is_none() {
+                set(&mut c, f.flag, "off").unwrap();
+                assert_eq!(c.settings, RenderSettings::default(), "set {} off", f.flag);
+            }
         }
         let e = set(&mut controls(), "no-such-setting", "1").unwrap_err();
         let listed = e.split_once('(').unwrap().1.trim_end_matches(')');
