@@ -248,3 +248,42 @@ fn scale_lengths_scales_lengths_only() {
         assert!(r.is_err(), "scale_lengths({bad}) must refuse");
     }
 }
+
+/// MeshPrimitiveModes draws one hexagon per mode: the triangle list, strip and fan each cover
+/// the same area, wound the same way (all face the camera), and the four point and line
+/// primitives are skipped, each with a warning naming it.
+#[test]
+fn strips_and_fans_are_triangulated_and_points_and_lines_skipped() {
+    let s = Scene::load(data("MeshPrimitiveModes/glTF/MeshPrimitiveModes.gltf")).expect("loads");
+    let g = &s.geometry;
+    // A list of 18 indices, a strip of 6 and a fan of 8 (6 triangles, 4, 6).
+    assert_eq!(g.triangle_count(), 16);
+    let triangles: Vec<[Vec3; 3]> = (0..16).map(|t| g.triangle(t).unwrap()).collect();
+    let cross = |[a, b, c]: [Vec3; 3]| (b - a).cross(c - a);
+    let area = |t: &[[Vec3; 3]]| t.iter().map(|&x| cross(x).length() / 2.0).sum::<f32>();
+    let (list, rest) = triangles.split_at(6);
+    let (strip, fan) = rest.split_at(4);
+    // Relative 1e-5: a sum of a few f32 products of coordinates of order 1.
+    for (mode, t) in [("strip", strip), ("fan", fan)] {
+        assert!((area(t) / area(list) - 1.0).abs() < 1e-5, "{mode}: {} vs {}", area(t), area(list));
+    }
+    let facing = cross(list[0]).normalize();
+    for (i, &t) in triangles.iter().enumerate() {
+        assert!(cross(t).normalize().dot(facing) > 0.999, "triangle {i} is wound the other way");
+    }
+    let skipped: Vec<&str> = s
+        .warnings
+        .iter()
+        .filter(|w| w.message.contains("points and lines"))
+        .map(|w| w.path.as_str())
+        .collect();
+    assert_eq!(
+        skipped,
+        [
+            "meshes[0].primitives[0]",
+            "meshes[1].primitives[0]",
+            "meshes[2].primitives[0]",
+            "meshes[3].primitives[0]"
+        ]
+    );
+}

@@ -108,8 +108,9 @@ pub(super) fn read_environment(
 }
 
 /// How many triangles `scene` would flatten to, from the accessors' counts alone (nothing is
-/// read): each node once, as [`flatten`] visits them, each TRIANGLES primitive's index count
-/// (or vertex count) / 3 per node that places its mesh. An upper bound: `flatten` may still
+/// read): each node once, as [`flatten`] visits them, each triangle primitive's triangles (a
+/// list's index count, or vertex count, / 3; a strip's or fan's count − 2) per node that places
+/// its mesh. An upper bound: `flatten` may still
 /// skip subtrees and drop triangles.
 pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>) -> u64 {
     let json = doc.as_json();
@@ -125,7 +126,11 @@ pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>)
         stack.extend(node.children());
         let Some(mesh) = node.mesh().and_then(|m| json.meshes.get(m.index())) else { continue };
         for p in &mesh.primitives {
-            let triangles = p.mode == gltf::json::validation::Checked::Valid(gltf::mesh::Mode::Triangles);
+            use gltf::mesh::Mode;
+            let mode = match p.mode {
+                gltf::json::validation::Checked::Valid(m) => Some(m),
+                gltf::json::validation::Checked::Invalid => None,
+            };
             let vertices = match (
                 &p.indices,
                 p.attributes.get(&gltf::json::validation::Checked::Valid(gltf::Semantic::Positions)),
@@ -134,9 +139,12 @@ pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>)
                 (None, Some(pos)) => count(*pos),
                 (None, None) => 0,
             };
-            if triangles {
-                total = total.saturating_add(vertices / 3);
-            }
+            let triangles = match mode {
+                Some(Mode::Triangles) => vertices / 3,
+                Some(Mode::TriangleStrip | Mode::TriangleFan) => vertices.saturating_sub(2),
+                _ => 0,
+            };
+            total = total.saturating_add(triangles);
         }
     }
     total

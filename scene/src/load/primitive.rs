@@ -70,8 +70,9 @@ impl<'b> Meshes<'b> {
 }
 
 impl Meshes<'_> {
-    /// Adds primitive `prim` (JSON path `ppath`) of node `npath`, placed by `world`; a
-    /// primitive that is not a triangle list or has no positions is skipped with a warning.
+    /// Adds primitive `prim` (JSON path `ppath`) of node `npath`, placed by `world`: triangle
+    /// lists, strips and fans; points, lines and primitives without positions are skipped with
+    /// a warning.
     pub(super) fn add_primitive(
         &mut self,
         ctx: &mut Ctx<'_>,
@@ -80,8 +81,13 @@ impl Meshes<'_> {
         npath: &str,
         world: Mat4,
     ) -> Result<(), SceneError> {
-        if prim.mode() != gltf::mesh::Mode::Triangles {
-            ctx.warn(ppath, format!("mode {:?} is not TRIANGLES: primitive skipped", prim.mode()));
+        use gltf::mesh::Mode;
+        let mode = prim.mode();
+        if !matches!(mode, Mode::Triangles | Mode::TriangleStrip | Mode::TriangleFan) {
+            ctx.warn(
+                ppath,
+                format!("mode {mode:?}: points and lines have no area to render; primitive skipped"),
+            );
             return Ok(());
         }
         if prim.extension_value("KHR_draco_mesh_compression").is_some() {
@@ -123,9 +129,19 @@ impl Meshes<'_> {
             None
         };
         let indices = reader.indices(prim.indices())?;
-        if !indices.len().is_multiple_of(3) {
-            ctx.warn(ppath, format!("{} indices is not a multiple of 3: the rest ignored", indices.len()));
-        }
+        let indices = match prim.mode() {
+            gltf::mesh::Mode::TriangleStrip => strip_triangles(&indices),
+            gltf::mesh::Mode::TriangleFan => fan_triangles(&indices),
+            _ => {
+                if !indices.len().is_multiple_of(3) {
+                    ctx.warn(
+                        ppath,
+                        format!("{} indices is not a multiple of 3: the rest ignored", indices.len()),
+                    );
+                }
+                indices
+            }
+        };
         Ok(Attributes { positions, normals, uvs, tangents, indices })
     }
 
@@ -262,6 +278,24 @@ impl Reader<'_> {
             )));
         }
         Ok(idx)
+    }
+}
+
+/// The triangle list of a `TRIANGLE_STRIP`: triangle i is (pᵢ, pᵢ₊₁, pᵢ₊₂) for even i and
+/// (pᵢ, pᵢ₊₂, pᵢ₊₁) for odd i (glTF 2.0, 3.7.2.1), so that all keep the first one's winding.
+fn strip_triangles(strip: &[u32]) -> Vec<u32> {
+    strip
+        .windows(3)
+        .enumerate()
+        .flat_map(|(i, w)| if i % 2 == 0 { [w[0], w[1], w[2]] } else { [w[0], w[2], w[1]] })
+        .collect()
+}
+
+/// The triangle list of a `TRIANGLE_FAN`: triangle i is (pᵢ₊₁, pᵢ₊₂, p₀) (glTF 2.0, 3.7.2.1).
+fn fan_triangles(fan: &[u32]) -> Vec<u32> {
+    match fan.split_first() {
+        Some((&first, rest)) => rest.windows(2).flat_map(|w| [w[0], w[1], first]).collect(),
+        None => Vec::new(),
     }
 }
 
