@@ -10,7 +10,7 @@ use furnace_render::{
 use furnace_sampling::{AnySampler, Sampler};
 use furnace_scene::{
     AlphaMode, Camera, CameraRays, Emitters, LightBvh, MaterialSample, PointLightDistribution, Scene,
-    oct_decode,
+    VertexAttributes, oct_decode,
 };
 use furnace_scene::{Environment, EnvironmentSampler};
 use glam::{Vec2, Vec3};
@@ -128,8 +128,9 @@ impl CpuRenderer {
             .materials
             .iter()
             .map(|m| {
-                (!m.uses_textures()).then(|| {
-                    let params = m.evaluate(Vec2::ZERO, &scene.textures, &scene.images);
+                // Constant: no texture, and no vertex colour to multiply the base colour.
+                (!m.uses_textures() && g.colors.is_empty()).then(|| {
+                    let params = m.evaluate(&VertexAttributes::default(), &scene.textures, &scene.images);
                     ConstantMaterial {
                         emission: params.emission,
                         bsdf: bsdf(&params, m, settings.specular),
@@ -423,8 +424,8 @@ impl CpuRenderer {
             let params = match &self.constant_materials[material_index] {
                 Some(c) => c.bsdf.sheet_transmittance(direction.dot(normal)),
                 None => {
-                    let uv = scene.geometry.uv(t as usize, b.x, b.y);
-                    let p = material.evaluate(uv, &scene.textures, &scene.images);
+                    let at = scene.geometry.attributes(t as usize, b.x, b.y);
+                    let p = material.evaluate(&at, &scene.textures, &scene.images);
                     bsdf(&p, material, self.settings.specular).sheet_transmittance(direction.dot(normal))
                 }
             };

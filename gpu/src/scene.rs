@@ -10,7 +10,7 @@
 //! |---|---|---|---|
 //! | `scene_triangles` | [`GpuSceneTriangle`] | 16 per triangle | vertex indices, material index (clamped like furnace-cpu's) |
 //! | `scene_vertices` | [`GpuVertex`] | 16 per vertex | world position, octahedral shading normal (`oct_encode`, decoded in WGSL as `oct_decode`) |
-//! | `scene_uvs` | `vec2<f32>` | 8 per vertex, **only when some material is textured** | `TEXCOORD_0` |
+//! | `scene_attributes` | `vec2<u32>` | 8 per UV set and vertex, **only when some material is textured**, + 8 per vertex **only with vertex colours** | the UV sets materials sample (`f32` bits), then `COLOR_0` as RGBA unorm16, vertex by vertex (the stride in each material's flags) |
 //! | `scene_tangents` | `vec2<u32>` | 8 per vertex, **only when some material is normal-mapped** | snorm16 tangent + handedness, as `Geometry::tangents` |
 //! | `scene_materials` | [`GpuMaterial`] | 256 per material | factors, flags, four resolved [`GpuTextureRef`]s |
 //! | `scene_texels` | `u32` | 4 per texel of each **used** image, + 2 KiB | the sRGB and linear decode tables (512 `f32`), then RGBA8 texels (R in the low byte) |
@@ -65,6 +65,15 @@ crate::wgsl_consts! {
     /// [`GpuMaterial::flags`]: some slot has a texture (`Material::uses_textures`): the hit needs
     /// its UV.
     pub const MATERIAL_TEXTURED: u32 = 8;
+    /// [`GpuMaterial::flags`]: the scene has vertex colours (`COLOR_0`, the last word of each
+    /// vertex's attributes), which multiply the base colour.
+    pub const MATERIAL_VERTEX_COLOR: u32 = 16;
+    /// [`GpuMaterial::flags`] bits 8–10: the UV sets the material's textures sample (the highest
+    /// `texCoord` + 1).
+    pub const MATERIAL_UV_SETS_SHIFT: u32 = 8;
+    /// [`GpuMaterial::flags`] bits 12–14: `scene_attributes` words per vertex (the scene's UV
+    /// sets, + 1 with vertex colours; the same in every material).
+    pub const MATERIAL_STRIDE_SHIFT: u32 = 12;
 
     /// [`GpuTextureRef::flags`]: the slot has a texture (otherwise a lookup is opaque white).
     pub const TEXTURE_PRESENT: u32 = 1;
@@ -76,6 +85,8 @@ crate::wgsl_consts! {
     pub const WRAP_S_SHIFT: u32 = 4;
     /// [`GpuTextureRef::flags`] bits 6–7: `wrapT`.
     pub const WRAP_T_SHIFT: u32 = 6;
+    /// [`GpuTextureRef::flags`] bits 8–9: the UV set (`texCoord`).
+    pub const TEXTURE_UV_SET_SHIFT: u32 = 8;
     /// Wrap code of [`WrapMode::Repeat`].
     pub const WRAP_REPEAT: u32 = 0;
     /// Wrap code of [`WrapMode::ClampToEdge`].
@@ -219,7 +230,7 @@ pub fn binding_list() -> Vec<Binding> {
     vec![
         Binding::read("scene_triangles", "array<SceneTriangle>"),
         Binding::read("scene_vertices", "array<SceneVertex>"),
-        Binding::read("scene_uvs", "array<vec2<f32>>"),
+        Binding::read("scene_attributes", "array<vec2<u32>>"),
         Binding::read("scene_tangents", "array<vec2<u32>>"),
         Binding::read("scene_materials", "array<SceneMaterial>"),
         Binding::read("scene_texels", "array<u32>"),
@@ -249,8 +260,9 @@ pub struct SceneBuffers {
     pub triangles: Vec<GpuSceneTriangle>,
     /// `scene_vertices`.
     pub vertices: Vec<GpuVertex>,
-    /// `scene_uvs` (empty when no material is textured).
-    pub uvs: Vec<[f32; 2]>,
+    /// `scene_attributes` (empty when no material is textured and the scene has no vertex
+    /// colours).
+    pub attributes: Vec<[u32; 2]>,
     /// `scene_tangents` (empty when no material is normal-mapped).
     pub tangents: Vec<[u32; 2]>,
     /// `scene_materials`.
@@ -264,20 +276,31 @@ pub struct SceneBuffers {
 }
 
 /// Which optional vertex attributes a scene's shading reads: UVs only when some material is
-/// textured, tangents only when some material has a normal map (and the scene has tangents).
+/// textured, tangents only when some material has a normal map (and the scene has tangents),
+/// colours when the scene has them.
 #[derive(Clone, Copy)]
 struct Kept {
-    textured: bool,
     normal_mapped: bool,
+    /// UV sets stored per vertex (0 unless textured).
+    uv_sets: u32,
+    colors: bool,
 }
 
 impl Kept {
     fn of(scene: &Scene) -> Self {
-        let has_tangents = !scene.geometry.tangents.is_empty();
+        let g = &scene.geometry;
+        let textured = scene.materials.iter().any(|m| m.uses_textures());
         Self {
-            textured: scene.materials.iter().any(|m| m.uses_textures()),
-            normal_mapped: has_tangents && scene.materials.iter().any(|m| m.normal_texture.is_some()),
+            normal_mapped: !g.tangents.is_empty()
+                && scene.materials.iter().any(|m| m.normal_texture.is_some()),
+            uv_sets: if textured { g.uv_sets().min(furnace_scene::MAX_UV_SETS) as u32 } else { 0 },
+            colors: !g.colors.is_empty(),
         }
+    }
+
+    /// `scene_attributes` words per vertex.
+    fn stride(self) -> u32 {
+        self.uv_sets + u32::from(self.colors)
     }
 }
 
@@ -291,8 +314,11 @@ fn check_sizes(scene: &Scene, kept: Kept, limit: u64) -> Result<(), GpuError> {
     let nt = g.triangles.len() as u64;
     check(format!("the scene's triangle buffer ({nt} triangles)"), nt * 16)?;
     check(format!("the scene's vertex buffer ({nv} vertices)"), nv * 16)?;
-    if kept.textured {
-        check(format!("the scene's UV buffer ({nv} vertices)"), nv * 8)?;
+    if kept.stride() > 0 {
+        check(
+            format!("the scene's vertex attribute buffer ({nv} vertices)"),
+            nv * 8 * u64::from(kept.stride()),
+        )?;
     }
     if kept.normal_mapped {
         check(format!("the scene's tangent buffer ({nv} vertices)"), nv * 8)?;
@@ -352,7 +378,8 @@ impl ImageLayout {
         let img = &scene.images[tex.image as usize];
         let mut flags = TEXTURE_PRESENT
             | (wrap_code(tex.wrap_s) << WRAP_S_SHIFT)
-            | (wrap_code(tex.wrap_t) << WRAP_T_SHIFT);
+            | (wrap_code(tex.wrap_t) << WRAP_T_SHIFT)
+            | ((r.tex_coord & 3) << TEXTURE_UV_SET_SHIFT);
         if r.color_space == ColorSpace::Srgb {
             flags |= TEXTURE_SRGB;
         }
@@ -420,6 +447,27 @@ fn geometry(scene: &Scene) -> (Vec<GpuSceneTriangle>, Vec<GpuVertex>) {
     (triangles, vertices)
 }
 
+/// `scene_attributes`: per vertex its [`Kept::uv_sets`] UV sets (`f32` bits), then its colour
+/// (RGBA unorm16, R and G in the first word's low and high halves).
+fn vertex_attributes(g: &furnace_scene::Geometry, kept: Kept) -> Vec<[u32; 2]> {
+    if kept.stride() == 0 {
+        return Vec::new();
+    }
+    let stored = g.uv_sets();
+    let mut out = Vec::with_capacity(g.positions.len() * kept.stride() as usize);
+    for i in 0..g.positions.len() {
+        for k in 0..kept.uv_sets as usize {
+            let uv = g.uvs.get(i * stored + k).copied().unwrap_or_default();
+            out.push([uv.x.to_bits(), uv.y.to_bits()]);
+        }
+        if kept.colors {
+            let c = g.colors.get(i).copied().unwrap_or([u16::MAX; 4]).map(u32::from);
+            out.push([c[0] | (c[1] << 16), c[2] | (c[3] << 16)]);
+        }
+    }
+    out
+}
+
 /// A material's GPU record, its texture slots through `texture_ref`.
 fn material_record(
     m: &furnace_scene::Material,
@@ -438,6 +486,11 @@ fn material_record(
     if m.uses_textures() {
         flags |= MATERIAL_TEXTURED;
     }
+    if kept.colors {
+        flags |= MATERIAL_VERTEX_COLOR;
+    }
+    let sets = m.texture_refs().map(|t| t.tex_coord + 1).max().unwrap_or(0).min(kept.uv_sets);
+    flags |= (sets << MATERIAL_UV_SETS_SHIFT) | (kept.stride() << MATERIAL_STRIDE_SHIFT);
     GpuMaterial {
         base_color_factor: m.base_color_factor.to_array(),
         emissive: m.emissive.to_array(),
@@ -479,11 +532,7 @@ impl SceneBuffers {
         let images = ImageLayout::of(scene, kept, max_binding)?;
         let (triangles, vertices) = geometry(scene);
         let g = &scene.geometry;
-        let uvs = if kept.textured {
-            (0..g.positions.len()).map(|i| g.uvs.get(i).map_or([0.0; 2], |uv| uv.to_array())).collect()
-        } else {
-            Vec::new()
-        };
+        let attributes = vertex_attributes(g, kept);
         let tangents = if kept.normal_mapped {
             (0..g.positions.len())
                 .map(|i| {
@@ -518,7 +567,7 @@ impl SceneBuffers {
         Ok(Self {
             triangles,
             vertices,
-            uvs,
+            attributes,
             tangents,
             materials,
             texels: images.texels(scene),
@@ -531,7 +580,7 @@ impl SceneBuffers {
     pub const EXTRA_NAMES: [&'static str; 6] = [
         "scene triangles",
         "scene vertices",
-        "scene uvs",
+        "scene vertex attributes",
         "scene tangents",
         "scene materials",
         "scene texels",
@@ -547,18 +596,19 @@ impl SceneBuffers {
         [
             w(bytemuck::cast_slice(&self.triangles)),
             w(bytemuck::cast_slice(&self.vertices)),
-            w(bytemuck::cast_slice(&self.uvs)),
+            w(bytemuck::cast_slice(&self.attributes)),
             w(bytemuck::cast_slice(&self.tangents)),
             w(bytemuck::cast_slice(&self.materials)),
             w(&self.texels),
         ]
     }
 
-    /// Bytes of the per-triangle and per-vertex buffers (triangles, vertices, UVs, tangents).
+    /// Bytes of the per-triangle and per-vertex buffers (triangles, vertices, attributes,
+    /// tangents).
     pub fn geometry_bytes(&self) -> u64 {
         (size_of_val(self.triangles.as_slice())
             + size_of_val(self.vertices.as_slice())
-            + size_of_val(self.uvs.as_slice())
+            + size_of_val(self.attributes.as_slice())
             + size_of_val(self.tangents.as_slice())) as u64
     }
 
@@ -680,7 +730,7 @@ mod tests {
     fn cornell_box_keeps_no_uvs_tangents_or_texels() {
         let scene = furnace_scene::builtin::cornell_box().unwrap();
         let b = SceneBuffers::new(&scene, u64::MAX).unwrap();
-        assert!(b.uvs.is_empty() && b.tangents.is_empty());
+        assert!(b.attributes.is_empty() && b.tangents.is_empty());
         assert_eq!(b.texels.len(), TABLE_WORDS as usize);
         assert_eq!(b.triangles.len(), scene.geometry.triangle_count());
         // The decode tables are furnace-scene's values, bit for bit.

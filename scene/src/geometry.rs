@@ -42,6 +42,46 @@ pub fn decode_tangent(e: [i16; 4]) -> Vec4 {
     Vec4::new(e[0] as f32, e[1] as f32, e[2] as f32, e[3] as f32) / 32767.0
 }
 
+/// The most UV sets a material may sample: `TEXCOORD_0` to `TEXCOORD_3`.
+pub const MAX_UV_SETS: usize = 4;
+
+/// What a shading point interpolates from its triangle's vertices besides its normal: the UV
+/// sets (those the scene does not store are `(0, 0)`) and `COLOR_0`, which multiplies the base
+/// colour and its alpha (opaque white without it).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct VertexAttributes {
+    /// `TEXCOORD_k` at index k.
+    pub uv: [Vec2; MAX_UV_SETS],
+    /// `COLOR_0`, linear RGBA.
+    pub color: Vec4,
+}
+
+impl Default for VertexAttributes {
+    fn default() -> Self {
+        Self { uv: [Vec2::ZERO; MAX_UV_SETS], color: Vec4::ONE }
+    }
+}
+
+impl VertexAttributes {
+    /// Attributes of UV0 alone (white vertex colour).
+    pub fn from_uv(uv: Vec2) -> Self {
+        let mut a = Self::default();
+        a.uv[0] = uv;
+        a
+    }
+}
+
+/// Packs a linear RGBA vertex colour as unorm16 (glTF's `COLOR_0` lies in [0, 1]; values
+/// outside are clamped, NaN reads 0).
+pub fn encode_color(c: Vec4) -> [u16; 4] {
+    c.to_array().map(|x| (x.clamp(0.0, 1.0) * 65535.0).round() as u16)
+}
+
+/// Unpacks [`encode_color`] (also WGSL's `unpack2x16unorm`).
+pub fn decode_color(e: [u16; 4]) -> Vec4 {
+    Vec4::from_array(e.map(|x| f32::from(x) / 65535.0))
+}
+
 /// Per-vertex tangents from UV derivatives (Lengyel, "Computing Tangent Space Basis Vectors
 /// for an Arbitrary Mesh", 2001): each triangle's `∂p/∂u` and `∂p/∂v` are accumulated on its
 /// vertices, then the tangent is Gram–Schmidt-orthogonalised against the normal and the
@@ -105,9 +145,13 @@ pub struct Geometry {
     pub positions: Vec<Vec3>,
     /// World-space unit shading normals, octahedral-encoded ([`oct_decode`]), one per vertex.
     pub normals: Vec<u32>,
-    /// `TEXCOORD_0` per vertex, **empty** when no material uses a texture; `(0, 0)` for
-    /// vertices of primitives without UVs.
+    /// The UV sets materials sample (`TEXCOORD_0` … `TEXCOORD_n`, n < [`MAX_UV_SETS`]), vertex
+    /// by vertex: vertex i's set k at `i × sets + k` ([`Geometry::uv_sets`]); **empty** when no
+    /// material uses a texture; `(0, 0)` for vertices of primitives without that set.
     pub uvs: Vec<Vec2>,
+    /// `COLOR_0` per vertex as RGBA unorm16 ([`encode_color`]), **empty** unless some primitive
+    /// has one; opaque white for vertices of primitives without it.
+    pub colors: Vec<[u16; 4]>,
     /// World-space unit tangents with handedness `w = ±1` (glTF `TANGENT`: bitangent =
     /// `w·cross(normal, tangent)`), as snorm16 ([`encode_tangent`]); **empty** unless some
     /// material has a normal map. From the file's `TANGENT` attribute when present, otherwise
@@ -141,13 +185,33 @@ impl Geometry {
         Some(((1.0 - b1 - b2) * n(a)? + b1 * n(b)? + b2 * n(c)?).normalize_or_zero())
     }
 
+    /// The UV sets stored per vertex (0 without UVs).
+    pub fn uv_sets(&self) -> usize {
+        if self.positions.is_empty() { 0 } else { self.uvs.len() / self.positions.len() }
+    }
+
     /// The interpolated UV0 of triangle `t` at barycentrics `(b1, b2)`; `(0, 0)` without UVs.
     pub fn uv(&self, t: usize, b1: f32, b2: f32) -> Vec2 {
+        self.attributes(t, b1, b2).uv[0]
+    }
+
+    /// The interpolated UV sets and vertex colour of triangle `t` at barycentrics `(b1, b2)`:
+    /// sets not stored are `(0, 0)`, the colour without `COLOR_0` opaque white.
+    pub fn attributes(&self, t: usize, b1: f32, b2: f32) -> VertexAttributes {
+        let mut out = VertexAttributes::default();
         let Some(&[a, b, c]) = self.triangles.get(t) else {
-            return Vec2::ZERO;
+            return out;
         };
-        let uv = |i: u32| self.uvs.get(i as usize).copied().unwrap_or(Vec2::ZERO);
-        (1.0 - b1 - b2) * uv(a) + b1 * uv(b) + b2 * uv(c)
+        let sets = self.uv_sets().min(MAX_UV_SETS);
+        for (k, uv) in out.uv.iter_mut().enumerate().take(sets) {
+            let at = |i: u32| self.uvs.get(i as usize * sets + k).copied().unwrap_or(Vec2::ZERO);
+            *uv = (1.0 - b1 - b2) * at(a) + b1 * at(b) + b2 * at(c);
+        }
+        if !self.colors.is_empty() {
+            let at = |i: u32| self.colors.get(i as usize).map_or(Vec4::ONE, |&e| decode_color(e));
+            out.color = (1.0 - b1 - b2) * at(a) + b1 * at(b) + b2 * at(c);
+        }
+        out
     }
 
     /// Axis-aligned bounds of all vertices (`(+∞, −∞)` when empty).
@@ -173,6 +237,7 @@ impl Geometry {
         self.positions.len() * 12
             + self.normals.len() * 4
             + self.uvs.len() * 8
+            + self.colors.len() * 8
             + self.tangents.len() * 8
             + self.triangles.len() * 12
             + self.triangle_materials.len() * 4

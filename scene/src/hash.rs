@@ -24,6 +24,13 @@ impl Scene {
         for uv in &g.uvs {
             uv.to_array().iter().for_each(|c| h.word(c.to_bits()));
         }
+        // Vertex colours only where stored, so that the hashes of scenes without them stay
+        // those recorded in earlier renders.
+        if !g.colors.is_empty() {
+            h.len(g.colors.len());
+            g.colors.iter().for_each(|c| h.word(u32::from(c[0]) | (u32::from(c[1]) << 16)));
+            g.colors.iter().for_each(|c| h.word(u32::from(c[2]) | (u32::from(c[3]) << 16)));
+        }
         h.len(g.tangents.len());
         for t in &g.tangents {
             t.iter().for_each(|&c| h.word(u32::from(c as u16)));

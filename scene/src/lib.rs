@@ -66,7 +66,10 @@ pub use environment::{
     MAX_ENVIRONMENT_TEXELS, YRotation, direction_to_uv, uv_to_direction,
 };
 pub use error::{SceneError, Warning};
-pub use geometry::{Geometry, decode_tangent, encode_tangent, generate_tangents, oct_decode, oct_encode};
+pub use geometry::{
+    Geometry, MAX_UV_SETS, VertexAttributes, decode_color, decode_tangent, encode_color, encode_tangent,
+    generate_tangents, oct_decode, oct_encode,
+};
 pub use light::{Light, PointLight, PointLightDistribution, Sky, SpotCone, Sun};
 pub use light_bvh::{LEAF as LIGHT_BVH_LEAF, LightBounds, LightBvh, LightBvhNode};
 pub use load::{MAX_COORDINATE, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS};

@@ -4,8 +4,9 @@
 //! [`Material::evaluate`] into the per-shading-point values the integrator feeds to
 //! `furnace_brdf::MetallicRoughnessParams`.
 
+use crate::VertexAttributes;
 use crate::texture::{Image, Texture, TextureRef};
-use glam::{Vec2, Vec3, Vec4};
+use glam::{Vec3, Vec4};
 
 /// How alpha is interpreted (glTF `alphaMode`).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -102,7 +103,7 @@ impl Default for Material {
 pub struct MaterialSample {
     /// Linear base colour (RGB).
     pub base_color: Vec3,
-    /// Alpha (base colour factor × texture alpha).
+    /// Alpha (base colour factor × texture alpha × vertex alpha).
     pub alpha: f32,
     /// `metallicFactor × texture.b`.
     pub metallic: f32,
@@ -121,11 +122,20 @@ pub struct MaterialSample {
 impl Material {
     /// True when any slot uses a texture (the scene then stores UVs).
     pub fn uses_textures(&self) -> bool {
-        self.base_color_texture.is_some()
-            || self.metallic_roughness_texture.is_some()
-            || self.normal_texture.is_some()
-            || self.emissive_texture.is_some()
-            || self.transmission_texture.is_some()
+        self.texture_refs().next().is_some()
+    }
+
+    /// The slots' textures.
+    pub fn texture_refs(&self) -> impl Iterator<Item = &TextureRef> {
+        [
+            &self.base_color_texture,
+            &self.metallic_roughness_texture,
+            &self.normal_texture,
+            &self.emissive_texture,
+            &self.transmission_texture,
+        ]
+        .into_iter()
+        .flatten()
     }
 
     /// Whether light can pass through the surface (`transmissionFactor` > 0): rendered as a
@@ -145,16 +155,16 @@ impl Material {
         self.is_transmissive() && (!self.volume || self.ior == 1.0)
     }
 
-    /// Evaluates factors × textures at `uv` (UV0; ignored without textures).
-    pub fn evaluate(&self, uv: Vec2, textures: &[Texture], images: &[Image]) -> MaterialSample {
-        let sample = |t: &Option<TextureRef>| {
-            t.as_ref().map_or(Vec4::ONE, |t| t.sample_bilinear(uv, textures, images))
-        };
-        let base = self.base_color_factor * sample(&self.base_color_texture);
+    /// Evaluates factors × textures at a shading point `at` (each texture at its UV set), the
+    /// base colour and alpha multiplied by the vertex colour.
+    pub fn evaluate(&self, at: &VertexAttributes, textures: &[Texture], images: &[Image]) -> MaterialSample {
+        let sample =
+            |t: &Option<TextureRef>| t.as_ref().map_or(Vec4::ONE, |t| t.sample(at, textures, images));
+        let base = self.base_color_factor * sample(&self.base_color_texture) * at.color;
         let mr = sample(&self.metallic_roughness_texture);
         let emission = self.emissive * sample(&self.emissive_texture).truncate();
         let transmission = match &self.transmission_texture {
-            Some(t) => self.transmission_factor * t.sample_bilinear(uv, textures, images).x,
+            Some(t) => self.transmission_factor * t.sample(at, textures, images).x,
             None => self.transmission_factor,
         };
         MaterialSample {

@@ -3,8 +3,8 @@
 //! ([`Scene::alpha_passes`]). The CPU integrator calls these; `furnace-gpu`'s `scene.wgsl` is
 //! their twin.
 
-use crate::{AlphaMode, Material, Scene};
-use glam::{Vec2, Vec3};
+use crate::{AlphaMode, Material, Scene, VertexAttributes};
+use glam::Vec3;
 
 /// Where a ray hit a surface, in world space, with normals oriented towards the incoming ray.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -42,7 +42,7 @@ impl Scene {
     /// The surface at a hit of triangle `t` at barycentrics `(b1, b2)` by a ray travelling along
     /// `direction`: the position, the geometric normal, and the shading normal — `interpolated`
     /// (the vertex normals' interpolation, [`crate::Geometry::shading_normal`]; the geometric
-    /// normal where it is `None` or zero) with `material`'s glTF normal map applied at `uv`
+    /// normal where it is `None` or zero) with `material`'s glTF normal map applied at `at`
     /// through the vertex tangents — both turned towards the incoming ray for a double-sided
     /// material. `None` on the back of a single-sided material (black, like a one-sided BSDF)
     /// or for a triangle out of range.
@@ -51,7 +51,7 @@ impl Scene {
         t: usize,
         (b1, b2): (f32, f32),
         material: &Material,
-        uv: Vec2,
+        at: &VertexAttributes,
         direction: Vec3,
         interpolated: Option<Vec3>,
     ) -> Option<SurfacePoint> {
@@ -65,7 +65,7 @@ impl Scene {
         {
             // glTF normal map: tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame
             // (T, B = w·N×T, N), with T made orthogonal to the shading normal N.
-            let m = normal_map.sample_bilinear(uv, &self.textures, &self.images).truncate();
+            let m = normal_map.sample(at, &self.textures, &self.images).truncate();
             let m = (2.0 * m - Vec3::ONE) * Vec3::new(material.normal_scale, material.normal_scale, 1.0);
             let tn = (tangent.truncate() - shading * shading.dot(tangent.truncate())).normalize_or_zero();
             if tn != Vec3::ZERO {
@@ -85,16 +85,17 @@ impl Scene {
     }
 
     /// The alpha test of a hit of triangle `t` (of `material`) at barycentrics `(b1, b2)`: true
-    /// unless the material is alpha-masked and `baseColorFactor.a × base colour texture alpha`
-    /// at the hit's UV is below its cutoff.
+    /// unless the material is alpha-masked and `baseColorFactor.a × base colour texture alpha ×
+    /// vertex alpha` there is below its cutoff.
     pub fn alpha_passes(&self, t: usize, (b1, b2): (f32, f32), material: &Material) -> bool {
         if !matches!(material.alpha_mode, AlphaMode::Mask { .. }) {
             return true;
         }
-        let uv = self.geometry.uv(t, b1, b2);
+        let at = self.geometry.attributes(t, b1, b2);
         let texture = material.base_color_texture.as_ref();
         let alpha = material.base_color_factor.w
-            * texture.map_or(1.0, |t| t.sample_bilinear(uv, &self.textures, &self.images).w);
+            * texture.map_or(1.0, |t| t.sample(&at, &self.textures, &self.images).w)
+            * at.color.w;
         material.alpha_test(alpha)
     }
 }

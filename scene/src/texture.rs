@@ -2,6 +2,7 @@
 //! lookup that decodes sRGB to linear *before* filtering (filtering encoded values would darken
 //! edges).
 
+use crate::VertexAttributes;
 use glam::{Mat3, Vec2, Vec3, Vec4};
 use std::sync::OnceLock;
 
@@ -107,8 +108,8 @@ impl TextureTransform {
 pub struct TextureRef {
     /// Index into [`crate::Scene::textures`].
     pub texture: u32,
-    /// The UV set (`texCoord`, possibly overridden by KHR_texture_transform). furnace stores
-    /// only `TEXCOORD_0`; a reference to another set was reported as a warning at load time.
+    /// The UV set (`texCoord`, possibly overridden by KHR_texture_transform), below
+    /// [`crate::MAX_UV_SETS`] (the loader reads a higher one as set 0, with a warning).
     pub tex_coord: u32,
     /// How the slot encodes colour.
     pub color_space: ColorSpace,
@@ -173,7 +174,14 @@ impl Image {
 }
 
 impl TextureRef {
-    /// Samples this slot at `uv` (the stored UV0, before KHR_texture_transform): applies the
+    /// Samples this slot at a shading point: at its UV set of `at` (see
+    /// [`TextureRef::sample_bilinear`]).
+    pub fn sample(&self, at: &VertexAttributes, textures: &[Texture], images: &[Image]) -> Vec4 {
+        let uv = at.uv.get(self.tex_coord as usize).copied().unwrap_or(at.uv[0]);
+        self.sample_bilinear(uv, textures, images)
+    }
+
+    /// Samples this slot at `uv` (its UV set's, before KHR_texture_transform): applies the
     /// transform, the texture's wrap modes and the slot's colour space. Returns linear RGBA, or
     /// opaque white when the texture or image index is out of range (cannot happen for a scene
     /// built by this crate).

@@ -68,7 +68,7 @@ fn box_textured_samples_linear_srgb() {
         let want = furnace_scene::srgb_to_linear(raw[0] as f32 / 255.0);
         // Tolerance: the lerp weights at a texel centre are exact up to f32 rounding of uv.
         assert!((got.x - want).abs() < 1e-4, "{got} vs {want}");
-        let ms = m.evaluate(uv, &s.textures, &s.images);
+        let ms = m.evaluate(&furnace_scene::VertexAttributes::from_uv(uv), &s.textures, &s.images);
         assert!(ms.base_color.is_finite());
     }
 }

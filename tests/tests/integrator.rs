@@ -303,6 +303,7 @@ fn frame_params_layout_matches_wgsl() {
                 solid_angle_triangles: light_bvh,
                 trace_counters: !light_bvh,
                 queued_point_lights: if light_bvh { 3 } else { 0 },
+                vertex_attributes: light_bvh,
                 one_point_light: !light_bvh,
             },
         ));

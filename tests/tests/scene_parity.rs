@@ -28,7 +28,7 @@ use furnace_gpu::scene::{
     self, GpuMaterial, GpuScene, GpuSceneTriangle, GpuTextureRef, GpuVertex, SceneBuffers,
 };
 use furnace_gpu::{GpuContext, GpuError, wgsl};
-use furnace_scene::{AlphaMode, Material, Scene, TextureRef, builtin, srgb_to_linear};
+use furnace_scene::{AlphaMode, Material, Scene, TextureRef, VertexAttributes, builtin, srgb_to_linear};
 use furnace_tests::gpu::{self as kernel, test_context};
 use glam::{Vec2, Vec3, Vec4};
 use std::fmt::Write as _;
@@ -370,13 +370,11 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     let b2 = bitcast<f32>(input[6u * i + 2u]);
     let dir = vec3<f32>(bitcast<f32>(input[6u * i + 3u]), bitcast<f32>(input[6u * i + 4u]), bitcast<f32>(input[6u * i + 5u]));
     let mi = scene_triangle_material(tri);
-    // As the integrator: the UV only for textured materials.
-    var uv = vec2<f32>(0.0);
-    if scene_material_is_textured(mi) {
-        uv = scene_uv(tri, b1, b2);
-    }
-    let s = scene_surface_point(tri, b1, b2, uv, dir);
-    let m = scene_material_evaluate(mi, uv);
+    // As the integrator: the attributes the material reads.
+    let at = scene_hit_attributes(mi, tri, b1, b2);
+    let uv = at.uv0;
+    let s = scene_surface_point(tri, b1, b2, at, dir);
+    let m = scene_material_evaluate(mi, at);
     let n = scene_shading_normal(tri, b1, b2);
     let t = scene_tangent(tri, b1, b2);
     let o = 36u * i;
@@ -409,7 +407,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     if i >= params.x { return; }
     let mi = input[3u * i];
     let uv = vec2<f32>(bitcast<f32>(input[3u * i + 1u]), bitcast<f32>(input[3u * i + 2u]));
-    let m = scene_material_evaluate(mi, uv);
+    let m = scene_material_evaluate(mi, scene_attributes_of_uv(uv));
     let mat = scene_materials[mi];
     let a = scene_texture_sample(mat.base_color_texture, uv);
     let b = scene_texture_sample(mat.metallic_roughness_texture, uv);
@@ -552,7 +550,7 @@ fn hit_parity(ctx: &GpuContext, scene: &Scene, label: &str, n: usize, seed: u64)
         let tex_tol = |r: &Option<TextureRef>| slot_tolerance(scene, r, uv) + uv_slack(r);
         // MaterialSample: factor × texture, so the texture bound times the factor (plus 1 ULP of
         // the product).
-        let ms = material.evaluate(uv, &scene.textures, &scene.images);
+        let ms = material.evaluate(&VertexAttributes::from_uv(uv), &scene.textures, &scene.images);
         let tb = tex_tol(&material.base_color_texture);
         let tmr = tex_tol(&material.metallic_roughness_texture);
         let te = tex_tol(&material.emissive_texture);
@@ -667,7 +665,7 @@ fn material_parity(ctx: &GpuContext, shader: &str, scene: &Scene, n: usize, seed
     for (q, &(mi, uv)) in queries.iter().enumerate() {
         let o = &out[32 * q..32 * q + 32];
         let material = &scene.materials[mi];
-        let ms = material.evaluate(uv, &scene.textures, &scene.images);
+        let ms = material.evaluate(&VertexAttributes::from_uv(uv), &scene.textures, &scene.images);
         // Without a finite UV both sides sample at (0, 0): the bound at (0, 0).
         let tuv = if uv.is_finite() { uv } else { Vec2::ZERO };
         let slots = [
@@ -777,7 +775,7 @@ fn cornell_box_uploads_untextured_and_matches() {
     let packed = SceneBuffers::new(&scene, ctx.max_storage_binding()).unwrap();
     // Untextured: no UVs, tangents or texels beyond the tables; 16 B per triangle + 16 B per
     // vertex.
-    assert!(packed.uvs.is_empty() && packed.tangents.is_empty());
+    assert!(packed.attributes.is_empty() && packed.tangents.is_empty());
     assert_eq!(packed.texels.len(), scene::TABLE_WORDS as usize);
     let gpu = GpuScene::upload(&ctx, &scene).unwrap();
     println!(
@@ -852,7 +850,7 @@ fn only_what_shading_reads_is_stored() {
     assert_eq!(p.image_count, 4, "image 2 is used by normal maps (and material 3's MR) only");
     // Untextured: no UVs.
     let cbox = SceneBuffers::new(&builtin::cornell_box().unwrap(), u64::MAX).unwrap();
-    assert!(cbox.uvs.is_empty());
+    assert!(cbox.attributes.is_empty());
     assert_eq!(cbox.geometry_bytes(), 16 * (cbox.triangles.len() + cbox.vertices.len()) as u64);
 }
 

@@ -386,8 +386,10 @@ impl CpuRenderer {
         match &self.constant_materials[material] {
             Some(c) => c.emission,
             None => {
-                let uv = self.scene.geometry.uv(t, b.x, b.y);
-                self.scene.materials[material].evaluate(uv, &self.scene.textures, &self.scene.images).emission
+                let at = self.scene.geometry.attributes(t, b.x, b.y);
+                self.scene.materials[material]
+                    .evaluate(&at, &self.scene.textures, &self.scene.images)
+                    .emission
             }
         }
     }

@@ -9,7 +9,7 @@ use furnace_brdf::{Frame, HitBsdf};
 use furnace_render::AovSample;
 use furnace_render::layout::{self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE};
 use furnace_sampling::Sampler;
-use furnace_scene::{Material, SurfacePoint};
+use furnace_scene::{Material, SurfacePoint, VertexAttributes};
 use glam::{Vec2, Vec3};
 
 /// What a path carries from one ray to the next.
@@ -77,18 +77,19 @@ impl CpuRenderer {
             };
             let material_index = self.triangle_materials[hit.triangle as usize] as usize;
             let material = &scene.materials[material_index];
-            // Textured materials are evaluated at the hit's UV; the others were built once.
-            let (uv, shading) = match &self.constant_materials[material_index] {
-                Some(c) => (Vec2::ZERO, Shading::Constant(c)),
-                None => {
-                    let uv = scene.geometry.uv(hit.triangle as usize, hit.barycentrics.x, hit.barycentrics.y);
-                    (uv, Shading::Evaluated(material.evaluate(uv, &scene.textures, &scene.images)))
-                }
-            };
+            // Materials with textures or vertex colours are evaluated at the hit's attributes;
+            // the others were built once.
             let t = hit.triangle as usize;
             let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
+            let (at, shading) = match &self.constant_materials[material_index] {
+                Some(c) => (VertexAttributes::default(), Shading::Constant(c)),
+                None => {
+                    let at = scene.geometry.attributes(t, b1, b2);
+                    (at, Shading::Evaluated(material.evaluate(&at, &scene.textures, &scene.images)))
+                }
+            };
             let interpolated = self.shading_normal(t, b1, b2);
-            let surface = scene.surface_point(t, (b1, b2), material, uv, path.direction, interpolated);
+            let surface = scene.surface_point(t, (b1, b2), material, &at, path.direction, interpolated);
             if let Some(aov) = aov.take() {
                 *aov = first_hit_aov(&shading, surface.as_ref(), hit.t);
             }

@@ -194,6 +194,9 @@ pub struct SceneFeatures {
     /// ([`TriangleSampling::SolidAngle`]; with `emitters` only), else by area: the spherical
     /// triangle's code is composed only then.
     pub solid_angle_triangles: bool,
+    /// Some material reads vertex attributes: a texture's UV set, or the scene's vertex colours
+    /// (`scene_attributes` is read at hits; without, a hit's attributes are a constant).
+    pub vertex_attributes: bool,
     /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
     /// triangles per invocation, added to the ray counter at its end). Not a property of the
     /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
@@ -227,6 +230,8 @@ impl SceneFeatures {
             transmission: scene.materials.iter().any(|m| m.is_transmissive()),
             thin_walled: scene.materials.iter().any(|m| m.passes_shadow_rays()),
             solid_angle_triangles: emitters && settings.triangle_sampling == TriangleSampling::SolidAngle,
+            vertex_attributes: scene.materials.iter().any(|m| m.uses_textures())
+                || !scene.geometry.colors.is_empty(),
             trace_counters: false,
         }
     }
@@ -254,7 +259,7 @@ impl SceneFeatures {
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
     /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
-    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `TRACE_COUNTERS`,
+    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`,
     /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
@@ -273,6 +278,7 @@ impl SceneFeatures {
             "THIN_WALLED" => self.transmission && self.thin_walled,
             "SOLID_ANGLE_TRIANGLES" => self.emitters && self.solid_angle_triangles,
             "TRACE_COUNTERS" => self.trace_counters,
+            "VERTEX_ATTRIBUTES" => self.vertex_attributes,
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,
             _ => panic!("no scene feature {name} (an #if of the integrator's WGSL)"),

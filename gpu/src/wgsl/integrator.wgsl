@@ -302,12 +302,9 @@ fn scatter_transmissive(path: ptr<function, Path>, pixel: u32, index: u32, bsdf:
 // that continues the path (`scatter`). Returns whether the path goes on.
 fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> bool {
     let material = scene_triangle_material(hit.triangle);
-    var uv = vec2<f32>(0.0);
-    if scene_material_is_textured(material) {
-        uv = scene_uv(hit.triangle, hit.u, hit.v);
-    }
-    let ms = scene_material_evaluate(material, uv);
-    let surface = scene_surface_point(hit.triangle, hit.u, hit.v, uv, path.direction);
+    let at = hit_attributes(material, hit.triangle, hit.u, hit.v);
+    let ms = scene_material_evaluate(material, at);
+    let surface = scene_surface_point(hit.triangle, hit.u, hit.v, at, path.direction);
     // #if AOVS
     if path.event == 0u {
         record_first_hit(ms, surface, hit.t);
@@ -333,7 +330,7 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
         return false;
     }
     // #endif
-    var bsdf = hit_bsdf(ms, material, uv);
+    var bsdf = hit_bsdf(ms, material, at);
     var shading = surface.shading;
     var delta = false;
     // #if TRANSMISSION

@@ -2,6 +2,16 @@
 // (`HitBsdf`): which lobes a hit has and their weights. Composed after the generated bindings
 // and before integrator.wgsl, with the TRANSMISSION parts only when a scene has them.
 
+// What a hit's material reads of its vertices (Geometry::attributes): its UV sets and vertex
+// colour where the scene has any (the VERTEX_ATTRIBUTES kernels), else nothing, a constant.
+fn hit_attributes(material: u32, triangle: u32, b1: f32, b2: f32) -> SceneAttributes {
+    // #if VERTEX_ATTRIBUTES
+    return scene_hit_attributes(material, triangle, b1, b2);
+    // #else
+    return scene_attributes_of_uv(vec2<f32>(0.0));
+    // #endif
+}
+
 // The BSDF at a hit and what light samples need of it besides (furnace_brdf::HitBsdf and
 // furnace-cpu's Vertex): the opaque record, or with TRANSMISSION the transmissive mixture.
 struct HitBsdf {
@@ -19,13 +29,13 @@ struct HitBsdf {
 }
 
 // `HitBsdf::new`: the material's BSDF at a hit.
-fn hit_bsdf(ms: MaterialSample, material: u32, uv: vec2<f32>) -> HitBsdf {
+fn hit_bsdf(ms: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
     var b: HitBsdf;
     b.m = bsdf_params(ms.base_color, ms.metallic, ms.roughness, ms.specular_factor, ms.specular_color,
                       params.bsdf_flags);
     // #if TRANSMISSION
     let tr = scene_transmission[material];
-    let transmission = tr.transmission_factor * scene_texture_sample(tr.transmission_texture, uv).x;
+    let transmission = tr.transmission_factor * scene_texture_sample_at(tr.transmission_texture, at).x;
     let metallic = brdf_clamp(ms.metallic, 0.0, 1.0);
     let g = brdf_clamp(transmission, 0.0, 1.0) * (1.0 - metallic);
     if g > 0.0 {

@@ -254,11 +254,7 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
         return;
     }
     let material = scene_triangle_material(t);
-    var uv = vec2<f32>(0.0);
-    if scene_material_is_textured(material) {
-        uv = scene_uv(t, b.x, b.y);
-    }
-    let emission = scene_material_evaluate(material, uv).emission;
+    let emission = scene_material_evaluate(material, hit_attributes(material, t, b.x, b.y)).emission;
     let wi_local = frame_to_local(frame, wi);
     let f = hit_eval(bsdf, wo, wi_local);
     if all(emission == vec3<f32>(0.0)) || all(f == vec3<f32>(0.0)) {

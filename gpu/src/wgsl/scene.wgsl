@@ -45,7 +45,7 @@
 //
 //   var<storage, read> scene_triangles: array<SceneTriangle>;
 //   var<storage, read> scene_vertices: array<SceneVertex>;
-//   var<storage, read> scene_uvs: array<vec2<f32>>;
+//   var<storage, read> scene_attributes: array<vec2<u32>>;
 //   var<storage, read> scene_tangents: array<vec2<u32>>;
 //   var<storage, read> scene_materials: array<SceneMaterial>;
 //   var<storage, read> scene_texels: array<u32>;
@@ -172,10 +172,70 @@ fn scene_shading_normal(triangle: u32, b1: f32, b2: f32) -> vec3<f32> {
     return scene_normalize_or_zero(n);
 }
 
-// Geometry::uv: interpolated UV0 ((0, 0) in a scene without UVs, whose buffer is one zero).
-fn scene_uv(triangle: u32, b1: f32, b2: f32) -> vec2<f32> {
+// VertexAttributes: the UV sets (those a material does not sample: (0, 0)) and COLOR_0
+// (opaque white without it) at a shading point.
+struct SceneAttributes {
+    uv0: vec2<f32>,
+    uv1: vec2<f32>,
+    uv2: vec2<f32>,
+    uv3: vec2<f32>,
+    color: vec4<f32>,
+}
+
+// VertexAttributes::from_uv: UV0 alone.
+fn scene_attributes_of_uv(uv: vec2<f32>) -> SceneAttributes {
+    return SceneAttributes(uv, vec2<f32>(0.0), vec2<f32>(0.0), vec2<f32>(0.0), vec4<f32>(1.0));
+}
+
+// Word k of the triangle's vertices' attributes (`stride` words per vertex), interpolated as
+// a UV.
+fn scene_interpolate_uv(t: SceneTriangle, stride: u32, k: u32, b1: f32, b2: f32) -> vec2<f32> {
+    let a = bitcast<vec2<f32>>(scene_attributes[t.i0 * stride + k]);
+    let b = bitcast<vec2<f32>>(scene_attributes[t.i1 * stride + k]);
+    let c = bitcast<vec2<f32>>(scene_attributes[t.i2 * stride + k]);
+    return (1.0 - b1 - b2) * a + b1 * b + b2 * c;
+}
+
+// decode_color: RGBA unorm16 in two words.
+fn scene_decode_color(w: vec2<u32>) -> vec4<f32> {
+    return vec4<f32>(f32(w.x & 0xffffu), f32(w.x >> 16u), f32(w.y & 0xffffu), f32(w.y >> 16u)) / 65535.0;
+}
+
+// Geometry::attributes at barycentrics (b1, b2) of `triangle`, whose material is `material`:
+// the UV sets its textures sample and the vertex colour where the scene has them.
+fn scene_hit_attributes(material: u32, triangle: u32, b1: f32, b2: f32) -> SceneAttributes {
+    var a = scene_attributes_of_uv(vec2<f32>(0.0));
+    let flags = scene_materials[material].flags;
+    let stride = (flags >> SCENE_MATERIAL_STRIDE_SHIFT) & 7u;
+    if stride == 0u {
+        return a;
+    }
     let t = scene_triangles[triangle];
-    return (1.0 - b1 - b2) * scene_uvs[t.i0] + b1 * scene_uvs[t.i1] + b2 * scene_uvs[t.i2];
+    let sets = (flags >> SCENE_MATERIAL_UV_SETS_SHIFT) & 7u;
+    if sets > 0u {
+        a.uv0 = scene_interpolate_uv(t, stride, 0u, b1, b2);
+    }
+    if sets > 1u {
+        a.uv1 = scene_interpolate_uv(t, stride, 1u, b1, b2);
+    }
+    if sets > 2u {
+        a.uv2 = scene_interpolate_uv(t, stride, 2u, b1, b2);
+    }
+    if sets > 3u {
+        a.uv3 = scene_interpolate_uv(t, stride, 3u, b1, b2);
+    }
+    if (flags & SCENE_MATERIAL_VERTEX_COLOR) != 0u {
+        let k = stride - 1u;
+        a.color = (1.0 - b1 - b2) * scene_decode_color(scene_attributes[t.i0 * stride + k])
+            + b1 * scene_decode_color(scene_attributes[t.i1 * stride + k])
+            + b2 * scene_decode_color(scene_attributes[t.i2 * stride + k]);
+    }
+    return a;
+}
+
+// Geometry::uv: interpolated UV0 ((0, 0) in a scene without UVs).
+fn scene_uv(triangle: u32, b1: f32, b2: f32) -> vec2<f32> {
+    return scene_hit_attributes(scene_triangles[triangle].material, triangle, b1, b2).uv0;
 }
 
 // Geometry::tangent: interpolated xyz re-normalised, handedness of the first vertex. Only
@@ -275,7 +335,21 @@ fn scene_texture_transform(t: SceneTextureRef, uv: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(m[0] * uv.x + m[2] * uv.y + m[4], m[1] * uv.x + m[3] * uv.y + m[5]);
 }
 
-// TextureRef::sample_bilinear: linear RGBA at the stored UV0; opaque white without a texture.
+// TextureRef::sample: at the slot's UV set of `at`.
+fn scene_texture_sample_at(t: SceneTextureRef, at: SceneAttributes) -> vec4<f32> {
+    let uv_set = (t.flags >> SCENE_TEXTURE_UV_SET_SHIFT) & 3u;
+    var uv = at.uv0;
+    if uv_set == 1u {
+        uv = at.uv1;
+    } else if uv_set == 2u {
+        uv = at.uv2;
+    } else if uv_set == 3u {
+        uv = at.uv3;
+    }
+    return scene_texture_sample(t, uv);
+}
+
+// TextureRef::sample_bilinear: linear RGBA at `uv`; opaque white without a texture.
 fn scene_texture_sample(t: SceneTextureRef, uv: vec2<f32>) -> vec4<f32> {
     if (t.flags & SCENE_TEXTURE_PRESENT) == 0u {
         return vec4<f32>(1.0);
@@ -291,12 +365,13 @@ fn scene_material_is_textured(material: u32) -> bool {
     return (scene_materials[material].flags & SCENE_MATERIAL_TEXTURED) != 0u;
 }
 
-// Material::evaluate: factors × textures at uv (ignored by an untextured material).
-fn scene_material_evaluate(material: u32, uv: vec2<f32>) -> MaterialSample {
+// Material::evaluate: factors × textures at `at`, the base colour and alpha times the vertex
+// colour.
+fn scene_material_evaluate(material: u32, at: SceneAttributes) -> MaterialSample {
     let m = scene_materials[material];
-    let base = m.base_color_factor * scene_texture_sample(m.base_color_texture, uv);
-    let mr = scene_texture_sample(m.metallic_roughness_texture, uv);
-    let emission = m.emissive * scene_texture_sample(m.emissive_texture, uv).xyz;
+    let base = m.base_color_factor * scene_texture_sample_at(m.base_color_texture, at) * at.color;
+    let mr = scene_texture_sample_at(m.metallic_roughness_texture, at);
+    let emission = m.emissive * scene_texture_sample_at(m.emissive_texture, at).xyz;
     return MaterialSample(base.xyz, base.w, m.metallic_factor * mr.z, m.roughness_factor * mr.y, emission,
         m.specular_factor, m.specular_color_factor);
 }
@@ -309,15 +384,15 @@ fn scene_alpha_passes(triangle_id: u32, b1: f32, b2: f32) -> bool {
     if (flags & SCENE_ALPHA_MODE_BITS) != SCENE_ALPHA_MASK {
         return true;
     }
-    let uv = scene_uv(triangle_id, b1, b2);
+    let at = scene_hit_attributes(mi, triangle_id, b1, b2);
     let alpha = scene_materials[mi].base_color_factor.w
-        * scene_texture_sample(scene_materials[mi].base_color_texture, uv).w;
+        * scene_texture_sample_at(scene_materials[mi].base_color_texture, at).w * at.color.w;
     return alpha >= scene_materials[mi].alpha_cutoff;
 }
 
 // Renderer::surface_point for a ray travelling along `direction` that hit `triangle` at
-// barycentrics (b1, b2); `uv` is the hit's UV0 (used by a normal map only).
-fn scene_surface_point(triangle: u32, b1: f32, b2: f32, uv: vec2<f32>, direction: vec3<f32>) -> SceneSurfacePoint {
+// barycentrics (b1, b2); `at` is the hit's attributes (used by a normal map only).
+fn scene_surface_point(triangle: u32, b1: f32, b2: f32, at: SceneAttributes, direction: vec3<f32>) -> SceneSurfacePoint {
     let t = scene_triangles[triangle];
     let v0 = scene_vertices[t.i0].position;
     let v1 = scene_vertices[t.i1].position;
@@ -334,7 +409,7 @@ fn scene_surface_point(triangle: u32, b1: f32, b2: f32, uv: vec2<f32>, direction
         // (T, B = w·N×T, N), with T made orthogonal to the shading normal N.
         let tangent = scene_tangent(triangle, b1, b2);
         let s = scene_materials[t.material].normal_scale;
-        let m = (2.0 * scene_texture_sample(normal_map, uv).xyz - vec3<f32>(1.0)) * vec3<f32>(s, s, 1.0);
+        let m = (2.0 * scene_texture_sample_at(normal_map, at).xyz - vec3<f32>(1.0)) * vec3<f32>(s, s, 1.0);
         let tn = scene_normalize_or_zero(tangent.xyz - shading * scene_dot(shading, tangent.xyz));
         if any(tn != vec3<f32>(0.0)) {
             let bn = tangent.w * scene_cross(shading, tn);

@@ -26,11 +26,8 @@ fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {
         let tr = scene_transmission[material];
         // Material::passes_shadow_rays: a sheet, or a solid of index 1.
         if (tr.flags & SCENE_TRANSMISSIVE) != 0u && ((tr.flags & SCENE_VOLUME) == 0u || tr.ior == 1.0) {
-            var uv = vec2<f32>(0.0);
-            if scene_material_is_textured(material) {
-                uv = scene_uv(triangle_id, u, v);
-            }
-            let b = hit_bsdf(scene_material_evaluate(material, uv), material, uv);
+            let at = hit_attributes(material, triangle_id, u, v);
+            let b = hit_bsdf(scene_material_evaluate(material, at), material, at);
             // CpuRenderer::transmittance: T′ at the angle to the sheet's shading normal.
             var n = scene_shading_normal(triangle_id, u, v);
             let cos = scene_dot(shadow_direction, n);

@@ -54,9 +54,18 @@ fn texture_ref(
         scale: Vec2::from(t.scale()),
     });
     let tex_coord = info.texture_transform().and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
-    if tex_coord != 0 {
-        ctx.warn(path, format!("uses TEXCOORD_{tex_coord}; only TEXCOORD_0 is stored: UV0 used"));
-    }
+    let tex_coord = if (tex_coord as usize) < crate::MAX_UV_SETS {
+        tex_coord
+    } else {
+        ctx.warn(
+            path,
+            format!(
+                "uses TEXCOORD_{tex_coord}; sets up to TEXCOORD_{} are read: TEXCOORD_0 used",
+                crate::MAX_UV_SETS - 1
+            ),
+        );
+        0
+    };
     Some(TextureRef { texture: info.texture().index() as u32, tex_coord, color_space: space, transform })
 }
 

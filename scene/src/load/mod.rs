@@ -34,8 +34,16 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
     let textures = material::read_textures(&mut ctx, &doc);
     let materials = material::read_materials(&mut ctx, &doc);
     let default_material = (materials.len() - 1) as u32;
-    let needs_uv = materials.iter().any(Material::uses_textures);
+    // The UV sets stored: up to the highest any texture samples.
+    let uv_sets = materials
+        .iter()
+        .flat_map(Material::texture_refs)
+        .map(|t| t.tex_coord as usize + 1)
+        .max()
+        .unwrap_or(0);
     let needs_tangent = materials.iter().any(|m| m.normal_texture.is_some());
+    let needs_color =
+        doc.meshes().flat_map(|m| m.primitives()).any(|p| p.get(&gltf::Semantic::Colors(0)).is_some());
     let images = resources::load_images(&mut ctx, &doc, &buffers, &materials, &textures)?;
 
     let scene = nodes::scene_to_render(&ctx, &doc)?;
@@ -51,13 +59,12 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
             ),
         )));
     }
-    let meshes = Meshes::new(&buffers, needs_uv, needs_tangent, default_material);
+    let normal_sets =
+        materials.iter().map(|m| m.normal_texture.as_ref().map_or(0, |t| t.tex_coord as usize)).collect();
+    let meshes = Meshes::new(&buffers, uv_sets, needs_tangent, needs_color, normal_sets, default_material);
     let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes)?;
     let (mut geo, dropped) = (flat.meshes.geo, flat.meshes.dropped);
     check_geometry(&mut ctx, &geo, dropped)?;
-    if !needs_uv {
-        geo.uvs = Vec::new();
-    }
     if !needs_tangent {
         geo.tangents = Vec::new();
     }

@@ -5,17 +5,21 @@
 use super::context::Ctx;
 use crate::accessor::{read_floats, read_indices};
 use crate::error::SceneError;
-use crate::geometry::{Geometry, encode_tangent, generate_tangents, oct_encode};
+use crate::geometry::{Geometry, encode_color, encode_tangent, generate_tangents, oct_encode};
 use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 use gltf::accessor::Dimensions;
 
 /// The triangles of the primitives added so far, and what adding one needs.
 pub(super) struct Meshes<'b> {
     buffers: &'b [Vec<u8>],
-    /// Some material samples a texture: UVs are stored.
-    needs_uv: bool,
+    /// The UV sets stored (0: none; some material samples TEXCOORD_(n − 1)).
+    uv_sets: usize,
     /// Some material has a normal map: tangents are stored.
     needs_tangent: bool,
+    /// Some primitive has COLOR_0: vertex colours are stored.
+    needs_color: bool,
+    /// The UV set of each material's normal map (0 without one).
+    normal_sets: Vec<usize>,
     /// The material of primitives without one (glTF's default material).
     default_material: u32,
     pub(super) geo: Geometry,
@@ -28,8 +32,10 @@ struct Attributes {
     /// POSITION, 3 floats per vertex, all finite.
     positions: Vec<f32>,
     normals: Option<Vec<f32>>,
-    /// TEXCOORD_0 (read only when UVs are stored).
-    uvs: Option<Vec<f32>>,
+    /// TEXCOORD_k for each stored set k (`None` where the primitive lacks it).
+    uvs: Vec<Option<Vec<f32>>>,
+    /// COLOR_0 as RGBA (read only when colours are stored).
+    colors: Option<Vec<Vec4>>,
     /// TANGENT (read only when tangents are stored).
     tangents: Option<Vec<f32>>,
     indices: Vec<u32>,
@@ -40,7 +46,10 @@ struct Placed {
     positions: Vec<Vec3>,
     /// Shading normals; `None` if absent or any is unusable (then per-face normals).
     normals: Option<Vec<Vec3>>,
-    uvs: Option<Vec<f32>>,
+    uvs: Vec<Option<Vec<f32>>>,
+    colors: Option<Vec<Vec4>>,
+    /// The UV set of the material's normal map (tangents follow its derivatives).
+    normal_set: usize,
     /// The file's tangents, in object space.
     tangents: Option<Vec<f32>>,
     indices: Vec<u32>,
@@ -52,20 +61,46 @@ struct Placed {
 }
 
 impl Placed {
-    /// Vertex `i`'s UV (zero without UVs).
+    /// Vertex `i`'s UV of `set` (zero without it).
+    fn uv_of(&self, set: usize, i: usize) -> Vec2 {
+        let uvs = self.uvs.get(set).and_then(Option::as_ref);
+        uvs.and_then(|t| t.get(2 * i..2 * i + 2)).map_or(Vec2::ZERO, |c| Vec2::new(c[0], c[1]))
+    }
+
+    /// Vertex `i`'s UV of the normal map's set (for tangents).
     fn uv(&self, i: usize) -> Vec2 {
-        self.uvs.as_ref().and_then(|t| t.get(2 * i..2 * i + 2)).map_or(Vec2::ZERO, |c| Vec2::new(c[0], c[1]))
+        self.uv_of(self.normal_set, i)
+    }
+
+    /// Vertex `i`'s stored attributes besides position and normal: its UV sets and colour.
+    fn push_attributes(&self, geo: &mut Geometry, sets: usize, colors: bool, i: usize) {
+        geo.uvs.extend((0..sets).map(|k| self.uv_of(k, i)));
+        if colors {
+            let c = self.colors.as_ref().and_then(|c| c.get(i)).copied().unwrap_or(Vec4::ONE);
+            geo.colors.push(encode_color(c));
+        }
     }
 }
 
 impl<'b> Meshes<'b> {
     pub(super) fn new(
         buffers: &'b [Vec<u8>],
-        needs_uv: bool,
+        uv_sets: usize,
         needs_tangent: bool,
+        needs_color: bool,
+        normal_sets: Vec<usize>,
         default_material: u32,
     ) -> Self {
-        Self { buffers, needs_uv, needs_tangent, default_material, geo: Geometry::default(), dropped: 0 }
+        Self {
+            buffers,
+            uv_sets,
+            needs_tangent,
+            needs_color,
+            normal_sets,
+            default_material,
+            geo: Geometry::default(),
+            dropped: 0,
+        }
     }
 }
 
@@ -99,7 +134,8 @@ impl Meshes<'_> {
         };
         let attributes = self.read_attributes(ctx, prim, &pos_acc, ppath)?;
         let material = prim.material().index().map_or(self.default_material, |i| i as u32);
-        let placed = place(ctx, attributes, material, world, ppath, npath)?;
+        let normal_set = self.normal_sets.get(material as usize).copied().unwrap_or(0);
+        let placed = place(ctx, attributes, material, normal_set, world, ppath, npath)?;
         let base = self.geo.positions.len();
         if let Some(normals) = &placed.normals {
             self.add_vertices(ctx, &placed, normals, ppath)?;
@@ -117,14 +153,33 @@ impl Meshes<'_> {
     ) -> Result<Attributes, SceneError> {
         let positions = read_positions(ctx, pos_acc, self.buffers, ppath)?;
         let reader = Reader { ctx, buffers: self.buffers, ppath, nverts: positions.len() / 3 };
-        let normals = reader.attribute(prim.get(&gltf::Semantic::Normals), Dimensions::Vec3, "NORMAL")?;
-        let uvs = if self.needs_uv {
-            reader.attribute(prim.get(&gltf::Semantic::TexCoords(0)), Dimensions::Vec2, "TEXCOORD_0")?
+        let normals =
+            reader.attribute(prim.get(&gltf::Semantic::Normals), &[Dimensions::Vec3], "NORMAL")?.map(|a| a.0);
+        let uvs = (0..self.uv_sets)
+            .map(|k| {
+                let name = format!("TEXCOORD_{k}");
+                let uv = reader.attribute(
+                    prim.get(&gltf::Semantic::TexCoords(k as u32)),
+                    &[Dimensions::Vec2],
+                    &name,
+                );
+                uv.map(|uv| uv.map(|a| a.0))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let colors = if self.needs_color {
+            let color = prim.get(&gltf::Semantic::Colors(0));
+            reader.attribute(color, &[Dimensions::Vec3, Dimensions::Vec4], "COLOR_0")?.map(|(c, width)| {
+                c.chunks_exact(width)
+                    .map(|c| if width == 3 { Vec4::new(c[0], c[1], c[2], 1.0) } else { Vec4::from_slice(c) })
+                    .collect()
+            })
         } else {
             None
         };
         let tangents = if self.needs_tangent {
-            reader.attribute(prim.get(&gltf::Semantic::Tangents), Dimensions::Vec4, "TANGENT")?
+            reader
+                .attribute(prim.get(&gltf::Semantic::Tangents), &[Dimensions::Vec4], "TANGENT")?
+                .map(|a| a.0)
         } else {
             None
         };
@@ -142,7 +197,7 @@ impl Meshes<'_> {
                 indices
             }
         };
-        Ok(Attributes { positions, normals, uvs, tangents, indices })
+        Ok(Attributes { positions, normals, uvs, colors, tangents, indices })
     }
 
     /// Copies the vertices of a primitive with shading normals once (its triangles index
@@ -163,8 +218,8 @@ impl Meshes<'_> {
         if self.needs_tangent {
             self.geo.tangents.extend(vertex_tangents(p, normals).into_iter().map(encode_tangent));
         }
-        if self.needs_uv {
-            self.geo.uvs.extend((0..nverts).map(|i| p.uv(i)));
+        for i in 0..nverts {
+            p.push_attributes(&mut self.geo, self.uv_sets, self.needs_color, i);
         }
         Ok(())
     }
@@ -221,9 +276,7 @@ impl Meshes<'_> {
         for &i in &[a, b, c] {
             geo.positions.push(p.positions[i]);
             geo.normals.push(n);
-            if self.needs_uv {
-                geo.uvs.push(p.uv(i));
-            }
+            p.push_attributes(geo, self.uv_sets, self.needs_color, i);
             if let Some(t) = face_tangent {
                 geo.tangents.push(encode_tangent(t));
             }
@@ -242,16 +295,17 @@ struct Reader<'a> {
 }
 
 impl Reader<'_> {
-    /// Attribute `name` from `acc` (if present) as floats of type `dims`, one element per vertex.
+    /// Attribute `name` from `acc` (if present) as floats of one of the types `dims`, one
+    /// element per vertex, with its width (components per element).
     fn attribute(
         &self,
         acc: Option<gltf::Accessor<'_>>,
-        dims: Dimensions,
+        dims: &[Dimensions],
         name: &str,
-    ) -> Result<Option<Vec<f32>>, SceneError> {
+    ) -> Result<Option<(Vec<f32>, usize)>, SceneError> {
         let Some(acc) = acc else { return Ok(None) };
-        let (v, _) = read_floats(&acc, self.buffers, &[dims]).map_err(|e| self.ctx.invalid(e))?;
-        let width = match dims {
+        let (v, _) = read_floats(&acc, self.buffers, dims).map_err(|e| self.ctx.invalid(e))?;
+        let width = match acc.dimensions() {
             Dimensions::Vec2 => 2,
             Dimensions::Vec3 => 3,
             _ => 4,
@@ -263,7 +317,7 @@ impl Reader<'_> {
                 format!("count {n} differs from POSITION's count {}", self.nverts),
             )));
         }
-        Ok(Some(v))
+        Ok(Some((v, width)))
     }
 
     /// The indices from `acc`, each below the vertex count; without an accessor, 0, 1, 2, ….
@@ -331,6 +385,7 @@ fn place(
     ctx: &mut Ctx<'_>,
     a: Attributes,
     material: u32,
+    normal_set: usize,
     world: Mat4,
     ppath: &str,
     npath: &str,
@@ -358,6 +413,8 @@ fn place(
         positions: wp,
         normals,
         uvs: a.uvs,
+        colors: a.colors,
+        normal_set,
         tangents: a.tangents,
         indices: a.indices,
         material,
