@@ -1,14 +1,15 @@
 //! The glTF 2.0 / GLB loader: parse, check required extensions, validate, load buffers
 //! ourselves (so that a missing file is named), flatten the default scene into world space.
 //!
-//! The steps, in order: [`document`] (parse and check), [`resources`] (buffers, then the
-//! images the materials use), [`material`] (textures and materials), [`nodes`] (the node
+//! The steps, in order: [`document`] (parse and check), [`resources`] (buffers, with
+//! [`meshopt`]'s compressed views decoded into them, then the images the materials use), [`material`] (textures and materials), [`nodes`] (the node
 //! hierarchy: cameras, lights, and each mesh primitive through [`primitive`]); then the
 //! geometry's checks here. [`context::Ctx`] carries the file and the warnings through them.
 
 mod context;
 mod document;
 mod material;
+mod meshopt;
 mod nodes;
 mod primitive;
 mod resources;
@@ -51,7 +52,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
             ),
         )));
     }
-    let meshes = Meshes::new(&buffers, needs_uv, needs_tangent, default_material);
+    let meshes = Meshes::new(&doc, &buffers, needs_uv, needs_tangent, default_material);
     let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes)?;
     let (mut geo, dropped) = (flat.meshes.geo, flat.meshes.dropped);
     check_geometry(&mut ctx, &geo, dropped)?;

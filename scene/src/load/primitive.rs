@@ -1,6 +1,8 @@
 //! Mesh primitives flattened into world-space triangles: attributes and indices read and
 //! checked, positions and normals transformed, tangents transformed or generated, zero-area
-//! triangles dropped.
+//! triangles dropped. Draco-compressed primitives are decoded by [`draco`].
+
+mod draco;
 
 use super::context::Ctx;
 use crate::accessor::{read_floats, read_indices};
@@ -11,6 +13,7 @@ use gltf::accessor::Dimensions;
 
 /// The triangles of the primitives added so far, and what adding one needs.
 pub(super) struct Meshes<'b> {
+    doc: &'b gltf::Document,
     buffers: &'b [Vec<u8>],
     /// Some material samples a texture: UVs are stored.
     needs_uv: bool,
@@ -60,12 +63,13 @@ impl Placed {
 
 impl<'b> Meshes<'b> {
     pub(super) fn new(
+        doc: &'b gltf::Document,
         buffers: &'b [Vec<u8>],
         needs_uv: bool,
         needs_tangent: bool,
         default_material: u32,
     ) -> Self {
-        Self { buffers, needs_uv, needs_tangent, default_material, geo: Geometry::default(), dropped: 0 }
+        Self { doc, buffers, needs_uv, needs_tangent, default_material, geo: Geometry::default(), dropped: 0 }
     }
 }
 
@@ -84,14 +88,14 @@ impl Meshes<'_> {
             ctx.warn(ppath, format!("mode {:?} is not TRIANGLES: primitive skipped", prim.mode()));
             return Ok(());
         }
-        if prim.extension_value("KHR_draco_mesh_compression").is_some() {
-            ctx.warn(ppath, "KHR_draco_mesh_compression is not supported: uncompressed fallback used if any");
-        }
         let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
             ctx.warn(ppath, "no POSITION attribute: primitive skipped");
             return Ok(());
         };
-        let attributes = self.read_attributes(ctx, prim, &pos_acc, ppath)?;
+        let attributes = match prim.extension_value(draco::EXTENSION) {
+            Some(ext) => draco::read_attributes(ctx, self, prim, ext, ppath)?,
+            None => self.read_attributes(ctx, prim, &pos_acc, ppath)?,
+        };
         let material = prim.material().index().map_or(self.default_material, |i| i as u32);
         let placed = place(ctx, attributes, material, world, ppath, npath)?;
         let base = self.geo.positions.len();
