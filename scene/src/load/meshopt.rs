@@ -75,8 +75,8 @@ pub(super) fn decode_views(
         let path = format!("bufferViews[{}].extensions.{name}", view.index());
         let invalid = |message: String| ctx.invalid((path.clone(), message));
         let c = parse(ext, name == EXTENSIONS[0]).map_err(invalid)?;
-        // `count × byteStride` bytes fill the view (its byteLength; the specification asks for
-        // equality, a shorter stream is accepted and leaves the rest of the view as it was).
+        // `count × byteStride` bytes fill the view: the specification asks for its byteLength;
+        // fewer are accepted, the rest of the view left as it was (zeros in a fallback buffer).
         let size = c.count.checked_mul(c.stride).filter(|&s| s <= view.length()).ok_or_else(|| {
             invalid(format!(
                 "count {} × byteStride {} exceeds the bufferView's byteLength {}",
@@ -99,10 +99,10 @@ pub(super) fn decode_views(
             )));
         }
         // No overflow: `size` ≤ byteLength, and byteOffset + byteLength fits (checked above).
-        let end = view.offset() + size;
+        let (end, view_end) = (view.offset() + size, view.offset() + view.length());
         // What this view makes the loader allocate: its decoded bytes, or what its (fallback)
-        // buffer grows by to hold them, whichever is more.
-        let growth = end.saturating_sub(buffers.get(target.index()).map_or(0, Vec::len));
+        // buffer grows by to hold the view, whichever is more.
+        let growth = view_end.saturating_sub(buffers.get(target.index()).map_or(0, Vec::len));
         total = total.saturating_add(size.max(growth) as u64);
         if total > MAX_DECODED_BYTES {
             return Err(invalid(format!(
@@ -124,9 +124,9 @@ pub(super) fn decode_views(
             )?;
         let decoded = decode(&c, source).map_err(invalid)?;
         let data = &mut buffers[target.index()];
-        // A fallback buffer holds no data: it grows to the decoded views.
-        if data.len() < end {
-            data.resize(end, 0);
+        // A fallback buffer holds no data: it grows to hold the compressed views.
+        if data.len() < view_end {
+            data.resize(view_end, 0);
         }
         data[view.offset()..end].copy_from_slice(&decoded);
     }
