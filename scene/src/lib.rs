@@ -13,6 +13,11 @@
 //!   [`MAX_SCENE_FILE_BYTES`], a buffer up to its `byteLength`, image sizes checked from their
 //!   headers ([`MAX_TEXTURE_SIZE`], [`MAX_ENVIRONMENT_TEXELS`]) before decoding; URIs relative to
 //!   the scene (absolute paths refused).
+//! * **Compressed meshes**: `KHR_draco_mesh_compression` primitives decoded by draco-core (a
+//!   Rust port of Google's Draco decoder), `EXT_meshopt_compression` and
+//!   `KHR_meshopt_compression` buffer views by meshoptimizer's own decoders (the `meshopt`
+//!   crate) before accessors read them; a corrupt or truncated payload is an error naming the
+//!   primitive or the buffer view.
 //! * **Materials** ([`Material`]): metallic-roughness with KHR_materials_specular and
 //!   KHR_materials_emissive_strength, alpha MASK, double-sided; textures stored as 8-bit RGBA and
 //!   decoded (sRGB → linear, IEC 61966-2-1) when sampled bilinearly with glTF wrap modes and
@@ -30,7 +35,7 @@
 //! * **Built-in scenes** ([`builtin`]): the reference Cornell box and a white-furnace sphere.
 //!
 //! Unsupported features (transmission, point lights, BLEND...) give one [`Warning`] each, never a
-//! failure; a *required* unsupported extension (e.g. `KHR_draco_mesh_compression`) is an error.
+//! failure; a *required* unsupported extension (e.g. `KHR_materials_variants`) is an error.
 //!
 //! ```
 //! use furnace_scene::{Scene, builtin};

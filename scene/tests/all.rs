@@ -5,6 +5,8 @@
 
 #[path = "bad_geometry.rs"]
 mod bad_geometry;
+#[path = "compressed.rs"]
+mod compressed;
 #[path = "corpus.rs"]
 mod corpus;
 #[path = "environment.rs"]

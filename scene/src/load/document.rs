@@ -16,6 +16,9 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_volume",
     "KHR_texture_transform",
     "KHR_mesh_quantization",
+    "KHR_draco_mesh_compression",
+    "EXT_meshopt_compression",
+    "KHR_meshopt_compression",
 ];
 
 /// Extensions whose absence changes the look but which furnace ignores with a warning when

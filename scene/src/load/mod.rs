@@ -1,14 +1,15 @@
 //! The glTF 2.0 / GLB loader: parse, check required extensions, validate, load buffers
 //! ourselves (so that a missing file is named), flatten the default scene into world space.
 //!
-//! The steps, in order: [`document`] (parse and check), [`resources`] (buffers, then the
-//! images the materials use), [`material`] (textures and materials), [`nodes`] (the node
+//! The steps, in order: [`document`] (parse and check), [`resources`] (buffers, with
+//! [`meshopt`]'s compressed views decoded into them, then the images the materials use), [`material`] (textures and materials), [`nodes`] (the node
 //! hierarchy: cameras, lights, and each mesh primitive through [`primitive`]); then the
 //! geometry's checks here. [`context::Ctx`] carries the file and the warnings through them.
 
 mod context;
 mod document;
 mod material;
+mod meshopt;
 mod nodes;
 mod primitive;
 mod resources;
@@ -61,7 +62,8 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
     }
     let normal_sets =
         materials.iter().map(|m| m.normal_texture.as_ref().map_or(0, |t| t.tex_coord as usize)).collect();
-    let meshes = Meshes::new(&buffers, uv_sets, needs_tangent, needs_color, normal_sets, default_material);
+    let meshes =
+        Meshes::new(&doc, &buffers, uv_sets, needs_tangent, needs_color, normal_sets, default_material);
     let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes)?;
     let (mut geo, dropped) = (flat.meshes.geo, flat.meshes.dropped);
     check_geometry(&mut ctx, &geo, dropped)?;

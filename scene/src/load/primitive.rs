@@ -1,6 +1,8 @@
 //! Mesh primitives flattened into world-space triangles: attributes and indices read and
 //! checked, positions and normals transformed, tangents transformed or generated, zero-area
-//! triangles dropped.
+//! triangles dropped. Draco-compressed primitives are decoded by [`draco`].
+
+mod draco;
 
 use super::context::Ctx;
 use crate::accessor::{read_floats, read_indices};
@@ -11,6 +13,7 @@ use gltf::accessor::Dimensions;
 
 /// The triangles of the primitives added so far, and what adding one needs.
 pub(super) struct Meshes<'b> {
+    doc: &'b gltf::Document,
     buffers: &'b [Vec<u8>],
     /// The UV sets stored (0: none; some material samples TEXCOORD_(n − 1)).
     uv_sets: usize,
@@ -84,6 +87,7 @@ impl Placed {
 
 impl<'b> Meshes<'b> {
     pub(super) fn new(
+        doc: &'b gltf::Document,
         buffers: &'b [Vec<u8>],
         uv_sets: usize,
         needs_tangent: bool,
@@ -92,6 +96,7 @@ impl<'b> Meshes<'b> {
         default_material: u32,
     ) -> Self {
         Self {
+            doc,
             buffers,
             uv_sets,
             needs_tangent,
@@ -125,14 +130,14 @@ impl Meshes<'_> {
             );
             return Ok(());
         }
-        if prim.extension_value("KHR_draco_mesh_compression").is_some() {
-            ctx.warn(ppath, "KHR_draco_mesh_compression is not supported: uncompressed fallback used if any");
-        }
         let Some(pos_acc) = prim.get(&gltf::Semantic::Positions) else {
             ctx.warn(ppath, "no POSITION attribute: primitive skipped");
             return Ok(());
         };
-        let attributes = self.read_attributes(ctx, prim, &pos_acc, ppath)?;
+        let attributes = match prim.extension_value(draco::EXTENSION) {
+            Some(ext) => draco::read_attributes(ctx, self, prim, ext, ppath)?,
+            None => self.read_attributes(ctx, prim, &pos_acc, ppath)?,
+        };
         let material = prim.material().index().map_or(self.default_material, |i| i as u32);
         let normal_set = self.normal_sets.get(material as usize).copied().unwrap_or(0);
         let placed = place(ctx, attributes, material, normal_set, world, ppath, npath)?;
@@ -168,11 +173,9 @@ impl Meshes<'_> {
             .collect::<Result<Vec<_>, _>>()?;
         let colors = if self.needs_color {
             let color = prim.get(&gltf::Semantic::Colors(0));
-            reader.attribute(color, &[Dimensions::Vec3, Dimensions::Vec4], "COLOR_0")?.map(|(c, width)| {
-                c.chunks_exact(width)
-                    .map(|c| if width == 3 { Vec4::new(c[0], c[1], c[2], 1.0) } else { Vec4::from_slice(c) })
-                    .collect()
-            })
+            reader
+                .attribute(color, &[Dimensions::Vec3, Dimensions::Vec4], "COLOR_0")?
+                .map(|(c, width)| rgba(&c, width))
         } else {
             None
         };
@@ -333,6 +336,14 @@ impl Reader<'_> {
         }
         Ok(idx)
     }
+}
+
+/// COLOR_0's values (`width` 3: RGB, alpha 1; 4: RGBA) as RGBA.
+fn rgba(values: &[f32], width: usize) -> Vec<Vec4> {
+    values
+        .chunks_exact(width)
+        .map(|c| if width == 3 { Vec4::new(c[0], c[1], c[2], 1.0) } else { Vec4::from_slice(c) })
+        .collect()
 }
 
 /// The triangle list of a `TRIANGLE_STRIP`: triangle i is (pᵢ, pᵢ₊₁, pᵢ₊₂) for even i and

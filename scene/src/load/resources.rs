@@ -93,7 +93,8 @@ pub(super) fn absolute_uri_message(rel: &str) -> String {
     )
 }
 
-/// Every buffer's bytes, in file order; `blob` is the GLB BIN chunk.
+/// Every buffer's bytes, in file order, with the meshopt-compressed buffer views decoded into
+/// them; `blob` is the GLB BIN chunk.
 pub(super) fn load_buffers(
     ctx: &mut Ctx<'_>,
     doc: &gltf::Document,
@@ -102,6 +103,12 @@ pub(super) fn load_buffers(
     let mut buffers: Vec<Vec<u8>> = Vec::new();
     for b in doc.buffers() {
         let path = format!("buffers[{}]", b.index());
+        if super::meshopt::is_fallback(&b) {
+            // Filled by the compressed views decoded into it (`meshopt::decode_views`); its
+            // uri, if any, names uncompressed data for loaders without the extension.
+            buffers.push(Vec::new());
+            continue;
+        }
         let data = match b.source() {
             // Only the first buffer may live in the GLB BIN chunk (§4.4.3.3); any other buffer
             // without a URI is a placeholder (valid, e.g. for extensions): empty.
@@ -130,6 +137,7 @@ pub(super) fn load_buffers(
         }
         buffers.push(data);
     }
+    super::meshopt::decode_views(ctx, doc, &mut buffers)?;
     Ok(buffers)
 }
 
