@@ -3,6 +3,8 @@
 //! 2 cores). Each module is one file beside this one, run alone with
 //! `cargo test -p furnace-scene --test all MODULE::`.
 
+#[path = "attributes.rs"]
+mod attributes;
 #[path = "bad_geometry.rs"]
 mod bad_geometry;
 #[path = "compressed.rs"]
