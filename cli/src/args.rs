@@ -66,6 +66,10 @@ pub struct RenderArgs {
     /// triangles, e.g. interior:1e7, for stress tests); without it, the built-in reference
     /// Cornell box (with --resume: the scene the file was rendered from).
     pub scene: Option<PathBuf>,
+    /// A missing, unreadable or undecodable texture image is an error [default: a warning, and
+    /// the material renders with its factors alone].
+    #[arg(long)]
+    pub strict: bool,
     /// Samples per pixel (the total, also when resuming; also N of the fixed-N samplers
     /// hammersley and cmj).
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
@@ -318,6 +322,10 @@ pub struct ViewArgs {
 pub struct InfoArgs {
     /// The .gltf or .glb scene.
     pub scene: PathBuf,
+    /// A missing, unreadable or undecodable texture image is an error [default: a warning, and
+    /// the material renders with its factors alone].
+    #[arg(long)]
+    pub strict: bool,
     // The render settings' flags, as `furnace render` takes them: the settings they make are
     // printed after the scene.
     #[command(flatten)]
@@ -394,6 +402,10 @@ pub struct BenchArgs {
     /// interior of about N triangles, e.g. interior:1e6), or a .gltf/.glb path.
     #[arg(long, default_value = "cbox", value_parser = parse_scene)]
     pub scene: SceneArg,
+    /// A missing, unreadable or undecodable texture image is an error [default: a warning, and
+    /// the material renders with its factors alone].
+    #[arg(long)]
+    pub strict: bool,
     /// Image width [default: 256 for cbox, else 512 or from --height and the camera].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIDE as i64))]
     pub width: Option<u32>,

@@ -314,11 +314,13 @@ impl Report {
     }
 }
 
-fn load(scene: &SceneArg) -> Result<Scene, String> {
+fn load(scene: &SceneArg, strict: bool) -> Result<Scene, String> {
     match scene {
         SceneArg::Cbox => builtin::cornell_box().map_err(|e| e.to_string()),
         SceneArg::Interior(n) => Ok(builtin::sunlit_interior(*n)),
-        SceneArg::File(p) => Scene::load(p).map_err(|e| e.to_string()),
+        SceneArg::File(p) => {
+            Scene::load_with(p, &furnace_scene::LoadOptions { strict }).map_err(|e| e.to_string())
+        }
     }
 }
 
@@ -335,7 +337,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         crate::env::check_sampling(given.env_sampling, given.light_sampling)?;
     }
     let start = Instant::now();
-    let mut scene = load(&a.scene)?;
+    let mut scene = load(&a.scene, a.strict)?;
     let scene_seconds = start.elapsed().as_secs_f64();
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);

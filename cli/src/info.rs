@@ -13,7 +13,8 @@ pub fn run(a: &InfoArgs) -> Result<(), String> {
     if a.settings.given("env-sampling") {
         crate::env::check_sampling(settings.env_sampling, settings.light_sampling)?;
     }
-    let scene = Scene::load(&a.scene).map_err(|e| e.to_string())?;
+    let scene = Scene::load_with(&a.scene, &furnace_scene::LoadOptions { strict: a.strict })
+        .map_err(|e| e.to_string())?;
     print!("{}", describe(&scene));
     print!("{}", describe_settings(settings, scene.point_lights().count()));
     Ok(())

@@ -8,7 +8,7 @@ use crate::shared::{Outcome, image_size};
 use furnace_cli::backend::{self, BackendChoice};
 use furnace_post::{ExrWithState, Metadata, read_exr_with_state};
 use furnace_render::{Budget, Film, Integrator, RenderSettings, SAMPLER_LAYOUT_VERSION, Session, Stop};
-use furnace_scene::{Camera, Projection, Scene, builtin};
+use furnace_scene::{Camera, LoadOptions, Projection, Scene, builtin};
 use indicatif::{ProgressBar, ProgressStyle};
 use std::path::Path;
 use std::sync::Arc;
@@ -106,13 +106,17 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         )?;
     }
     check_samples(&mut args)?;
-    let mut scene = load_scene(args.scene.as_deref()).map_err(|e| match (&a.resume, &a.scene) {
-        // The scene came from the file's record: say so, and how to point at it.
-        (Some(file), None) => {
-            format!("{e} (the scene {} was rendered from; give its path after `{command}`)", file.display())
-        }
-        _ => e,
-    })?;
+    let mut scene =
+        load_scene(args.scene.as_deref(), args.strict).map_err(|e| match (&a.resume, &a.scene) {
+            // The scene came from the file's record: say so, and how to point at it.
+            (Some(file), None) => {
+                format!(
+                    "{e} (the scene {} was rendered from; give its path after `{command}`)",
+                    file.display()
+                )
+            }
+            _ => e,
+        })?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
@@ -570,7 +574,7 @@ fn shell_quote(s: &str) -> String {
     }
 }
 
-fn load_scene(path: Option<&Path>) -> Result<Scene, String> {
+fn load_scene(path: Option<&Path>, strict: bool) -> Result<Scene, String> {
     match path {
         // The procedural stress scene of `furnace bench --scene interior:N`.
         Some(p) if p.to_str().is_some_and(|s| s.starts_with("interior:")) => {
@@ -579,7 +583,7 @@ fn load_scene(path: Option<&Path>) -> Result<Scene, String> {
                 _ => Err(format!("'{}': not a scene", p.display())),
             }
         }
-        Some(p) => Scene::load(p).map_err(|e| e.to_string()),
+        Some(p) => Scene::load_with(p, &LoadOptions { strict }).map_err(|e| e.to_string()),
         None => builtin::cornell_box().map_err(|e| e.to_string()),
     }
 }

@@ -22,6 +22,12 @@
 //!   KHR_materials_emissive_strength, alpha MASK, double-sided; textures stored as 8-bit RGBA and
 //!   decoded (sRGB → linear, IEC 61966-2-1) when sampled bilinearly with glTF wrap modes and
 //!   KHR_texture_transform ([`TextureRef::sample_bilinear`]).
+//! * **Image formats**: PNG, JPEG and the others of the `image` crate; WebP (EXT_texture_webp);
+//!   KTX2 (KHR_texture_basisu: ETC1S and UASTC transcoded by Binomial's Basis Universal
+//!   transcoder; plain 8-bit, 16-bit and float formats, BCn, ETC2 and ASTC blocks), mip level 0.
+//!   AVIF (EXT_texture_avif) is not decoded: its fallback `source` is used. An image that cannot
+//!   be used is a [`Warning`] and its textures are left out, or an error with
+//!   [`LoadOptions::strict`].
 //! * **Camera, sun and sky** ([`Camera`], [`Sun`]) with the reference renders' conventions
 //!   (`tests/data/references/README.md`): camera looks down −Z, pixel `(i, j)` covers
 //!   `[i, i+1] × [j, j+1]` with row 0 at the top; the sun is a KHR_lights_punctual directional
@@ -119,6 +125,15 @@ pub struct Scene {
     pub dropped_triangles: usize,
 }
 
+/// How [`Scene::load_with`] treats what it can work around.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LoadOptions {
+    /// A missing, unreadable or undecodable image is an error. Without it (the default) it is a
+    /// [`Warning`] naming the image and the reason, and the material slots that sample the
+    /// image are left empty: those materials render with their factors alone.
+    pub strict: bool,
+}
+
 /// Sizes of a scene, for logs and benchmarks.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SceneStats {
@@ -151,18 +166,32 @@ impl Scene {
     /// Loads a `.gltf` or `.glb` file; buffers and images are resolved relative to it. Only a
     /// regular file of at most [`MAX_SCENE_FILE_BYTES`] is read (a FIFO, a device or a
     /// directory is an error, not a wait or an endless read).
+    ///
+    /// An image that is missing, unreadable or undecodable is a [`Warning`] and the material
+    /// slots that sample it are left empty (see [`LoadOptions`]; [`Scene::load_with`] can make
+    /// it an error).
     pub fn load(path: impl AsRef<Path>) -> Result<Self, SceneError> {
+        Self::load_with(path, &LoadOptions::default())
+    }
+
+    /// [`Scene::load`] with `options`.
+    pub fn load_with(path: impl AsRef<Path>, options: &LoadOptions) -> Result<Self, SceneError> {
         let path = path.as_ref();
         let file = path.display().to_string();
         let bytes = file::read_regular(path, MAX_SCENE_FILE_BYTES, "a scene file")
             .map_err(|source| SceneError::Io { file: file.clone(), what: "the scene file".into(), source })?;
-        load::load(&bytes, &file, Some(path.parent().unwrap_or(Path::new("."))))
+        load::load(&bytes, &file, Some(path.parent().unwrap_or(Path::new("."))), options)
     }
 
     /// Loads glTF or GLB bytes named `name` (for messages). External URIs are an error; data
     /// URIs and the GLB `BIN` chunk work.
     pub fn from_slice(bytes: &[u8], name: &str) -> Result<Self, SceneError> {
-        load::load(bytes, name, None)
+        Self::from_slice_with(bytes, name, &LoadOptions::default())
+    }
+
+    /// [`Scene::from_slice`] with `options`.
+    pub fn from_slice_with(bytes: &[u8], name: &str, options: &LoadOptions) -> Result<Self, SceneError> {
+        load::load(bytes, name, None, options)
     }
 
     /// Camera `index` of [`Scene::cameras`], if there is one.

@@ -19,3 +19,5 @@ mod fuzz;
 mod hostile;
 #[path = "scenes.rs"]
 mod scenes;
+#[path = "textures.rs"]
+mod textures;

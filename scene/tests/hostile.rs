@@ -3,7 +3,7 @@
 //! saying what was repaired; none panics, aborts, blocks or reads without end. FIFOs and device
 //! files are made or named at test time.
 
-use furnace_scene::{EnvironmentMap, Projection, Scene, SceneError};
+use furnace_scene::{EnvironmentMap, LoadOptions, Projection, Scene, SceneError};
 use glam::{Vec2, Vec3};
 use std::path::PathBuf;
 use std::sync::mpsc;
@@ -14,12 +14,16 @@ fn hostile(name: &str) -> PathBuf {
     furnace_tests::data::data_dir().join("hostile/scene").join(name)
 }
 
+/// The error of loading `name` strictly (an image that cannot be used is an error, not a
+/// warning).
 fn load_err(name: &str) -> String {
-    match Scene::load(hostile(name)) {
+    match Scene::load_with(hostile(name), &STRICT) {
         Ok(_) => panic!("{name} loaded"),
         Err(e) => e.to_string(),
     }
 }
+
+const STRICT: LoadOptions = LoadOptions { strict: true };
 
 fn warnings(scene: &Scene) -> String {
     scene.warnings.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n")
@@ -67,11 +71,16 @@ fn environment_maps_with_huge_headers_are_refused_before_decoding() {
 }
 
 /// A PNG texture whose header claims 100 000 × 100 000 texels is refused from its header,
-/// naming the image and the size.
+/// naming the image and the size: an error when loading strictly, else a warning and the
+/// material without its texture.
 #[test]
 fn a_texture_with_a_huge_header_is_refused() {
     let e = load_err("texture_huge_dimensions.gltf");
     assert!(e.contains("images[0]") && e.contains("100000 × 100000") && e.contains("16384"), "{e}");
+    let s = Scene::load(hostile("texture_huge_dimensions.gltf")).unwrap();
+    let w = warnings(&s);
+    assert!(w.contains("images[0]") && w.contains("100000 × 100000") && w.contains("left out"), "{w}");
+    assert!(s.materials.iter().all(|m| m.base_color_texture.is_none()));
 }
 
 /// A buffer, image or environment URI that is an absolute path is refused (`Path::join` would
@@ -151,7 +160,8 @@ fn only_regular_files_are_read() {
     for (name, json, path, kind) in cases {
         let file = dir.join(name);
         std::fs::write(&file, json).unwrap();
-        let e = within_time(name, move || Scene::load(&file).map(|_| ()).unwrap_err().to_string());
+        let e =
+            within_time(name, move || Scene::load_with(&file, &STRICT).map(|_| ()).unwrap_err().to_string());
         assert!(e.contains(name) && e.contains(path) && e.contains(kind), "{e}");
     }
 }

@@ -10,12 +10,14 @@ pub(super) struct Ctx<'a> {
     pub(super) file: &'a str,
     pub(super) base: Option<&'a Path>,
     pub(super) warnings: Vec<Warning>,
+    /// An image that cannot be used is an error (else a warning: see [`crate::LoadOptions`]).
+    pub(super) strict: bool,
     seen: HashSet<(String, String)>,
 }
 
 impl<'a> Ctx<'a> {
-    pub(super) fn new(file: &'a str, base: Option<&'a Path>) -> Self {
-        Self { file, base, warnings: Vec::new(), seen: HashSet::new() }
+    pub(super) fn new(file: &'a str, base: Option<&'a Path>, strict: bool) -> Self {
+        Self { file, base, warnings: Vec::new(), strict, seen: HashSet::new() }
     }
 }
 

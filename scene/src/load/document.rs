@@ -19,6 +19,8 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_draco_mesh_compression",
     "EXT_meshopt_compression",
     "KHR_meshopt_compression",
+    super::texture_source::BASISU,
+    super::texture_source::WEBP,
 ];
 
 /// Extensions whose absence changes the look but which furnace ignores with a warning when
@@ -74,6 +76,9 @@ fn without_found_value(message: &str) -> String {
 /// validation; warns about each used extension it ignores.
 pub(super) fn check(ctx: &mut Ctx<'_>, root: &gltf::json::Root) -> Result<(), SceneError> {
     for (i, ext) in root.extensions_required.iter().enumerate() {
+        if ext == super::texture_source::AVIF {
+            return Err(super::texture_source::avif_required(ctx, root, i));
+        }
         if !SUPPORTED_EXTENSIONS.contains(&ext.as_str()) {
             return Err(SceneError::UnsupportedExtension {
                 file: ctx.file.to_string(),

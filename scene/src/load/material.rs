@@ -14,14 +14,12 @@ const NO_IMAGE: u32 = u32::MAX;
 pub(super) fn read_textures(ctx: &mut Ctx<'_>, doc: &gltf::Document) -> Vec<Texture> {
     let mut textures = Vec::new();
     for (t, tj) in doc.textures().zip(&doc.as_json().textures) {
-        // The JSON `source`, not `Texture::source()`, which unwraps a missing one.
-        let image = tj.source.value();
-        let image = if image < doc.images().len() {
-            image as u32
-        } else {
+        // The JSON `source` (not `Texture::source()`, which unwraps a missing one), or the image
+        // an image-format extension names.
+        let image = super::texture_source::choose(ctx, doc, t.index(), tj).unwrap_or_else(|| {
             ctx.warn(format!("textures[{}]", t.index()), "no image source: texture ignored");
             NO_IMAGE
-        };
+        });
         let s = t.sampler();
         let wrap = |w: gltf::texture::WrappingMode| match w {
             gltf::texture::WrappingMode::Repeat => WrapMode::Repeat,

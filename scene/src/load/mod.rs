@@ -8,11 +8,13 @@
 
 mod context;
 mod document;
+mod ktx2;
 mod material;
 mod meshopt;
 mod nodes;
 mod primitive;
 mod resources;
+mod texture_source;
 
 pub use document::SUPPORTED_EXTENSIONS;
 
@@ -27,13 +29,18 @@ use std::collections::HashSet;
 use std::path::Path;
 
 /// Loads a glTF (JSON or GLB) from bytes. `base` resolves relative URIs.
-pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scene, SceneError> {
-    let mut ctx = Ctx::new(file, base);
+pub(crate) fn load(
+    bytes: &[u8],
+    file: &str,
+    base: Option<&Path>,
+    options: &crate::LoadOptions,
+) -> Result<Scene, SceneError> {
+    let mut ctx = Ctx::new(file, base, options.strict);
     let (doc, blob) = document::parse(bytes, file)?;
     document::check(&mut ctx, doc.as_json())?;
     let buffers = resources::load_buffers(&mut ctx, &doc, blob.as_deref())?;
     let textures = material::read_textures(&mut ctx, &doc);
-    let materials = material::read_materials(&mut ctx, &doc);
+    let mut materials = material::read_materials(&mut ctx, &doc);
     let default_material = (materials.len() - 1) as u32;
     // The UV sets stored: up to the highest any texture samples.
     let uv_sets = materials
@@ -45,7 +52,7 @@ pub(crate) fn load(bytes: &[u8], file: &str, base: Option<&Path>) -> Result<Scen
     let needs_tangent = materials.iter().any(|m| m.normal_texture.is_some());
     let needs_color =
         doc.meshes().flat_map(|m| m.primitives()).any(|p| p.get(&gltf::Semantic::Colors(0)).is_some());
-    let images = resources::load_images(&mut ctx, &doc, &buffers, &materials, &textures)?;
+    let images = resources::load_images(&mut ctx, &doc, &buffers, &mut materials, &textures)?;
 
     let scene = nodes::scene_to_render(&ctx, &doc)?;
     let sky = nodes::read_sky(&mut ctx, &scene);

@@ -4,7 +4,7 @@
 use super::context::Ctx;
 use crate::error::SceneError;
 use crate::material::Material;
-use crate::texture::{Image, Texture};
+use crate::texture::{ColorSpace, Image, Texture, TextureRef};
 
 /// Decodes the base64 of a data URI (RFC 4648, as the `gltf` crate's own reader does, through
 /// the same crate), ignoring whitespace, in the standard or the URL-safe alphabet.
@@ -142,42 +142,106 @@ pub(super) fn load_buffers(
 }
 
 /// The images (glTF `images`, same indices): those some material uses decoded, the others
-/// 1×1 white placeholders.
+/// 1×1 white placeholders. An image that cannot be read or decoded is an error with
+/// [`Ctx::strict`]; otherwise a warning, and the material slots that sample it are emptied (the
+/// material's factors alone), its place a placeholder.
 pub(super) fn load_images(
     ctx: &mut Ctx<'_>,
     doc: &gltf::Document,
     buffers: &[Vec<u8>],
-    materials: &[Material],
+    materials: &mut [Material],
     textures: &[Texture],
 ) -> Result<Vec<Image>, SceneError> {
-    let used = used_images(doc.images().len(), materials, textures);
+    let uses = image_uses(doc.images().len(), materials, textures);
+    let named_by = super::texture_source::extension_paths(doc.as_json());
+    let placeholder = || Image { width: 1, height: 1, texels: vec![[255; 4]] };
     let mut images = Vec::new();
+    let mut failed = vec![false; uses.len()];
     for img in doc.images() {
-        if !used.get(img.index()).copied().unwrap_or(false) {
-            images.push(Image { width: 1, height: 1, texels: vec![[255; 4]] });
+        let i = img.index();
+        let use_ = uses.get(i).copied().unwrap_or_default();
+        if !use_.srgb && !use_.linear {
+            images.push(placeholder());
             continue;
         }
-        images.push(decode_image(ctx, doc, &img, buffers)?);
+        let named_by = named_by.get(i).and_then(Option::as_deref);
+        match decode_image(ctx, doc, &img, buffers, use_, named_by) {
+            Ok(image) => images.push(image),
+            Err(e) if !ctx.strict => {
+                ctx.warn(
+                    format!("images[{i}]"),
+                    format!(
+                        "{}: the textures using it are left out (the material's factors alone)",
+                        without_file(&e)
+                    ),
+                );
+                images.push(placeholder());
+                failed[i] = true;
+            }
+            Err(e) => return Err(e),
+        }
     }
+    forget_failed(materials, textures, &failed);
     Ok(images)
 }
 
-/// For each of the `count` images, whether a texture of some material samples it.
-fn used_images(count: usize, materials: &[Material], textures: &[Texture]) -> Vec<bool> {
-    let mut used = vec![false; count];
+/// The error's message without the scene file (a warning is reported with the scene).
+fn without_file(e: &SceneError) -> String {
+    match e {
+        SceneError::Io { what, source, .. } => format!("cannot read {what}: {source}"),
+        SceneError::Image { message, .. } => format!("cannot decode image: {message}"),
+        SceneError::Invalid { path, message, .. } => format!("{path}: {message}"),
+        other => other.to_string(),
+    }
+}
+
+/// Empties every material slot whose texture samples a `failed` image.
+fn forget_failed(materials: &mut [Material], textures: &[Texture], failed: &[bool]) {
+    let fails = |r: &Option<TextureRef>| {
+        r.and_then(|r| textures.get(r.texture as usize))
+            .is_some_and(|t| failed.get(t.image as usize).copied().unwrap_or(false))
+    };
+    for m in materials {
+        for slot in [
+            &mut m.base_color_texture,
+            &mut m.metallic_roughness_texture,
+            &mut m.normal_texture,
+            &mut m.emissive_texture,
+        ] {
+            if fails(slot) {
+                *slot = None;
+            }
+        }
+    }
+}
+
+/// How the materials use an image: through a colour slot (sRGB-encoded: base colour,
+/// emissive) or a data slot (linear: metallic-roughness, normal); neither: unused.
+#[derive(Debug, Clone, Copy, Default)]
+struct Uses {
+    srgb: bool,
+    linear: bool,
+}
+
+/// For each of the `count` images, how the textures of the materials sample it.
+fn image_uses(count: usize, materials: &[Material], textures: &[Texture]) -> Vec<Uses> {
+    let mut uses = vec![Uses::default(); count];
     for m in materials {
         for t in [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture]
             .into_iter()
             .flatten()
         {
             if let Some(tex) = textures.get(t.texture as usize)
-                && let Some(u) = used.get_mut(tex.image as usize)
+                && let Some(u) = uses.get_mut(tex.image as usize)
             {
-                *u = true;
+                match t.color_space {
+                    ColorSpace::Srgb => u.srgb = true,
+                    ColorSpace::Linear => u.linear = true,
+                }
             }
         }
     }
-    used
+    uses
 }
 
 fn decode_image(
@@ -185,6 +249,8 @@ fn decode_image(
     doc: &gltf::Document,
     img: &gltf::Image<'_>,
     buffers: &[Vec<u8>],
+    uses: Uses,
+    named_by: Option<&str>,
 ) -> Result<Image, SceneError> {
     let path = format!("images[{}]", img.index());
     // The JSON, not `Image::source()`, which unwraps a missing `uri` and a missing `mimeType`.
@@ -218,45 +284,106 @@ fn decode_image(
             return Err(ctx.invalid((path, format!("{which}: an image needs exactly one"))));
         }
     };
+    // What the messages call the image: its file, or where its bytes are, and the texture
+    // extension that names it.
+    let mut name = match (&json.uri, &json.buffer_view) {
+        (Some(uri), _) if uri.starts_with("data:") => "a data URI".to_string(),
+        (Some(uri), _) => format!("'{}'", percent_decode(uri)),
+        (_, Some(view)) => format!("bufferViews[{}]", view.value()),
+        _ => String::new(),
+    };
+    if let Some(by) = named_by {
+        name = format!("{name} (named by {by})");
+    }
     let image_error =
         |message: String| SceneError::Image { file: ctx.file.to_string(), path: path.clone(), message };
+    if super::ktx2::is_ktx2(&bytes) {
+        let decoded = super::ktx2::decode(&bytes, crate::MAX_TEXTURE_SIZE)
+            .map_err(|e| image_error(format!("{name}: KTX2: {e}")))?;
+        return Ok(ktx2_image(ctx, &path, &name, decoded, uses));
+    }
     let mut reader = image::ImageReader::new(std::io::Cursor::new(&bytes))
         .with_guessed_format()
-        .map_err(|e| image_error(e.to_string()))?;
+        .map_err(|e| image_error(format!("{name}: {e}")))?;
     // The size from the header, refused (with the size in the message) before any texel is
     // allocated; then the decoder gets the width, height and allocation limits, which image's
     // decoders also enforce themselves.
     let mut limits = image::Limits::default();
     limits.max_alloc = Some(MAX_TEXTURE_DECODE_BYTES);
     reader.limits(limits.clone());
-    let mut decoder = reader.into_decoder().map_err(|e| image_error(texture_decode_message(&e)))?;
+    let mut decoder =
+        reader.into_decoder().map_err(|e| image_error(format!("{name}: {}", texture_decode_message(&e))))?;
     let (w, h) = image::ImageDecoder::dimensions(&decoder);
     if w > crate::MAX_TEXTURE_SIZE || h > crate::MAX_TEXTURE_SIZE {
-        return Err(image_error(texture_too_large(w, h)));
+        return Err(image_error(format!("{name}: {}", texture_too_large(w, h))));
     }
     limits.max_image_width = Some(crate::MAX_TEXTURE_SIZE);
     limits.max_image_height = Some(crate::MAX_TEXTURE_SIZE);
     image::ImageDecoder::set_limits(&mut decoder, limits)
-        .map_err(|e| image_error(texture_decode_message(&e)))?;
+        .map_err(|e| image_error(format!("{name}: {}", texture_decode_message(&e))))?;
     // `DynamicImage::from_decoder` allocates the decoded image without consulting the limits.
     if image::ImageDecoder::total_bytes(&decoder) > MAX_TEXTURE_DECODE_BYTES {
-        return Err(image_error(texture_decode_message(&image::ImageError::Limits(
-            image::error::LimitErrorKind::InsufficientMemory.into(),
-        ))));
+        return Err(image_error(format!(
+            "{name}: {}",
+            texture_decode_message(&image::ImageError::Limits(
+                image::error::LimitErrorKind::InsufficientMemory.into()
+            ))
+        )));
     }
-    let decoded =
-        image::DynamicImage::from_decoder(decoder).map_err(|e| image_error(texture_decode_message(&e)))?;
+    let decoded = image::DynamicImage::from_decoder(decoder)
+        .map_err(|e| image_error(format!("{name}: {}", texture_decode_message(&e))))?;
     let rgba = decoded.to_rgba8();
     let (width, height) = rgba.dimensions();
     if width == 0 || height == 0 {
-        return Err(SceneError::Image {
-            file: ctx.file.to_string(),
-            path,
-            message: "zero-sized image".into(),
-        });
+        return Err(image_error(format!("{name}: zero-sized image")));
     }
     let texels = rgba.pixels().map(|p| p.0).collect();
     Ok(Image { width, height, texels })
+}
+
+/// A decoded KTX2 image as 8-bit texels for the slots that use it. 8-bit data is kept as
+/// stored, read as sRGB or linear by the slot (as PNG and JPEG are), with a warning when the
+/// file's transfer function says otherwise; float data (linear) is encoded for the slot:
+/// sRGB-encoded for colour slots, plain for data slots.
+fn ktx2_image(ctx: &mut Ctx<'_>, path: &str, name: &str, decoded: super::ktx2::Decoded, uses: Uses) -> Image {
+    use super::ktx2::Texels;
+    let format = &decoded.format;
+    let texels = match decoded.texels {
+        Texels::Unorm8 { texels, srgb } => {
+            if srgb && uses.linear {
+                ctx.warn(
+                    path,
+                    format!(
+                        "{name}: {format} is marked sRGB but a data slot (metallic-roughness, normal) uses it: \
+                         its values are read as linear, as glTF requires there"
+                    ),
+                );
+            }
+            if !srgb && uses.srgb {
+                ctx.warn(
+                    path,
+                    format!(
+                        "{name}: {format} is marked linear but a colour slot (base colour, emissive) uses it: \
+                         its values are read as sRGB, as glTF requires there"
+                    ),
+                );
+            }
+            texels
+        }
+        Texels::Float(texels) => {
+            if uses.srgb && uses.linear {
+                ctx.warn(
+                    path,
+                    format!("{name}: {format} is used by colour and data slots alike: stored sRGB-encoded for the colour slots"),
+                );
+            }
+            let q = furnace_post::quantize_unorm8;
+            let encode =
+                |v: f32| if uses.srgb { q(furnace_post::linear_to_srgb(v.clamp(0.0, 1.0))) } else { q(v) };
+            texels.into_iter().map(|[r, g, b, a]| [encode(r), encode(g), encode(b), q(a)]).collect()
+        }
+    };
+    Image { width: decoded.width, height: decoded.height, texels }
 }
 
 fn texture_too_large(w: u32, h: u32) -> String {
