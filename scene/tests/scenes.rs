@@ -282,3 +282,28 @@ fn strips_and_fans_are_triangulated_and_points_and_lines_skipped() {
         ]
     );
 }
+
+/// An image that only a transmission texture samples is decoded (it was left a 1×1
+/// placeholder, so the texture read white and the factor alone showed).
+#[test]
+fn an_image_only_a_transmission_texture_uses_is_decoded() {
+    let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("transmission-texture");
+    std::fs::create_dir_all(&dir).expect("tmp dir");
+    let src = data("BoxTextured/glTF");
+    for f in ["BoxTextured0.bin", "CesiumLogoFlat.png"] {
+        std::fs::copy(src.join(f), dir.join(f)).expect("copy");
+    }
+    let json = std::fs::read_to_string(src.join("BoxTextured.gltf")).expect("BoxTextured.gltf");
+    let json = json.replacen(
+        r#""baseColorTexture""#,
+        r#""baseColorFactor":[1,1,1,1]},"extensions":{"KHR_materials_transmission":{"transmissionFactor":1,"transmissionTexture":{"index":0}}},"unused":{"x""#,
+        1,
+    );
+    let json = json.replacen(r#""asset""#, r#""extensionsUsed":["KHR_materials_transmission"],"asset""#, 1);
+    std::fs::write(dir.join("t.gltf"), json).expect("write");
+    let s = Scene::load(dir.join("t.gltf")).expect("loads");
+    let m = &s.materials[0];
+    assert!(m.base_color_texture.is_none() && m.transmission_texture.is_some(), "{m:?}");
+    let image = &s.images[0];
+    assert!(image.width > 1 && image.height > 1, "{}×{}", image.width, image.height);
+}

@@ -207,6 +207,7 @@ fn forget_failed(materials: &mut [Material], textures: &[Texture], failed: &[boo
             &mut m.metallic_roughness_texture,
             &mut m.normal_texture,
             &mut m.emissive_texture,
+            &mut m.transmission_texture,
         ] {
             if fails(slot) {
                 *slot = None;
@@ -216,7 +217,7 @@ fn forget_failed(materials: &mut [Material], textures: &[Texture], failed: &[boo
 }
 
 /// How the materials use an image: through a colour slot (sRGB-encoded: base colour,
-/// emissive) or a data slot (linear: metallic-roughness, normal); neither: unused.
+/// emissive) or a data slot (linear: metallic-roughness, normal, transmission); neither: unused.
 #[derive(Debug, Clone, Copy, Default)]
 struct Uses {
     srgb: bool,
@@ -227,10 +228,7 @@ struct Uses {
 fn image_uses(count: usize, materials: &[Material], textures: &[Texture]) -> Vec<Uses> {
     let mut uses = vec![Uses::default(); count];
     for m in materials {
-        for t in [m.base_color_texture, m.metallic_roughness_texture, m.normal_texture, m.emissive_texture]
-            .into_iter()
-            .flatten()
-        {
+        for t in m.texture_refs() {
             if let Some(tex) = textures.get(t.texture as usize)
                 && let Some(u) = uses.get_mut(tex.image as usize)
             {
