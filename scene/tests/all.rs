@@ -17,6 +17,8 @@ mod environment;
 mod fuzz;
 #[path = "hostile.rs"]
 mod hostile;
+#[path = "instancing.rs"]
+mod instancing;
 #[path = "scenes.rs"]
 mod scenes;
 #[path = "textures.rs"]

@@ -19,6 +19,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_draco_mesh_compression",
     "EXT_meshopt_compression",
     "KHR_meshopt_compression",
+    super::instancing::EXTENSION,
     super::texture_source::BASISU,
     super::texture_source::WEBP,
 ];

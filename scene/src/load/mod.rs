@@ -3,11 +3,13 @@
 //!
 //! The steps, in order: [`document`] (parse and check), [`resources`] (buffers, with
 //! [`meshopt`]'s compressed views decoded into them, then the images the materials use), [`material`] (textures and materials), [`nodes`] (the node
-//! hierarchy: cameras, lights, and each mesh primitive through [`primitive`]); then the
+//! hierarchy: cameras, lights, and each mesh primitive through [`primitive`], once per instance
+//! of [`instancing`]); then the
 //! geometry's checks here. [`context::Ctx`] carries the file and the warnings through them.
 
 mod context;
 mod document;
+mod instancing;
 mod ktx2;
 mod material;
 mod meshopt;

@@ -110,8 +110,8 @@ pub(super) fn read_environment(
 /// How many triangles `scene` would flatten to, from the accessors' counts alone (nothing is
 /// read): each node once, as [`flatten`] visits them, each triangle primitive's triangles (a
 /// list's index count, or vertex count, / 3; a strip's or fan's count − 2) per node that places
-/// its mesh. An upper bound: `flatten` may still
-/// skip subtrees and drop triangles.
+/// its mesh, times its instances (`EXT_mesh_gpu_instancing`). An upper bound: `flatten` may
+/// still skip subtrees and drop triangles.
 pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>) -> u64 {
     let json = doc.as_json();
     let count =
@@ -125,6 +125,7 @@ pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>)
         }
         stack.extend(node.children());
         let Some(mesh) = node.mesh().and_then(|m| json.meshes.get(m.index())) else { continue };
+        let copies = super::instancing::declared_count(doc, &node);
         for p in &mesh.primitives {
             use gltf::mesh::Mode;
             let mode = match p.mode {
@@ -144,7 +145,7 @@ pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>)
                 Some(Mode::TriangleStrip | Mode::TriangleFan) => vertices.saturating_sub(2),
                 _ => 0,
             };
-            total = total.saturating_add(triangles);
+            total = total.saturating_add(triangles.saturating_mul(copies));
         }
     }
     total
@@ -205,10 +206,16 @@ impl Flattened<'_> {
             self.add_light(ctx, &light, world);
         }
         if let Some(mesh) = node.mesh() {
+            let worlds = super::instancing::instances(ctx, doc, self.meshes.buffers(), node, npath, world)?;
             for prim in mesh.primitives() {
                 let ppath = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-                self.meshes.add_primitive(ctx, &prim, &ppath, npath, world)?;
+                self.meshes.add_primitive(ctx, &prim, &ppath, npath, &worlds)?;
             }
+        } else if node.extension_value(super::instancing::EXTENSION).is_some() {
+            ctx.warn(
+                format!("{npath}.extensions.{}", super::instancing::EXTENSION),
+                "the node has no mesh to instance: ignored",
+            );
         }
         Ok(())
     }

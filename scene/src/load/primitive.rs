@@ -44,18 +44,19 @@ struct Attributes {
     indices: Vec<u32>,
 }
 
-/// A primitive placed in world space by its node's transform.
-struct Placed {
+/// A primitive placed in world space by its node's transform (or one instance's); what does not
+/// move is borrowed from the attributes read once for all placements.
+struct Placed<'a> {
     positions: Vec<Vec3>,
     /// Shading normals; `None` if absent or any is unusable (then per-face normals).
     normals: Option<Vec<Vec3>>,
-    uvs: Vec<Option<Vec<f32>>>,
-    colors: Option<Vec<Vec4>>,
+    uvs: &'a [Option<Vec<f32>>],
+    colors: Option<&'a [Vec4]>,
     /// The UV set of the material's normal map (tangents follow its derivatives).
     normal_set: usize,
     /// The file's tangents, in object space.
-    tangents: Option<Vec<f32>>,
-    indices: Vec<u32>,
+    tangents: Option<&'a [f32]>,
+    indices: &'a [u32],
     material: u32,
     world: Mat4,
     /// The transform mirrors: triangles are wound the other way round and the tangents'
@@ -63,7 +64,7 @@ struct Placed {
     flip: bool,
 }
 
-impl Placed {
+impl Placed<'_> {
     /// Vertex `i`'s UV of `set` (zero without it).
     fn uv_of(&self, set: usize, i: usize) -> Vec2 {
         let uvs = self.uvs.get(set).and_then(Option::as_ref);
@@ -79,7 +80,7 @@ impl Placed {
     fn push_attributes(&self, geo: &mut Geometry, sets: usize, colors: bool, i: usize) {
         geo.uvs.extend((0..sets).map(|k| self.uv_of(k, i)));
         if colors {
-            let c = self.colors.as_ref().and_then(|c| c.get(i)).copied().unwrap_or(Vec4::ONE);
+            let c = self.colors.and_then(|c| c.get(i)).copied().unwrap_or(Vec4::ONE);
             geo.colors.push(encode_color(c));
         }
     }
@@ -109,17 +110,22 @@ impl<'b> Meshes<'b> {
     }
 }
 
-impl Meshes<'_> {
-    /// Adds primitive `prim` (JSON path `ppath`) of node `npath`, placed by `world`: triangle
-    /// lists, strips and fans; points, lines and primitives without positions are skipped with
-    /// a warning.
+impl<'b> Meshes<'b> {
+    /// The file's buffers, as the accessors read them.
+    pub(super) fn buffers(&self) -> &'b [Vec<u8>] {
+        self.buffers
+    }
+
+    /// Adds primitive `prim` (JSON path `ppath`) of node `npath` once per transform of `worlds`
+    /// (the node's, or one per instance), reading its accessors once: triangle lists, strips
+    /// and fans; points, lines and primitives without positions are skipped with a warning.
     pub(super) fn add_primitive(
         &mut self,
         ctx: &mut Ctx<'_>,
         prim: &gltf::Primitive<'_>,
         ppath: &str,
         npath: &str,
-        world: Mat4,
+        worlds: &[Mat4],
     ) -> Result<(), SceneError> {
         use gltf::mesh::Mode;
         let mode = prim.mode();
@@ -140,12 +146,15 @@ impl Meshes<'_> {
         };
         let material = prim.material().index().map_or(self.default_material, |i| i as u32);
         let normal_set = self.normal_sets.get(material as usize).copied().unwrap_or(0);
-        let placed = place(ctx, attributes, material, normal_set, world, ppath, npath)?;
-        let base = self.geo.positions.len();
-        if let Some(normals) = &placed.normals {
-            self.add_vertices(ctx, &placed, normals, ppath)?;
+        for &world in worlds {
+            let placed = place(ctx, &attributes, material, normal_set, world, ppath, npath)?;
+            let base = self.geo.positions.len();
+            if let Some(normals) = &placed.normals {
+                self.add_vertices(ctx, &placed, normals, ppath)?;
+            }
+            self.add_triangles(ctx, &placed, base, ppath)?;
         }
-        self.add_triangles(ctx, &placed, base, ppath)
+        Ok(())
     }
 
     /// Reads the attributes the scene stores and the indices, checking counts and ranges.
@@ -208,7 +217,7 @@ impl Meshes<'_> {
     fn add_vertices(
         &mut self,
         ctx: &Ctx<'_>,
-        p: &Placed,
+        p: &Placed<'_>,
         normals: &[Vec3],
         ppath: &str,
     ) -> Result<(), SceneError> {
@@ -232,7 +241,7 @@ impl Meshes<'_> {
     fn add_triangles(
         &mut self,
         ctx: &Ctx<'_>,
-        p: &Placed,
+        p: &Placed<'_>,
         base: usize,
         ppath: &str,
     ) -> Result<(), SceneError> {
@@ -260,7 +269,7 @@ impl Meshes<'_> {
     fn add_flat_triangle(
         &mut self,
         ctx: &Ctx<'_>,
-        p: &Placed,
+        p: &Placed<'_>,
         [a, b, c]: [usize; 3],
         face_normal: Vec3,
         ppath: &str,
@@ -392,15 +401,15 @@ fn read_positions(
 }
 
 /// Transforms the primitive's positions and shading normals to world space.
-fn place(
+fn place<'a>(
     ctx: &mut Ctx<'_>,
-    a: Attributes,
+    a: &'a Attributes,
     material: u32,
     normal_set: usize,
     world: Mat4,
     ppath: &str,
     npath: &str,
-) -> Result<Placed, SceneError> {
+) -> Result<Placed<'a>, SceneError> {
     let flip = Mat3::from_mat4(world).determinant() < 0.0;
     let pos = &a.positions;
     let wp: Vec<Vec3> =
@@ -419,15 +428,15 @@ fn place(
             ),
         )));
     }
-    let normals = a.normals.and_then(|n| world_normals(ctx, &n, world, ppath));
+    let normals = a.normals.as_deref().and_then(|n| world_normals(ctx, n, world, ppath));
     Ok(Placed {
         positions: wp,
         normals,
-        uvs: a.uvs,
-        colors: a.colors,
+        uvs: &a.uvs,
+        colors: a.colors.as_deref(),
         normal_set,
-        tangents: a.tangents,
-        indices: a.indices,
+        tangents: a.tangents.as_deref(),
+        indices: &a.indices,
         material,
         world,
         flip,
@@ -451,11 +460,11 @@ fn world_normals(ctx: &mut Ctx<'_>, n: &[f32], world: Mat4, ppath: &str) -> Opti
 }
 
 /// Per-vertex world-space tangents of a primitive with shading `normals`.
-fn vertex_tangents(p: &Placed, normals: &[Vec3]) -> Vec<Vec4> {
+fn vertex_tangents(p: &Placed<'_>, normals: &[Vec3]) -> Vec<Vec4> {
     // The file's tangents transform as directions (not by the inverse transpose);
     // a mirroring transform flips the handedness. Otherwise generate them.
     let world3 = Mat3::from_mat4(p.world);
-    let from_file: Option<Vec<Vec4>> = p.tangents.as_ref().map(|t| {
+    let from_file: Option<Vec<Vec4>> = p.tangents.map(|t| {
         t.chunks_exact(4)
             .map(|c| {
                 let w = if (c[3] < 0.0) != p.flip { -1.0 } else { 1.0 };
