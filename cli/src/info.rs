@@ -16,8 +16,28 @@ pub fn run(a: &InfoArgs) -> Result<(), String> {
     let scene = Scene::load_with(&a.scene, &furnace_scene::LoadOptions { strict: a.strict })
         .map_err(|e| e.to_string())?;
     print!("{}", describe(&scene));
+    print!("{}", describe_extensions(&scene.extensions));
     print!("{}", describe_settings(settings, scene.point_lights().count()));
     Ok(())
+}
+
+/// The glTF extensions the file lists, one line each: `required` where the file requires it,
+/// and whether furnace honours it or ignores it.
+fn describe_extensions(extensions: &[furnace_scene::ExtensionUse]) -> String {
+    if extensions.is_empty() {
+        return format!("{:<16}none\n", "extensions");
+    }
+    let mut out = format!(
+        "{:<16}{} (the file's extensionsUsed and extensionsRequired)\n",
+        "extensions",
+        extensions.len()
+    );
+    for e in extensions {
+        let required = if e.required { "required" } else { "used" };
+        let honoured = if e.honoured() { "honoured" } else { "ignored" };
+        out.push_str(&format!("  {:<34}{required}, {honoured}\n", e.name));
+    }
+    out
 }
 
 /// The render settings, one line per field: its flag and its value as the flag takes it
@@ -216,6 +236,23 @@ mod tests {
         );
         let text = describe_settings(&RenderSettings::default(), 0);
         assert!(text.contains("  --env-sampling       compensated (default)\n"), "{text}");
+    }
+
+    /// One line per extension, required or only used, honoured or ignored.
+    #[test]
+    fn lists_the_extensions_and_what_furnace_does_with_them() {
+        let use_ = |name: &str, required| furnace_scene::ExtensionUse { name: name.into(), required };
+        let text = describe_extensions(&[
+            use_("EXT_mesh_gpu_instancing", true),
+            use_("ACME_not_an_extension", false),
+        ]);
+        assert_eq!(
+            text,
+            "extensions      2 (the file's extensionsUsed and extensionsRequired)\n\
+             \x20 EXT_mesh_gpu_instancing           required, honoured\n\
+             \x20 ACME_not_an_extension             used, ignored\n",
+        );
+        assert_eq!(describe_extensions(&[]), "extensions      none\n");
     }
 
     #[test]

@@ -195,6 +195,19 @@ fn info_on_the_cornell_box_file() {
     assert!(text.contains("sun") && text.contains("W/m²"), "{text}");
 }
 
+/// `furnace info` lists the extensions the file uses, and the instances they place.
+#[test]
+fn info_lists_the_extensions_the_file_uses() {
+    let o = furnace(&["info", &data("SimpleInstancing/glTF/SimpleInstancing.gltf")]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("triangles       1500\n"), "125 cubes of 12 triangles: {text}");
+    assert!(text.contains("extensions      1 "), "{text}");
+    assert!(text.contains("  EXT_mesh_gpu_instancing           used, honoured\n"), "{text}");
+    let o = furnace(&["info", &data("Box/glTF-Binary/Box.glb")]);
+    assert!(String::from_utf8_lossy(&o.stdout).contains("extensions      none\n"), "{}", stderr(&o));
+}
+
 /// `furnace info` takes render's settings flags and prints the settings they make after the
 /// scene: a line per field of the table, those not given marked as defaults; a value render
 /// refuses is refused.

@@ -7,7 +7,8 @@ impl Scene {
     /// textures, images, cameras, lights), as 16 hex digits: two loads of the same content give
     /// the same hash, any change to what is rendered changes it (with probability 1 − 2⁻⁶⁴). Not
     /// cryptographic: it guards against resuming a render with an edited scene, not against
-    /// forgery. The name and the loader's warnings are not part of it.
+    /// forgery. The name, the loader's warnings and the extensions the file lists are not part
+    /// of it.
     ///
     /// Stable across platforms and Rust versions (a fixed multiply–xorshift over 32-bit words,
     /// the small parts by their `Debug` text); a new field of the scene must be added here.
@@ -115,5 +116,7 @@ mod tests {
         let mut e = a;
         e.name = "elsewhere.glb".into();
         assert_eq!(e.content_hash(), h, "the name is not content");
+        e.extensions.push(crate::ExtensionUse { name: "EXT_mesh_gpu_instancing".into(), required: true });
+        assert_eq!(e.content_hash(), h, "the extensions the file lists are not content");
     }
 }

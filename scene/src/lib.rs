@@ -83,7 +83,7 @@ pub use geometry::{
 };
 pub use light::{Light, PointLight, PointLightDistribution, Sky, SpotCone, Sun};
 pub use light_bvh::{LEAF as LIGHT_BVH_LEAF, LightBounds, LightBvh, LightBvhNode};
-pub use load::{MAX_COORDINATE, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
+pub use load::{ExtensionUse, MAX_COORDINATE, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
 pub use material::{AlphaMode, Material, MaterialSample};
 pub use surface::{SurfacePoint, geometric_normal};
 pub use texture::{
@@ -123,6 +123,9 @@ pub struct Scene {
     /// Degenerate (zero-area) triangles dropped while loading (non-finite positions are an
     /// error).
     pub dropped_triangles: usize,
+    /// The glTF extensions the file lists (none for a scene not loaded from glTF). What the
+    /// file says, not what renders: not part of [`Scene::content_hash`].
+    pub extensions: Vec<ExtensionUse>,
 }
 
 /// How [`Scene::load_with`] treats what it can work around.

@@ -142,6 +142,12 @@ fn simple_instancing_places_125_cubes() {
             assert!((p - m.transform_point3(q)).abs().max_element() < 1e-5, "instance {i} vertex {k}: {p}");
         }
     }
+    assert_eq!(
+        scene.extensions,
+        [furnace_scene::ExtensionUse { name: EXT.into(), required: false }],
+        "the file lists the extension as used"
+    );
+    assert!(scene.extensions[0].honoured());
 }
 
 /// An instance places the mesh as a node of the same TRS does: the same positions (within

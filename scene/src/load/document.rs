@@ -24,6 +24,38 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     super::texture_source::WEBP,
 ];
 
+/// An extension a glTF file lists (`extensionsUsed`, `extensionsRequired`), as
+/// [`Scene::extensions`](crate::Scene::extensions) reports it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ExtensionUse {
+    /// The extension's name (`EXT_mesh_gpu_instancing`).
+    pub name: String,
+    /// The file lists it in `extensionsRequired`: a reader that does not honour it must refuse
+    /// the file.
+    pub required: bool,
+}
+
+impl ExtensionUse {
+    /// furnace honours it (it is one of [`SUPPORTED_EXTENSIONS`]); otherwise the loader ignores
+    /// it with a warning.
+    pub fn honoured(&self) -> bool {
+        SUPPORTED_EXTENSIONS.contains(&self.name.as_str())
+    }
+}
+
+/// The extensions `root` lists: those of `extensionsUsed` in its order, then any only in
+/// `extensionsRequired` (which glTF forbids, but a file may do), each once.
+pub(super) fn extensions(root: &gltf::json::Root) -> Vec<ExtensionUse> {
+    let mut out: Vec<ExtensionUse> = Vec::new();
+    for name in root.extensions_used.iter().chain(&root.extensions_required) {
+        if !out.iter().any(|e| &e.name == name) {
+            let required = root.extensions_required.contains(name);
+            out.push(ExtensionUse { name: name.clone(), required });
+        }
+    }
+    out
+}
+
 /// Extensions whose absence changes the look but which furnace ignores with a warning when
 /// only *used* (never when *required*).
 const IGNORED_WITH_WARNING: &str = "is used but not supported: ignored";

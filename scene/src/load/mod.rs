@@ -18,7 +18,7 @@ mod primitive;
 mod resources;
 mod texture_source;
 
-pub use document::SUPPORTED_EXTENSIONS;
+pub use document::{ExtensionUse, SUPPORTED_EXTENSIONS};
 
 use crate::error::SceneError;
 use crate::geometry::Geometry;
@@ -96,6 +96,7 @@ pub(crate) fn load(
             .collect(),
         warnings: ctx.warnings,
         dropped_triangles: dropped,
+        extensions: document::extensions(doc.as_json()),
     })
 }
 
