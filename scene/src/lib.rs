@@ -70,7 +70,7 @@ mod material;
 mod surface;
 mod texture;
 
-pub use camera::{Camera, CameraRays, DEFAULT_YFOV, Projection, Ray};
+pub use camera::{Camera, CameraRays, DEFAULT_YFOV, FLAT_THICKNESS, Projection, Ray};
 pub use emitter::{Emitters, luminance, triangle_area};
 pub use environment::{
     Environment, EnvironmentError, EnvironmentMap, EnvironmentSample, EnvironmentSampler,
