@@ -278,6 +278,7 @@ fn sunlit_lambert_floor() {
         lights: vec![Light::Sun(Sun::delta(-Vec3::new(theta.sin(), theta.cos(), 0.0), irradiance))],
         warnings: Vec::new(),
         dropped_triangles: 0,
+        variants: Vec::new(),
     };
     let settings = RenderSettings { width: 8, height: 8, bounces: 1, ..Default::default() };
     let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");

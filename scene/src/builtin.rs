@@ -33,6 +33,7 @@ pub fn furnace_sphere(material: Material, n: u32) -> Scene {
         lights: vec![crate::Light::Sky(crate::Sky { radiance: Vec3::ONE })],
         warnings: Vec::new(),
         dropped_triangles: 0,
+        variants: Vec::new(),
     }
 }
 
@@ -187,6 +188,7 @@ pub fn sunlit_interior(target_triangles: u32) -> Scene {
         ))],
         warnings: Vec::new(),
         dropped_triangles: 0,
+        variants: Vec::new(),
     }
 }
 

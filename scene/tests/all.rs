@@ -17,6 +17,8 @@ mod environment;
 mod fuzz;
 #[path = "hostile.rs"]
 mod hostile;
+#[path = "material_extensions.rs"]
+mod material_extensions;
 #[path = "scenes.rs"]
 mod scenes;
 #[path = "textures.rs"]
