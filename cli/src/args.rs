@@ -70,6 +70,10 @@ pub struct RenderArgs {
     /// the material renders with its factors alone].
     #[arg(long)]
     pub strict: bool,
+    /// The KHR_materials_variants variant to load, by name or index (`furnace info` lists a
+    /// file's variants) [default: each primitive's own material].
+    #[arg(long, value_name = "NAME")]
+    pub variant: Option<String>,
     /// Samples per pixel (the total, also when resuming; also N of the fixed-N samplers
     /// hammersley and cmj).
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
@@ -326,6 +330,10 @@ pub struct InfoArgs {
     /// the material renders with its factors alone].
     #[arg(long)]
     pub strict: bool,
+    /// The KHR_materials_variants variant to load, by name or index (`furnace info` lists a
+    /// file's variants) [default: each primitive's own material].
+    #[arg(long, value_name = "NAME")]
+    pub variant: Option<String>,
     // The render settings' flags, as `furnace render` takes them: the settings they make are
     // printed after the scene.
     #[command(flatten)]
@@ -406,6 +414,10 @@ pub struct BenchArgs {
     /// the material renders with its factors alone].
     #[arg(long)]
     pub strict: bool,
+    /// The KHR_materials_variants variant to load, by name or index (`furnace info` lists a
+    /// file's variants) [default: each primitive's own material].
+    #[arg(long, value_name = "NAME")]
+    pub variant: Option<String>,
     /// Image width [default: 256 for cbox, else 512 or from --height and the camera].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIDE as i64))]
     pub width: Option<u32>,

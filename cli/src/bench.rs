@@ -314,13 +314,14 @@ impl Report {
     }
 }
 
-fn load(scene: &SceneArg, strict: bool) -> Result<Scene, String> {
+fn load(scene: &SceneArg, options: &furnace_scene::LoadOptions) -> Result<Scene, String> {
+    if let (Some(v), false) = (&options.variant, matches!(scene, SceneArg::File(_))) {
+        return Err(format!("--variant {v}: the built-in scenes have no material variants"));
+    }
     match scene {
         SceneArg::Cbox => builtin::cornell_box().map_err(|e| e.to_string()),
         SceneArg::Interior(n) => Ok(builtin::sunlit_interior(*n)),
-        SceneArg::File(p) => {
-            Scene::load_with(p, &furnace_scene::LoadOptions { strict }).map_err(|e| e.to_string())
-        }
+        SceneArg::File(p) => Scene::load_with(p, options).map_err(|e| e.to_string()),
     }
 }
 
@@ -337,7 +338,8 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         crate::env::check_sampling(given.env_sampling, given.light_sampling)?;
     }
     let start = Instant::now();
-    let mut scene = load(&a.scene, a.strict)?;
+    let mut scene =
+        load(&a.scene, &furnace_scene::LoadOptions { strict: a.strict, variant: a.variant.clone() })?;
     let scene_seconds = start.elapsed().as_secs_f64();
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);

@@ -13,10 +13,11 @@ pub fn run(a: &InfoArgs) -> Result<(), String> {
     if a.settings.given("env-sampling") {
         crate::env::check_sampling(settings.env_sampling, settings.light_sampling)?;
     }
-    let scene = Scene::load_with(&a.scene, &furnace_scene::LoadOptions { strict: a.strict })
-        .map_err(|e| e.to_string())?;
+    let options = furnace_scene::LoadOptions { strict: a.strict, variant: a.variant.clone() };
+    let scene = Scene::load_with(&a.scene, &options).map_err(|e| e.to_string())?;
     print!("{}", describe(&scene));
     print!("{}", describe_extensions(&scene.extensions));
+    print!("{}", describe_variants(&scene, a.variant.as_deref()));
     print!("{}", describe_settings(settings, scene.point_lights().count()));
     Ok(())
 }
@@ -38,6 +39,28 @@ fn describe_extensions(extensions: &[furnace_scene::ExtensionUse]) -> String {
         out.push_str(&format!("  {:<34}{required}, {honoured}\n", e.name));
     }
     out
+}
+
+/// The file's KHR_materials_variants, one line (nothing without them): each variant's index
+/// and name, the one `loaded` (`--variant`, by name or index) marked.
+fn describe_variants(scene: &Scene, loaded: Option<&str>) -> String {
+    if scene.variants.is_empty() {
+        return String::new();
+    }
+    let loaded = loaded.and_then(|w| {
+        scene
+            .variants
+            .iter()
+            .position(|n| n == w)
+            .or_else(|| w.parse().ok().filter(|&i| i < scene.variants.len()))
+    });
+    let names: Vec<String> = scene
+        .variants
+        .iter()
+        .enumerate()
+        .map(|(i, n)| format!("{i} '{n}'{}", if Some(i) == loaded { " (loaded)" } else { "" }))
+        .collect();
+    format!("{:<16}{}: {}\n", "variants", names.len(), names.join(", "))
 }
 
 /// The render settings, one line per field: its flag and its value as the flag takes it

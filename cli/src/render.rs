@@ -106,17 +106,17 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         )?;
     }
     check_samples(&mut args)?;
-    let mut scene =
-        load_scene(args.scene.as_deref(), args.strict).map_err(|e| match (&a.resume, &a.scene) {
-            // The scene came from the file's record: say so, and how to point at it.
-            (Some(file), None) => {
-                format!(
-                    "{e} (the scene {} was rendered from; give its path after `{command}`)",
-                    file.display()
-                )
-            }
-            _ => e,
-        })?;
+    let mut scene = load_scene(
+        args.scene.as_deref(),
+        &LoadOptions { strict: args.strict, variant: args.variant.clone() },
+    )
+    .map_err(|e| match (&a.resume, &a.scene) {
+        // The scene came from the file's record: say so, and how to point at it.
+        (Some(file), None) => {
+            format!("{e} (the scene {} was rendered from; give its path after `{command}`)", file.display())
+        }
+        _ => e,
+    })?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
@@ -574,7 +574,11 @@ fn shell_quote(s: &str) -> String {
     }
 }
 
-fn load_scene(path: Option<&Path>, strict: bool) -> Result<Scene, String> {
+fn load_scene(path: Option<&Path>, options: &LoadOptions) -> Result<Scene, String> {
+    let is_file = path.is_some_and(|p| !p.to_str().is_some_and(|s| s.starts_with("interior:")));
+    if let Some(v) = options.variant.as_ref().filter(|_| !is_file) {
+        return Err(format!("--variant {v}: the built-in scenes have no material variants"));
+    }
     match path {
         // The procedural stress scene of `furnace bench --scene interior:N`.
         Some(p) if p.to_str().is_some_and(|s| s.starts_with("interior:")) => {
@@ -583,7 +587,7 @@ fn load_scene(path: Option<&Path>, strict: bool) -> Result<Scene, String> {
                 _ => Err(format!("'{}': not a scene", p.display())),
             }
         }
-        Some(p) => Scene::load_with(p, &LoadOptions { strict }).map_err(|e| e.to_string()),
+        Some(p) => Scene::load_with(p, options).map_err(|e| e.to_string()),
         None => builtin::cornell_box().map_err(|e| e.to_string()),
     }
 }

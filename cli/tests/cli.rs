@@ -1380,3 +1380,44 @@ fn denoise_writes_a_denoised_image_closer_to_the_converged_one() {
 
 #[path = "split_cases/merge.rs"]
 mod split;
+
+/// `--variant` loads a KHR_materials_variants variant and `furnace info` lists the file's
+/// variants, the loaded one marked; a name the file lacks is one error line listing them.
+#[test]
+fn info_lists_material_variants() {
+    let dir = temp_dir("variants");
+    let file = dir.join("variants.gltf");
+    let material = |c: &str| format!(r#"{{"pbrMetallicRoughness":{{"baseColorFactor":[{c},1]}}}}"#);
+    let gltf = format!(
+        r#"{{"asset":{{"version":"2.0"}},"extensionsUsed":["KHR_materials_variants"],
+"extensions":{{"KHR_materials_variants":{{"variants":[{{"name":"Day"}},{{"name":"Night"}}]}}}},
+"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"material":0,
+"extensions":{{"KHR_materials_variants":{{"mappings":[{{"variants":[1],"material":1}}]}}}}}}]}}],
+"materials":[{},{}],
+"buffers":[{{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}}],
+"bufferViews":[{{"buffer":0,"byteLength":36}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}}]}}"#,
+        material("1,0,0"),
+        material("0,1,0")
+    );
+    std::fs::write(&file, gltf).unwrap();
+    let path = file.display().to_string();
+    let o = furnace(&["info", &path]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("variants        2: 0 'Day', 1 'Night'\n"), "{text}");
+    let o = furnace(&["info", &path, "--variant", "Night"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("1 'Night' (loaded)"));
+    let o = furnace(&["info", &path, "--variant", "Dusk"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with("error: ") && err.contains("'Dusk'") && err.contains("0 'Day', 1 'Night'"),
+        "{err}"
+    );
+    // The built-in scenes have none.
+    let o = furnace(&["bench", "--variant", "Day"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+}

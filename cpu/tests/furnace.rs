@@ -279,6 +279,7 @@ fn sunlit_lambert_floor() {
         warnings: Vec::new(),
         dropped_triangles: 0,
         extensions: Vec::new(),
+        variants: Vec::new(),
     };
     let settings = RenderSettings { width: 8, height: 8, bounces: 1, ..Default::default() };
     let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");

@@ -34,6 +34,7 @@ pub fn furnace_sphere(material: Material, n: u32) -> Scene {
         warnings: Vec::new(),
         dropped_triangles: 0,
         extensions: Vec::new(),
+        variants: Vec::new(),
     }
 }
 
@@ -189,6 +190,7 @@ pub fn sunlit_interior(target_triangles: u32) -> Scene {
         warnings: Vec::new(),
         dropped_triangles: 0,
         extensions: Vec::new(),
+        variants: Vec::new(),
     }
 }
 

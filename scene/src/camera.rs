@@ -66,12 +66,25 @@ impl Camera {
 
     /// The default camera for a scene with no camera: looks along −Z at the centre of the
     /// bounds `[min, max]` from the +Z side, with [`DEFAULT_YFOV`], far enough that the bounding
-    /// sphere fits in the vertical field of view (distance `r / sin(yfov/2)`).
+    /// sphere fits in the vertical field of view (distance `r / sin(yfov/2)`). A flat asset
+    /// (bounds thinner than [`FLAT_THICKNESS`] of their size along x or y: a ground plane, a wall facing
+    /// ±x), which −Z would see edge-on as an empty frame, is seen from 45° between its normal and
+    /// +Z.
     pub fn frame_bounds(min: Vec3, max: Vec3) -> Self {
         let center = (min + max) * 0.5;
         let r = ((max - min).length() * 0.5).max(1e-3);
         let d = r / (DEFAULT_YFOV * 0.5).sin();
-        Self::look_at(center + Vec3::Z * d, center, Vec3::Y, DEFAULT_YFOV)
+        let size = (max - min).max_element();
+        let thin = |e: f32| e <= FLAT_THICKNESS * size;
+        let extent = max - min;
+        let from = if thin(extent.y) && !thin(extent.z) {
+            Vec3::new(0.0, 1.0, 1.0).normalize()
+        } else if thin(extent.x) && !thin(extent.z) {
+            Vec3::new(1.0, 0.0, 1.0).normalize()
+        } else {
+            Vec3::Z
+        };
+        Self::look_at(center + from * d, center, Vec3::Y, DEFAULT_YFOV)
     }
 
     /// The ray through the film point `pixel` (in pixels, jitter included: pixel `(i, j)` is
@@ -93,6 +106,10 @@ impl Camera {
         CameraRays { camera: *self, w, h, aspect, scale }
     }
 }
+
+/// The thickness, relative to its largest extent, below which [`Camera::frame_bounds`] takes
+/// an asset for flat.
+pub const FLAT_THICKNESS: f32 = 0.01;
 
 /// A [`Camera`] with the constants of one image size formed: [`Camera::rays`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -126,6 +143,31 @@ impl CameraRays {
 
 #[cfg(test)]
 mod tests {
+
+    /// A flat asset is framed from an angle: the centre ray of a ground plane (y = 0) or a wall
+    /// facing x hits it inside its bounds, where looking along −Z would graze it; bounds that
+    /// are not flat keep the view along −Z.
+    #[test]
+    fn flat_assets_are_framed_from_an_angle() {
+        let hits = |min: Vec3, max: Vec3, axis: usize| {
+            let ray = Camera::frame_bounds(min, max).generate_ray(Vec2::new(32.0, 32.0), 64, 64);
+            let t = (min[axis] - ray.origin[axis]) / ray.direction[axis];
+            let p = ray.origin + t * ray.direction;
+            // At the plane, within the bounds (f32 rounding of a unit-size scene: 1e-5).
+            t > 0.0 && (p - p.clamp(min, max)).abs().max_element() < 1e-5
+        };
+        let ground = (Vec3::new(-1.0, 0.0, -1.0), Vec3::new(1.0, 0.0, 1.0));
+        assert!(hits(ground.0, ground.1, 1), "a ground plane");
+        let wall = (Vec3::new(2.0, -1.0, -1.0), Vec3::new(2.0, 1.0, 1.0));
+        assert!(hits(wall.0, wall.1, 0), "a wall facing x");
+        let facing = (Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0));
+        assert!(hits(facing.0, facing.1, 2), "a plane facing the default view");
+        // Not flat: the view along −Z, eye on +Z.
+        let c = Camera::frame_bounds(Vec3::splat(-1.0), Vec3::ONE);
+        let eye = c.world_from_camera.translation;
+        assert!(eye.x == 0.0 && eye.y == 0.0 && eye.z > 0.0, "{eye}");
+    }
+
     use super::*;
 
     #[test]

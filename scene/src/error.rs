@@ -65,6 +65,17 @@ pub enum SceneError {
         /// What is wrong with the map (names the map's file).
         source: crate::EnvironmentError,
     },
+    /// The material variant a load asked for ([`crate::LoadOptions::variant`]) is neither a
+    /// name nor an index of the file's KHR_materials_variants.
+    #[error("{file}: no material variant '{variant}': {}", variant_list(available))]
+    UnknownVariant {
+        /// The scene file.
+        file: String,
+        /// The name asked for.
+        variant: String,
+        /// The file's variants, in order.
+        available: Vec<String>,
+    },
     /// The file is valid but yields no renderable triangle.
     #[error("{file}: nothing to render: {reason}")]
     NothingToRender {
@@ -85,9 +96,19 @@ impl SceneError {
             Self::UnsupportedExtension { .. } => "unsupported-extension",
             Self::Image { .. } => "image",
             Self::Environment { .. } => "environment",
+            Self::UnknownVariant { .. } => "unknown-variant",
             Self::NothingToRender { .. } => "nothing-to-render",
         }
     }
+}
+
+/// The variants a file offers, for [`SceneError::UnknownVariant`]'s message.
+fn variant_list(names: &[String]) -> String {
+    if names.is_empty() {
+        return "the file has no variants (KHR_materials_variants)".to_string();
+    }
+    let quoted: Vec<String> = names.iter().enumerate().map(|(i, n)| format!("{i} '{n}'")).collect();
+    format!("the file's variants are {}", quoted.join(", "))
 }
 
 /// Something the loader ignored or repaired; the scene still loads. Identical warnings are

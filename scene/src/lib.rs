@@ -19,7 +19,9 @@
 //!   crate) before accessors read them; a corrupt or truncated payload is an error naming the
 //!   primitive or the buffer view.
 //! * **Materials** ([`Material`]): metallic-roughness with KHR_materials_specular and
-//!   KHR_materials_emissive_strength, alpha MASK, double-sided; textures stored as 8-bit RGBA and
+//!   KHR_materials_emissive_strength, alpha MASK, double-sided; KHR_materials_pbrSpecularGlossiness
+//!   converted to metallic-roughness (the Khronos converter's formulas); KHR_materials_variants
+//!   selected by [`LoadOptions::variant`]; textures stored as 8-bit RGBA and
 //!   decoded (sRGB → linear, IEC 61966-2-1) when sampled bilinearly with glTF wrap modes and
 //!   KHR_texture_transform ([`TextureRef::sample_bilinear`]).
 //! * **Image formats**: PNG, JPEG and the others of the `image` crate; WebP (EXT_texture_webp);
@@ -41,7 +43,7 @@
 //! * **Built-in scenes** ([`builtin`]): the reference Cornell box and a white-furnace sphere.
 //!
 //! Unsupported features (transmission, point lights, BLEND...) give one [`Warning`] each, never a
-//! failure; a *required* unsupported extension (e.g. `KHR_materials_variants`) is an error.
+//! failure; a *required* unsupported extension (e.g. `KHR_materials_clearcoat`) is an error.
 //!
 //! ```
 //! use furnace_scene::{Scene, builtin};
@@ -70,7 +72,7 @@ mod material;
 mod surface;
 mod texture;
 
-pub use camera::{Camera, CameraRays, DEFAULT_YFOV, Projection, Ray};
+pub use camera::{Camera, CameraRays, DEFAULT_YFOV, FLAT_THICKNESS, Projection, Ray};
 pub use emitter::{Emitters, luminance, triangle_area};
 pub use environment::{
     Environment, EnvironmentError, EnvironmentMap, EnvironmentSample, EnvironmentSampler,
@@ -126,15 +128,25 @@ pub struct Scene {
     /// The glTF extensions the file lists (none for a scene not loaded from glTF). What the
     /// file says, not what renders: not part of [`Scene::content_hash`].
     pub extensions: Vec<ExtensionUse>,
+    /// The file's KHR_materials_variants names, in file order (empty without the extension).
+    /// Not part of [`Scene::content_hash`]: the variant loaded shows in the triangles'
+    /// materials, which are.
+    pub variants: Vec<String>,
 }
 
-/// How [`Scene::load_with`] treats what it can work around.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+/// How [`Scene::load_with`] treats what it can work around, and which material variant it
+/// loads.
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct LoadOptions {
     /// A missing, unreadable or undecodable image is an error. Without it (the default) it is a
     /// [`Warning`] naming the image and the reason, and the material slots that sample the
     /// image are left empty: those materials render with their factors alone.
     pub strict: bool,
+    /// The KHR_materials_variants variant to load, by name (or, when no variant has that name,
+    /// by index): each primitive whose mappings list it takes the mapped material, the others
+    /// keep their own. `None` (the default) loads every primitive's own material. A value that
+    /// names no variant of the file is [`SceneError::UnknownVariant`].
+    pub variant: Option<String>,
 }
 
 /// Sizes of a scene, for logs and benchmarks.

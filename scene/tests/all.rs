@@ -19,6 +19,8 @@ mod fuzz;
 mod hostile;
 #[path = "instancing.rs"]
 mod instancing;
+#[path = "material_extensions.rs"]
+mod material_extensions;
 #[path = "scenes.rs"]
 mod scenes;
 #[path = "textures.rs"]

@@ -14,6 +14,8 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_transmission",
     "KHR_materials_ior",
     "KHR_materials_volume",
+    "KHR_materials_pbrSpecularGlossiness",
+    super::variants::EXTENSION,
     "KHR_texture_transform",
     "KHR_mesh_quantization",
     "KHR_draco_mesh_compression",

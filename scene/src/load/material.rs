@@ -70,19 +70,10 @@ fn texture_ref(
 fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
     let i = m.index().unwrap_or(0);
     let p = format!("materials[{i}]");
-    let pbr = m.pbr_metallic_roughness();
-    let base_color_texture = texture_ref(
-        ctx,
-        pbr.base_color_texture(),
-        ColorSpace::Srgb,
-        format!("{p}.pbrMetallicRoughness.baseColorTexture"),
-    );
-    let metallic_roughness_texture = texture_ref(
-        ctx,
-        pbr.metallic_roughness_texture(),
-        ColorSpace::Linear,
-        format!("{p}.pbrMetallicRoughness.metallicRoughnessTexture"),
-    );
+    let pbr = match m.pbr_specular_glossiness() {
+        Some(sg) => spec_gloss(ctx, &sg, &p),
+        None => metal_rough(ctx, &m.pbr_metallic_roughness(), &p),
+    };
     let (normal_texture, normal_scale) = normal_texture(m);
     let emissive_texture =
         texture_ref(ctx, m.emissive_texture(), ColorSpace::Srgb, format!("{p}.emissiveTexture"));
@@ -98,8 +89,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
     }
     let transmission = transmission(ctx, m, &p);
     warn_ignored(ctx, m);
-    let clamp01 = |x: f32| if x.is_nan() { 1.0 } else { x.clamp(0.0, 1.0) };
-    let roughness_factor = clamp01(pbr.roughness_factor());
+    let roughness_factor = pbr.roughness_factor;
     let transmissive = transmission.factor > 0.0;
     if transmissive && !transmission.volume && roughness_factor > 0.0 {
         ctx.warn(
@@ -109,11 +99,11 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
     }
     Material {
         name: m.name().map(str::to_string),
-        base_color_factor: Vec4::from(pbr.base_color_factor()),
-        base_color_texture,
-        metallic_factor: clamp01(pbr.metallic_factor()),
+        base_color_factor: pbr.base_color_factor,
+        base_color_texture: pbr.base_color_texture,
+        metallic_factor: pbr.metallic_factor,
         roughness_factor,
-        metallic_roughness_texture,
+        metallic_roughness_texture: pbr.metallic_roughness_texture,
         normal_texture,
         normal_scale,
         emissive,
@@ -130,6 +120,110 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
         volume: transmissive && transmission.volume,
         absorption: transmission.absorption,
     }
+}
+
+/// The metallic-roughness part of a material, read from `pbrMetallicRoughness` or converted
+/// from KHR_materials_pbrSpecularGlossiness.
+struct MetalRough {
+    base_color_factor: Vec4,
+    base_color_texture: Option<TextureRef>,
+    metallic_factor: f32,
+    roughness_factor: f32,
+    metallic_roughness_texture: Option<TextureRef>,
+}
+
+/// A factor clamped to [0, 1]; NaN reads as 1.
+fn clamp01(x: f32) -> f32 {
+    if x.is_nan() { 1.0 } else { x.clamp(0.0, 1.0) }
+}
+
+fn metal_rough(ctx: &mut Ctx<'_>, pbr: &gltf::material::PbrMetallicRoughness<'_>, p: &str) -> MetalRough {
+    MetalRough {
+        base_color_factor: Vec4::from(pbr.base_color_factor()),
+        base_color_texture: texture_ref(
+            ctx,
+            pbr.base_color_texture(),
+            ColorSpace::Srgb,
+            format!("{p}.pbrMetallicRoughness.baseColorTexture"),
+        ),
+        metallic_factor: clamp01(pbr.metallic_factor()),
+        roughness_factor: clamp01(pbr.roughness_factor()),
+        metallic_roughness_texture: texture_ref(
+            ctx,
+            pbr.metallic_roughness_texture(),
+            ColorSpace::Linear,
+            format!("{p}.pbrMetallicRoughness.metallicRoughnessTexture"),
+        ),
+    }
+}
+
+/// KHR_materials_pbrSpecularGlossiness converted to metallic-roughness from its factors
+/// ([`spec_gloss_to_metal_rough`]); `diffuseTexture` becomes the base colour texture. The
+/// specular-glossiness texture is not converted (a warning says so): its texels would each
+/// need their own metallic and base colour.
+fn spec_gloss(ctx: &mut Ctx<'_>, sg: &gltf::material::PbrSpecularGlossiness<'_>, p: &str) -> MetalRough {
+    let ext = format!("{p}.extensions.KHR_materials_pbrSpecularGlossiness");
+    let finite01 = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 1.0 };
+    let diffuse = Vec4::from(sg.diffuse_factor().map(finite01));
+    let specular = Vec3::from(sg.specular_factor().map(finite01));
+    let (base_color_factor, metallic_factor, roughness_factor) =
+        spec_gloss_to_metal_rough(diffuse, specular, finite01(sg.glossiness_factor()));
+    if sg.specular_glossiness_texture().is_some() {
+        ctx.warn(
+            format!("{ext}.specularGlossinessTexture"),
+            "not converted per texel: metallic and roughness come from the factors alone",
+        );
+    }
+    let base_color_texture =
+        texture_ref(ctx, sg.diffuse_texture(), ColorSpace::Srgb, format!("{ext}.diffuseTexture"));
+    if base_color_texture.is_some() && metallic_factor > 0.0 {
+        ctx.warn(
+            format!("{ext}.diffuseTexture"),
+            "multiplies the base colour converted from the factors: approximate where the material is \
+             partly metallic",
+        );
+    }
+    MetalRough {
+        base_color_factor,
+        base_color_texture,
+        metallic_factor,
+        roughness_factor,
+        metallic_roughness_texture: None,
+    }
+}
+
+/// The dielectric reflectance at normal incidence of the metallic-roughness model.
+const DIELECTRIC_F0: f32 = 0.04;
+
+/// Converts specular-glossiness factors (linear RGB, each in [0, 1]) to metallic-roughness:
+/// `(baseColor, metallic, roughness)`, as the Khronos converter does
+/// (`KHR_materials_pbrSpecularGlossiness/examples/convert-between-workflows`, Babylon.js's
+/// `ConvertToMetallicRoughness`).
+///
+/// With perceived brightness `L(c) = √(0.299 r² + 0.587 g² + 0.114 b²)`, `d = L(diffuse)`,
+/// `s = L(specular)` and `k = 1 − max(specular)`, metallic solves
+/// `0.04 m² + (d·k/0.96 + s − 0.08) m + (0.04 − s) = 0` (0 when `s < 0.04`: a dielectric);
+/// the base colour blends `diffuse·k/(0.96 (1 − m))` and `(specular − 0.04 (1 − m))/m` by `m²`,
+/// clamped to [0, 1]; alpha is the diffuse alpha; roughness is `1 − glossiness`.
+pub(crate) fn spec_gloss_to_metal_rough(diffuse: Vec4, specular: Vec3, glossiness: f32) -> (Vec4, f32, f32) {
+    const EPSILON: f32 = 1e-6;
+    let brightness = |c: Vec3| (0.299 * c.x * c.x + 0.587 * c.y * c.y + 0.114 * c.z * c.z).sqrt();
+    let one_minus_specular = 1.0 - specular.max_element();
+    let (d, s) = (brightness(diffuse.truncate()), brightness(specular));
+    let metallic = if s < DIELECTRIC_F0 {
+        0.0
+    } else {
+        let a = DIELECTRIC_F0;
+        let b = d * one_minus_specular / (1.0 - DIELECTRIC_F0) + s - 2.0 * DIELECTRIC_F0;
+        let c = DIELECTRIC_F0 - s;
+        let disc = (b * b - 4.0 * a * c).max(0.0);
+        ((-b + disc.sqrt()) / (2.0 * a)).clamp(0.0, 1.0)
+    };
+    let from_diffuse =
+        diffuse.truncate() * (one_minus_specular / (1.0 - DIELECTRIC_F0) / (1.0 - metallic).max(EPSILON));
+    let from_specular = (specular - Vec3::splat(DIELECTRIC_F0 * (1.0 - metallic))) / metallic.max(EPSILON);
+    let base = from_diffuse.lerp(from_specular, metallic * metallic).clamp(Vec3::ZERO, Vec3::ONE);
+    (base.extend(diffuse.w), metallic, 1.0 - glossiness)
 }
 
 /// KHR_materials_ior's `ior` (1.5 without it). glTF allows 0 (meaning "very large", a
@@ -267,12 +361,7 @@ fn warn_ignored(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) {
     if m.occlusion_texture().is_some() {
         ctx.warn("", "occlusionTexture ignored (a path tracer computes occlusion)");
     }
-    for (present, name) in [
-        (m.unlit(), "KHR_materials_unlit"),
-        (m.pbr_specular_glossiness().is_some(), "KHR_materials_pbrSpecularGlossiness"),
-    ] {
-        if present {
-            ctx.warn("", format!("{name} is not supported: ignored"));
-        }
+    if m.unlit() {
+        ctx.warn("", "KHR_materials_unlit is not supported: ignored");
     }
 }

@@ -2,9 +2,10 @@
 //! ourselves (so that a missing file is named), flatten the default scene into world space.
 //!
 //! The steps, in order: [`document`] (parse and check), [`resources`] (buffers, with
-//! [`meshopt`]'s compressed views decoded into them, then the images the materials use), [`material`] (textures and materials), [`nodes`] (the node
-//! hierarchy: cameras, lights, and each mesh primitive through [`primitive`], once per instance
-//! of [`instancing`]); then the
+//! [`meshopt`]'s compressed views decoded into them, then the images the materials use),
+//! [`material`] (textures and materials), [`variants`] (the material variant chosen), [`nodes`]
+//! (the node hierarchy: cameras, lights, and each mesh primitive through [`primitive`], once per
+//! instance of [`instancing`]); then the
 //! geometry's checks here. [`context::Ctx`] carries the file and the warnings through them.
 
 mod context;
@@ -17,6 +18,7 @@ mod nodes;
 mod primitive;
 mod resources;
 mod texture_source;
+mod variants;
 
 pub use document::{ExtensionUse, SUPPORTED_EXTENSIONS};
 
@@ -40,6 +42,11 @@ pub(crate) fn load(
     let mut ctx = Ctx::new(file, base, options.strict);
     let (doc, blob) = document::parse(bytes, file)?;
     document::check(&mut ctx, doc.as_json())?;
+    let variant_names = variants::names(&mut ctx, &doc);
+    let variant = match &options.variant {
+        Some(wanted) => Some(variants::select(&ctx, &variant_names, wanted)?),
+        None => None,
+    };
     let buffers = resources::load_buffers(&mut ctx, &doc, blob.as_deref())?;
     let textures = material::read_textures(&mut ctx, &doc);
     let mut materials = material::read_materials(&mut ctx, &doc);
@@ -71,8 +78,9 @@ pub(crate) fn load(
     }
     let normal_sets =
         materials.iter().map(|m| m.normal_texture.as_ref().map_or(0, |t| t.tex_coord as usize)).collect();
-    let meshes =
+    let mut meshes =
         Meshes::new(&doc, &buffers, uv_sets, needs_tangent, needs_color, normal_sets, default_material);
+    meshes.variant = variant.map(|v| (v, variant_names.len()));
     let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes)?;
     let (mut geo, dropped) = (flat.meshes.geo, flat.meshes.dropped);
     check_geometry(&mut ctx, &geo, dropped)?;
@@ -97,6 +105,7 @@ pub(crate) fn load(
         warnings: ctx.warnings,
         dropped_triangles: dropped,
         extensions: document::extensions(doc.as_json()),
+        variants: variant_names,
     })
 }
 

@@ -25,6 +25,9 @@ pub(super) struct Meshes<'b> {
     normal_sets: Vec<usize>,
     /// The material of primitives without one (glTF's default material).
     default_material: u32,
+    /// The KHR_materials_variants variant loaded and how many the file declares (`None`:
+    /// every primitive's own material).
+    pub(super) variant: Option<(usize, usize)>,
     pub(super) geo: Geometry,
     /// Zero-area triangles dropped.
     pub(super) dropped: usize,
@@ -104,6 +107,7 @@ impl<'b> Meshes<'b> {
             needs_color,
             normal_sets,
             default_material,
+            variant: None,
             geo: Geometry::default(),
             dropped: 0,
         }
@@ -144,7 +148,14 @@ impl<'b> Meshes<'b> {
             Some(ext) => draco::read_attributes(ctx, self, prim, ext, ppath)?,
             None => self.read_attributes(ctx, prim, &pos_acc, ppath)?,
         };
-        let material = prim.material().index().map_or(self.default_material, |i| i as u32);
+        let own = prim.material().index().map_or(self.default_material, |i| i as u32);
+        let mapped = match self.variant {
+            Some((v, count)) => {
+                super::variants::mapped_material(ctx, prim, ppath, v, (count, self.doc.materials().len()))?
+            }
+            None => None,
+        };
+        let material = mapped.unwrap_or(own);
         let normal_set = self.normal_sets.get(material as usize).copied().unwrap_or(0);
         for &world in worlds {
             let placed = place(ctx, &attributes, material, normal_set, world, ppath, npath)?;
