@@ -9,20 +9,6 @@ fn data(p: &str) -> std::path::PathBuf {
     furnace_tests::data::scene(p)
 }
 
-/// Base64 (RFC 4648, padded).
-fn base64(bytes: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            out.push(if k <= c.len() { T[(n >> (18 - 6 * k) & 63) as usize] as char } else { '=' });
-        }
-    }
-    out
-}
-
 /// One triangle per entry of `colors` (side by side in x), each its own primitive with
 /// `COLOR_0` given as `(componentType, type, bytes)`, or none.
 fn triangles_with_colors(colors: &[Option<(u32, &str, Vec<u8>)>]) -> Vec<u8> {
@@ -68,7 +54,7 @@ fn triangles_with_colors(colors: &[Option<(u32, &str, Vec<u8>)>]) -> Vec<u8> {
 "bufferViews":[{}],"accessors":[{}]}}"#,
         primitives.join(","),
         bin.len(),
-        base64(&bin),
+        base64::encode(&bin),
         views.join(","),
         accessors.join(",")
     )

@@ -19,20 +19,6 @@
 use furnace_scene::{MAX_COORDINATE, MIN_COORDINATE, Scene, SceneError, oct_decode};
 use glam::{Mat4, Vec3};
 
-/// Base64 (RFC 4648, padded).
-fn base64(bytes: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            out.push(if k <= c.len() { T[(n >> (18 - 6 * k) & 63) as usize] as char } else { '=' });
-        }
-    }
-    out
-}
-
 /// A glTF with one mesh of one primitive: `positions` (f32 VEC3) and `indices` (u32), instanced
 /// by one node with `matrix` (column-major), optionally with NORMALs. The POSITION accessor's
 /// min/max are over the finite values (JSON has no NaN).
@@ -69,7 +55,7 @@ fn gltf(positions: &[Vec3], indices: &[u32], matrix: Mat4, normals: bool) -> Vec
 {{"bufferView":1,"componentType":5125,"count":{},"type":"SCALAR"}}{normal_accessor}]}}"#,
         m.join(","),
         bin.len(),
-        base64(&bin),
+        base64::encode(&bin),
         bin.len() - idx_off,
         positions.len(),
         f(lo),

@@ -8,20 +8,6 @@ use glam::{Mat4, Quat, Vec3};
 
 const EXT: &str = "EXT_mesh_gpu_instancing";
 
-/// Base64 (RFC 4648, padded).
-fn base64(bytes: &[u8]) -> String {
-    const T: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    let mut out = String::new();
-    for c in bytes.chunks(3) {
-        let b = [c[0], *c.get(1).unwrap_or(&0), *c.get(2).unwrap_or(&0)];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for k in 0..4 {
-            out.push(if k <= c.len() { T[(n >> (18 - 6 * k) & 63) as usize] as char } else { '=' });
-        }
-    }
-    out
-}
-
 /// An accessor of the test files: `componentType`, `type`, `normalized`, `count` and its bytes
 /// (no buffer view when `None`: all zeros).
 struct Acc {
@@ -80,7 +66,7 @@ fn gltf(node: &str, extra: &[Acc]) -> Vec<u8> {
 "buffers":[{{"byteLength":{},"uri":"data:application/octet-stream;base64,{}"}}],
 "bufferViews":[{}],"accessors":[{}]}}"#,
         bin.len(),
-        base64(&bin),
+        base64::encode(&bin),
         views.join(","),
         accessors.join(",")
     )
