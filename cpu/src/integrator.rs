@@ -12,7 +12,7 @@ use furnace_scene::{
     AlphaMode, Camera, CameraRays, Emitters, LightBvh, MaterialSample, PointLightDistribution, Scene,
     VertexAttributes, oct_decode,
 };
-use furnace_scene::{Environment, EnvironmentSampler};
+use furnace_scene::{Environment, EnvironmentSampler, blend_keeps, blend_seed};
 use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -44,10 +44,11 @@ pub struct CpuRenderer {
     constant_materials: Vec<Option<ConstantMaterial>>,
     /// `oct_decode` of each vertex normal, decoded once here rather than three times per hit.
     normals: Vec<Vec3>,
-    /// Whether any material is alpha-masked (otherwise rays skip the mask callback).
-    any_masked: bool,
-    /// Whether shadow rays can cross some material (a thin-walled sheet, an η = 1 solid);
-    /// otherwise they are plain occlusion tests.
+    /// Whether any material is alpha-masked or blended (otherwise rays skip the alpha
+    /// callback).
+    any_alpha: bool,
+    /// Whether shadow rays can cross some material (a thin-walled sheet, an η = 1 solid, a
+    /// blended surface); otherwise they are plain occlusion tests.
     any_crossable: bool,
     /// The ray offsets' length scale (`furnace_accel::offset_scale_of_bounds`).
     offset_scale: f32,
@@ -122,8 +123,9 @@ impl CpuRenderer {
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         let triangle_materials = (0..g.triangle_count()).map(|t| scene.triangle_material(t) as u32).collect();
-        let any_masked = scene.materials.iter().any(|m| matches!(m.alpha_mode, AlphaMode::Mask { .. }));
-        let any_crossable = scene.materials.iter().any(|m| m.passes_shadow_rays());
+        let any_alpha = scene.materials.iter().any(|m| m.alpha_mode != AlphaMode::Opaque);
+        let any_crossable =
+            scene.materials.iter().any(|m| m.passes_shadow_rays() || m.alpha_mode == AlphaMode::Blend);
         let constant_materials = scene
             .materials
             .iter()
@@ -180,7 +182,7 @@ impl CpuRenderer {
             triangle_materials,
             constant_materials,
             normals,
-            any_masked,
+            any_alpha,
             any_crossable,
             offset_scale,
         })
@@ -393,17 +395,42 @@ impl CpuRenderer {
         self.scene.alpha_passes(triangle as usize, (barycentrics.x, barycentrics.y), material)
     }
 
+    /// The coverage of a hit ([`Scene::coverage`]): 1 in a scene without alpha.
+    fn coverage(&self, triangle: u32, barycentrics: Vec2) -> f32 {
+        if !self.any_alpha {
+            return 1.0;
+        }
+        let material = &self.scene.materials[self.triangle_materials[triangle as usize] as usize];
+        self.scene.coverage(triangle as usize, (barycentrics.x, barycentrics.y), material)
+    }
+
+    /// Whether a path ray of blend seed `seed` stops at a hit: not at a mask's cut-out, and at
+    /// a blended surface with probability equal to its coverage.
+    fn stops(&self, seed: u32, triangle: u32, barycentrics: Vec2) -> bool {
+        let material = &self.scene.materials[self.triangle_materials[triangle as usize] as usize];
+        let b = (barycentrics.x, barycentrics.y);
+        match material.alpha_mode {
+            AlphaMode::Opaque => true,
+            AlphaMode::Mask { .. } => self.scene.alpha_passes(triangle as usize, b, material),
+            AlphaMode::Blend => {
+                blend_keeps(seed, triangle, self.scene.coverage(triangle as usize, b, material))
+            }
+        }
+    }
+
     fn closest_hit(&self, origin: Vec3, direction: Vec3) -> Option<Hit> {
-        if self.any_masked {
-            self.bvh.closest_hit_masked(origin, direction, f32::INFINITY, |t, b| self.alpha_passes(t, b))
+        if self.any_alpha {
+            let seed = blend_seed(origin, direction);
+            self.bvh.closest_hit_masked(origin, direction, f32::INFINITY, |t, b| self.stops(seed, t, b))
         } else {
             self.bvh.closest_hit(origin, direction, f32::INFINITY)
         }
     }
 
     /// The fraction of light a shadow ray from `origin` along `direction` carries over
-    /// `t_max`: 0 where a surface blocks it, else the product of the thin-walled sheets' T′
-    /// it crosses and the absorption of the volume it starts in (`medium`).
+    /// `t_max`: 0 where a surface blocks it, else the product of what the surfaces it crosses
+    /// let through (a thin-walled sheet its T′; a blended surface of coverage c its 1 − c, plus
+    /// c × T′ if it is a sheet) and the absorption of the volume it starts in (`medium`).
     fn transmittance(&self, origin: Vec3, direction: Vec3, t_max: f32, medium: Vec3) -> Vec3 {
         let mut carried = if medium == Vec3::ZERO { Vec3::ONE } else { absorption(medium, t_max) };
         if !self.any_crossable {
@@ -411,13 +438,20 @@ impl CpuRenderer {
         }
         let scene = &self.scene;
         let blocked = self.bvh.occluded_masked(origin, direction, t_max, |t, b| {
-            if self.any_masked && !self.alpha_passes(t, b) {
-                return false;
-            }
             let material_index = self.triangle_materials[t as usize] as usize;
             let material = &scene.materials[material_index];
+            let coverage = match material.alpha_mode {
+                AlphaMode::Opaque => 1.0,
+                AlphaMode::Mask { .. } if !self.alpha_passes(t, b) => return false,
+                AlphaMode::Mask { .. } => 1.0,
+                AlphaMode::Blend => scene.coverage(t as usize, (b.x, b.y), material),
+            };
             if !material.passes_shadow_rays() {
-                return true;
+                if coverage >= 1.0 {
+                    return true;
+                }
+                carried *= 1.0 - coverage;
+                return carried == Vec3::ZERO;
             }
             // A sheet (or an η = 1 solid): T′ at the angle to its shading normal, times its tint.
             let normal = self.shading_normal(t as usize, b.x, b.y).unwrap_or(Vec3::Z);
@@ -429,7 +463,7 @@ impl CpuRenderer {
                     bsdf(&p, material, self.settings.specular).sheet_transmittance(direction.dot(normal))
                 }
             };
-            carried *= params;
+            carried *= if coverage >= 1.0 { params } else { (1.0 - coverage) + coverage * params };
             carried == Vec3::ZERO
         });
         if blocked { Vec3::ZERO } else { carried }
@@ -437,7 +471,8 @@ impl CpuRenderer {
 
     /// Whether a surface lies along `direction` from `origin` closer than `t_max`.
     fn occluded_within(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
-        if self.any_masked {
+        // Without crossable materials there are no blended ones: only masks filter hits here.
+        if self.any_alpha {
             self.bvh.occluded_masked(origin, direction, t_max, |t, b| self.alpha_passes(t, b))
         } else {
             self.bvh.occluded(origin, direction, t_max)

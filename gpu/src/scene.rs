@@ -58,7 +58,7 @@ crate::wgsl_consts! {
     pub const ALPHA_OPAQUE: u32 = 0;
     /// Alpha mode code of [`AlphaMode::Mask`] (cutoff in [`GpuMaterial::alpha_cutoff`]).
     pub const ALPHA_MASK: u32 = 1;
-    /// Alpha mode code of [`AlphaMode::Blend`] (rendered opaque, as on the CPU).
+    /// Alpha mode code of [`AlphaMode::Blend`] (stochastic transparency, as on the CPU).
     pub const ALPHA_BLEND: u32 = 2;
     /// [`GpuMaterial::flags`]: `doubleSided`.
     pub const MATERIAL_DOUBLE_SIDED: u32 = 4;

@@ -19,8 +19,9 @@ pub enum AlphaMode {
         /// `alphaCutoff`.
         cutoff: f32,
     },
-    /// Alpha-blended. A path tracer can treat it as stochastic transparency; furnace renders
-    /// it opaque for now (a warning is issued when loading).
+    /// Alpha-blended, rendered as stochastic transparency: a ray stops at the surface with
+    /// probability α (its coverage, [`crate::Scene::coverage`]) and else passes straight on;
+    /// a shadow ray carries 1 − α of its light through it.
     Blend,
 }
 

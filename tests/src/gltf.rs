@@ -32,8 +32,10 @@ pub struct MaterialDesc {
     pub emissive: Vec3,
     /// PNG of the base-colour texture (its alpha drives MASK).
     pub base_color_png: Option<Vec<u8>>,
-    /// `alphaCutoff` with `alphaMode: MASK`; `None` is OPAQUE.
+    /// `alphaCutoff` with `alphaMode: MASK`; `None` is OPAQUE (unless `blend_alpha`).
     pub mask_cutoff: Option<f32>,
+    /// `alphaMode: BLEND` with this `baseColorFactor` alpha.
+    pub blend_alpha: Option<f32>,
     /// PNG of the normal texture and its `scale`.
     pub normal_png: Option<(Vec<u8>, f32)>,
     /// glTF `doubleSided`.
@@ -47,6 +49,7 @@ impl Default for MaterialDesc {
             emissive: Vec3::ZERO,
             base_color_png: None,
             mask_cutoff: None,
+            blend_alpha: None,
             normal_png: None,
             double_sided: true,
         }
@@ -194,12 +197,14 @@ impl SceneDesc {
             let normal = m.normal_png.as_ref().map_or(String::new(), |(png, scale)| {
                 format!(r#","normalTexture":{{"index":{},"scale":{scale:?}}}"#, texture(png))
             });
-            let alpha = m
-                .mask_cutoff
-                .map_or(String::new(), |c| format!(r#","alphaMode":"MASK","alphaCutoff":{c:?}"#));
+            let alpha = match (m.mask_cutoff, m.blend_alpha) {
+                (Some(c), _) => format!(r#","alphaMode":"MASK","alphaCutoff":{c:?}"#),
+                (None, Some(_)) => r#","alphaMode":"BLEND""#.to_string(),
+                (None, None) => String::new(),
+            };
             materials.push(format!(
                 r#"{{"pbrMetallicRoughness":{{"baseColorFactor":{},"metallicFactor":0.0,"roughnessFactor":1.0{base_texture}}},"emissiveFactor":{},"doubleSided":{}{normal}{alpha},"extensions":{{"KHR_materials_specular":{{"specularFactor":0.0}}}}}}"#,
-                vec(m.albedo.extend(1.0).to_array()),
+                vec(m.albedo.extend(m.blend_alpha.unwrap_or(1.0)).to_array()),
                 vec(m.emissive.to_array()),
                 m.double_sided
             ));

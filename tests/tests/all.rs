@@ -5,6 +5,8 @@
 
 #[path = "adaptive.rs"]
 mod adaptive;
+#[path = "alpha_blend.rs"]
+mod alpha_blend;
 #[path = "alpha_mask.rs"]
 mod alpha_mask;
 #[path = "aovs.rs"]

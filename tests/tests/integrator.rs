@@ -234,6 +234,7 @@ fn one_traversal_and_one_path_code_per_shader() {
         env_sampling: true,
         transmission: true,
         thin_walled: true,
+        blend: true,
         aovs: true,
         adaptive: true,
         ..Default::default()
@@ -300,6 +301,9 @@ fn frame_params_layout_matches_wgsl() {
                 adaptive: light_bvh,
                 transmission: true,
                 thin_walled: light_bvh,
+                // Blended surfaces with and without thin-walled sheets: `shadow_query` is
+                // declared for either.
+                blend: !light_bvh,
                 solid_angle_triangles: light_bvh,
                 trace_counters: !light_bvh,
                 queued_point_lights: if light_bvh { 3 } else { 0 },

@@ -237,11 +237,15 @@ impl CpuRenderer {
         let wi = to_light / d;
         let cos_light = -geometric_normal(v0, v1, v2).dot(wi);
         let Some(origin) = v.origin_towards(wi).filter(|_| cos_light > 0.0) else { return Vec3::ZERO };
-        if self.any_masked && !self.alpha_passes(t as u32, bary) {
-            return Vec3::ZERO; // a cut-out of an alpha-masked emitter emits nothing
+        // A cut-out of an alpha-masked emitter emits nothing; a blended one emits in proportion
+        // to its coverage (a path ray sees it with that probability).
+        let coverage = self.coverage(t as u32, bary);
+        if coverage == 0.0 {
+            return Vec3::ZERO;
         }
         let material = self.triangle_materials[t] as usize;
         let emission = self.emission_at(material, t, bary);
+        let emission = if coverage < 1.0 { emission * coverage } else { emission };
         let wi_local = v.frame.to_local(wi);
         let f = v.bsdf.eval(v.wo, wi_local);
         if emission == Vec3::ZERO || f == Vec3::ZERO {

@@ -11,7 +11,7 @@ use crate::film::FilmPrecision;
 use crate::shared::{Binding, BindingKind, BindingTable, GpuStruct, wgsl_struct};
 use crate::{GpuContext, GpuError, brdf, scene, traverse, wgsl};
 use furnace_render::{LightSelection, RenderSettings, TriangleSampling};
-use furnace_scene::{Emitters, Scene};
+use furnace_scene::{AlphaMode, Emitters, Scene};
 
 #[cfg(doc)]
 use super::GpuRenderer;
@@ -190,6 +190,9 @@ pub struct SceneFeatures {
     pub transmission: bool,
     /// A material shadow rays cross (a thin-walled sheet, multiplied by its T′; an η = 1 solid).
     pub thin_walled: bool,
+    /// An alpha-blended material (stochastic transparency: the blend seed of path rays, the
+    /// coverage of hits, shadow rays multiplied by 1 − coverage).
+    pub blend: bool,
     /// Emissive triangles are sampled by solid angle where that is precise
     /// ([`TriangleSampling::SolidAngle`]; with `emitters` only), else by area: the spherical
     /// triangle's code is composed only then.
@@ -229,6 +232,7 @@ impl SceneFeatures {
             adaptive: settings.adaptive.is_some(),
             transmission: scene.materials.iter().any(|m| m.is_transmissive()),
             thin_walled: scene.materials.iter().any(|m| m.passes_shadow_rays()),
+            blend: scene.materials.iter().any(|m| m.alpha_mode == AlphaMode::Blend),
             solid_angle_triangles: emitters && settings.triangle_sampling == TriangleSampling::SolidAngle,
             vertex_attributes: scene.materials.iter().any(|m| m.uses_textures())
                 || !scene.geometry.colors.is_empty(),
@@ -259,7 +263,8 @@ impl SceneFeatures {
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
     /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
-    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`,
+    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `BLEND`, `SHADOW_FILTER` (shadow rays
+    /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`,
     /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
@@ -276,6 +281,8 @@ impl SceneFeatures {
             "ADAPTIVE" => self.adaptive,
             "TRANSMISSION" => self.transmission,
             "THIN_WALLED" => self.transmission && self.thin_walled,
+            "BLEND" => self.blend,
+            "SHADOW_FILTER" => (self.transmission && self.thin_walled) || self.blend,
             "SOLID_ANGLE_TRIANGLES" => self.emitters && self.solid_angle_triangles,
             "TRACE_COUNTERS" => self.trace_counters,
             "VERTEX_ATTRIBUTES" => self.vertex_attributes,

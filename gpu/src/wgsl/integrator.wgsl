@@ -399,10 +399,12 @@ fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bo
                 query_origin = q.origin;
                 query_dir = q.dir;
                 query_t = q.t_max;
-                // #if THIN_WALLED
+                // #if SHADOW_FILTER
                 shadow_carried = q.value;
-                shadow_direction = q.dir;
                 shadow_query = true;
+                // #endif
+                // #if THIN_WALLED
+                shadow_direction = q.dir;
                 // #endif
             } else {
                 // An empty iteration: t_max 0 traces nothing.
@@ -426,12 +428,15 @@ fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bo
         // #if TRACE_COUNTERS
         rays_traced += select(0u, 1u, query_t > 0.0);
         // #endif
+        // #if BLEND
+        blend_seed = blend_seed_of(query_origin, query_dir);
+        // #endif
         // The intersection stage: the kernel's one traversal call, for path and shadow rays.
         let hit = trace_query(query_origin, query_dir, query_t, shadowing);
         if shadowing {
             if queued {
                 var carried = shadow_rays[shadow_next].value;
-                // #if THIN_WALLED
+                // #if SHADOW_FILTER
                 shadow_query = false;
                 carried = shadow_carried;
                 // #endif

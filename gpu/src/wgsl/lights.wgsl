@@ -254,7 +254,16 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
         return;
     }
     let material = scene_triangle_material(t);
-    let emission = scene_material_evaluate(material, hit_attributes(material, t, b.x, b.y)).emission;
+    var emission = scene_material_evaluate(material, hit_attributes(material, t, b.x, b.y)).emission;
+    // #if BLEND
+    // A blended emitter emits in proportion to its coverage (a path ray sees it that often).
+    if (scene_materials[material].flags & SCENE_ALPHA_MODE_BITS) == SCENE_ALPHA_BLEND {
+        let coverage = scene_blend_coverage(material, t, b.x, b.y);
+        if coverage < 1.0 {
+            emission *= coverage;
+        }
+    }
+    // #endif
     let wi_local = frame_to_local(frame, wi);
     let f = hit_eval(bsdf, wo, wi_local);
     if all(emission == vec3<f32>(0.0)) || all(f == vec3<f32>(0.0)) {

@@ -30,6 +30,8 @@
 //   zero), the glTF normal map in the frame (T ⟂ N, B = w·N×T, N), and the orientation: on the
 //   back (dot(geometric, direction) > 0) a double-sided material flips both normals, a
 //   single-sided one gives no surface (`valid == 0`).
+// * `scene_blend_coverage`: `Scene::coverage` of a BLEND material (stochastic transparency;
+//   the integrator's shadow.wgsl draws the decisions).
 // * `scene_alpha_passes`: furnace-cpu's `Renderer::alpha_passes` (the traversal's `hit_filter`):
 //   MASK materials keep a hit where `baseColorFactor.a × texture alpha ≥ alphaCutoff`.
 // * `scene_srgb_to_linear`: `furnace_scene::srgb_to_linear` for continuous values (texels use
@@ -384,11 +386,22 @@ fn scene_alpha_passes(triangle_id: u32, b1: f32, b2: f32) -> bool {
     if (flags & SCENE_ALPHA_MODE_BITS) != SCENE_ALPHA_MASK {
         return true;
     }
-    let at = scene_hit_attributes(mi, triangle_id, b1, b2);
-    let alpha = scene_materials[mi].base_color_factor.w
-        * scene_texture_sample_at(scene_materials[mi].base_color_texture, at).w * at.color.w;
-    return alpha >= scene_materials[mi].alpha_cutoff;
+    return scene_alpha_at(mi, triangle_id, b1, b2) >= scene_materials[mi].alpha_cutoff;
 }
+
+// Scene::alpha_at: baseColorFactor.a × base colour texture alpha × vertex alpha at a hit.
+fn scene_alpha_at(mi: u32, triangle_id: u32, b1: f32, b2: f32) -> f32 {
+    let at = scene_hit_attributes(mi, triangle_id, b1, b2);
+    return scene_materials[mi].base_color_factor.w
+        * scene_texture_sample_at(scene_materials[mi].base_color_texture, at).w * at.color.w;
+}
+
+// Scene::coverage of a BLEND material `mi`'s hit: its alpha clamped to [0, 1], 0 for NaN.
+fn scene_blend_coverage(mi: u32, triangle_id: u32, b1: f32, b2: f32) -> f32 {
+    let a = scene_alpha_at(mi, triangle_id, b1, b2);
+    return select(0.0, min(a, 1.0), a > 0.0);
+}
+
 
 // Renderer::surface_point for a ray travelling along `direction` that hit `triangle` at
 // barycentrics (b1, b2); `at` is the hit's attributes (used by a normal map only).

@@ -1,25 +1,55 @@
 // furnace-gpu: the integrator's shadow rays, twins of furnace-cpu's Vertex::origin_towards and
-// CpuRenderer::transmittance: the traversal's hit filter (alpha masks, and the thin-walled sheets
-// a shadow ray crosses, multiplying what it carries by their T′), the origin of a shadow ray, the
+// CpuRenderer::transmittance: the traversal's hit filter (alpha masks, blended surfaces, and the
+// blended surfaces and thin-walled sheets a shadow ray crosses, multiplying what it carries by
+// what they let through), the origin of a shadow ray, the
 // absorption of the volume a vertex is in, and the queue of the shadow rays a scattering event
 // takes, traced by the path loop of integrator.wgsl.
 //
 // Composed by furnace_gpu::integrator::shader_source after material.wgsl, before lights.wgsl and
 // integrator.wgsl.
 
-// #if THIN_WALLED
-// A shadow ray is being traced (`shadow`): thin-walled sheets are crossed, not hits, and the
-// light it carries is multiplied by their T′ in `shadow_carried`.
+// #if SHADOW_FILTER
+// A shadow ray is being traced (`shadow`): thin-walled sheets and blended surfaces are crossed,
+// not hits, and the light it carries is multiplied by what they let through in `shadow_carried`.
 var<private> shadow_query: bool = false;
 var<private> shadow_carried: vec3<f32>;
 // #endif
 
-// The alpha-mask callback of traverse.wgsl: masked materials' cut-outs are not hits (and, for a
-// shadow ray, thin-walled sheets are crossed).
+// #if BLEND
+// The blend seed of the path ray being traced (`blend_seed_of` its origin and direction).
+var<private> blend_seed: u32;
+
+// furnace_scene::blend_seed: a hash of a ray's origin's and direction's bits.
+fn blend_seed_of(origin: vec3<f32>, direction: vec3<f32>) -> u32 {
+    let o = bitcast<vec3<u32>>(origin);
+    let d = bitcast<vec3<u32>>(direction);
+    return smp_hash2(smp_hash3(o.x, o.y, o.z), smp_hash3(d.x, d.y, d.z));
+}
+
+// furnace_scene::blend_keeps: whether a ray of `seed` stops at triangle `t` of `coverage`.
+fn blend_keeps(seed: u32, t: u32, coverage: f32) -> bool {
+    let u = f32(smp_hash2(seed, t) >> 8u) * (1.0 / 16777216.0);
+    return u < coverage;
+}
+// #endif
+
+// The alpha callback of traverse.wgsl: masked materials' cut-outs are not hits, a path ray stops
+// at a blended surface with probability equal to its coverage, and a shadow ray crosses blended
+// surfaces and thin-walled sheets (CpuRenderer::stops and CpuRenderer::transmittance).
 fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {
     if (params.flags & FRAME_ANY_MASKED) != 0u && !scene_alpha_passes(triangle_id, u, v) {
         return false;
     }
+    // #if BLEND
+    var coverage = 1.0;
+    let mi = scene_triangles[triangle_id].material;
+    if (scene_materials[mi].flags & SCENE_ALPHA_MODE_BITS) == SCENE_ALPHA_BLEND {
+        coverage = scene_blend_coverage(mi, triangle_id, u, v);
+        if !shadow_query {
+            return blend_keeps(blend_seed, triangle_id, coverage);
+        }
+    }
+    // #endif
     // #if THIN_WALLED
     if shadow_query {
         let material = scene_triangles[triangle_id].material;
@@ -31,9 +61,22 @@ fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {
             // CpuRenderer::transmittance: T′ at the angle to the sheet's shading normal.
             var n = scene_shading_normal(triangle_id, u, v);
             let cos = scene_dot(shadow_direction, n);
-            shadow_carried *= b.t.weight * dielectric_shadow_transmittance(b.t.d, cos);
+            let through = b.t.weight * dielectric_shadow_transmittance(b.t.d, cos);
+            // #if BLEND
+            if coverage < 1.0 {
+                shadow_carried *= (1.0 - coverage) + coverage * through;
+                return all(shadow_carried == vec3<f32>(0.0));
+            }
+            // #endif
+            shadow_carried *= through;
             return all(shadow_carried == vec3<f32>(0.0));
         }
+    }
+    // #endif
+    // #if BLEND
+    if shadow_query && coverage < 1.0 {
+        shadow_carried *= 1.0 - coverage;
+        return all(shadow_carried == vec3<f32>(0.0));
     }
     // #endif
     return true;
@@ -94,10 +137,14 @@ fn shadow(b: HitBsdf, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32
     rays_traced += 1u;
     // #endif
     let carried = vertex_absorption(b, t_max);
-    // #if THIN_WALLED
+    // #if SHADOW_FILTER
     shadow_carried = carried;
-    shadow_direction = dir;
     shadow_query = true;
+    // #endif
+    // #if THIN_WALLED
+    shadow_direction = dir;
+    // #endif
+    // #if SHADOW_FILTER
     let blocked = trace_any(origin, dir, t_max);
     shadow_query = false;
     if blocked {

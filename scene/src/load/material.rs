@@ -78,7 +78,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
     let emissive_texture =
         texture_ref(ctx, m.emissive_texture(), ColorSpace::Srgb, format!("{p}.emissiveTexture"));
     let emissive = emissive(ctx, m, &p);
-    let alpha_mode = alpha_mode(ctx, m, &p);
+    let alpha_mode = alpha_mode(m);
     let (specular_factor, mut specular_color_factor) = specular(ctx, m, &p);
     let ior = ior(ctx, m, &p);
     if ior != 1.5 {
@@ -329,14 +329,11 @@ fn emissive(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> Vec3 {
     emissive
 }
 
-fn alpha_mode(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> AlphaMode {
+fn alpha_mode(m: &gltf::Material<'_>) -> AlphaMode {
     match m.alpha_mode() {
         gltf::material::AlphaMode::Opaque => AlphaMode::Opaque,
         gltf::material::AlphaMode::Mask => AlphaMode::Mask { cutoff: m.alpha_cutoff().unwrap_or(0.5) },
-        gltf::material::AlphaMode::Blend => {
-            ctx.warn(format!("{p}.alphaMode"), "BLEND is rendered opaque");
-            AlphaMode::Blend
-        }
+        gltf::material::AlphaMode::Blend => AlphaMode::Blend,
     }
 }
 
