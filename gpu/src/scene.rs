@@ -68,6 +68,9 @@ crate::wgsl_consts! {
     /// [`GpuMaterial::flags`]: the scene has vertex colours (`COLOR_0`, the last word of each
     /// vertex's attributes), which multiply the base colour.
     pub const MATERIAL_VERTEX_COLOR: u32 = 16;
+    /// [`GpuMaterial::flags`]: KHR_materials_unlit (the base colour seen as is, nothing
+    /// reflected).
+    pub const MATERIAL_UNLIT: u32 = 32;
     /// [`GpuMaterial::flags`] bits 8–10: the UV sets the material's textures sample (the highest
     /// `texCoord` + 1).
     pub const MATERIAL_UV_SETS_SHIFT: u32 = 8;
@@ -488,6 +491,9 @@ fn material_record(
     }
     if kept.colors {
         flags |= MATERIAL_VERTEX_COLOR;
+    }
+    if m.unlit {
+        flags |= MATERIAL_UNLIT;
     }
     let sets = m.texture_refs().map(|t| t.tex_coord + 1).max().unwrap_or(0).min(kept.uv_sets);
     flags |= (sets << MATERIAL_UV_SETS_SHIFT) | (kept.stride() << MATERIAL_STRIDE_SHIFT);

@@ -70,6 +70,11 @@ pub struct Material {
     /// The volume's absorption coefficient σ_a = −ln(attenuationColor)/attenuationDistance per
     /// channel, in 1/m (0: clear; +∞ where a channel is black).
     pub absorption: Vec3,
+    /// KHR_materials_unlit: the surface shows its base colour (× texture × vertex colour) as
+    /// is, to every ray and from either side, reflects nothing and is not a light source (the
+    /// loader leaves it no emission, transmission or normal map). Kept last: the content hash
+    /// leaves it out where it is false, so other files hash as before.
+    pub unlit: bool,
 }
 
 impl Default for Material {
@@ -95,6 +100,7 @@ impl Default for Material {
             ior: 1.5,
             volume: false,
             absorption: Vec3::ZERO,
+            unlit: false,
         }
     }
 }

@@ -159,3 +159,45 @@ fn vertex_colors_and_uv_sets_render_alike_on_both_backends() {
         }
     }
 }
+
+/// KHR_materials_unlit on both backends: UnlitTest's orange and blue objects (CC BY 4.0, in
+/// `tests/data`) under a grey sky and a bright sun show their base colour as is: every sample
+/// sees the sky, the orange or the blue exactly, so every pixel must be a convex combination
+/// of those three colours (solved per pixel; a lit or shaded surface falls outside), and most
+/// of the objects' pixels must be the colour itself.
+#[test]
+fn unlit_surfaces_show_their_base_colour_on_both_backends() {
+    use furnace_scene::{Light, Sky, Sun};
+    let mut scene =
+        Scene::load(furnace_tests::data::scene("UnlitTest/glTF/UnlitTest.gltf")).expect("UnlitTest");
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    assert!(scene.materials[0].unlit && scene.materials[1].unlit, "{:?}", scene.materials);
+    let sky = Vec3::splat(0.5);
+    scene.lights.push(Light::Sky(Sky { radiance: sky }));
+    scene.lights.push(Light::Sun(Sun::delta(Vec3::new(-0.3, -1.0, -0.5).normalize(), Vec3::splat(5.0))));
+    let (orange, blue) =
+        (scene.materials[0].base_color_factor.truncate(), scene.materials[1].base_color_factor.truncate());
+    let basis = glam::DMat3::from_cols(orange.as_dvec3(), blue.as_dvec3(), sky.as_dvec3());
+    let inverse = basis.inverse();
+    let settings =
+        RenderSettings { width: 64, height: 48, sampler: SamplerKind::Sobol, seed: 2, ..Default::default() };
+    for backend in Backend::ALL {
+        let Some(mut integrator) = backend.open_default(&scene, settings) else { return };
+        integrator.render_pass(0, 16).expect("a pass");
+        let film = integrator.film().expect("the film");
+        let (mut pure_orange, mut pure_blue) = (0, 0);
+        for i in 0..film.counts().len() {
+            let v = film.mean(i);
+            let w = inverse * v;
+            // Tolerance: f32 rounding of 16 samples' sum, and of the solve (1e-5).
+            assert!(
+                w.min_element() > -1e-5 && (w.element_sum() - 1.0).abs() < 1e-5,
+                "{backend}: pixel {i} = {v} is not a mixture of the two colours and the sky ({w})"
+            );
+            pure_orange += usize::from(w.x > 1.0 - 1e-5);
+            pure_blue += usize::from(w.y > 1.0 - 1e-5);
+        }
+        eprintln!("{backend}: {pure_orange} pixels exactly orange, {pure_blue} exactly blue");
+        assert!(pure_orange > 150 && pure_blue > 150, "{backend}: {pure_orange}, {pure_blue}");
+    }
+}

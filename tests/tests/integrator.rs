@@ -235,6 +235,7 @@ fn one_traversal_and_one_path_code_per_shader() {
         transmission: true,
         thin_walled: true,
         blend: true,
+        unlit: true,
         aovs: true,
         adaptive: true,
         ..Default::default()
@@ -304,6 +305,7 @@ fn frame_params_layout_matches_wgsl() {
                 // Blended surfaces with and without thin-walled sheets: `shadow_query` is
                 // declared for either.
                 blend: !light_bvh,
+                unlit: light_bvh,
                 solid_angle_triangles: light_bvh,
                 trace_counters: !light_bvh,
                 queued_point_lights: if light_bvh { 3 } else { 0 },

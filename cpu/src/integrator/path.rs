@@ -103,6 +103,15 @@ impl CpuRenderer {
                 // Beer–Lambert over the segment inside the volume, surface to surface.
                 path.throughput *= absorption(path.medium, (surface.position - path.left_from).length());
             }
+            if material.unlit {
+                // KHR_materials_unlit: the colour as is, from either side; nothing reflected.
+                let color = match &shading {
+                    Shading::Constant(c) => c.base_color,
+                    Shading::Evaluated(params) => params.base_color,
+                };
+                path.radiance += path.throughput * color;
+                break;
+            }
             self.add_emission(&mut path, &shading, surface, material_index, t, hit.t);
             let evaluated;
             let bsdf = match &shading {

@@ -193,6 +193,8 @@ pub struct SceneFeatures {
     /// An alpha-blended material (stochastic transparency: the blend seed of path rays, the
     /// coverage of hits, shadow rays multiplied by 1 − coverage).
     pub blend: bool,
+    /// A KHR_materials_unlit material (its colour added at a hit, where the path ends).
+    pub unlit: bool,
     /// Emissive triangles are sampled by solid angle where that is precise
     /// ([`TriangleSampling::SolidAngle`]; with `emitters` only), else by area: the spherical
     /// triangle's code is composed only then.
@@ -233,6 +235,7 @@ impl SceneFeatures {
             transmission: scene.materials.iter().any(|m| m.is_transmissive()),
             thin_walled: scene.materials.iter().any(|m| m.passes_shadow_rays()),
             blend: scene.materials.iter().any(|m| m.alpha_mode == AlphaMode::Blend),
+            unlit: scene.materials.iter().any(|m| m.unlit),
             solid_angle_triangles: emitters && settings.triangle_sampling == TriangleSampling::SolidAngle,
             vertex_attributes: scene.materials.iter().any(|m| m.uses_textures())
                 || !scene.geometry.colors.is_empty(),
@@ -263,7 +266,7 @@ impl SceneFeatures {
     /// Whether the `// #if NAME` blocks of the shader ([`wgsl::select`]) are composed:
     /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
-    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `BLEND`, `SHADOW_FILTER` (shadow rays
+    /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `BLEND`, `UNLIT`, `SHADOW_FILTER` (shadow rays
     /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`,
     /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
@@ -282,6 +285,7 @@ impl SceneFeatures {
             "TRANSMISSION" => self.transmission,
             "THIN_WALLED" => self.transmission && self.thin_walled,
             "BLEND" => self.blend,
+            "UNLIT" => self.unlit,
             "SHADOW_FILTER" => (self.transmission && self.thin_walled) || self.blend,
             "SOLID_ANGLE_TRIANGLES" => self.emitters && self.solid_angle_triangles,
             "TRACE_COUNTERS" => self.trace_counters,

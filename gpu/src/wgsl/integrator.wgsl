@@ -320,6 +320,13 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
         path.throughput *= absorption(path.medium, length(surface.position - path.left_from));
     }
     // #endif
+    // #if UNLIT
+    if (scene_materials[material].flags & SCENE_MATERIAL_UNLIT) != 0u {
+        // KHR_materials_unlit: the colour as is, from either side; nothing reflected.
+        path.radiance += path.throughput * ms.base_color;
+        return false;
+    }
+    // #endif
     // Emission is one-sided: the back of a double-sided emitter does not emit.
     if surface.back_face == 0u {
         add_emission(path, ms.emission, material, hit, surface);

@@ -15,6 +15,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_volume",
     "KHR_materials_pbrSpecularGlossiness",
+    "KHR_materials_unlit",
     super::variants::EXTENSION,
     "KHR_texture_transform",
     "KHR_mesh_quantization",

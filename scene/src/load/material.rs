@@ -74,10 +74,10 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
         Some(sg) => spec_gloss(ctx, &sg, &p),
         None => metal_rough(ctx, &m.pbr_metallic_roughness(), &p),
     };
-    let (normal_texture, normal_scale) = normal_texture(m);
-    let emissive_texture =
+    let (mut normal_texture, normal_scale) = normal_texture(m);
+    let mut emissive_texture =
         texture_ref(ctx, m.emissive_texture(), ColorSpace::Srgb, format!("{p}.emissiveTexture"));
-    let emissive = emissive(ctx, m, &p);
+    let mut emissive = emissive(ctx, m, &p);
     let alpha_mode = alpha_mode(m);
     let (specular_factor, mut specular_color_factor) = specular(ctx, m, &p);
     let ior = ior(ctx, m, &p);
@@ -87,8 +87,15 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
         let f0 = ((ior - 1.0) / (ior + 1.0)).powi(2);
         specular_color_factor *= f0 / 0.04;
     }
-    let transmission = transmission(ctx, m, &p);
+    let mut transmission = transmission(ctx, m, &p);
     warn_ignored(ctx, m);
+    let unlit = m.unlit();
+    if unlit {
+        // KHR_materials_unlit: only the base colour and alpha count.
+        (emissive, emissive_texture, normal_texture) = (Vec3::ZERO, None, None);
+        transmission.factor = 0.0;
+        transmission.texture = None;
+    }
     let roughness_factor = pbr.roughness_factor;
     let transmissive = transmission.factor > 0.0;
     if transmissive && !transmission.volume && roughness_factor > 0.0 {
@@ -119,6 +126,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
         ior,
         volume: transmissive && transmission.volume,
         absorption: transmission.absorption,
+        unlit,
     }
 }
 
@@ -357,8 +365,5 @@ fn specular(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> (f32, Vec3) {
 fn warn_ignored(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) {
     if m.occlusion_texture().is_some() {
         ctx.warn("", "occlusionTexture ignored (a path tracer computes occlusion)");
-    }
-    if m.unlit() {
-        ctx.warn("", "KHR_materials_unlit is not supported: ignored");
     }
 }
