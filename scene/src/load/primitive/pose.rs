@@ -102,6 +102,9 @@ pub(super) fn morph(
         return Ok(());
     };
     let nverts = a.positions.len() / 3;
+    if nverts == 0 {
+        return Ok(());
+    }
     for (i, target) in targets.iter().enumerate() {
         let w: f32 = weights.get(i).copied().unwrap_or(0.0);
         if w == 0.0 {
@@ -132,7 +135,7 @@ pub(super) fn morph(
                 )));
             }
             // Tangents are VEC4 (xyz and the handedness); their displacements are VEC3.
-            let width = values.len() / nverts.max(1);
+            let width = values.len() / nverts;
             for (v, d) in values.chunks_exact_mut(width).zip(d.chunks_exact(3)) {
                 for c in 0..3 {
                     v[c] += w * d[c];
