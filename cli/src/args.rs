@@ -74,6 +74,15 @@ pub struct RenderArgs {
     /// file's variants) [default: each primitive's own material].
     #[arg(long, value_name = "NAME")]
     pub variant: Option<String>,
+    /// The animation to pose the scene by, by name or index (`furnace info` lists a file's
+    /// animations), sampled at --time [default: with --time, animation 0; else none: the nodes'
+    /// own transforms and morph weights].
+    #[arg(long, value_name = "NAME")]
+    pub animation: Option<String>,
+    /// The time, in seconds, at which the animation is sampled (each channel clamped to its
+    /// keyframes) [default: 0 with --animation].
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = parse_time)]
+    pub time: Option<f32>,
     /// Samples per pixel (the total, also when resuming; also N of the fixed-N samplers
     /// hammersley and cmj).
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
@@ -334,6 +343,15 @@ pub struct InfoArgs {
     /// file's variants) [default: each primitive's own material].
     #[arg(long, value_name = "NAME")]
     pub variant: Option<String>,
+    /// The animation to pose the scene by, by name or index (`furnace info` lists a file's
+    /// animations), sampled at --time [default: with --time, animation 0; else none: the nodes'
+    /// own transforms and morph weights].
+    #[arg(long, value_name = "NAME")]
+    pub animation: Option<String>,
+    /// The time, in seconds, at which the animation is sampled (each channel clamped to its
+    /// keyframes) [default: 0 with --animation].
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = parse_time)]
+    pub time: Option<f32>,
     // The render settings' flags, as `furnace render` takes them: the settings they make are
     // printed after the scene.
     #[command(flatten)]
@@ -418,6 +436,15 @@ pub struct BenchArgs {
     /// file's variants) [default: each primitive's own material].
     #[arg(long, value_name = "NAME")]
     pub variant: Option<String>,
+    /// The animation to pose the scene by, by name or index (`furnace info` lists a file's
+    /// animations), sampled at --time [default: with --time, animation 0; else none: the nodes'
+    /// own transforms and morph weights].
+    #[arg(long, value_name = "NAME")]
+    pub animation: Option<String>,
+    /// The time, in seconds, at which the animation is sampled (each channel clamped to its
+    /// keyframes) [default: 0 with --animation].
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = parse_time)]
+    pub time: Option<f32>,
     /// Image width [default: 256 for cbox, else 512 or from --height and the camera].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIDE as i64))]
     pub width: Option<u32>,
@@ -630,6 +657,16 @@ fn parse_exposure(s: &str) -> Result<f32, String> {
 
 fn parse_interval(s: &str) -> Result<f64, String> {
     positive_seconds(s, "the checkpoint interval")
+}
+
+/// `--time`: a finite number of seconds ≥ 0.
+fn parse_time(s: &str) -> Result<f32, String> {
+    let t: f32 = s.trim().parse().map_err(|_| format!("'{s}' is not a number of seconds"))?;
+    if t.is_finite() && t >= 0.0 {
+        Ok(t)
+    } else {
+        Err(format!("the animation time must be a finite number of seconds ≥ 0 (got {s})"))
+    }
 }
 
 fn parse_seconds(s: &str) -> Result<f64, String> {

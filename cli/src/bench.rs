@@ -315,9 +315,7 @@ impl Report {
 }
 
 fn load(scene: &SceneArg, options: &furnace_scene::LoadOptions) -> Result<Scene, String> {
-    if let (Some(v), false) = (&options.variant, matches!(scene, SceneArg::File(_))) {
-        return Err(format!("--variant {v}: the built-in scenes have no material variants"));
-    }
+    crate::shared::check_builtin_options(options, matches!(scene, SceneArg::File(_)))?;
     match scene {
         SceneArg::Cbox => builtin::cornell_box().map_err(|e| e.to_string()),
         SceneArg::Interior(n) => Ok(builtin::sunlit_interior(*n)),
@@ -338,8 +336,13 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         crate::env::check_sampling(given.env_sampling, given.light_sampling)?;
     }
     let start = Instant::now();
-    let mut scene =
-        load(&a.scene, &furnace_scene::LoadOptions { strict: a.strict, variant: a.variant.clone() })?;
+    let options = furnace_scene::LoadOptions {
+        strict: a.strict,
+        variant: a.variant.clone(),
+        animation: a.animation.clone(),
+        time: a.time,
+    };
+    let mut scene = load(&a.scene, &options)?;
     let scene_seconds = start.elapsed().as_secs_f64();
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);

@@ -13,11 +13,17 @@ pub fn run(a: &InfoArgs) -> Result<(), String> {
     if a.settings.given("env-sampling") {
         crate::env::check_sampling(settings.env_sampling, settings.light_sampling)?;
     }
-    let options = furnace_scene::LoadOptions { strict: a.strict, variant: a.variant.clone() };
+    let options = furnace_scene::LoadOptions {
+        strict: a.strict,
+        variant: a.variant.clone(),
+        animation: a.animation.clone(),
+        time: a.time,
+    };
     let scene = Scene::load_with(&a.scene, &options).map_err(|e| e.to_string())?;
     print!("{}", describe(&scene));
     print!("{}", describe_extensions(&scene.extensions));
     print!("{}", describe_variants(&scene, a.variant.as_deref()));
+    print!("{}", describe_animations(&scene));
     print!("{}", describe_settings(settings, scene.point_lights().count()));
     Ok(())
 }
@@ -61,6 +67,27 @@ fn describe_variants(scene: &Scene, loaded: Option<&str>) -> String {
         .map(|(i, n)| format!("{i} '{n}'{}", if Some(i) == loaded { " (loaded)" } else { "" }))
         .collect();
     format!("{:<16}{}: {}\n", "variants", names.len(), names.join(", "))
+}
+
+/// The file's animations, one line (nothing without them): each animation's index, name and
+/// duration, the one the scene is posed by (`--animation`, `--time`) marked with its time.
+fn describe_animations(scene: &Scene) -> String {
+    if scene.animations.is_empty() {
+        return String::new();
+    }
+    let listed: Vec<String> = scene
+        .animations
+        .iter()
+        .enumerate()
+        .map(|(i, a)| {
+            let posed = match scene.posed_by {
+                Some((p, t)) if p == i => format!(" (loaded at {t} s)"),
+                _ => String::new(),
+            };
+            format!("{i} '{}' {} s{posed}", a.name, a.duration)
+        })
+        .collect();
+    format!("{:<16}{}: {}\n", "animations", listed.len(), listed.join(", "))
 }
 
 /// The render settings, one line per field: its flag and its value as the flag takes it

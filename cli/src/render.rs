@@ -108,7 +108,12 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
     check_samples(&mut args)?;
     let mut scene = load_scene(
         args.scene.as_deref(),
-        &LoadOptions { strict: args.strict, variant: args.variant.clone() },
+        &LoadOptions {
+            strict: args.strict,
+            variant: args.variant.clone(),
+            animation: args.animation.clone(),
+            time: args.time,
+        },
     )
     .map_err(|e| match (&a.resume, &a.scene) {
         // The scene came from the file's record: say so, and how to point at it.
@@ -576,9 +581,7 @@ fn shell_quote(s: &str) -> String {
 
 fn load_scene(path: Option<&Path>, options: &LoadOptions) -> Result<Scene, String> {
     let is_file = path.is_some_and(|p| !p.to_str().is_some_and(|s| s.starts_with("interior:")));
-    if let Some(v) = options.variant.as_ref().filter(|_| !is_file) {
-        return Err(format!("--variant {v}: the built-in scenes have no material variants"));
-    }
+    crate::shared::check_builtin_options(options, is_file)?;
     match path {
         // The procedural stress scene of `furnace bench --scene interior:N`.
         Some(p) if p.to_str().is_some_and(|s| s.starts_with("interior:")) => {

@@ -1,5 +1,5 @@
-//! What several subcommands share: how a run ended, the image size a camera gives, and atomic
-//! file writes.
+//! What several subcommands share: how a run ended, the image size a camera gives, the
+//! scene's load options, and atomic file writes.
 
 use crate::args::MAX_SIDE;
 use furnace_scene::{Camera, Projection};
@@ -15,6 +15,27 @@ pub const DEFAULT_WIDTH: u32 = 512;
 
 /// Largest number of pixels accepted (8192² — 2 GiB of `f64` film).
 const MAX_PIXELS: u64 = 1 << 26;
+
+/// Refuses the load options only a glTF file honours (`--variant`, `--animation`, `--time`) for a
+/// built-in scene (`is_file` false).
+pub(crate) fn check_builtin_options(
+    options: &furnace_scene::LoadOptions,
+    is_file: bool,
+) -> Result<(), String> {
+    if is_file {
+        return Ok(());
+    }
+    if let Some(v) = &options.variant {
+        return Err(format!("--variant {v}: the built-in scenes have no material variants"));
+    }
+    if let Some(a) = &options.animation {
+        return Err(format!("--animation {a}: the built-in scenes have no animations"));
+    }
+    if let Some(t) = options.time {
+        return Err(format!("--time {t}: the built-in scenes have no animations"));
+    }
+    Ok(())
+}
 
 /// How a render ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -1421,3 +1421,61 @@ fn info_lists_material_variants() {
     let o = furnace(&["bench", "--variant", "Day"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
 }
+
+/// `--animation` and `--time` pose a file's skins, morphs and nodes: `furnace info` lists the
+/// animations with their durations, the loaded one marked with its time; an unknown name is one
+/// error line listing them; a bad time is refused by the parser; the built-in scenes have none;
+/// and a render posed at one time resumes only at that time (the pose is in the scene's hash,
+/// as a material variant is).
+#[test]
+fn animation_and_time_flags() {
+    let skin = furnace_tests::data::scene("SimpleSkin/glTF-Embedded/SimpleSkin.gltf");
+    let path = skin.to_str().unwrap();
+    let o = furnace(&["info", path]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let text = String::from_utf8_lossy(&o.stdout);
+    assert!(text.contains("animations      1: 0 '' 5.5 s\n"), "{text}");
+    let o = furnace(&["info", path, "--time", "1"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(String::from_utf8_lossy(&o.stdout).contains("0 '' 5.5 s (loaded at 1 s)"));
+    let o = furnace(&["info", path, "--animation", "Walk"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.starts_with("error: ") && err.contains("no animation 'Walk'") && err.contains("0 '' (5.5 s)"),
+        "{err}"
+    );
+    let o = furnace(&["info", path, "--time", "-1"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("≥ 0"), "{}", stderr(&o));
+    for flags in [["--animation", "0"], ["--time", "1"]] {
+        let o = furnace(&["bench", flags[0], flags[1]]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        assert!(stderr(&o).contains("the built-in scenes have no animations"), "{}", stderr(&o));
+    }
+
+    let dir = temp_dir("animation");
+    let out = dir.join("posed");
+    let render = |extra: &[&str]| {
+        let mut args = vec!["render", "--quiet", "--backend", "cpu", "--width", "16", "--height", "16"];
+        args.extend_from_slice(extra);
+        furnace(&args)
+    };
+    let o = render(&[path, "--time", "1", "--spp", "2", "--out", out.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let exr = dir.join("posed.exr");
+    // Resumed without --time: the rest pose is another scene.
+    let o = render(&[
+        path,
+        "--resume",
+        exr.to_str().unwrap(),
+        "--spp",
+        "4",
+        "--out",
+        dir.join("rest").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("scene content hash"), "{}", stderr(&o));
+    let o = render(&[path, "--time", "1", "--resume", exr.to_str().unwrap(), "--spp", "4"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}

@@ -280,6 +280,8 @@ fn sunlit_lambert_floor() {
         dropped_triangles: 0,
         extensions: Vec::new(),
         variants: Vec::new(),
+        animations: Vec::new(),
+        posed_by: None,
     };
     let settings = RenderSettings { width: 8, height: 8, bounces: 1, ..Default::default() };
     let renderer = CpuRenderer::with_default_camera(scene, settings).expect("a progressive sampler");

@@ -35,6 +35,8 @@ pub fn furnace_sphere(material: Material, n: u32) -> Scene {
         dropped_triangles: 0,
         extensions: Vec::new(),
         variants: Vec::new(),
+        animations: Vec::new(),
+        posed_by: None,
     }
 }
 
@@ -191,6 +193,8 @@ pub fn sunlit_interior(target_triangles: u32) -> Scene {
         dropped_triangles: 0,
         extensions: Vec::new(),
         variants: Vec::new(),
+        animations: Vec::new(),
+        posed_by: None,
     }
 }
 

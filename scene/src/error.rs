@@ -76,6 +76,18 @@ pub enum SceneError {
         /// The file's variants, in order.
         available: Vec<String>,
     },
+    /// The animation a load asked for ([`crate::LoadOptions::animation`], or animation 0 for a
+    /// [`crate::LoadOptions::time`] alone) is neither a name nor an index of the file's
+    /// animations.
+    #[error("{file}: no animation '{animation}': {}", animation_list(available))]
+    UnknownAnimation {
+        /// The scene file.
+        file: String,
+        /// The name asked for.
+        animation: String,
+        /// The file's animations, in order.
+        available: Vec<crate::AnimationInfo>,
+    },
     /// The file is valid but yields no renderable triangle.
     #[error("{file}: nothing to render: {reason}")]
     NothingToRender {
@@ -97,6 +109,7 @@ impl SceneError {
             Self::Image { .. } => "image",
             Self::Environment { .. } => "environment",
             Self::UnknownVariant { .. } => "unknown-variant",
+            Self::UnknownAnimation { .. } => "unknown-animation",
             Self::NothingToRender { .. } => "nothing-to-render",
         }
     }
@@ -109,6 +122,16 @@ fn variant_list(names: &[String]) -> String {
     }
     let quoted: Vec<String> = names.iter().enumerate().map(|(i, n)| format!("{i} '{n}'")).collect();
     format!("the file's variants are {}", quoted.join(", "))
+}
+
+/// The animations a file offers, for [`SceneError::UnknownAnimation`]'s message.
+fn animation_list(animations: &[crate::AnimationInfo]) -> String {
+    if animations.is_empty() {
+        return "the file has no animations".to_string();
+    }
+    let listed: Vec<String> =
+        animations.iter().enumerate().map(|(i, a)| format!("{i} '{}' ({} s)", a.name, a.duration)).collect();
+    format!("the file's animations are {}", listed.join(", "))
 }
 
 /// Something the loader ignored or repaired; the scene still loads. Identical warnings are

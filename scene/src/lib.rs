@@ -13,6 +13,12 @@
 //!   [`MAX_SCENE_FILE_BYTES`], a buffer up to its `byteLength`, image sizes checked from their
 //!   headers ([`MAX_TEXTURE_SIZE`], [`MAX_ENVIRONMENT_TEXELS`]) before decoding; URIs relative to
 //!   the scene (absolute paths refused).
+//! * **Skins, morph targets, animation** (glTF 2.0 §3.7.2.2, §3.7.3, appendix C): posed when
+//!   loaded, so every renderer sees posed triangles: morph targets add their weighted
+//!   displacements to positions, normals and tangents; skinned vertices are placed by linear
+//!   blend skinning (Σ wₖ · world(jointₖ) · inverseBindₖ); an animation chosen by
+//!   [`LoadOptions::animation`] is sampled at [`LoadOptions::time`] (STEP, LINEAR with slerp,
+//!   CUBICSPLINE) into the nodes' transforms and weights before they are flattened.
 //! * **Compressed meshes**: `KHR_draco_mesh_compression` primitives decoded by draco-core (a
 //!   Rust port of Google's Draco decoder), `EXT_meshopt_compression` and
 //!   `KHR_meshopt_compression` buffer views by meshoptimizer's own decoders (the `meshopt`
@@ -132,11 +138,28 @@ pub struct Scene {
     /// Not part of [`Scene::content_hash`]: the variant loaded shows in the triangles'
     /// materials, which are.
     pub variants: Vec<String>,
+    /// The file's animations, in file order (empty without any). Not part of
+    /// [`Scene::content_hash`]: the pose loaded shows in the geometry, cameras and lights,
+    /// which are.
+    pub animations: Vec<AnimationInfo>,
+    /// The animation the scene was posed by and the time, in seconds, it was sampled at
+    /// ([`LoadOptions::animation`], [`LoadOptions::time`]); `None`: the nodes' own transforms
+    /// and morph weights.
+    pub posed_by: Option<(usize, f32)>,
 }
 
-/// How [`Scene::load_with`] treats what it can work around, and which material variant it
-/// loads.
-#[derive(Debug, Clone, Default, PartialEq, Eq)]
+/// One of a glTF file's animations, as [`Scene::animations`] lists it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AnimationInfo {
+    /// Its `name` (`""` without one: select it by its index).
+    pub name: String,
+    /// The last keyframe time of its samplers, in seconds (0 when none can be read).
+    pub duration: f32,
+}
+
+/// How [`Scene::load_with`] treats what it can work around, which material variant it loads,
+/// and the animation pose.
+#[derive(Debug, Clone, Default, PartialEq)]
 pub struct LoadOptions {
     /// A missing, unreadable or undecodable image is an error. Without it (the default) it is a
     /// [`Warning`] naming the image and the reason, and the material slots that sample the
@@ -147,6 +170,16 @@ pub struct LoadOptions {
     /// keep their own. `None` (the default) loads every primitive's own material. A value that
     /// names no variant of the file is [`SceneError::UnknownVariant`].
     pub variant: Option<String>,
+    /// The animation to pose the scene by, by name (or, when no animation has that name, by
+    /// index): its node translation, rotation, scale and morph weight channels sampled at
+    /// [`LoadOptions::time`] (0 without it). A value that names no animation of the file is
+    /// [`SceneError::UnknownAnimation`]. `None` (the default): animation 0 if `time` is given,
+    /// else no animation (the nodes' own transforms and weights).
+    pub animation: Option<String>,
+    /// The time, in seconds, the animation is sampled at (each channel clamped to its keyframes'
+    /// range). Given without [`LoadOptions::animation`], the file's first animation; a file
+    /// without animations is then [`SceneError::UnknownAnimation`].
+    pub time: Option<f32>,
 }
 
 /// Sizes of a scene, for logs and benchmarks.

@@ -21,6 +21,8 @@ mod hostile;
 mod instancing;
 #[path = "material_extensions.rs"]
 mod material_extensions;
+#[path = "posing.rs"]
+mod posing;
 #[path = "scenes.rs"]
 mod scenes;
 #[path = "textures.rs"]

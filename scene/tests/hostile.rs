@@ -23,7 +23,7 @@ fn load_err(name: &str) -> String {
     }
 }
 
-const STRICT: LoadOptions = LoadOptions { strict: true, variant: None };
+const STRICT: LoadOptions = LoadOptions { strict: true, variant: None, animation: None, time: None };
 
 fn warnings(scene: &Scene) -> String {
     scene.warnings.iter().map(ToString::to_string).collect::<Vec<_>>().join("\n")

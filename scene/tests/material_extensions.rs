@@ -138,7 +138,7 @@ fn variants_file() -> Vec<u8> {
 }
 
 fn load_variant(bytes: &[u8], variant: Option<&str>) -> Result<Scene, SceneError> {
-    let options = LoadOptions { strict: false, variant: variant.map(str::to_string) };
+    let options = LoadOptions { variant: variant.map(str::to_string), ..LoadOptions::default() };
     Scene::from_slice_with(bytes, "variants.gltf", &options)
 }
 

@@ -6,7 +6,7 @@
 use furnace_scene::{Image, LoadOptions, Scene, SceneError};
 use std::path::PathBuf;
 
-const STRICT: LoadOptions = LoadOptions { strict: true, variant: None };
+const STRICT: LoadOptions = LoadOptions { strict: true, variant: None, animation: None, time: None };
 
 fn file(name: &str) -> PathBuf {
     furnace_tests::data::scene("gltf-transform-textures").join(name)

@@ -3,11 +3,12 @@
 //!
 //! The steps, in order: [`document`] (parse and check), [`resources`] (buffers, with
 //! [`meshopt`]'s compressed views decoded into them, then the images the materials use),
-//! [`material`] (textures and materials), [`variants`] (the material variant chosen), [`nodes`]
-//! (the node hierarchy: cameras, lights, and each mesh primitive through [`primitive`], once per
-//! instance of [`instancing`]); then the
-//! geometry's checks here. [`context::Ctx`] carries the file and the warnings through them.
+//! [`material`] (textures and materials), [`variants`] (the material variant chosen),
+//! [`animation`] (the animation chosen, sampled into a pose), [`nodes`] (the node hierarchy at
+//! that pose: cameras, lights, and each mesh primitive through [`primitive`], posed by its morph
+//! weights and [`skin`], once per instance of [`instancing`]); then the geometry's checks here. [`context::Ctx`] carries the file and the warnings through them.
 
+mod animation;
 mod context;
 mod document;
 mod instancing;
@@ -17,6 +18,7 @@ mod meshopt;
 mod nodes;
 mod primitive;
 mod resources;
+mod skin;
 mod texture_source;
 mod variants;
 
@@ -48,6 +50,12 @@ pub(crate) fn load(
         None => None,
     };
     let buffers = resources::load_buffers(&mut ctx, &doc, blob.as_deref())?;
+    let animations = animation::list(&doc, &buffers);
+    let posed_by = animation::select(&ctx, &animations, options.animation.as_deref(), options.time)?;
+    let pose = match posed_by {
+        Some((index, time)) => animation::sample(&mut ctx, &doc, &buffers, index, time)?,
+        None => animation::Pose::rest(doc.nodes().len()),
+    };
     let textures = material::read_textures(&mut ctx, &doc);
     let mut materials = material::read_materials(&mut ctx, &doc);
     let default_material = (materials.len() - 1) as u32;
@@ -81,7 +89,7 @@ pub(crate) fn load(
     let mut meshes =
         Meshes::new(&doc, &buffers, uv_sets, needs_tangent, needs_color, normal_sets, default_material);
     meshes.variant = variant.map(|v| (v, variant_names.len()));
-    let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes)?;
+    let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes, &pose)?;
     let (mut geo, dropped) = (flat.meshes.geo, flat.meshes.dropped);
     check_geometry(&mut ctx, &geo, dropped)?;
     if !needs_tangent {
@@ -106,6 +114,8 @@ pub(crate) fn load(
         dropped_triangles: dropped,
         extensions: document::extensions(doc.as_json()),
         variants: variant_names,
+        animations,
+        posed_by,
     })
 }
 

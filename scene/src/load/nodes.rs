@@ -1,8 +1,12 @@
-//! The scene to render and its node hierarchy, flattened depth-first into world space:
-//! cameras, punctual lights and mesh primitives; the sky from the scene's extras.
+//! The scene to render and its node hierarchy, flattened depth-first into world space at the
+//! animation's pose: cameras, punctual lights and mesh primitives (posed by their morph weights
+//! and skins); the sky from the scene's extras.
 
+use super::animation::Pose;
 use super::context::Ctx;
 use super::primitive::Meshes;
+use super::primitive::pose::Posing;
+use super::skin::JointMatrices;
 use crate::camera::{Camera, Projection};
 use crate::error::SceneError;
 use crate::{Light, Sun};
@@ -18,6 +22,12 @@ pub(super) struct Flattened<'b> {
     pub(super) sun: Option<Sun>,
     /// The other supported lights.
     pub(super) lights: Vec<Light>,
+    /// The nodes' transforms and morph weights.
+    pose: &'b Pose,
+    /// Every node's world transform at the pose (computed only when the file has skins).
+    worlds: Vec<Option<Mat4>>,
+    /// Each skin's joint matrices, computed when a node first uses it.
+    skins: Vec<Option<JointMatrices>>,
 }
 
 /// The file's default scene, else its first.
@@ -151,16 +161,23 @@ pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>)
     total
 }
 
-/// Walks `scene`'s nodes depth-first (children in file order), each once, adding what they
-/// hold to `meshes` and the cameras and lights; a subtree with a non-finite transform is
-/// skipped with a warning.
+/// Walks `scene`'s nodes depth-first (children in file order), each once, at `pose`, adding
+/// what they hold to `meshes` and the cameras and lights; a subtree with a non-finite transform
+/// is skipped with a warning.
 pub(super) fn flatten<'b>(
     ctx: &mut Ctx<'_>,
     doc: &gltf::Document,
     scene: &gltf::Scene<'_>,
     meshes: Meshes<'b>,
+    pose: &'b Pose,
 ) -> Result<Flattened<'b>, SceneError> {
-    let mut out = Flattened { meshes, cameras: Vec::new(), sun: None, lights: Vec::new() };
+    let worlds = match doc.skins().len() {
+        0 => Vec::new(),
+        _ => super::skin::world_transforms(ctx, doc, pose),
+    };
+    let skins = vec![None; doc.skins().len()];
+    let mut out =
+        Flattened { meshes, cameras: Vec::new(), sun: None, lights: Vec::new(), pose, worlds, skins };
     let mut visited = vec![false; doc.nodes().len()];
     let mut stack: Vec<(gltf::Node<'_>, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     stack.reverse();
@@ -170,7 +187,7 @@ pub(super) fn flatten<'b>(
             ctx.warn(npath, "node reached twice (cycle or shared child): skipped");
             continue;
         }
-        let Some(local) = local_transform(ctx, node.transform(), &npath) else { continue };
+        let Some(local) = local_transform(ctx, pose.transform(&node), &npath) else { continue };
         let world = parent * local;
         if !world.is_finite() {
             ctx.warn(npath, "non-finite transform: subtree skipped");
@@ -194,9 +211,6 @@ impl Flattened<'_> {
         npath: &str,
         world: Mat4,
     ) -> Result<(), SceneError> {
-        if node.skin().is_some() || node.weights().is_some() {
-            ctx.warn(npath, "skinning and morph targets are not supported: rest pose used");
-        }
         if let Some(cam) = node.camera()
             && let Some(camera) = make_camera(ctx, doc, &cam, npath, world)?
         {
@@ -207,9 +221,28 @@ impl Flattened<'_> {
         }
         if let Some(mesh) = node.mesh() {
             let worlds = super::instancing::instances(ctx, doc, self.meshes.buffers(), node, npath, world)?;
+            let skin = match node.skin() {
+                Some(skin) => {
+                    if node.extension_value(super::instancing::EXTENSION).is_some() {
+                        ctx.warn(
+                            format!("{npath}.extensions.{}", super::instancing::EXTENSION),
+                            "a skinned mesh is placed by its joints, once: instances ignored",
+                        );
+                    }
+                    Some(self.joint_matrices(ctx, doc, &skin)?)
+                }
+                None => None,
+            };
+            let pose = self.pose;
+            let posing = Posing {
+                mesh: mesh.index(),
+                weights: pose.weights(node),
+                skin: skin.as_ref(),
+                node_world: world,
+            };
             for prim in mesh.primitives() {
                 let ppath = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
-                self.meshes.add_primitive(ctx, &prim, &ppath, npath, &worlds)?;
+                self.meshes.add_primitive(ctx, &prim, (&ppath, npath), &worlds, &posing)?;
             }
         } else if node.extension_value(super::instancing::EXTENSION).is_some() {
             ctx.warn(
@@ -218,6 +251,23 @@ impl Flattened<'_> {
             );
         }
         Ok(())
+    }
+
+    /// `skin`'s joint matrices at the pose (computed once per skin).
+    fn joint_matrices(
+        &mut self,
+        ctx: &Ctx<'_>,
+        doc: &gltf::Document,
+        skin: &gltf::Skin<'_>,
+    ) -> Result<JointMatrices, SceneError> {
+        if let Some(Some(m)) = self.skins.get(skin.index()) {
+            return Ok(m.clone());
+        }
+        let m = super::skin::joint_matrices(ctx, doc, self.meshes.buffers(), skin, &self.worlds)?;
+        if let Some(slot) = self.skins.get_mut(skin.index()) {
+            *slot = Some(m.clone());
+        }
+        Ok(m)
     }
 
     /// The first directional light becomes the sun; an unsupported light is ignored with a
@@ -261,7 +311,7 @@ fn angular_radius(ctx: &mut Ctx<'_>, light: &gltf::khr_lights_punctual::Light<'_
 /// whose norm is off by more than the rounding of a written file (10⁻³) is normalised with a
 /// warning (unnormalised, it would scale and shear the subtree, and a camera's view with it);
 /// one that cannot be normalised (zero or not finite) skips the subtree with a warning.
-fn local_transform(ctx: &mut Ctx<'_>, t: gltf::scene::Transform, npath: &str) -> Option<Mat4> {
+pub(super) fn local_transform(ctx: &mut Ctx<'_>, t: gltf::scene::Transform, npath: &str) -> Option<Mat4> {
     let t = match t {
         gltf::scene::Transform::Decomposed { translation, rotation, scale } => {
             let norm = rotation.iter().map(|&c| f64::from(c).powi(2)).sum::<f64>().sqrt();

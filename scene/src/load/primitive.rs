@@ -1,8 +1,10 @@
 //! Mesh primitives flattened into world-space triangles: attributes and indices read and
-//! checked, positions and normals transformed, tangents transformed or generated, zero-area
-//! triangles dropped. Draco-compressed primitives are decoded by [`draco`].
+//! checked, posed by their morph targets and skin ([`pose`]), positions and normals
+//! transformed, tangents transformed or generated, zero-area triangles dropped.
+//! Draco-compressed primitives are decoded by [`draco`].
 
 mod draco;
+pub(super) mod pose;
 
 use super::context::Ctx;
 use crate::accessor::{read_floats, read_indices};
@@ -45,6 +47,10 @@ struct Attributes {
     /// TANGENT (read only when tangents are stored).
     tangents: Option<Vec<f32>>,
     indices: Vec<u32>,
+    /// JOINTS_n and WEIGHTS_n (read only for a skinned node).
+    skin: Vec<pose::SkinSet>,
+    /// Per vertex, whether its skinning matrix mirrors (`None`: none does, or not skinned).
+    mirrored: Option<Vec<bool>>,
 }
 
 /// A primitive placed in world space by its node's transform (or one instance's); what does not
@@ -65,6 +71,9 @@ struct Placed<'a> {
     /// The transform mirrors: triangles are wound the other way round and the tangents'
     /// handedness flips.
     flip: bool,
+    /// Per vertex, whether skinning mirrored it (the tangents already flipped): a triangle
+    /// most of whose vertices are is wound the other way round.
+    mirrored: Option<&'a [bool]>,
 }
 
 impl Placed<'_> {
@@ -120,16 +129,17 @@ impl<'b> Meshes<'b> {
         self.buffers
     }
 
-    /// Adds primitive `prim` (JSON path `ppath`) of node `npath` once per transform of `worlds`
-    /// (the node's, or one per instance), reading its accessors once: triangle lists, strips
-    /// and fans; points, lines and primitives without positions are skipped with a warning.
+    /// Adds primitive `prim` (JSON path `ppath`) of node `npath`, posed by `posing`, once per
+    /// transform of `worlds` (the node's, or one per instance; a skinned primitive, placed by
+    /// its joints, once), reading its accessors once: triangle lists, strips and fans; points,
+    /// lines and primitives without positions are skipped with a warning.
     pub(super) fn add_primitive(
         &mut self,
         ctx: &mut Ctx<'_>,
         prim: &gltf::Primitive<'_>,
-        ppath: &str,
-        npath: &str,
+        (ppath, npath): (&str, &str),
         worlds: &[Mat4],
+        posing: &pose::Posing<'_>,
     ) -> Result<(), SceneError> {
         use gltf::mesh::Mode;
         let mode = prim.mode();
@@ -144,9 +154,25 @@ impl<'b> Meshes<'b> {
             ctx.warn(ppath, "no POSITION attribute: primitive skipped");
             return Ok(());
         };
-        let attributes = match prim.extension_value(draco::EXTENSION) {
-            Some(ext) => draco::read_attributes(ctx, self, prim, ext, ppath)?,
-            None => self.read_attributes(ctx, prim, &pos_acc, ppath)?,
+        let skinned = posing.skin.is_some();
+        let mut attributes = match prim.extension_value(draco::EXTENSION) {
+            Some(ext) => draco::read_attributes(ctx, self, prim, ext, ppath, skinned)?,
+            None => self.read_attributes(ctx, prim, &pos_acc, ppath, skinned)?,
+        };
+        pose::morph(
+            ctx,
+            self.doc,
+            self.buffers,
+            (posing.mesh, prim),
+            ppath,
+            posing.weights,
+            &mut attributes,
+        )?;
+        let worlds = match posing.skin {
+            Some(skin) if pose::skin(ctx, skin, &mut attributes, ppath, posing.node_world)? => {
+                &[Mat4::IDENTITY][..]
+            }
+            _ => worlds,
         };
         let own = prim.material().index().map_or(self.default_material, |i| i as u32);
         let mapped = match self.variant {
@@ -168,13 +194,15 @@ impl<'b> Meshes<'b> {
         Ok(())
     }
 
-    /// Reads the attributes the scene stores and the indices, checking counts and ranges.
+    /// Reads the attributes the scene stores (and, for a `skinned` node, the joints and
+    /// weights) and the indices, checking counts and ranges.
     fn read_attributes(
         &self,
         ctx: &mut Ctx<'_>,
         prim: &gltf::Primitive<'_>,
         pos_acc: &gltf::Accessor<'_>,
         ppath: &str,
+        skinned: bool,
     ) -> Result<Attributes, SceneError> {
         let positions = read_positions(ctx, pos_acc, self.buffers, ppath)?;
         let reader = Reader { ctx, buffers: self.buffers, ppath, nverts: positions.len() / 3 };
@@ -206,6 +234,12 @@ impl<'b> Meshes<'b> {
         } else {
             None
         };
+        let skin = match skinned {
+            true => pose::read_skin_sets(reader.ctx, prim, ppath, |acc, name| {
+                reader.attribute(acc, &[Dimensions::Vec4], name).map(|a| a.map(|a| a.0))
+            })?,
+            false => Vec::new(),
+        };
         let indices = reader.indices(prim.indices())?;
         let indices = match prim.mode() {
             gltf::mesh::Mode::TriangleStrip => strip_triangles(&indices),
@@ -220,7 +254,7 @@ impl<'b> Meshes<'b> {
                 indices
             }
         };
-        Ok(Attributes { positions, normals, uvs, colors, tangents, indices })
+        Ok(Attributes { positions, normals, uvs, colors, tangents, indices, skin, mirrored: None })
     }
 
     /// Copies the vertices of a primitive with shading normals once (its triangles index
@@ -258,7 +292,9 @@ impl<'b> Meshes<'b> {
     ) -> Result<(), SceneError> {
         for t in p.indices.chunks_exact(3) {
             let (mut a, b, mut c) = (t[0] as usize, t[1] as usize, t[2] as usize);
-            if p.flip {
+            let mirrored =
+                p.mirrored.is_some_and(|m| usize::from(m[a]) + usize::from(m[b]) + usize::from(m[c]) >= 2);
+            if p.flip != mirrored {
                 std::mem::swap(&mut a, &mut c);
             }
             let Some(face_normal) = face_normal(p.positions[a], p.positions[b], p.positions[c]) else {
@@ -451,6 +487,7 @@ fn place<'a>(
         material,
         world,
         flip,
+        mirrored: a.mirrored.as_deref(),
     })
 }
 

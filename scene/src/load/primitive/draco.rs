@@ -19,13 +19,15 @@ pub(super) const EXTENSION: &str = "KHR_draco_mesh_compression";
 
 /// Decodes primitive `prim` (JSON path `ppath`), whose `KHR_draco_mesh_compression` object is
 /// `ext`, into the attributes the loader stores: POSITION (finite), NORMAL, the UV sets stored,
-/// COLOR_0 when colours are, TANGENT when tangents are, and the triangles' indices.
+/// COLOR_0 when colours are, TANGENT when tangents are, JOINTS_n and WEIGHTS_n when `skinned`,
+/// and the triangles' indices.
 pub(super) fn read_attributes(
     ctx: &Ctx<'_>,
     src: &Meshes<'_>,
     prim: &gltf::Primitive<'_>,
     ext: &Value,
     ppath: &str,
+    skinned: bool,
 ) -> Result<Attributes, SceneError> {
     let epath = format!("{ppath}.extensions.{EXTENSION}");
     let (view, ids) = parse(ext, src.doc).map_err(|e| ctx.invalid(at(&epath, e)))?;
@@ -65,6 +67,12 @@ pub(super) fn read_attributes(
         true => decoded.attribute(prim.get(&gltf::Semantic::Tangents), Dimensions::Vec4, "TANGENT")?,
         false => None,
     };
+    let skin = match skinned {
+        true => super::pose::read_skin_sets(ctx, prim, ppath, |acc, name| {
+            decoded.attribute(acc, Dimensions::Vec4, name)
+        })?,
+        false => Vec::new(),
+    };
     let nverts = mesh.num_points();
     let mut indices = Vec::with_capacity(3 * mesh.num_faces());
     for face in mesh.faces() {
@@ -78,7 +86,7 @@ pub(super) fn read_attributes(
             indices.push(p.0);
         }
     }
-    Ok(Attributes { positions, normals, uvs, colors, tangents, indices })
+    Ok(Attributes { positions, normals, uvs, colors, tangents, indices, skin, mirrored: None })
 }
 
 /// A problem with a member of the extension object: the member (`bufferView`, `attributes`)
