@@ -49,6 +49,7 @@ impl Job {
             .chain(a.sun_angle.map(|d| (resume::SUN_ANGLE, d.to_string())))
             .chain(resume::env_records(&a.environment))
             .chain(self.default_light.map(|d| (resume::DEFAULT_LIGHT, d.to_string())))
+            .chain(a.variant.clone().map(|v| (resume::VARIANT, v)))
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
             ..Metadata::default()
@@ -172,7 +173,10 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
             let path = a.resume.clone().unwrap_or_default();
             let recorded = resume::identity(&file.metadata, file.width, file.height);
             let now = resume::identity(&job.metadata(0, 0.0, 0), width, height);
-            resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights, chooses_point_lights)?;
+            resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights, chooses_point_lights)
+                .map_err(|e| {
+                    resume::variant_hint(e, &file.metadata, a.variant.as_deref(), !scene.variants.is_empty())
+                })?;
             let saved = restore(&path, file)?;
             Some(saved)
         }

@@ -61,6 +61,9 @@ pub const ENV_VISIBLE: &str = "furnace.env_visible";
 /// measuring again (absent in a file from before the rule: that rule, the studio only for a
 /// scene without a light of its own).
 pub const DEFAULT_LIGHT: &str = "furnace.default_light";
+/// The `--variant` given (absent: each primitive's own material). It decides the scene's
+/// content, so a resumed render needs the same.
+pub const VARIANT: &str = "furnace.variant";
 /// A part of a split render: the `--samples A..B` it renders (absent: the whole render,
 /// `0..furnace.target_spp`). Its film holds samples `A..A+furnace.spp`.
 pub const SAMPLE_RANGE: &str = "furnace.sample_range";
@@ -216,6 +219,32 @@ pub fn check_same(
     .map_err(|e| format!("{}: {e}", file.display()))
 }
 
+/// A refused resume's `message` with what the file says of `--variant`, where the scene's content
+/// differs (a variant changes it): the variant it records if another is given now (`now`), or,
+/// for a file without the record of a scene that has variants (`has_variants`), that it may
+/// have been rendered with one from before furnace recorded it.
+pub fn variant_hint(message: String, meta: &Metadata, now: Option<&str>, has_variants: bool) -> String {
+    if !message.contains("scene content hash") {
+        return message;
+    }
+    match (meta.extra.get(VARIANT), now) {
+        (Some(file), Some(now)) if file != now => {
+            let (file, now) = (printable_excerpt(file), printable_excerpt(now));
+            format!("{message}; it was rendered with --variant {file}, not --variant {now}")
+        }
+        (None, Some(now)) => format!(
+            "{message}; the file records no --variant (rendered without one, or by a furnace that did not \
+             record it): try without --variant {}",
+            printable_excerpt(now)
+        ),
+        (None, None) if has_variants => format!(
+            "{message}; the file records no --variant (it was written by a furnace that did not record \
+             it): if it was rendered with one, give the same --variant"
+        ),
+        _ => message,
+    }
+}
+
 /// Fills every film-deciding argument that was not given on the command line from the file's
 /// record (`given` ones stay, to be checked by [`check_same`]); `--out` defaults to the file
 /// itself, `--spp` to the recorded target.
@@ -270,6 +299,11 @@ pub fn apply_recorded(
     {
         // The same pose given again: the field of view is the file's unless given.
         a.yfov = Some(yfov);
+    }
+    if !a.given("variant")
+        && let Some(v) = meta.extra.get(VARIANT)
+    {
+        a.variant = Some(v.clone());
     }
     if let Some(v) = meta.extra.get(DEFAULT_LIGHT)
         && v != "studio"

@@ -1470,11 +1470,9 @@ fn denoise_writes_a_denoised_image_closer_to_the_converged_one() {
 #[path = "split_cases/merge.rs"]
 mod split;
 
-/// `--variant` loads a KHR_materials_variants variant and `furnace info` lists the file's
-/// variants, the loaded one marked; a name the file lacks is one error line listing them.
-#[test]
-fn info_lists_material_variants() {
-    let dir = temp_dir("variants");
+/// One triangle of material 0 (red), material 1 (green) in variant "Night" (variants "Day",
+/// "Night"). Written to `dir`; its path.
+fn variants_file(dir: &Path) -> String {
     let file = dir.join("variants.gltf");
     let material = |c: &str| format!(r#"{{"pbrMetallicRoughness":{{"baseColorFactor":[{c},1]}}}}"#);
     let gltf = format!(
@@ -1491,7 +1489,15 @@ fn info_lists_material_variants() {
         material("0,1,0")
     );
     std::fs::write(&file, gltf).unwrap();
-    let path = file.display().to_string();
+    file.display().to_string()
+}
+
+/// `--variant` loads a KHR_materials_variants variant and `furnace info` lists the file's
+/// variants, the loaded one marked; a name the file lacks is one error line listing them.
+#[test]
+fn info_lists_material_variants() {
+    let dir = temp_dir("variants");
+    let path = variants_file(&dir);
     let o = furnace(&["info", &path]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
@@ -1509,4 +1515,35 @@ fn info_lists_material_variants() {
     // The built-in scenes have none.
     let o = furnace(&["bench", "--variant", "Day"]);
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+}
+
+/// `--variant` is recorded (`furnace.variant`): a render resumes with its variant without
+/// being given it, bit-identically; another variant is refused, naming the one it was rendered
+/// with; a file without the record (from before it) says to give the same `--variant`.
+#[test]
+fn the_variant_is_recorded_and_resumed() {
+    let dir = temp_dir("variant_resume");
+    let path = variants_file(&dir);
+    resume_matches_one_render(&dir, "night", &[&path, "--variant", "Night"]);
+    let two = dir.join("night_2.exr");
+    let (_, _, _, meta) = furnace_post::read_exr(&two).unwrap();
+    assert_eq!(meta.extra.get("furnace.variant").map(String::as_str), Some("Night"));
+    let again = dir.join("again");
+    let resume = |args: &[&str]| {
+        let mut all = vec!["render", "--quiet", "--resume", two.to_str().unwrap(), "--spp", "4"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--out", again.to_str().unwrap()]);
+        furnace(&all)
+    };
+    let o = resume(&["--variant", "Day"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("it was rendered with --variant 'Night', not --variant 'Day'"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(remove_attribute(&two, "furnace.variant").is_some());
+    let o = resume(&[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("if it was rendered with one, give the same --variant"), "{}", stderr(&o));
+    let o = resume(&["--variant", "Night"]);
+    assert!(o.status.success(), "{}", stderr(&o));
 }
