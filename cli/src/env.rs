@@ -1,34 +1,53 @@
 //! The environment options (`--env`, `--env-intensity`, `--env-rotation`, `--env-visible`) and
-//! the default light: how `furnace render`, `bench` and `chart` set up a scene's environment
-//! map, and the check of `--env-sampling` against `--light-sampling`.
+//! the default light ([`crate::default_light`]): how `furnace render`, `view`, `bench` and
+//! `chart` set up a scene's environment map, and the check of `--env-sampling` against
+//! `--light-sampling`.
 
 use crate::args::{EnvArg, EnvArgs, Switch};
+use crate::default_light::Decision;
 use furnace_render::{EnvSampling, LightSampling};
 use furnace_scene::{Environment, EnvironmentMap, Scene};
 use std::sync::Arc;
 
 /// What [`apply`] did to the scene's environment.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Applied {
     /// The scene's own environment, adjusted by the options given.
     Own,
     /// The map of `--env FILE` or `--env studio`.
     Given,
-    /// The built-in studio, for a scene without a light of its own (the default light).
-    Default,
-    /// No environment (`--env none`, or a scene with lights of its own and none).
+    /// Neither `--env` nor an environment of the scene's own: the default light's rule decided
+    /// (the built-in studio, or nothing).
+    Rule(Decision),
+    /// No environment: `--env none`.
     None,
 }
 
-/// Sets the scene's environment from `e` (the scene's own when `--env` is not given; the
-/// built-in studio for a scene without a light of its own), scaled, turned and shown as `e`
-/// says. Prints to stderr one `note:` line for the default light and a `warning:` line for a
-/// map's warning or options that have no environment to act on (also with `--quiet`: they say
-/// what the image shows).
+/// [`apply_resumed`] for a new render: the default light's rule measures the scene.
 ///
 /// # Errors
-/// The map's one-line error (`EnvironmentError`: the file, and the texel for a non-finite one).
+/// As [`apply_resumed`].
 pub fn apply(scene: &mut Scene, e: &EnvArgs) -> Result<Applied, String> {
+    apply_resumed(scene, e, None)
+}
+
+/// Sets the scene's environment from `e` (the scene's own when `--env` is not given; else the
+/// default light's decision, [`crate::default_light::decide`]), scaled, turned and shown as `e`
+/// says. `resumed` is, for a render being continued, its file's record of the decision
+/// (`Some(None)`: a file written before the rule), which is followed instead of measuring
+/// again. Prints to stderr one `note:` line when the rule adds the studio to a new render (why,
+/// and `--env none`) and a `warning:` line for a map's warning or options that have no environment to act
+/// on (also with `--quiet`: they say what the image shows).
+///
+/// # Errors
+/// The map's one-line error (`EnvironmentError`: the file, and the texel for a non-finite one);
+/// a resumed record that is neither `studio` nor `none`.
+pub fn apply_resumed(
+    scene: &mut Scene,
+    e: &EnvArgs,
+    resumed: Option<Option<&str>>,
+) -> Result<Applied, String> {
+    let mut ruled = None;
     let map = match &e.env {
         Some(EnvArg::File(path)) => {
             let (map, warning) = EnvironmentMap::load(path).map_err(|err| err.to_string())?;
@@ -43,15 +62,33 @@ pub fn apply(scene: &mut Scene, e: &EnvArgs) -> Result<Applied, String> {
             None
         }
         None if scene.environment().is_some() => None,
-        None if !scene.has_own_light() => {
-            eprintln!(
-                "note: {} has no light of its own: lit by the built-in studio environment (--env FILE to \
-                 choose another, --env none for none)",
-                scene_file_name(scene)
-            );
-            Some((Arc::new(EnvironmentMap::studio()), Applied::Default))
+        None => {
+            let decision = match resumed {
+                Some(record) => Decision::resumed(scene, record).map_err(|v| {
+                    format!(
+                        "attribute '{}' = {} is not studio or none",
+                        crate::resume::DEFAULT_LIGHT,
+                        furnace_post::printable_excerpt(&v)
+                    )
+                })?,
+                None => crate::default_light::decide(scene),
+            };
+            ruled = Some(decision);
+            decision.studio.then(|| {
+                // A resumed render says nothing: the file decided, and another --env would
+                // not continue it.
+                if resumed.is_none() {
+                    eprintln!(
+                        "note: {}: lit by the built-in studio environment: {} (--env none for {}, --env FILE \
+                     for another map)",
+                        scene_file_name(scene),
+                        decision.reason(),
+                        if scene.has_own_light() { "its own lights alone" } else { "none" }
+                    );
+                }
+                (Arc::new(EnvironmentMap::studio()), Applied::Rule(decision))
+            })
         }
-        None => None,
     };
     let applied = match map {
         Some((map, how)) => {
@@ -59,7 +96,7 @@ pub fn apply(scene: &mut Scene, e: &EnvArgs) -> Result<Applied, String> {
             how
         }
         None if scene.environment().is_some() => Applied::Own,
-        None => Applied::None,
+        None => ruled.map_or(Applied::None, Applied::Rule),
     };
     let Some(mut env) = scene.environment().cloned() else {
         if e.adjusts() {
@@ -133,7 +170,8 @@ mod tests {
     fn the_cornell_box_keeps_its_sun_and_sky() {
         let mut scene = builtin::cornell_box().unwrap();
         let hash = scene.content_hash();
-        assert_eq!(apply(&mut scene, &args(None)).unwrap(), Applied::None);
+        let sky = Decision { studio: false, why: crate::default_light::Why::Sky };
+        assert_eq!(apply(&mut scene, &args(None)).unwrap(), Applied::Rule(sky));
         assert!(scene.environment().is_none());
         assert_eq!(scene.content_hash(), hash);
     }
@@ -148,7 +186,8 @@ mod tests {
         assert!(!scene.has_own_light());
         let mut dark = scene.clone();
         let e = EnvArgs { env_rotation: Some(90.0), env_visible: Some(Switch::Off), ..args(None) };
-        assert_eq!(apply(&mut scene, &e).unwrap(), Applied::Default);
+        let studio = Decision { studio: true, why: crate::default_light::Why::NoLight };
+        assert_eq!(apply(&mut scene, &e).unwrap(), Applied::Rule(studio));
         let env = scene.environment().unwrap();
         assert_eq!((env.intensity, env.visible), (1.0, false));
         assert!((env.rotation - std::f32::consts::FRAC_PI_2).abs() < 1e-7);

@@ -181,13 +181,21 @@ fn describe(scene: &Scene) -> String {
             ),
         );
     }
-    if !scene.has_own_light() {
-        line(
-            "default light",
-            "none of its own: `furnace render` lights it with the built-in studio environment (--env FILE \
-             for another, --env none for none)"
-                .into(),
-        );
+    if scene.environment().is_none() {
+        let d = crate::default_light::decide(scene);
+        if d.why != crate::default_light::Why::Sky {
+            let text = if d.studio {
+                let none = if scene.has_own_light() { "its own lights alone" } else { "none" };
+                format!(
+                    "studio: `furnace render` adds the built-in studio environment: {} (--env none for {none}, \
+                     --env FILE for another map)",
+                    d.reason()
+                )
+            } else {
+                format!("none: {} (--env studio or --env FILE to add one)", d.reason())
+            };
+            line("default light", text);
+        }
     }
     if scene.cameras.is_empty() {
         let camera = describe_camera(&scene.default_camera());
@@ -248,7 +256,8 @@ mod tests {
         let text = describe(&scene);
         assert!(
             text.contains(
-                "default light   none of its own: `furnace render` lights it with the built-in studio"
+                "default light   studio: `furnace render` adds the built-in studio environment: it has no \
+                 light of its own (--env none for none"
             ),
             "{text}"
         );

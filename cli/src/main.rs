@@ -36,6 +36,7 @@ mod args;
 mod bench;
 mod chart;
 mod compare;
+mod default_light;
 mod env;
 mod info;
 mod interrupt;

@@ -22,6 +22,9 @@ pub(crate) struct Job {
     pub camera: String,
     pub scene_name: String,
     pub scene_hash: String,
+    /// The default light's decision ([`resume::DEFAULT_LIGHT`]: `studio` or `none`), where the
+    /// rule decided (no `--env`, no environment of the scene's own).
+    pub default_light: Option<&'static str>,
 }
 
 impl Job {
@@ -45,6 +48,8 @@ impl Job {
             .chain(a.samples.map(|r| (resume::SAMPLE_RANGE, r.to_string())))
             .chain(a.sun_angle.map(|d| (resume::SUN_ANGLE, d.to_string())))
             .chain(resume::env_records(&a.environment))
+            .chain(self.default_light.map(|d| (resume::DEFAULT_LIGHT, d.to_string())))
+            .chain(a.variant.clone().map(|v| (resume::VARIANT, v)))
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
             ..Metadata::default()
@@ -130,7 +135,13 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
     {
         eprintln!("warning: {}: --sun-angle {deg} is ignored: the scene has no sun", scene.name);
     }
-    crate::env::apply(&mut scene, &args.environment)?;
+    // A resumed render follows its record of the default light (a file without one was made
+    // before the rule: the rule of then), so that the same scene is rebuilt.
+    let recorded = resumed.as_ref().map(|f| f.metadata.extra.get(resume::DEFAULT_LIGHT).map(String::as_str));
+    let default_light = match crate::env::apply_resumed(&mut scene, &args.environment, recorded)? {
+        crate::env::Applied::Rule(d) => Some(d.record()),
+        _ => None,
+    };
     let samples_lights = scene.samples_lights();
     let chooses_point_lights = args.settings.settings.point_lights.chooses(scene.point_lights().count());
     let scene_hash = scene.content_hash();
@@ -159,7 +170,7 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
             a.resume.clone().unwrap_or_default().display()
         ));
     }
-    let job = Job { scene_name: scene.name.clone(), scene_hash, camera, settings, args };
+    let job = Job { scene_name: scene.name.clone(), scene_hash, camera, settings, args, default_light };
     let a = &job.args;
 
     let saved = match resumed {
@@ -167,7 +178,10 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
             let path = a.resume.clone().unwrap_or_default();
             let recorded = resume::identity(&file.metadata, file.width, file.height);
             let now = resume::identity(&job.metadata(0, 0.0, 0), width, height);
-            resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights, chooses_point_lights)?;
+            resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights, chooses_point_lights)
+                .map_err(|e| {
+                    resume::variant_hint(e, &file.metadata, a.variant.as_deref(), !scene.variants.is_empty())
+                })?;
             let saved = restore(&path, file)?;
             Some(saved)
         }

@@ -8,8 +8,8 @@
 //! and the render settings as their one description records them (`furnace_render::fields`:
 //! bounces, sampler, seed, material model, light sampling, clamp, adaptive sampling; the size
 //! and, for the fixed-N samplers, N are in `furnace_render::resume::identity`). The scene hash covers the environment itself (its texels, intensity,
-//! rotation and visibility), so the same options rebuild the same scene, the default studio
-//! light of a scene without one included.
+//! rotation and visibility), so the same options rebuild the same scene, the default light
+//! included (its decision is recorded, [`DEFAULT_LIGHT`], and followed on resume).
 //! `--resume` restores the film from the sums and continues at sample index `furnace.spp`: each
 //! pixel's sum keeps adding samples in index order, so the result is bit-identical to an
 //! uninterrupted render on the same backend and adapter (on a GPU without `f64` shaders, whose
@@ -56,6 +56,14 @@ pub const ENV_INTENSITY: &str = "furnace.env_intensity";
 pub const ENV_ROTATION: &str = "furnace.env_rotation_deg";
 /// The `--env-visible` given, `on` or `off` (absent: the scene's own, else on).
 pub const ENV_VISIBLE: &str = "furnace.env_visible";
+/// The default light's decision, `studio` or `none`, where it decided (no `--env` given and no
+/// environment of the scene's own; `crate::default_light`). `--resume` follows it rather than
+/// measuring again (absent in a file from before the rule: that rule, the studio only for a
+/// scene without a light of its own).
+pub const DEFAULT_LIGHT: &str = "furnace.default_light";
+/// The `--variant` given (absent: each primitive's own material). It decides the scene's
+/// content, so a resumed render needs the same.
+pub const VARIANT: &str = "furnace.variant";
 /// A part of a split render: the `--samples A..B` it renders (absent: the whole render,
 /// `0..furnace.target_spp`). Its film holds samples `A..A+furnace.spp`.
 pub const SAMPLE_RANGE: &str = "furnace.sample_range";
@@ -211,6 +219,32 @@ pub fn check_same(
     .map_err(|e| format!("{}: {e}", file.display()))
 }
 
+/// A refused resume's `message` with what the file says of `--variant`, where the scene's content
+/// differs (a variant changes it): the variant it records if another is given now (`now`), or,
+/// for a file without the record of a scene that has variants (`has_variants`), that it may
+/// have been rendered with one from before furnace recorded it.
+pub fn variant_hint(message: String, meta: &Metadata, now: Option<&str>, has_variants: bool) -> String {
+    if !message.contains("scene content hash") {
+        return message;
+    }
+    match (meta.extra.get(VARIANT), now) {
+        (Some(file), Some(now)) if file != now => {
+            let (file, now) = (printable_excerpt(file), printable_excerpt(now));
+            format!("{message}; it was rendered with --variant {file}, not --variant {now}")
+        }
+        (None, Some(now)) => format!(
+            "{message}; the file records no --variant (rendered without one, or by a furnace that did not \
+             record it): try without --variant {}",
+            printable_excerpt(now)
+        ),
+        (None, None) if has_variants => format!(
+            "{message}; the file records no --variant (it was written by a furnace that did not record \
+             it): if it was rendered with one, give the same --variant"
+        ),
+        _ => message,
+    }
+}
+
 /// Fills every film-deciding argument that was not given on the command line from the file's
 /// record (`given` ones stay, to be checked by [`check_same`]); `--out` defaults to the file
 /// itself, `--spp` to the recorded target.
@@ -265,6 +299,17 @@ pub fn apply_recorded(
     {
         // The same pose given again: the field of view is the file's unless given.
         a.yfov = Some(yfov);
+    }
+    if !a.given("variant")
+        && let Some(v) = meta.extra.get(VARIANT)
+    {
+        a.variant = Some(v.clone());
+    }
+    if let Some(v) = meta.extra.get(DEFAULT_LIGHT)
+        && v != "studio"
+        && v != "none"
+    {
+        return Err(invalid(DEFAULT_LIGHT, v));
     }
     if !a.given("sun_angle")
         && let Some(v) = meta.extra.get(SUN_ANGLE)

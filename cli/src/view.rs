@@ -120,6 +120,7 @@ impl ViewHost for CliHost<'_> {
             camera: self.job.camera.clone(),
             scene_name: self.job.scene_name.clone(),
             scene_hash: scene.content_hash(),
+            default_light: self.job.default_light,
         };
         apply_settings(&mut job, &r)?;
         if let Some(path) = &r.path {

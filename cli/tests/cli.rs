@@ -1041,8 +1041,8 @@ fn a_scene_without_lights_is_lit_by_the_studio_unless_env_none() {
         (stderr(&o), mean_radiance(&dir.join(format!("{name}.exr"))))
     };
     let (err, lit) = run("studio", &[]);
-    let note = "note: DamagedHelmet.glb has no light of its own: lit by the built-in studio environment \
-                (--env FILE to choose another, --env none for none)";
+    let note = "note: DamagedHelmet.glb: lit by the built-in studio environment: it has no light of its own \
+                (--env none for none, --env FILE for another map)";
     let notes: Vec<&str> = err.lines().filter(|l| l.starts_with("note:")).collect();
     assert_eq!(notes, [note], "one line, even with --quiet: {err}");
     let (err, dark) = run("none", &["--env", "none"]);
@@ -1059,7 +1059,96 @@ fn a_scene_without_lights_is_lit_by_the_studio_unless_env_none() {
     );
     // `furnace info` says so.
     let o = furnace(&["info", &helmet]);
-    assert!(String::from_utf8_lossy(&o.stdout).contains("default light   none of its own"), "{o:?}");
+    assert!(
+        String::from_utf8_lossy(&o.stdout).contains(
+            "default light   studio: `furnace render` adds the built-in studio environment: it has no"
+        ),
+        "{o:?}"
+    );
+}
+
+/// One triangle (normal +z, at z = 0) lit by a point light of 0.2 W/sr in front of it: lights
+/// in open space, dim beside the studio. Written to `dir`; its path.
+fn lit_triangle(dir: &Path) -> String {
+    let file = dir.join("lit.gltf");
+    let gltf = r#"{"asset":{"version":"2.0"},"extensionsUsed":["KHR_lights_punctual"],
+"extensions":{"KHR_lights_punctual":{"lights":[{"type":"point","intensity":0.2}]}},
+"scene":0,"scenes":[{"nodes":[0,1]}],"nodes":[{"mesh":0},
+{"translation":[0.3,0.3,0.5],"extensions":{"KHR_lights_punctual":{"light":0}}}],
+"meshes":[{"primitives":[{"attributes":{"POSITION":0}}]}],
+"buffers":[{"byteLength":36,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA"}],
+"bufferViews":[{"buffer":0,"byteLength":36}],
+"accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}]}"#;
+    std::fs::write(&file, gltf).unwrap();
+    file.display().to_string()
+}
+
+/// The default light's rule: a scene whose lights face open space (a lit triangle: every ray
+/// from it leaves the scene) gets the studio as well, saying why and how to turn it off, and
+/// records the decision; the Cornell box, a room around its panel, keeps its light alone and
+/// says nothing; `--env none` overrides; `furnace info` tells both in advance.
+#[test]
+fn the_default_light_adds_the_studio_to_lights_in_open_space_only() {
+    let dir = temp_dir("default_light_rule");
+    let lit = lit_triangle(&dir);
+    let cetra = data("CornellBox-cetra/cornell_box.gltf");
+    let run = |name: &str, args: &[&str]| {
+        let out = dir.join(name);
+        let mut all = vec!["render", "--quiet", "--backend", "cpu", "--width", "16", "--height", "16"];
+        all.extend_from_slice(&["--spp", "2", "--out", out.to_str().unwrap()]);
+        all.extend_from_slice(args);
+        let o = furnace(&all);
+        assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+        let exr = dir.join(format!("{name}.exr"));
+        let record = furnace_post::read_exr(&exr).unwrap().3.extra.get("furnace.default_light").cloned();
+        (stderr(&o), record, mean_radiance(&exr))
+    };
+    let notes =
+        |err: &str| err.lines().filter(|l| l.starts_with("note:")).map(str::to_string).collect::<Vec<_>>();
+    let (err, record, with_studio) = run("open", &[&lit]);
+    assert_eq!(
+        notes(&err),
+        ["note: lit.gltf: lit by the built-in studio environment: its lights face open space (1.00 of the \
+          rays from what its camera sees leave the scene, ≥ 0.5) (--env none for its own lights alone, \
+          --env FILE for another map)"],
+        "{err}"
+    );
+    assert_eq!(record.as_deref(), Some("studio"));
+    let (err, record, alone) = run("alone", &[&lit, "--env", "none"]);
+    assert!(notes(&err).is_empty() && record.is_none(), "--env none decides: {err}");
+    // The studio lights the triangle some 15 times more than its dim lamp and fills the
+    // background: a factor 2 is far below what it adds, far above the noise of 2 spp.
+    assert!(with_studio > 2.0 * alone, "with the studio {with_studio}, alone {alone}");
+    let (err, record, _) = run("cetra", &[&cetra]);
+    assert!(notes(&err).is_empty(), "{err}");
+    assert_eq!(record.as_deref(), Some("none"));
+    let info = |path: &str| String::from_utf8_lossy(&furnace(&["info", path]).stdout).into_owned();
+    assert!(info(&lit).contains("default light   studio: `furnace render` adds the built-in studio"));
+    let text = info(&cetra);
+    assert!(text.contains("default light   none: a room around its lights (0.2"), "{text}");
+}
+
+/// A render lit by the rule's studio resumes bit-identically from its record alone. A file from
+/// before the rule records no decision: it resumes as that rule made it (a scene with a light of
+/// its own: no studio), here a file written with `--env none` stripped of its `furnace.env`.
+#[test]
+fn the_default_light_resumes_from_its_record_or_as_before_the_rule() {
+    let dir = temp_dir("default_light_resume");
+    let lit = lit_triangle(&dir);
+    resume_matches_one_render(&dir, "open", &[&lit]);
+    let two = render_ok(&dir, "old2", 16, &[&lit, "--env", "none", "--spp", "2"]);
+    let four = render_ok(&dir, "old4", 16, &[&lit, "--env", "none", "--spp", "4"]);
+    assert!(remove_attribute(&two, "furnace.env").is_some());
+    let o = furnace(&["render", "--quiet", "--resume", two.to_str().unwrap(), "--spp", "4"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("note:"), "no studio: {}", stderr(&o));
+    // The image and scene of an uninterrupted render with its lights alone; the decision is
+    // recorded now (where the other file records `--env none`).
+    let (resumed, alone) = (furnace_post::read_exr(&two).unwrap(), furnace_post::read_exr(&four).unwrap());
+    assert!(resumed.2 == alone.2, "the pixels differ");
+    let record = |m: &furnace_post::Metadata, k: &str| m.extra.get(k).cloned();
+    assert_eq!(record(&resumed.3, "furnace.scene_hash"), record(&alone.3, "furnace.scene_hash"));
+    assert_eq!(record(&resumed.3, "furnace.default_light").as_deref(), Some("none"));
 }
 
 #[test]
@@ -1381,11 +1470,9 @@ fn denoise_writes_a_denoised_image_closer_to_the_converged_one() {
 #[path = "split_cases/merge.rs"]
 mod split;
 
-/// `--variant` loads a KHR_materials_variants variant and `furnace info` lists the file's
-/// variants, the loaded one marked; a name the file lacks is one error line listing them.
-#[test]
-fn info_lists_material_variants() {
-    let dir = temp_dir("variants");
+/// One triangle of material 0 (red), material 1 (green) in variant "Night" (variants "Day",
+/// "Night"). Written to `dir`; its path.
+fn variants_file(dir: &Path) -> String {
     let file = dir.join("variants.gltf");
     let material = |c: &str| format!(r#"{{"pbrMetallicRoughness":{{"baseColorFactor":[{c},1]}}}}"#);
     let gltf = format!(
@@ -1402,7 +1489,15 @@ fn info_lists_material_variants() {
         material("0,1,0")
     );
     std::fs::write(&file, gltf).unwrap();
-    let path = file.display().to_string();
+    file.display().to_string()
+}
+
+/// `--variant` loads a KHR_materials_variants variant and `furnace info` lists the file's
+/// variants, the loaded one marked; a name the file lacks is one error line listing them.
+#[test]
+fn info_lists_material_variants() {
+    let dir = temp_dir("variants");
+    let path = variants_file(&dir);
     let o = furnace(&["info", &path]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
@@ -1477,5 +1572,36 @@ fn animation_and_time_flags() {
     assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
     assert!(stderr(&o).contains("scene content hash"), "{}", stderr(&o));
     let o = render(&[path, "--time", "1", "--resume", exr.to_str().unwrap(), "--spp", "4"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+}
+
+/// `--variant` is recorded (`furnace.variant`): a render resumes with its variant without
+/// being given it, bit-identically; another variant is refused, naming the one it was rendered
+/// with; a file without the record (from before it) says to give the same `--variant`.
+#[test]
+fn the_variant_is_recorded_and_resumed() {
+    let dir = temp_dir("variant_resume");
+    let path = variants_file(&dir);
+    resume_matches_one_render(&dir, "night", &[&path, "--variant", "Night"]);
+    let two = dir.join("night_2.exr");
+    let (_, _, _, meta) = furnace_post::read_exr(&two).unwrap();
+    assert_eq!(meta.extra.get("furnace.variant").map(String::as_str), Some("Night"));
+    let again = dir.join("again");
+    let resume = |args: &[&str]| {
+        let mut all = vec!["render", "--quiet", "--resume", two.to_str().unwrap(), "--spp", "4"];
+        all.extend_from_slice(args);
+        all.extend_from_slice(&["--out", again.to_str().unwrap()]);
+        furnace(&all)
+    };
+    let o = resume(&["--variant", "Day"]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(err.contains("it was rendered with --variant 'Night', not --variant 'Day'"), "{err}");
+    assert_eq!(err.trim_end().lines().count(), 1, "{err}");
+    assert!(remove_attribute(&two, "furnace.variant").is_some());
+    let o = resume(&[]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(stderr(&o).contains("if it was rendered with one, give the same --variant"), "{}", stderr(&o));
+    let o = resume(&["--variant", "Night"]);
     assert!(o.status.success(), "{}", stderr(&o));
 }

@@ -103,19 +103,198 @@ fn specular_glossiness_converts_to_metallic_roughness() {
     assert!(!unsupported, "{:?}", scene.warnings);
 }
 
+/// A `width × height` RGBA PNG of `texels` (row-major), base64.
+fn png(width: u32, height: u32, texels: &[[u8; 4]]) -> String {
+    let image =
+        image::RgbaImage::from_fn(width, height, |x, y| image::Rgba(texels[(y * width + x) as usize]));
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    image.write_to(&mut bytes, image::ImageFormat::Png).unwrap();
+    base64::encode(bytes.into_inner())
+}
+
+/// A file of one triangle (with `TEXCOORD_0` and `TEXCOORD_1`, so that any set may be
+/// sampled) of material 0, with `materials`, `images` (base64 PNGs) and `textures` (JSON).
+fn textured_gltf(materials: &[String], images: &[String], textures: &str, samplers: &str) -> Vec<u8> {
+    // Positions, then two UV sets, of 3 vertices.
+    let floats: [f32; 21] =
+        [0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 0., 1., 0., 0., 1., 0., 0., 1., 0., 0., 1.];
+    let bin: Vec<u8> = floats.iter().flat_map(|f| f.to_le_bytes()).collect();
+    let images: Vec<String> =
+        images.iter().map(|i| format!(r#"{{"uri":"data:image/png;base64,{i}"}}"#)).collect();
+    format!(
+        r#"{{"asset":{{"version":"2.0"}},
+"extensionsUsed":["KHR_materials_pbrSpecularGlossiness","KHR_texture_transform"],
+"scene":0,"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0,"TEXCOORD_0":1,"TEXCOORD_1":2}},"material":0}}]}}],
+"materials":[{}],"textures":{textures},"samplers":{samplers},"images":[{}],
+"buffers":[{{"byteLength":84,"uri":"data:application/octet-stream;base64,{}"}}],
+"bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":24}},
+{{"buffer":0,"byteOffset":60,"byteLength":24}}],
+"accessors":[{{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+{{"bufferView":1,"componentType":5126,"count":3,"type":"VEC2"}},
+{{"bufferView":2,"componentType":5126,"count":3,"type":"VEC2"}}]}}"#,
+        materials.join(","),
+        images.join(","),
+        base64::encode(&bin)
+    )
+    .into_bytes()
+}
+
+/// Diffuse and specular-glossiness texels (4 × 2, sRGB RGB, linear alpha) from dielectric
+/// (specular below 0.04) to metal, and rough to glossy.
+const DIFFUSE: [[u8; 4]; 8] = [
+    [200, 30, 30, 255],
+    [0, 0, 0, 255],
+    [128, 128, 128, 128],
+    [255, 255, 255, 255],
+    [10, 200, 90, 255],
+    [90, 60, 30, 0],
+    [255, 0, 255, 255],
+    [40, 40, 40, 255],
+];
+const SPEC_GLOSS: [[u8; 4]; 8] = [
+    [20, 20, 20, 255],
+    [250, 200, 120, 230],
+    [59, 59, 59, 128],
+    [128, 128, 128, 0],
+    [255, 255, 255, 255],
+    [180, 180, 180, 60],
+    [0, 0, 0, 200],
+    [70, 90, 110, 10],
+];
+
+/// The factors the material has when texel `i`'s values are its factors (no textures):
+/// `diffuse × texel`, `specular × texel RGB`, `glossiness × texel alpha`.
+fn texel_as_factors(i: usize, diffuse: [f32; 4], specular: [f32; 3], glossiness: f32) -> String {
+    let lin = |v: u8| furnace_post::srgb_to_linear(f32::from(v) / 255.0);
+    let (d, s) = (DIFFUSE[i], SPEC_GLOSS[i]);
+    spec_gloss(
+        [
+            diffuse[0] * lin(d[0]),
+            diffuse[1] * lin(d[1]),
+            diffuse[2] * lin(d[2]),
+            diffuse[3] * f32::from(d[3]) / 255.0,
+        ],
+        [specular[0] * lin(s[0]), specular[1] * lin(s[1]), specular[2] * lin(s[2])],
+        glossiness * f32::from(s[3]) / 255.0,
+        "",
+    )
+}
+
+/// The specular-glossiness texture is baked per texel, as the factors are converted: each
+/// texel of the new base colour and metallic-roughness images is what the factor conversion
+/// gives for that texel's values, and the new textures keep the source's sampler, UV set and
+/// transform.
 #[test]
-fn specular_glossiness_textures() {
-    let textures = r#","diffuseTexture":{"index":0},"specularGlossinessTexture":{"index":0}"#;
-    let materials = [spec_gloss([1.0, 1.0, 1.0, 1.0], [0.04; 3], 0.5, textures)];
-    let used = r#""KHR_materials_pbrSpecularGlossiness""#;
-    let scene = Scene::from_slice(&gltf(&materials, &[r#""material":0"#], "", used), "sgtex.gltf").unwrap();
+fn specular_glossiness_textures_are_baked_per_texel() {
+    let (diffuse, specular, glossiness) = ([0.9, 0.8, 1.0, 1.0], [1.0, 0.9, 0.8], 0.7);
+    let transform =
+        r#""extensions":{"KHR_texture_transform":{"offset":[0.25,0],"scale":[2,2],"texCoord":1}}"#;
+    let textures = format!(
+        r#","diffuseTexture":{{"index":0,{transform}}},"specularGlossinessTexture":{{"index":1,{transform}}}"#
+    );
+    let material = spec_gloss(diffuse, specular, glossiness, &textures);
+    let bytes = textured_gltf(
+        &[material],
+        &[png(4, 2, &DIFFUSE), png(4, 2, &SPEC_GLOSS)],
+        r#"[{"source":0},{"source":1,"sampler":0}]"#,
+        r#"[{"wrapS":33071,"wrapT":33648}]"#,
+    );
+    let scene = Scene::from_slice(&bytes, "sgtex.gltf").unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
     let m = &scene.materials[0];
-    let base = m.base_color_texture.as_ref().expect("diffuseTexture becomes the base colour texture");
-    assert_eq!((base.texture, base.color_space), (0, furnace_scene::ColorSpace::Srgb));
+    assert_eq!((m.base_color_factor, m.metallic_factor, m.roughness_factor), (Vec4::ONE, 1.0, 1.0));
+    let base = m.base_color_texture.expect("a baked base colour texture");
+    let mr = m.metallic_roughness_texture.expect("a baked metallic-roughness texture");
+    for (r, space) in [(base, furnace_scene::ColorSpace::Srgb), (mr, furnace_scene::ColorSpace::Linear)] {
+        assert_eq!(r.color_space, space);
+        // The source's UV set and transform; its sampler's wrap modes.
+        assert_eq!(r.tex_coord, 1);
+        let t = r.transform.expect("the transform carries over");
+        assert_eq!((t.offset.x, t.scale.x), (0.25, 2.0));
+        let tex = scene.textures[r.texture as usize];
+        assert_eq!(
+            (tex.wrap_s, tex.wrap_t),
+            (furnace_scene::WrapMode::ClampToEdge, furnace_scene::WrapMode::MirroredRepeat)
+        );
+        assert_eq!((scene.images[tex.image as usize].width, scene.images[tex.image as usize].height), (4, 2));
+    }
+    // The sources are sampled by no material any more: placeholders.
+    assert!(scene.images[..2].iter().all(|i| i.width == 1 && i.height == 1));
+    // Each texel against the factor conversion of its values.
+    let materials: Vec<String> = (0..8).map(|i| texel_as_factors(i, diffuse, specular, glossiness)).collect();
+    let factors =
+        Scene::from_slice(&gltf(&materials, &[""], "", r#""KHR_materials_pbrSpecularGlossiness""#), "f.gltf")
+            .unwrap();
+    let texels = |r: furnace_scene::TextureRef| {
+        &scene.images[scene.textures[r.texture as usize].image as usize].texels
+    };
+    let unorm = |v: f32| (v.clamp(0.0, 1.0) * 255.0).round() as i32;
+    for i in 0..8 {
+        let f = &factors.materials[i];
+        let srgb = |v: f32| unorm(furnace_post::linear_to_srgb(v));
+        let c = f.base_color_factor;
+        let want_base = [srgb(c.x), srgb(c.y), srgb(c.z), unorm(c.w)];
+        let want_mr = [unorm(f.roughness_factor), unorm(f.metallic_factor)];
+        let (b, m) = (texels(base)[i], texels(mr)[i]);
+        let got_base = b.map(i32::from);
+        let got_mr = [i32::from(m[1]), i32::from(m[2])];
+        // ±1 in the 8-bit code: the factor file's values are the texels' decoded and printed
+        // again, so the two conversions may differ by an f32 rounding, which can move a value
+        // across a quantisation boundary; a wrong conversion misses by far more.
+        let close = |a: &[i32], b: &[i32]| a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1);
+        assert!(
+            close(&got_base, &want_base),
+            "texel {i}: base colour {got_base:?}, factors give {want_base:?}"
+        );
+        assert!(
+            close(&got_mr, &want_mr),
+            "texel {i}: roughness, metallic {got_mr:?}, factors give {want_mr:?}"
+        );
+    }
+    // The texels span dielectric to metal: the test sees both sides of the conversion.
+    let metallic: Vec<u8> = texels(mr).iter().map(|t| t[2]).collect();
+    assert!(metallic.contains(&0) && metallic.iter().any(|&m| m > 200), "{metallic:?}");
+}
+
+/// A new image only when the material needs one: a dielectric's diffuse texture stays the base
+/// colour texture (exact: its base colour is the diffuse colour times a constant); a partly
+/// metallic one's is baked. Textures of different UV sets cannot be baked texel by texel: the
+/// diffuse texture stays, the metallic-roughness is baked with its mean colour, and a warning
+/// says so.
+#[test]
+fn specular_glossiness_bakes_only_what_needs_it() {
+    let load = |material: String, textures: &str| {
+        let bytes =
+            textured_gltf(&[material], &[png(4, 2, &DIFFUSE), png(4, 2, &SPEC_GLOSS)], textures, "[]");
+        Scene::from_slice(&bytes, "sg.gltf").unwrap()
+    };
+    let both = r#"[{"source":0},{"source":1}]"#;
+    let diffuse_only = r#","diffuseTexture":{"index":0}"#;
+    let dielectric = load(spec_gloss([1.0; 4], [0.04; 3], 0.5, diffuse_only), both);
+    let m = &dielectric.materials[0];
+    assert_eq!(dielectric.textures.len(), 2, "no new texture for a dielectric");
+    assert_eq!(m.base_color_texture.map(|t| t.texture), Some(0));
     assert!(m.metallic_roughness_texture.is_none());
-    let path = "materials[0].extensions.KHR_materials_pbrSpecularGlossiness.specularGlossinessTexture";
+    assert!((m.metallic_factor, m.roughness_factor) == (0.0, 0.5));
+
+    let metal = load(spec_gloss([1.0; 4], [0.5; 3], 0.5, diffuse_only), both);
+    let m = &metal.materials[0];
+    assert_eq!(metal.textures.len(), 4, "base colour and metallic-roughness baked");
+    assert_eq!(
+        (m.base_color_texture.unwrap().texture, m.metallic_roughness_texture.unwrap().texture),
+        (3, 2)
+    );
+
+    let apart = r#","diffuseTexture":{"index":0},"specularGlossinessTexture":{"index":1,"texCoord":1}"#;
+    let scene = load(spec_gloss([1.0; 4], [1.0; 3], 1.0, apart), both);
+    let m = &scene.materials[0];
+    assert_eq!(m.base_color_texture.map(|t| (t.texture, t.tex_coord)), Some((0, 0)), "diffuse kept");
+    let mr = m.metallic_roughness_texture.expect("metallic-roughness baked");
+    assert_eq!((mr.texture, mr.tex_coord), (2, 1));
+    let path = "materials[0].extensions.KHR_materials_pbrSpecularGlossiness";
     assert!(
-        scene.warnings.iter().any(|w| w.path == path && w.message.contains("factors alone")),
+        scene.warnings.iter().any(|w| w.path == path && w.message.contains("different UV sets")),
         "{:?}",
         scene.warnings
     );

@@ -2,6 +2,7 @@
 //! metallic-roughness factors and the supported extensions, a warning for each ignored feature.
 
 use super::context::Ctx;
+use super::spec_gloss::Bake;
 use crate::material::{AlphaMode, Material};
 use crate::texture::{ColorSpace, Texture, TextureRef, TextureTransform, WrapMode};
 use glam::{Vec2, Vec3, Vec4};
@@ -32,11 +33,21 @@ pub(super) fn read_textures(ctx: &mut Ctx<'_>, doc: &gltf::Document) -> Vec<Text
 }
 
 /// The file's materials, then glTF's default material (the last one: primitives without a
-/// material use it).
-pub(super) fn read_materials(ctx: &mut Ctx<'_>, doc: &gltf::Document) -> Vec<Material> {
-    let mut materials: Vec<Material> = doc.materials().map(|m| read_material(ctx, &m)).collect();
+/// material use it); and the bakes of the specular-glossiness materials that need one, by
+/// material index (run [`super::spec_gloss::bake_all`] once the images are loaded).
+pub(super) fn read_materials(ctx: &mut Ctx<'_>, doc: &gltf::Document) -> (Vec<Material>, Vec<(usize, Bake)>) {
+    let mut bakes = Vec::new();
+    let mut materials: Vec<Material> = doc
+        .materials()
+        .enumerate()
+        .map(|(i, m)| {
+            let (material, bake) = read_material(ctx, &m);
+            bakes.extend(bake.map(|b| (i, b)));
+            material
+        })
+        .collect();
     materials.push(Material::default());
-    materials
+    (materials, bakes)
 }
 
 fn texture_ref(
@@ -67,7 +78,7 @@ fn texture_ref(
     Some(TextureRef { texture: info.texture().index() as u32, tex_coord, color_space: space, transform })
 }
 
-fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
+fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> (Material, Option<Bake>) {
     let i = m.index().unwrap_or(0);
     let p = format!("materials[{i}]");
     let pbr = match m.pbr_specular_glossiness() {
@@ -104,7 +115,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
             "rough thin-walled transmission is not supported: the sheet is rendered smooth",
         );
     }
-    Material {
+    let material = Material {
         name: m.name().map(str::to_string),
         base_color_factor: pbr.base_color_factor,
         base_color_texture: pbr.base_color_texture,
@@ -127,7 +138,8 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> Material {
         volume: transmissive && transmission.volume,
         absorption: transmission.absorption,
         unlit,
-    }
+    };
+    (material, pbr.bake)
 }
 
 /// The metallic-roughness part of a material, read from `pbrMetallicRoughness` or converted
@@ -138,6 +150,8 @@ struct MetalRough {
     metallic_factor: f32,
     roughness_factor: f32,
     metallic_roughness_texture: Option<TextureRef>,
+    /// The bake a specular-glossiness material's textures need ([`super::spec_gloss`]).
+    bake: Option<Bake>,
 }
 
 /// A factor clamped to [0, 1]; NaN reads as 1.
@@ -162,41 +176,46 @@ fn metal_rough(ctx: &mut Ctx<'_>, pbr: &gltf::material::PbrMetallicRoughness<'_>
             ColorSpace::Linear,
             format!("{p}.pbrMetallicRoughness.metallicRoughnessTexture"),
         ),
+        bake: None,
     }
 }
 
-/// KHR_materials_pbrSpecularGlossiness converted to metallic-roughness from its factors
-/// ([`spec_gloss_to_metal_rough`]); `diffuseTexture` becomes the base colour texture. The
-/// specular-glossiness texture is not converted (a warning says so): its texels would each
-/// need their own metallic and base colour.
+/// KHR_materials_pbrSpecularGlossiness converted to metallic-roughness
+/// ([`spec_gloss_to_metal_rough`]): from its factors, `diffuseTexture` becoming the base colour
+/// texture, when that is exact; else (a `specularGlossinessTexture`, or a diffuse texture on a
+/// partly metallic material) the textures are baked after the images load
+/// ([`super::spec_gloss`]), and until then the base colour slot holds `diffuseTexture` and the
+/// metallic-roughness slot `specularGlossinessTexture`.
 fn spec_gloss(ctx: &mut Ctx<'_>, sg: &gltf::material::PbrSpecularGlossiness<'_>, p: &str) -> MetalRough {
     let ext = format!("{p}.extensions.KHR_materials_pbrSpecularGlossiness");
     let finite01 = |x: f32| if x.is_finite() { x.clamp(0.0, 1.0) } else { 1.0 };
-    let diffuse = Vec4::from(sg.diffuse_factor().map(finite01));
-    let specular = Vec3::from(sg.specular_factor().map(finite01));
+    let factors = Bake {
+        diffuse: Vec4::from(sg.diffuse_factor().map(finite01)),
+        specular: Vec3::from(sg.specular_factor().map(finite01)),
+        glossiness: finite01(sg.glossiness_factor()),
+    };
     let (base_color_factor, metallic_factor, roughness_factor) =
-        spec_gloss_to_metal_rough(diffuse, specular, finite01(sg.glossiness_factor()));
-    if sg.specular_glossiness_texture().is_some() {
-        ctx.warn(
-            format!("{ext}.specularGlossinessTexture"),
-            "not converted per texel: metallic and roughness come from the factors alone",
-        );
-    }
+        spec_gloss_to_metal_rough(factors.diffuse, factors.specular, factors.glossiness);
     let base_color_texture =
         texture_ref(ctx, sg.diffuse_texture(), ColorSpace::Srgb, format!("{ext}.diffuseTexture"));
-    if base_color_texture.is_some() && metallic_factor > 0.0 {
-        ctx.warn(
-            format!("{ext}.diffuseTexture"),
-            "multiplies the base colour converted from the factors: approximate where the material is \
-             partly metallic",
-        );
-    }
+    // The specular RGB is sRGB-encoded like a colour (its glossiness in alpha is linear, as
+    // every alpha is).
+    let specular_glossiness_texture = texture_ref(
+        ctx,
+        sg.specular_glossiness_texture(),
+        ColorSpace::Srgb,
+        format!("{ext}.specularGlossinessTexture"),
+    );
+    let bake = factors
+        .needed(base_color_texture.is_some(), specular_glossiness_texture.is_some())
+        .then_some(factors);
     MetalRough {
         base_color_factor,
         base_color_texture,
         metallic_factor,
         roughness_factor,
-        metallic_roughness_texture: None,
+        metallic_roughness_texture: specular_glossiness_texture.filter(|_| bake.is_some()),
+        bake,
     }
 }
 

@@ -3,10 +3,12 @@
 //!
 //! The steps, in order: [`document`] (parse and check), [`resources`] (buffers, with
 //! [`meshopt`]'s compressed views decoded into them, then the images the materials use),
-//! [`material`] (textures and materials), [`variants`] (the material variant chosen),
-//! [`animation`] (the animation chosen, sampled into a pose), [`nodes`] (the node hierarchy at
-//! that pose: cameras, lights, and each mesh primitive through [`primitive`], posed by its morph
-//! weights and [`skin`], once per instance of [`instancing`]); then the geometry's checks here. [`context::Ctx`] carries the file and the warnings through them.
+//! [`material`] (textures and materials; [`spec_gloss`] bakes specular-glossiness textures once
+//! the images are loaded), [`variants`] (the material variant chosen), [`animation`] (the
+//! animation chosen, sampled into a pose), [`nodes`] (the node hierarchy at that pose: cameras,
+//! lights, and each mesh primitive through [`primitive`], posed by its morph weights and
+//! [`skin`], once per instance of [`instancing`]); then the geometry's checks here.
+//! [`context::Ctx`] carries the file and the warnings through them.
 
 mod animation;
 mod context;
@@ -19,6 +21,7 @@ mod nodes;
 mod primitive;
 mod resources;
 mod skin;
+mod spec_gloss;
 mod texture_source;
 mod variants;
 
@@ -56,8 +59,8 @@ pub(crate) fn load(
         Some((index, time)) => animation::sample(&mut ctx, &doc, &buffers, index, time)?,
         None => animation::Pose::rest(doc.nodes().len()),
     };
-    let textures = material::read_textures(&mut ctx, &doc);
-    let mut materials = material::read_materials(&mut ctx, &doc);
+    let mut textures = material::read_textures(&mut ctx, &doc);
+    let (mut materials, bakes) = material::read_materials(&mut ctx, &doc);
     let default_material = (materials.len() - 1) as u32;
     // The UV sets stored: up to the highest any texture samples.
     let uv_sets = materials
@@ -69,7 +72,8 @@ pub(crate) fn load(
     let needs_tangent = materials.iter().any(|m| m.normal_texture.is_some());
     let needs_color =
         doc.meshes().flat_map(|m| m.primitives()).any(|p| p.get(&gltf::Semantic::Colors(0)).is_some());
-    let images = resources::load_images(&mut ctx, &doc, &buffers, &mut materials, &textures)?;
+    let mut images = resources::load_images(&mut ctx, &doc, &buffers, &mut materials, &textures)?;
+    spec_gloss::bake_all(&mut ctx, &bakes, &mut materials, &mut textures, &mut images);
 
     let scene = nodes::scene_to_render(&ctx, &doc)?;
     let sky = nodes::read_sky(&mut ctx, &scene);
