@@ -10,7 +10,7 @@ MODELS_DIR is the checkout's Models/ folder; OUT_DIR receives table.md, results.
 thumbnails (thumbs/NAME.jpg: render left, screenshot right; needs ImageMagick's `convert`).
 FURNACE defaults to target/release/furnace. WIDTH (256), HEIGHT (192), SPP (32) set the renders.
 """
-import json, os, subprocess, sys, time
+import json, os, re, subprocess, sys, time
 
 models, out = sys.argv[1], sys.argv[2]
 furnace = sys.argv[3] if len(sys.argv) > 3 else "target/release/furnace"
@@ -76,7 +76,8 @@ for name in sorted(os.listdir(models)):
                 shot = os.path.join(shots, s)
                 break
     if plain:
-        thumb = os.path.join(out, "thumbs", name + ".jpg")
+        # ASCII file names (a model is called Unicode❤♻Test).
+        thumb = os.path.join(out, "thumbs", re.sub(r"[^A-Za-z0-9_-]", "_", name) + ".jpg")
         args = ["convert", plain + ".png", "-resize", f"{w}x{h}"]
         if shot:
             args += ["(", shot, "-resize", f"{w}x{h}", ")", "+append"]
@@ -100,6 +101,6 @@ for row in results:
         mse = e.get("rel_mse_vs_plain")
         cells.append(f"{v} ✓ ({e['warnings']})" + ("" if mse is None else f" [{mse:.1e}]"))
         kinds.update(e.get("kinds", []))
-    thumb = f"![{row['model']}](gltf-samples/{row['model'].replace(' ', '%20')}.jpg)" if "thumb" in row else ""
+    thumb = f"![{row['model']}](gltf-samples/{os.path.basename(row['thumb'])})" if "thumb" in row else ""
     lines.append(f"| {row['model']} | {'<br>'.join(cells)} | {'<br>'.join(sorted(kinds))} | {thumb} |")
 open(os.path.join(out, "table.md"), "w").write("\n".join(lines) + "\n")
