@@ -59,13 +59,9 @@ pub enum Command {
     Chart(ChartArgs),
 }
 
-/// `furnace render`.
-#[derive(Debug, Clone, Args)]
-pub struct RenderArgs {
-    /// The .gltf or .glb scene, or interior:N (the procedural sunlit interior of about N
-    /// triangles, e.g. interior:1e7, for stress tests); without it, the built-in reference
-    /// Cornell box (with --resume: the scene the file was rendered from).
-    pub scene: Option<PathBuf>,
+/// How a scene file is loaded (`render`, `view`, `info`, `bench`).
+#[derive(Debug, Clone, Default, Args)]
+pub struct LoadArgs {
     /// A missing, unreadable or undecodable texture image is an error [default: a warning, and
     /// the material renders with its factors alone].
     #[arg(long)]
@@ -83,6 +79,29 @@ pub struct RenderArgs {
     /// keyframes) [default: 0 with --animation].
     #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = parse_time)]
     pub time: Option<f32>,
+}
+
+impl LoadArgs {
+    /// The scene crate's load options these flags make.
+    pub fn options(&self) -> furnace_scene::LoadOptions {
+        furnace_scene::LoadOptions {
+            strict: self.strict,
+            variant: self.variant.clone(),
+            animation: self.animation.clone(),
+            time: self.time,
+        }
+    }
+}
+
+/// `furnace render`.
+#[derive(Debug, Clone, Args)]
+pub struct RenderArgs {
+    /// The .gltf or .glb scene, or interior:N (the procedural sunlit interior of about N
+    /// triangles, e.g. interior:1e7, for stress tests); without it, the built-in reference
+    /// Cornell box (with --resume: the scene the file was rendered from).
+    pub scene: Option<PathBuf>,
+    #[command(flatten)]
+    pub load: LoadArgs,
     /// Samples per pixel (the total, also when resuming; also N of the fixed-N samplers
     /// hammersley and cmj).
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..))]
@@ -335,23 +354,8 @@ pub struct ViewArgs {
 pub struct InfoArgs {
     /// The .gltf or .glb scene.
     pub scene: PathBuf,
-    /// A missing, unreadable or undecodable texture image is an error [default: a warning, and
-    /// the material renders with its factors alone].
-    #[arg(long)]
-    pub strict: bool,
-    /// The KHR_materials_variants variant to load, by name or index (`furnace info` lists a
-    /// file's variants) [default: each primitive's own material].
-    #[arg(long, value_name = "NAME")]
-    pub variant: Option<String>,
-    /// The animation to pose the scene by, by name or index (`furnace info` lists a file's
-    /// animations), sampled at --time [default: with --time, animation 0; else none: the nodes'
-    /// own transforms and morph weights].
-    #[arg(long, value_name = "NAME")]
-    pub animation: Option<String>,
-    /// The time, in seconds, at which the animation is sampled (each channel clamped to its
-    /// keyframes) [default: 0 with --animation].
-    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = parse_time)]
-    pub time: Option<f32>,
+    #[command(flatten)]
+    pub load: LoadArgs,
     // The render settings' flags, as `furnace render` takes them: the settings they make are
     // printed after the scene.
     #[command(flatten)]
@@ -428,23 +432,8 @@ pub struct BenchArgs {
     /// interior of about N triangles, e.g. interior:1e6), or a .gltf/.glb path.
     #[arg(long, default_value = "cbox", value_parser = parse_scene)]
     pub scene: SceneArg,
-    /// A missing, unreadable or undecodable texture image is an error [default: a warning, and
-    /// the material renders with its factors alone].
-    #[arg(long)]
-    pub strict: bool,
-    /// The KHR_materials_variants variant to load, by name or index (`furnace info` lists a
-    /// file's variants) [default: each primitive's own material].
-    #[arg(long, value_name = "NAME")]
-    pub variant: Option<String>,
-    /// The animation to pose the scene by, by name or index (`furnace info` lists a file's
-    /// animations), sampled at --time [default: with --time, animation 0; else none: the nodes'
-    /// own transforms and morph weights].
-    #[arg(long, value_name = "NAME")]
-    pub animation: Option<String>,
-    /// The time, in seconds, at which the animation is sampled (each channel clamped to its
-    /// keyframes) [default: 0 with --animation].
-    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, value_parser = parse_time)]
-    pub time: Option<f32>,
+    #[command(flatten)]
+    pub load: LoadArgs,
     /// Image width [default: 256 for cbox, else 512 or from --height and the camera].
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=MAX_SIDE as i64))]
     pub width: Option<u32>,

@@ -336,12 +336,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         crate::env::check_sampling(given.env_sampling, given.light_sampling)?;
     }
     let start = Instant::now();
-    let options = furnace_scene::LoadOptions {
-        strict: a.strict,
-        variant: a.variant.clone(),
-        animation: a.animation.clone(),
-        time: a.time,
-    };
+    let options = a.load.options();
     let mut scene = load(&a.scene, &options)?;
     let scene_seconds = start.elapsed().as_secs_f64();
     for w in &scene.warnings {

@@ -13,16 +13,11 @@ pub fn run(a: &InfoArgs) -> Result<(), String> {
     if a.settings.given("env-sampling") {
         crate::env::check_sampling(settings.env_sampling, settings.light_sampling)?;
     }
-    let options = furnace_scene::LoadOptions {
-        strict: a.strict,
-        variant: a.variant.clone(),
-        animation: a.animation.clone(),
-        time: a.time,
-    };
+    let options = a.load.options();
     let scene = Scene::load_with(&a.scene, &options).map_err(|e| e.to_string())?;
     print!("{}", describe(&scene));
     print!("{}", describe_extensions(&scene.extensions));
-    print!("{}", describe_variants(&scene, a.variant.as_deref()));
+    print!("{}", describe_variants(&scene, a.load.variant.as_deref()));
     print!("{}", describe_animations(&scene));
     print!("{}", describe_settings(settings, scene.point_lights().count()));
     Ok(())

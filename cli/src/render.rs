@@ -49,7 +49,7 @@ impl Job {
             .chain(a.sun_angle.map(|d| (resume::SUN_ANGLE, d.to_string())))
             .chain(resume::env_records(&a.environment))
             .chain(self.default_light.map(|d| (resume::DEFAULT_LIGHT, d.to_string())))
-            .chain(a.variant.clone().map(|v| (resume::VARIANT, v)))
+            .chain(a.load.variant.clone().map(|v| (resume::VARIANT, v)))
             .map(|(k, v)| (k.to_string(), v))
             .collect(),
             ..Metadata::default()
@@ -111,22 +111,17 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         )?;
     }
     check_samples(&mut args)?;
-    let mut scene = load_scene(
-        args.scene.as_deref(),
-        &LoadOptions {
-            strict: args.strict,
-            variant: args.variant.clone(),
-            animation: args.animation.clone(),
-            time: args.time,
-        },
-    )
-    .map_err(|e| match (&a.resume, &a.scene) {
-        // The scene came from the file's record: say so, and how to point at it.
-        (Some(file), None) => {
-            format!("{e} (the scene {} was rendered from; give its path after `{command}`)", file.display())
-        }
-        _ => e,
-    })?;
+    let mut scene =
+        load_scene(args.scene.as_deref(), &args.load.options()).map_err(|e| match (&a.resume, &a.scene) {
+            // The scene came from the file's record: say so, and how to point at it.
+            (Some(file), None) => {
+                format!(
+                    "{e} (the scene {} was rendered from; give its path after `{command}`)",
+                    file.display()
+                )
+            }
+            _ => e,
+        })?;
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
@@ -180,7 +175,12 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
             let now = resume::identity(&job.metadata(0, 0.0, 0), width, height);
             resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights, chooses_point_lights)
                 .map_err(|e| {
-                    resume::variant_hint(e, &file.metadata, a.variant.as_deref(), !scene.variants.is_empty())
+                    resume::variant_hint(
+                        e,
+                        &file.metadata,
+                        a.load.variant.as_deref(),
+                        !scene.variants.is_empty(),
+                    )
                 })?;
             let saved = restore(&path, file)?;
             Some(saved)

@@ -303,7 +303,7 @@ pub fn apply_recorded(
     if !a.given("variant")
         && let Some(v) = meta.extra.get(VARIANT)
     {
-        a.variant = Some(v.clone());
+        a.load.variant = Some(v.clone());
     }
     if let Some(v) = meta.extra.get(DEFAULT_LIGHT)
         && v != "studio"

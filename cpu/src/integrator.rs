@@ -47,6 +47,8 @@ pub struct CpuRenderer {
     /// Whether any material is alpha-masked or blended (otherwise rays skip the alpha
     /// callback).
     any_alpha: bool,
+    /// Whether any material is blended (path rays then draw a blend seed).
+    any_blended: bool,
     /// Whether shadow rays can cross some material (a thin-walled sheet, an η = 1 solid, a
     /// blended surface); otherwise they are plain occlusion tests.
     any_crossable: bool,
@@ -124,8 +126,8 @@ impl CpuRenderer {
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         let triangle_materials = (0..g.triangle_count()).map(|t| scene.triangle_material(t) as u32).collect();
         let any_alpha = scene.materials.iter().any(|m| m.alpha_mode != AlphaMode::Opaque);
-        let any_crossable =
-            scene.materials.iter().any(|m| m.passes_shadow_rays() || m.alpha_mode == AlphaMode::Blend);
+        let any_blended = scene.materials.iter().any(|m| m.alpha_mode == AlphaMode::Blend);
+        let any_crossable = any_blended || scene.materials.iter().any(|m| m.passes_shadow_rays());
         let constant_materials = scene
             .materials
             .iter()
@@ -183,6 +185,7 @@ impl CpuRenderer {
             constant_materials,
             normals,
             any_alpha,
+            any_blended,
             any_crossable,
             offset_scale,
         })
@@ -420,7 +423,7 @@ impl CpuRenderer {
 
     fn closest_hit(&self, origin: Vec3, direction: Vec3) -> Option<Hit> {
         if self.any_alpha {
-            let seed = blend_seed(origin, direction);
+            let seed = if self.any_blended { blend_seed(origin, direction) } else { 0 };
             self.bvh.closest_hit_masked(origin, direction, f32::INFINITY, |t, b| self.stops(seed, t, b))
         } else {
             self.bvh.closest_hit(origin, direction, f32::INFINITY)

@@ -16,22 +16,14 @@ use furnace_tests::gltf::{MaterialDesc, Quad, SceneDesc, TopCamera};
 use glam::{DVec3, Vec3};
 use std::f32::consts::PI;
 
-const ALPHA: f32 = 0.3;
-const QUAD_HEIGHT: f32 = 1.0;
-const ALBEDO: f32 = 0.5;
-const QUAD_EMISSION: Vec3 = Vec3::new(1.0, 0.0, 0.0);
-const FLOOR_EMISSION: Vec3 = Vec3::new(0.0, 0.0, 0.25);
-const SUN_IRRADIANCE: Vec3 = Vec3::new(2.0, 2.0, 2.0);
-/// 60 pixels over 2.4 m: 0.04 m each; the quad's edges (±1 m) fall on pixel edges.
-const SIZE: u32 = 60;
-const HALF_VIEW: f32 = 1.2;
-const SPP: u32 = 16;
+// The scene of `alpha_mask.rs`, its quad blended instead of masked: 60 pixels over 2.4 m, 0.04 m
+// each, so the quad's edges (±1 m) fall on pixel edges.
+use super::alpha_mask::{
+    ALBEDO, FLOOR_EMISSION, HALF_VIEW, QUAD_EMISSION, QUAD_HEIGHT, SIZE, SUN_IRRADIANCE, sun_direction,
+};
 
-fn sun_direction() -> Vec3 {
-    // Travelling down, 30° from the vertical, towards +x and a little +z.
-    let theta = 30f32.to_radians();
-    Vec3::new(theta.sin() * 0.8, -theta.cos(), theta.sin() * 0.6).normalize()
-}
+const ALPHA: f32 = 0.3;
+const SPP: u32 = 16;
 
 fn floor(emission: Vec3) -> Quad {
     Quad {

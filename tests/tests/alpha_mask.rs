@@ -30,17 +30,17 @@ const CELLS: u32 = 8;
 const CUTOFF: f32 = 0.7;
 const SOLID_ALPHA: u8 = 204; // 0.8
 const CUT_ALPHA: u8 = 153; // 0.6
-const QUAD_HEIGHT: f32 = 1.0;
-const ALBEDO: f32 = 0.5;
-const FLOOR_EMISSION: Vec3 = Vec3::new(0.0, 0.0, 0.25);
-const QUAD_EMISSION: Vec3 = Vec3::new(1.0, 0.0, 0.0);
-const SUN_IRRADIANCE: Vec3 = Vec3::new(2.0, 2.0, 2.0);
+pub(super) const QUAD_HEIGHT: f32 = 1.0;
+pub(super) const ALBEDO: f32 = 0.5;
+pub(super) const FLOOR_EMISSION: Vec3 = Vec3::new(0.0, 0.0, 0.25);
+pub(super) const QUAD_EMISSION: Vec3 = Vec3::new(1.0, 0.0, 0.0);
+pub(super) const SUN_IRRADIANCE: Vec3 = Vec3::new(2.0, 2.0, 2.0);
 /// 60 pixels over 2.4 m: cell edges (every 0.25 m) do not fall on pixel edges, so some
 /// pixels straddle them.
-const SIZE: u32 = 60;
-const HALF_VIEW: f32 = 1.2;
+pub(super) const SIZE: u32 = 60;
+pub(super) const HALF_VIEW: f32 = 1.2;
 
-fn sun_direction() -> Vec3 {
+pub(super) fn sun_direction() -> Vec3 {
     // Travelling down, 30° from the vertical, towards +x and a little +z.
     let theta = 30f32.to_radians();
     Vec3::new(theta.sin() * 0.8, -theta.cos(), theta.sin() * 0.6).normalize()

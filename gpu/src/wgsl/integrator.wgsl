@@ -436,7 +436,9 @@ fn trace_samples(x: u32, y: u32, pixel: u32, first: u32, count: u32, to_film: bo
         rays_traced += select(0u, 1u, query_t > 0.0);
         // #endif
         // #if BLEND
-        blend_seed = blend_seed_of(query_origin, query_dir);
+        if !shadowing {
+            blend_seed = blend_seed_of(query_origin, query_dir);
+        }
         // #endif
         // The intersection stage: the kernel's one traversal call, for path and shadow rays.
         let hit = trace_query(query_origin, query_dir, query_t, shadowing);
