@@ -303,7 +303,7 @@ fn scatter_transmissive(path: ptr<function, Path>, pixel: u32, index: u32, bsdf:
 fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> bool {
     let material = scene_triangle_material(hit.triangle);
     let at = hit_attributes(material, hit.triangle, hit.u, hit.v);
-    let ms = scene_material_evaluate(material, at);
+    let ms = hit_material(material, at);
     let surface = scene_surface_point(hit.triangle, hit.u, hit.v, at, path.direction);
     // #if AOVS
     if path.event == 0u {

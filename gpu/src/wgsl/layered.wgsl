@@ -12,6 +12,17 @@ fn hit_attributes(material: u32, triangle: u32, b1: f32, b2: f32) -> SceneAttrib
     // #endif
 }
 
+// Material::evaluate at a hit. A kernel without VERTEX_ATTRIBUTES has no texture and no vertex
+// colour to read, so it evaluates the factors alone and composes no texture code (the same
+// values: every lookup would be opaque white).
+fn hit_material(material: u32, at: SceneAttributes) -> MaterialSample {
+    // #if VERTEX_ATTRIBUTES
+    return scene_material_evaluate(material, at);
+    // #else
+    return scene_material_factors(material);
+    // #endif
+}
+
 // The BSDF at a hit and what light samples need of it besides (furnace_brdf::HitBsdf and
 // furnace-cpu's Vertex): the opaque record, or with TRANSMISSION the transmissive mixture.
 struct HitBsdf {
@@ -35,7 +46,11 @@ fn hit_bsdf(ms: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
                       params.bsdf_flags);
     // #if TRANSMISSION
     let tr = scene_transmission[material];
+    // #if VERTEX_ATTRIBUTES
     let transmission = tr.transmission_factor * scene_texture_sample_at(tr.transmission_texture, at).x;
+    // #else
+    let transmission = tr.transmission_factor;
+    // #endif
     let metallic = brdf_clamp(ms.metallic, 0.0, 1.0);
     let g = brdf_clamp(transmission, 0.0, 1.0) * (1.0 - metallic);
     if g > 0.0 {

@@ -254,7 +254,7 @@ fn sample_emitter(pixel: u32, index: u32, event: u32, throughput: vec3<f32>, bsd
         return;
     }
     let material = scene_triangle_material(t);
-    var emission = scene_material_evaluate(material, hit_attributes(material, t, b.x, b.y)).emission;
+    var emission = hit_material(material, hit_attributes(material, t, b.x, b.y)).emission;
     // #if BLEND
     // A blended emitter emits in proportion to its coverage (a path ray sees it that often).
     if (scene_materials[material].flags & SCENE_ALPHA_MODE_BITS) == SCENE_ALPHA_BLEND {

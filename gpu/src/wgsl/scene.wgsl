@@ -378,6 +378,13 @@ fn scene_material_evaluate(material: u32, at: SceneAttributes) -> MaterialSample
         m.specular_factor, m.specular_color_factor);
 }
 
+// Material::evaluate of a material without textures or vertex colours: its factors.
+fn scene_material_factors(material: u32) -> MaterialSample {
+    let m = scene_materials[material];
+    return MaterialSample(m.base_color_factor.xyz, m.base_color_factor.w, m.metallic_factor, m.roughness_factor,
+        m.emissive, m.specular_factor, m.specular_color_factor);
+}
+
 // Renderer::alpha_passes (the traversal's hit_filter): false only where a MASK material's
 // alpha is below its cutoff.
 fn scene_alpha_passes(triangle_id: u32, b1: f32, b2: f32) -> bool {
