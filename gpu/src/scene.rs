@@ -24,7 +24,7 @@
 //! furnace-scene: decoding is bit-identical to the CPU's; only the bilinear weights and the
 //! texture transform differ by float rounding (see `scene.wgsl`).
 //!
-//! A shader that reads the scene composes [`crate::wgsl::SCENE`] and declares the buffers with
+//! A shader that reads the scene composes [`crate::wgsl::SCENE`] (through [`crate::wgsl::select`]) and declares the buffers with
 //! [`bindings`]; the traversal's alpha callback is then one line:
 //!
 //! ```wgsl

@@ -29,7 +29,8 @@ pub const DIELECTRIC: &str = include_str!("wgsl/dielectric.wgsl");
 /// interpolation (octahedral normals, UVs, tangents), bilinear RGBA8 texture lookups with wrap
 /// modes, sRGB decode and KHR_texture_transform, `Material::evaluate`, furnace-cpu's
 /// `surface_point` (normal map, double-sided orientation) and alpha test. Needs the
-/// declarations of [`crate::scene::bindings`].
+/// declarations of [`crate::scene::bindings`]. Compose it through [`select`]: `UV_SETS` and
+/// `VERTEX_COLORS` keep the reads of UV sets beyond UV0 and of vertex colours.
 pub const SCENE: &str = include_str!("wgsl/scene.wgsl");
 
 /// `furnace-scene`'s light BVH (`LightBounds::importance`, `LightBvh::sample` and `pmf`) over

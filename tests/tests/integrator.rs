@@ -310,6 +310,8 @@ fn frame_params_layout_matches_wgsl() {
                 trace_counters: !light_bvh,
                 queued_point_lights: if light_bvh { 3 } else { 0 },
                 vertex_attributes: light_bvh,
+                uv_sets: light_bvh,
+                vertex_colors: light_bvh,
                 one_point_light: !light_bvh,
             },
         ));

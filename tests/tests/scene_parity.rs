@@ -356,7 +356,7 @@ fn hit_kernel() -> String {
     wgsl::compose(&[
         kernel::PREAMBLE,
         &scene::bindings(0, 3),
-        wgsl::SCENE,
+        &all_of_scene_wgsl(),
         r#"
 // Input per query: triangle, b1, b2, direction (6 words). Output: 36 words.
 @compute @workgroup_size(64)
@@ -396,7 +396,7 @@ fn material_kernel() -> String {
     wgsl::compose(&[
         kernel::PREAMBLE,
         &scene::bindings(0, 3),
-        wgsl::SCENE,
+        &all_of_scene_wgsl(),
         r#"
 // Input per query: material, u, v (3 words). Output: 32 words (MaterialSample, 4 raw slots).
 @compute @workgroup_size(64)
@@ -858,7 +858,7 @@ fn srgb_decode_and_octahedral_normals_match() {
     let src = wgsl::compose(&[
         kernel::PREAMBLE,
         &scene::bindings(0, 3),
-        wgsl::SCENE,
+        &all_of_scene_wgsl(),
         r#"
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -909,9 +909,14 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
 
 /// Every struct shared with the WGSL (generated from the Rust), by naga reflection against the
 /// Rust layout.
+/// The scene module with every feature composed (vertex colours and UV sets read).
+fn all_of_scene_wgsl() -> String {
+    wgsl::select(wgsl::SCENE, |_| true)
+}
+
 #[test]
 fn shared_structs_match_the_wgsl() {
-    let src = wgsl::compose(&[&scene::bindings(0, 0), wgsl::SCENE]);
+    let src = wgsl::compose(&[&scene::bindings(0, 0), &all_of_scene_wgsl()]);
     furnace_tests::layout::assert_gpu_struct::<GpuSceneTriangle>(&src);
     furnace_tests::layout::assert_gpu_struct::<GpuVertex>(&src);
     furnace_tests::layout::assert_gpu_struct::<GpuTextureRef>(&src);

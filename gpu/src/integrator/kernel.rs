@@ -202,6 +202,11 @@ pub struct SceneFeatures {
     /// Some material reads vertex attributes: a texture's UV set, or the scene's vertex colours
     /// (`scene_attributes` is read at hits; without, a hit's attributes are a constant).
     pub vertex_attributes: bool,
+    /// Some texture samples a UV set other than UV0 (with `vertex_attributes`): only then does
+    /// a hit interpolate the other sets and a lookup choose among them.
+    pub uv_sets: bool,
+    /// The scene has vertex colours (with `vertex_attributes`): only then are they read.
+    pub vertex_colors: bool,
     /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
     /// triangles per invocation, added to the ray counter at its end). Not a property of the
     /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
@@ -239,6 +244,8 @@ impl SceneFeatures {
             solid_angle_triangles: emitters && settings.triangle_sampling == TriangleSampling::SolidAngle,
             vertex_attributes: scene.materials.iter().any(|m| m.uses_textures())
                 || !scene.geometry.colors.is_empty(),
+            uv_sets: scene.materials.iter().flat_map(|m| m.texture_refs()).any(|t| t.tex_coord > 0),
+            vertex_colors: !scene.geometry.colors.is_empty(),
             trace_counters: false,
         }
     }
@@ -267,7 +274,7 @@ impl SceneFeatures {
     /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
     /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `BLEND`, `UNLIT`, `SHADOW_FILTER` (shadow rays
-    /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`,
+    /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`, `UV_SETS`, `VERTEX_COLORS`,
     /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
@@ -290,6 +297,8 @@ impl SceneFeatures {
             "SOLID_ANGLE_TRIANGLES" => self.emitters && self.solid_angle_triangles,
             "TRACE_COUNTERS" => self.trace_counters,
             "VERTEX_ATTRIBUTES" => self.vertex_attributes,
+            "UV_SETS" => self.vertex_attributes && self.uv_sets,
+            "VERTEX_COLORS" => self.vertex_attributes && self.vertex_colors,
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,
             _ => panic!("no scene feature {name} (an #if of the integrator's WGSL)"),
@@ -340,7 +349,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         wgsl::SAMPLING,
         wgsl::BRDF,
         if features.transmission { wgsl::DIELECTRIC } else { "" },
-        wgsl::SCENE,
+        &wgsl::select(wgsl::SCENE, |name| features.enabled(name)),
         &wgsl::select(wgsl::TRAVERSE, |name| features.enabled(name)),
         &light_bvh,
         &environment,

@@ -51,6 +51,10 @@
 //   var<storage, read> scene_tangents: array<vec2<u32>>;
 //   var<storage, read> scene_materials: array<SceneMaterial>;
 //   var<storage, read> scene_texels: array<u32>;
+//
+// The module is composed through `furnace_gpu::wgsl::select` with two features: `UV_SETS`
+// (some texture samples a UV set other than UV0) and `VERTEX_COLORS` (the scene has COLOR_0);
+// without them, those reads are not composed (`|_| true` composes everything).
 
 // furnace_scene::MaterialSample.
 struct MaterialSample {
@@ -217,6 +221,7 @@ fn scene_hit_attributes(material: u32, triangle: u32, b1: f32, b2: f32) -> Scene
     if sets > 0u {
         a.uv0 = scene_interpolate_uv(t, stride, 0u, b1, b2);
     }
+    // #if UV_SETS
     if sets > 1u {
         a.uv1 = scene_interpolate_uv(t, stride, 1u, b1, b2);
     }
@@ -226,12 +231,15 @@ fn scene_hit_attributes(material: u32, triangle: u32, b1: f32, b2: f32) -> Scene
     if sets > 3u {
         a.uv3 = scene_interpolate_uv(t, stride, 3u, b1, b2);
     }
+    // #endif
+    // #if VERTEX_COLORS
     if (flags & SCENE_MATERIAL_VERTEX_COLOR) != 0u {
         let k = stride - 1u;
         a.color = (1.0 - b1 - b2) * scene_decode_color(scene_attributes[t.i0 * stride + k])
             + b1 * scene_decode_color(scene_attributes[t.i1 * stride + k])
             + b2 * scene_decode_color(scene_attributes[t.i2 * stride + k]);
     }
+    // #endif
     return a;
 }
 
@@ -337,10 +345,12 @@ fn scene_texture_transform(t: SceneTextureRef, uv: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(m[0] * uv.x + m[2] * uv.y + m[4], m[1] * uv.x + m[3] * uv.y + m[5]);
 }
 
-// TextureRef::sample: at the slot's UV set of `at`.
+// TextureRef::sample: at the slot's UV set of `at` (UV0 in a scene whose textures sample no
+// other).
 fn scene_texture_sample_at(t: SceneTextureRef, at: SceneAttributes) -> vec4<f32> {
-    let uv_set = (t.flags >> SCENE_TEXTURE_UV_SET_SHIFT) & 3u;
     var uv = at.uv0;
+    // #if UV_SETS
+    let uv_set = (t.flags >> SCENE_TEXTURE_UV_SET_SHIFT) & 3u;
     if uv_set == 1u {
         uv = at.uv1;
     } else if uv_set == 2u {
@@ -348,6 +358,7 @@ fn scene_texture_sample_at(t: SceneTextureRef, at: SceneAttributes) -> vec4<f32>
     } else if uv_set == 3u {
         uv = at.uv3;
     }
+    // #endif
     return scene_texture_sample(t, uv);
 }
 
@@ -371,7 +382,10 @@ fn scene_material_is_textured(material: u32) -> bool {
 // colour.
 fn scene_material_evaluate(material: u32, at: SceneAttributes) -> MaterialSample {
     let m = scene_materials[material];
-    let base = m.base_color_factor * scene_texture_sample_at(m.base_color_texture, at) * at.color;
+    var base = m.base_color_factor * scene_texture_sample_at(m.base_color_texture, at);
+    // #if VERTEX_COLORS
+    base *= at.color;
+    // #endif
     let mr = scene_texture_sample_at(m.metallic_roughness_texture, at);
     let emission = m.emissive * scene_texture_sample_at(m.emissive_texture, at).xyz;
     return MaterialSample(base.xyz, base.w, m.metallic_factor * mr.z, m.roughness_factor * mr.y, emission,
