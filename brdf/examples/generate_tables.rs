@@ -1,4 +1,4 @@
-//! Regenerates `brdf/src/tables.rs`, the Turquin `E_ss` tables:
+//! Regenerates `brdf/src/tables.rs`, the Turquin `E_ss` tables and the sheen albedo table:
 //! `cargo run --release -p furnace-brdf --example generate_tables`.
 
 fn main() -> std::io::Result<()> {

@@ -9,6 +9,8 @@
 //! | [`Lambert`](crate::Lambert) diffuse base | `lambert.rs` | `(1 − g)·(1 − m′)`, under the specular layer: `1 − sF·max(fr)` at the half vector | `baseColor` |
 //! | [`GgxSpecular`](crate::GgxSpecular) (with [`turquin`](crate::turquin) compensation) | `specular.rs`, `ggx.rs`, `turquin.rs` | `1 − g`, merged: F0 `mix(0.04·sF·sC, baseColor, m′)`, F90 `mix(sF, 1, m′)` | Fresnel |
 //! | [`Dielectric`] interface (smooth, rough or thin-walled) | `dielectric.rs` | `g` | tint `baseColor` |
+//! | [`Sheen`] (KHR_materials_sheen, Charlie) | `sheen.rs` | `1 − c·Fc`; scales everything below by `1 − max(sheenColor)·max(E(μo), E(μi))` | `sheenColor·E` |
+//! | [`Clearcoat`] (KHR_materials_clearcoat, white GGX) | `clearcoat.rs` | `c·Fc(μo)`; scales everything below by `1 − c·Fc(μo)` | `c·Fc·E_ss` |
 //!
 //! with `m = clamp(metallic)`, `g = clamp(transmission)·(1 − m)` (KHR_materials_transmission:
 //! only the dielectric part transmits) and the opaque rest's metallic `m′ = min(m/(1 − g), 1)`
@@ -17,11 +19,18 @@
 //! [`MetallicRoughness`] (`metallic_roughness.rs`), the mixture with the third
 //! [`Transmissive`].
 //!
+//! The layers above the material are the extensions' own rules, outermost first:
+//! `coat + (1 − c·Fc)·(sheen + s·material)` with the coat's `c`, `Fc` of [`crate::clearcoat`]
+//! and the sheen's scale `s` of [`Sheen::base_scale`]. A material without them is exactly the
+//! material (no layer is evaluated and no sampler dimension drawn).
+//!
 //! A new lobe is one more Rust file (its `eval`, `sample`, `pdf`), its parameters in
 //! [`LayeredParams`], its weight in [`HitBsdf::new`] and its row above.
 
-use crate::dielectric::{Dielectric, Interface, ScatterSample, Transmissive};
+use crate::clearcoat::Clearcoat;
+use crate::dielectric::{Dielectric, Interface, ONE_BELOW, ScatterSample, Transmissive};
 use crate::metallic_roughness::{MetallicRoughness, MetallicRoughnessParams};
+use crate::sheen::Sheen;
 use crate::specular::SpecularOptions;
 use crate::{Bsdf, Rgb};
 use glam::{Vec2, Vec3};
@@ -48,23 +57,178 @@ pub struct LayeredParams {
     pub ior: f32,
     /// KHR_materials_volume: the surface bounds a solid (otherwise a thin-walled sheet).
     pub volume: bool,
+    /// KHR_materials_clearcoat `clearcoatFactor × texture.r` (0: no coat).
+    pub clearcoat: f32,
+    /// KHR_materials_clearcoat `clearcoatRoughnessFactor × texture.g` (perceptual).
+    pub clearcoat_roughness: f32,
+    /// The coat's normal in the shading frame (`Vec3::Z`: the shading normal itself).
+    pub clearcoat_normal: Vec3,
+    /// KHR_materials_sheen `sheenColorFactor × texture.rgb` (black: no sheen).
+    pub sheen_color: Rgb,
+    /// KHR_materials_sheen `sheenRoughnessFactor × texture.a`.
+    pub sheen_roughness: f32,
 }
 
-/// The BSDF at a hit: the opaque glTF material, or one that transmits
-/// (KHR_materials_transmission). See the [module docs](self) for the layering.
+impl Default for LayeredParams {
+    /// glTF's default material (white, metallic 1, roughness 1, opaque, no layers).
+    fn default() -> Self {
+        Self {
+            base_color: Rgb::ONE,
+            metallic: 1.0,
+            roughness: 1.0,
+            specular_factor: 1.0,
+            specular_color: Rgb::ONE,
+            transmission: 0.0,
+            ior: 1.5,
+            volume: false,
+            clearcoat: 0.0,
+            clearcoat_roughness: 0.0,
+            clearcoat_normal: Vec3::Z,
+            sheen_color: Rgb::ZERO,
+            sheen_roughness: 0.0,
+        }
+    }
+}
+
+/// The material beneath the layers: the opaque glTF material, or one that transmits
+/// (KHR_materials_transmission).
 #[derive(Debug, Clone, Copy)]
-pub enum HitBsdf {
+pub enum Core {
     /// Lambert under a merged GGX lobe ([`MetallicRoughness`]).
     Opaque(MetallicRoughness),
     /// The mixture with a dielectric, and whether it bounds a solid (KHR_materials_volume).
     Transmissive(Transmissive, bool),
 }
 
+/// The layers above the material: a clear coat and a sheen, each optional (at least one).
+#[derive(Debug, Clone, Copy)]
+pub struct Layers {
+    /// KHR_materials_clearcoat.
+    pub clearcoat: Option<Clearcoat>,
+    /// KHR_materials_sheen.
+    pub sheen: Option<Sheen>,
+}
+
+/// The BSDF at a hit: the material ([`Core`]) under its layers. See the [module docs](self)
+/// for the layering.
+#[derive(Debug, Clone, Copy)]
+pub struct HitBsdf {
+    /// The material beneath.
+    pub core: Core,
+    /// The layers above it, `None` without coat or sheen.
+    pub layers: Option<Layers>,
+}
+
+/// The smallest probability a present layer is sampled with: no lobe whose estimate is
+/// small at this view (a coat seen head-on reflects 4 %) is starved.
+const MIN_LAYER_PROBABILITY: f32 = 0.05;
+
 impl HitBsdf {
     /// The BSDF of evaluated material parameters: the glTF metallic-roughness material, mixed
-    /// with a dielectric interface where it transmits.
+    /// with a dielectric interface where it transmits, under its coat and sheen.
     #[inline]
     pub fn new(params: &LayeredParams, specular: SpecularOptions) -> Self {
+        let clearcoat = (params.clearcoat > 0.0).then(|| {
+            Clearcoat::new(params.clearcoat, params.clearcoat_roughness, params.clearcoat_normal, specular)
+        });
+        let sheen = (params.sheen_color.max_element() > 0.0)
+            .then(|| Sheen::new(params.sheen_color, params.sheen_roughness));
+        let layers = (clearcoat.is_some() || sheen.is_some()).then_some(Layers { clearcoat, sheen });
+        Self { core: Core::new(params, specular), layers }
+    }
+
+    /// The BSDF times `|cos θi|`.
+    #[inline]
+    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        match &self.layers {
+            None => self.core.eval(wo, wi),
+            Some(l) => l.eval(wo, wi, self.core.eval(wo, wi)),
+        }
+    }
+
+    /// The density of the non-delta part of `sample`.
+    #[inline]
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        match &self.layers {
+            None => self.core.pdf(wo, wi),
+            Some(l) => {
+                let p = l.probabilities(wo, &self.core);
+                l.pdf(wo, wi, p) + p.core * self.core.pdf(wo, wi)
+            }
+        }
+    }
+
+    /// Samples a direction; the lobe number `uc` is drawn only where it decides something
+    /// ([`MetallicRoughness::sample_lazy`]).
+    #[inline]
+    pub fn sample(&self, wo: Vec3, u: Vec2, uc: impl FnOnce() -> f32) -> Option<ScatterSample> {
+        let Some(l) = &self.layers else { return self.core.sample(wo, u, uc) };
+        let p = l.probabilities(wo, &self.core);
+        let uc = uc();
+        let wi = if uc < p.clearcoat {
+            l.clearcoat?.sample_direction(wo, u)?
+        } else if uc < p.clearcoat + p.sheen {
+            l.sheen?.sample(wo, 0.0, u)?.wi
+        } else {
+            let rest = ((uc - p.clearcoat - p.sheen) / p.core).min(ONE_BELOW);
+            let s = self.core.sample(wo, u, || rest)?;
+            if s.delta {
+                // A delta event of the material: its weight through the layers, the choice of
+                // the material divided out.
+                let k = l.below_weight(wo, s.wi) / p.core;
+                return Some(ScatterSample { weight: s.weight * k, ..s });
+            }
+            s.wi
+        };
+        let pdf = l.pdf(wo, wi, p) + p.core * self.core.pdf(wo, wi);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        let transmitted = wi.z < 0.0;
+        Some(ScatterSample { wi, weight: self.eval(wo, wi) / pdf, pdf, delta: false, transmitted, rest: 0.0 })
+    }
+
+    /// Only delta lobes: no light sample can reach a direction.
+    #[inline]
+    pub fn is_delta(&self) -> bool {
+        self.layers.is_none() && self.core.is_delta()
+    }
+
+    /// A thin-walled sheet or an η = 1 interface: straight passes are no events.
+    #[inline]
+    pub fn is_straight(&self) -> bool {
+        matches!(self.core, Core::Transmissive(b, _) if b.dielectric.is_straight())
+    }
+
+    /// The interface of a solid.
+    #[inline]
+    pub fn is_volume(&self) -> bool {
+        matches!(self.core, Core::Transmissive(_, true))
+    }
+
+    /// Light samples may arrive from behind the surface (a rough solid interface).
+    #[inline]
+    pub fn transmits_light_samples(&self) -> bool {
+        matches!(self.core, Core::Transmissive(b, true) if b.dielectric.interface == Interface::Rough)
+    }
+
+    /// What a shadow ray crossing a sheet (or an η = 1 interface) at cosine `cos` keeps:
+    /// `g·T′·tint + (1 − g)·0`, through the layers.
+    pub fn sheet_transmittance(&self, cos: f32) -> Rgb {
+        let t = match self.core {
+            Core::Transmissive(b, _) => b.weight * b.dielectric.shadow_transmittance(cos),
+            _ => return Vec3::ZERO,
+        };
+        match &self.layers {
+            None => t,
+            // The ray enters at `cos` and leaves straight on: the layers at that direction.
+            Some(l) => t * l.below_weight(Vec3::new(0.0, 0.0, cos.abs()), Vec3::new(0.0, 0.0, -cos.abs())),
+        }
+    }
+}
+
+impl Core {
+    fn new(params: &LayeredParams, specular: SpecularOptions) -> Self {
         let mr = |metallic: f32| {
             MetallicRoughness::new(
                 MetallicRoughnessParams {
@@ -96,64 +260,120 @@ impl HitBsdf {
         Self::Transmissive(Transmissive { dielectric, opaque, weight: g.min(1.0) }, params.volume)
     }
 
-    /// The BSDF times `|cos θi|`.
     #[inline]
-    pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
         match self {
             Self::Opaque(b) => b.eval(wo, wi),
             Self::Transmissive(b, _) => b.eval(wo, wi),
         }
     }
 
-    /// The density of the non-delta part of `sample`.
     #[inline]
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         match self {
             Self::Opaque(b) => b.pdf(wo, wi),
             Self::Transmissive(b, _) => b.pdf(wo, wi),
         }
     }
 
-    /// Samples a direction; the lobe number `uc` is drawn only where it decides something
-    /// ([`MetallicRoughness::sample_lazy`]).
     #[inline]
-    pub fn sample(&self, wo: Vec3, u: Vec2, uc: impl FnOnce() -> f32) -> Option<ScatterSample> {
+    fn sample(&self, wo: Vec3, u: Vec2, uc: impl FnOnce() -> f32) -> Option<ScatterSample> {
         match self {
             Self::Opaque(b) => b.sample_lazy(wo, u, uc).map(ScatterSample::from),
             Self::Transmissive(b, _) => b.sample(wo, uc(), u),
         }
     }
 
-    /// Only delta lobes: no light sample can reach a direction.
     #[inline]
-    pub fn is_delta(&self) -> bool {
+    fn is_delta(&self) -> bool {
         matches!(self, Self::Transmissive(b, _) if b.is_delta())
     }
 
-    /// A thin-walled sheet or an η = 1 interface: straight passes are no events.
+    /// The material's albedo estimate (luminance) at `wo`, for choosing between it and the
+    /// layers: the opaque lobes' estimates; a transmissive material's dielectric counts 1.
     #[inline]
-    pub fn is_straight(&self) -> bool {
-        matches!(self, Self::Transmissive(b, _) if b.dielectric.is_straight())
-    }
-
-    /// The interface of a solid.
-    #[inline]
-    pub fn is_volume(&self) -> bool {
-        matches!(self, Self::Transmissive(_, true))
-    }
-
-    /// Light samples may arrive from behind the surface (a rough solid interface).
-    #[inline]
-    pub fn transmits_light_samples(&self) -> bool {
-        matches!(self, Self::Transmissive(b, true) if b.dielectric.interface == Interface::Rough)
-    }
-
-    /// What a shadow ray crossing a sheet (or an η = 1 interface) at cosine `cos` keeps:
-    /// `g·T′·tint + (1 − g)·0`.
-    pub fn sheet_transmittance(&self, cos: f32) -> Rgb {
+    fn albedo_estimate(&self, wo: Vec3) -> f32 {
+        let opaque = |m: &MetallicRoughness| {
+            let (s, d) = m.albedo_estimates(wo);
+            s + d
+        };
         match self {
-            Self::Transmissive(b, _) => b.weight * b.dielectric.shadow_transmittance(cos),
-            _ => Vec3::ZERO,
+            Self::Opaque(m) => opaque(m),
+            Self::Transmissive(t, _) => t.weight + (1.0 - t.weight) * opaque(&t.opaque),
         }
+    }
+}
+
+/// The probabilities of sampling the coat, the sheen and the material (summing to 1).
+#[derive(Debug, Clone, Copy)]
+struct Probabilities {
+    clearcoat: f32,
+    sheen: f32,
+    core: f32,
+}
+
+impl Layers {
+    /// `1 − c·Fc(ωo)`: what the coat leaves to everything below it.
+    #[inline]
+    fn coat_rest(&self, wo: Vec3) -> f32 {
+        self.clearcoat.map_or(1.0, |c| 1.0 - c.weight(wo))
+    }
+
+    /// The weight of the material beneath both layers for the pair (ωo, ωi):
+    /// `(1 − c·Fc(ωo))·s(μo, μi)`.
+    #[inline]
+    fn below_weight(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let s = self.sheen.map_or(1.0, |s| s.base_scale(wo.z, wi.z));
+        self.coat_rest(wo) * s
+    }
+
+    /// `coat + (1 − c·Fc)·(sheen + s·material)`, given the material's `core = eval`.
+    #[inline]
+    fn eval(&self, wo: Vec3, wi: Vec3, core: Rgb) -> Rgb {
+        let mut below = core * self.sheen.map_or(1.0, |s| s.base_scale(wo.z, wi.z));
+        if let Some(s) = &self.sheen {
+            below += s.eval(wo, wi);
+        }
+        let mut f = below * self.coat_rest(wo);
+        if let Some(c) = &self.clearcoat {
+            f += c.eval(wo, wi);
+        }
+        f
+    }
+
+    /// The layers' part of the mixture pdf.
+    #[inline]
+    fn pdf(&self, wo: Vec3, wi: Vec3, p: Probabilities) -> f32 {
+        let mut pdf = 0.0;
+        if let Some(c) = &self.clearcoat {
+            pdf += p.clearcoat * c.pdf(wo, wi);
+        }
+        if let Some(s) = &self.sheen {
+            pdf += p.sheen * s.pdf(wo, wi);
+        }
+        pdf
+    }
+
+    /// Lobe selection in proportion to the albedo estimates at ωo (coat `c·Fc·E_ss`, sheen
+    /// `(1 − c·Fc)·lum(sheenColor)·E(μo)`, material `(1 − c·Fc)·(1 − max(sheenColor)·E(μo))`
+    /// times its own estimate), each present layer at least [`MIN_LAYER_PROBABILITY`].
+    #[inline]
+    fn probabilities(&self, wo: Vec3, core: &Core) -> Probabilities {
+        let rest = self.coat_rest(wo);
+        let c = self.clearcoat.map_or(0.0, |c| c.albedo_estimate(wo));
+        let (s, scale) = match &self.sheen {
+            Some(s) => (rest * s.albedo_estimate(wo.z), s.base_scale(wo.z, wo.z)),
+            None => (0.0, 1.0),
+        };
+        let m = rest * scale * core.albedo_estimate(wo);
+        let floor = |present: bool, x: f32| if present { x.max(MIN_LAYER_PROBABILITY) } else { 0.0 };
+        let total = c + s + m;
+        let (c, s) = if total > 0.0 && total.is_finite() { (c / total, s / total) } else { (0.0, 0.0) };
+        let c = floor(self.clearcoat.is_some(), c);
+        let s = floor(self.sheen.is_some(), s);
+        // The material keeps at least the floor too; the layers share the rest.
+        let layers = (c + s).min(1.0 - MIN_LAYER_PROBABILITY);
+        let k = if c + s > 0.0 { layers / (c + s) } else { 0.0 };
+        Probabilities { clearcoat: c * k, sheen: s * k, core: 1.0 - layers }
     }
 }

@@ -14,6 +14,8 @@
 //! * [`Dielectric`] — glass: smooth, rough (Walter et al. 2007) or thin-walled, with the exact
 //!   unpolarised Fresnel reflectance; [`Transmissive`] mixes one with the opaque material
 //!   (KHR_materials_transmission). Dielectrics see both hemispheres ([`dielectric`]).
+//! * [`Clearcoat`] and [`Sheen`] — KHR_materials_clearcoat's white GGX coat and
+//!   KHR_materials_sheen's Charlie lobe, the layers above the material.
 //! * [`HitBsdf`] — the glTF material at a hit as one layered BSDF: the lobes above, their
 //!   weights and albedo scaling, built from [`LayeredParams`] ([`layered`]: the table of
 //!   lobes and the layering rule).
@@ -59,6 +61,7 @@
 //! assert!((gold.pdf(wo, s.wi) - s.pdf).abs() < 1e-3 * s.pdf);
 //! ```
 
+pub mod clearcoat;
 pub mod dielectric;
 mod frame;
 pub mod fresnel;
@@ -66,17 +69,20 @@ pub mod ggx;
 mod lambert;
 pub mod layered;
 mod metallic_roughness;
+pub mod sheen;
 mod specular;
 #[rustfmt::skip]
 mod tables;
 pub mod turquin;
 
+pub use clearcoat::Clearcoat;
 pub use dielectric::{Dielectric, Fresnel, Interface, ScatterSample, Transmissive, fresnel_dielectric};
 pub use frame::Frame;
 pub use ggx::{Ggx, Masking, SpecularSampling};
 pub use lambert::Lambert;
 pub use layered::{HitBsdf, LayeredParams};
 pub use metallic_roughness::{MetallicRoughness, MetallicRoughnessParams, luminance};
+pub use sheen::Sheen;
 pub use specular::{GgxSpecular, SpecularOptions};
 
 use glam::{Vec2, Vec3};
@@ -111,6 +117,10 @@ pub enum Lobe {
     Diffuse,
     /// The GGX lobe.
     Specular,
+    /// The clear coat's GGX lobe ([`Clearcoat`]).
+    Clearcoat,
+    /// The sheen lobe ([`Sheen`]).
+    Sheen,
 }
 
 /// A sampled direction.

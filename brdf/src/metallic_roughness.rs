@@ -116,14 +116,22 @@ impl MetallicRoughness {
         1.0 - self.specular_factor * fr.max_element()
     }
 
-    /// The probability of sampling the specular lobe for view direction `wo`.
-    pub fn specular_probability(&self, wo: Vec3) -> f32 {
+    /// The albedo estimates (luminance) of the specular and diffuse lobes at `wo` that lobe
+    /// selection weighs them by: specular `lum(F(μo))`, times `E_ss` without compensation;
+    /// diffuse `lum(albedo)·(1 − sF·max(fr(μo)))`.
+    #[inline]
+    pub fn albedo_estimates(&self, wo: Vec3) -> (f32, f32) {
         let mu = wo.z.clamp(0.0, 1.0);
         let mut spec = luminance(schlick(self.specular.f0, self.specular.f90, mu));
         if !self.specular.options.compensation {
             spec *= crate::turquin::e_ss(mu, self.specular.ggx.alpha(), self.specular.options.masking);
         }
-        let diff = luminance(self.diffuse.albedo) * self.diffuse_scale(mu);
+        (spec, luminance(self.diffuse.albedo) * self.diffuse_scale(mu))
+    }
+
+    /// The probability of sampling the specular lobe for view direction `wo`.
+    pub fn specular_probability(&self, wo: Vec3) -> f32 {
+        let (spec, diff) = self.albedo_estimates(wo);
         if !(diff > 0.0) {
             // Only a diffuse lobe that is zero everywhere may go unsampled. With specularFactor 1
             // the estimate `1 − F(μo)` rounds to 0 below μo ≈ 1e-8 although `eval`'s diffuse

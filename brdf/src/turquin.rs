@@ -97,7 +97,7 @@ pub fn generate_table(masking: Masking) -> [[f32; TABLE_SIZE]; TABLE_SIZE] {
     t
 }
 
-/// The Rust source of `tables.rs` (what `cargo run -p furnace-brdf --example generate_tables`
+/// The Rust source of `tables.rs`, these tables and the sheen's [`crate::sheen::SHEEN_LN_E`] (what `cargo run -p furnace-brdf --example generate_tables`
 /// writes).
 pub fn tables_source() -> String {
     let mut s = String::from(
@@ -125,7 +125,17 @@ pub fn tables_source() -> String {
         }
         s.push_str("];\n\n");
     }
-    s.pop();
+    let sheen = crate::sheen::generate_table();
+    let n = crate::sheen::SHEEN_TABLE_SIZE;
+    s.push_str(&format!(
+        "/// `ln E(μ, sheenRoughness)` of the Charlie sheen lobe (colour 1) at\n\
+         /// `[roughness index][μ index]`, see `sheen.rs`.\npub const SHEEN_LN_E: [[f32; {n}]; {n}] = [\n"
+    ));
+    for row in &sheen {
+        let cells: Vec<String> = row.iter().map(|v| format!("{v:?}")).collect();
+        s.push_str(&format!("    [{}],\n", cells.join(", ")));
+    }
+    s.push_str("];\n");
     s
 }
 

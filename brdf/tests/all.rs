@@ -11,6 +11,8 @@ mod common;
 mod consistency;
 #[path = "dielectric.rs"]
 mod dielectric;
+#[path = "layers.rs"]
+mod layers;
 #[path = "stability.rs"]
 mod stability;
 #[path = "turquin_tables.rs"]

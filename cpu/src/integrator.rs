@@ -560,6 +560,11 @@ fn bsdf(params: &MaterialSample, material: &furnace_scene::Material, specular: S
             transmission: params.transmission,
             ior: material.ior,
             volume: material.volume,
+            clearcoat: params.clearcoat,
+            clearcoat_roughness: params.clearcoat_roughness,
+            clearcoat_normal: Vec3::Z,
+            sheen_color: params.sheen_color,
+            sheen_roughness: params.sheen_roughness,
         },
         specular,
     )

@@ -61,6 +61,10 @@ crate::wgsl_consts! {
     pub const LOBE_DIFFUSE: u32 = 1;
     /// `BsdfSample.lobe` of [`Lobe::Specular`].
     pub const LOBE_SPECULAR: u32 = 2;
+    /// A sample of the clear coat.
+    pub const LOBE_CLEARCOAT: u32 = 3;
+    /// A sample of the sheen.
+    pub const LOBE_SHEEN: u32 = 4;
 }
 
 /// The number of `f32` in [`turquin_table`]: two tables of `TABLE_SIZE²`.
@@ -87,6 +91,8 @@ pub fn lobe_code(lobe: Option<Lobe>) -> u32 {
         None => LOBE_NONE,
         Some(Lobe::Diffuse) => LOBE_DIFFUSE,
         Some(Lobe::Specular) => LOBE_SPECULAR,
+        Some(Lobe::Clearcoat) => LOBE_CLEARCOAT,
+        Some(Lobe::Sheen) => LOBE_SHEEN,
     }
 }
 

@@ -49,7 +49,7 @@
 //! * **Built-in scenes** ([`builtin`]): the reference Cornell box and a white-furnace sphere.
 //!
 //! Unsupported features (transmission, point lights, BLEND...) give one [`Warning`] each, never a
-//! failure; a *required* unsupported extension (e.g. `KHR_materials_clearcoat`) is an error.
+//! failure; a *required* unsupported extension (e.g. `KHR_materials_iridescence`) is an error.
 //!
 //! ```
 //! use furnace_scene::{Scene, builtin};
@@ -92,7 +92,7 @@ pub use geometry::{
 pub use light::{Light, PointLight, PointLightDistribution, Sky, SpotCone, Sun};
 pub use light_bvh::{LEAF as LIGHT_BVH_LEAF, LightBounds, LightBvh, LightBvhNode};
 pub use load::{ExtensionUse, MAX_COORDINATE, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
-pub use material::{AlphaMode, Material, MaterialSample};
+pub use material::{AlphaMode, ClearcoatLayer, Material, MaterialLayers, MaterialSample, SheenLayer};
 pub use surface::{SurfacePoint, blend_keeps, blend_seed, geometric_normal};
 pub use texture::{
     ColorSpace, Image, MAX_TEXTURE_SIZE, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear,

@@ -1,6 +1,7 @@
 //! Materials: glTF 2.0 metallic-roughness with KHR_materials_specular,
-//! KHR_materials_emissive_strength, KHR_materials_transmission, KHR_materials_ior and
-//! KHR_materials_volume, as factors and texture references. Textures are sampled by
+//! KHR_materials_emissive_strength, KHR_materials_transmission, KHR_materials_ior,
+//! KHR_materials_volume, KHR_materials_clearcoat and KHR_materials_sheen, as factors and texture
+//! references. Textures are sampled by
 //! [`Material::evaluate`] into the per-shading-point values the integrator feeds to
 //! `furnace_brdf::MetallicRoughnessParams`.
 
@@ -70,6 +71,9 @@ pub struct Material {
     /// The volume's absorption coefficient σ_a = −ln(attenuationColor)/attenuationDistance per
     /// channel, in 1/m (0: clear; +∞ where a channel is black).
     pub absorption: Vec3,
+    /// The layers above the material (KHR_materials_clearcoat, KHR_materials_sheen). The
+    /// content hash leaves them out where there are none, so other files hash as before.
+    pub layers: MaterialLayers,
     /// KHR_materials_unlit: the surface shows its base colour (× texture × vertex colour) as
     /// is, to every ray and from either side, reflects nothing and is not a light source (the
     /// loader leaves it no emission, transmission or normal map). Kept last: the content hash
@@ -100,9 +104,52 @@ impl Default for Material {
             ior: 1.5,
             volume: false,
             absorption: Vec3::ZERO,
+            layers: MaterialLayers::default(),
             unlit: false,
         }
     }
+}
+
+/// The layers above a material, each present only where the file gives it.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct MaterialLayers {
+    /// KHR_materials_clearcoat (a `clearcoatFactor` above 0).
+    pub clearcoat: Option<ClearcoatLayer>,
+    /// KHR_materials_sheen (a `sheenColorFactor` other than black).
+    pub sheen: Option<SheenLayer>,
+}
+
+impl MaterialLayers {
+    /// No layer.
+    pub fn is_empty(&self) -> bool {
+        self.clearcoat.is_none() && self.sheen.is_none()
+    }
+}
+
+/// KHR_materials_clearcoat's factors and textures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ClearcoatLayer {
+    /// `clearcoatFactor`.
+    pub factor: f32,
+    /// `clearcoatTexture` (linear, R channel).
+    pub texture: Option<TextureRef>,
+    /// `clearcoatRoughnessFactor` (perceptual).
+    pub roughness: f32,
+    /// `clearcoatRoughnessTexture` (linear, G channel).
+    pub roughness_texture: Option<TextureRef>,
+}
+
+/// KHR_materials_sheen's factors and textures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SheenLayer {
+    /// `sheenColorFactor` (linear RGB).
+    pub color: Vec3,
+    /// `sheenColorTexture` (sRGB, RGB channels).
+    pub color_texture: Option<TextureRef>,
+    /// `sheenRoughnessFactor`.
+    pub roughness: f32,
+    /// `sheenRoughnessTexture` (linear, A channel).
+    pub roughness_texture: Option<TextureRef>,
 }
 
 /// A material evaluated at one shading point: every factor multiplied by its texture.
@@ -124,6 +171,14 @@ pub struct MaterialSample {
     pub specular_color: Vec3,
     /// `transmissionFactor × texture.r`: the share of the dielectric part that is transmissive.
     pub transmission: f32,
+    /// `clearcoatFactor × texture.r` (0 without a coat).
+    pub clearcoat: f32,
+    /// `clearcoatRoughnessFactor × texture.g`.
+    pub clearcoat_roughness: f32,
+    /// `sheenColorFactor × texture.rgb` (black without a sheen).
+    pub sheen_color: Vec3,
+    /// `sheenRoughnessFactor × texture.a`.
+    pub sheen_roughness: f32,
 }
 
 impl Material {
@@ -142,6 +197,8 @@ impl Material {
             &self.transmission_texture,
         ]
         .into_iter()
+        .chain(self.layers.clearcoat.iter().flat_map(|c| [&c.texture, &c.roughness_texture]))
+        .chain(self.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]))
         .flatten()
     }
 
@@ -174,6 +231,16 @@ impl Material {
             Some(t) => self.transmission_factor * t.sample(at, textures, images).x,
             None => self.transmission_factor,
         };
+        let (clearcoat, clearcoat_roughness) = match &self.layers.clearcoat {
+            Some(c) => (c.factor * sample(&c.texture).x, c.roughness * sample(&c.roughness_texture).y),
+            None => (0.0, 0.0),
+        };
+        let (sheen_color, sheen_roughness) = match &self.layers.sheen {
+            Some(s) => {
+                (s.color * sample(&s.color_texture).truncate(), s.roughness * sample(&s.roughness_texture).w)
+            }
+            None => (Vec3::ZERO, 0.0),
+        };
         MaterialSample {
             base_color: base.truncate(),
             alpha: base.w,
@@ -183,6 +250,10 @@ impl Material {
             specular_factor: self.specular_factor,
             specular_color: self.specular_color_factor,
             transmission,
+            clearcoat,
+            clearcoat_roughness,
+            sheen_color,
+            sheen_roughness,
         }
     }
 

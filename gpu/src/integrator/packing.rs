@@ -236,6 +236,13 @@ impl PackedScene {
         limit: u64,
     ) -> Result<Self, GpuError> {
         let sampler = renderable_sampler(scene, &settings)?;
+        if let Some(m) = scene.materials.iter().find(|m| !m.layers.is_empty()) {
+            return Err(GpuError::Unsupported(format!(
+                "material {:?} has a clear coat or sheen, which only the CPU integrator renders so far \
+                 (--backend cpu)",
+                m.name.as_deref().unwrap_or("(unnamed)")
+            )));
+        }
         let g = &scene.geometry;
         if bvh.input_count() != g.triangle_count() || bvh.layout() != furnace_accel::Layout::Cwbvh {
             return Err(GpuError::Unsupported(format!(

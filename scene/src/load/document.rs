@@ -16,6 +16,8 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_volume",
     "KHR_materials_pbrSpecularGlossiness",
     "KHR_materials_unlit",
+    "KHR_materials_clearcoat",
+    "KHR_materials_sheen",
     super::variants::EXTENSION,
     "KHR_texture_transform",
     "KHR_mesh_quantization",

@@ -3,7 +3,7 @@
 
 use super::context::Ctx;
 use super::spec_gloss::Bake;
-use crate::material::{AlphaMode, Material};
+use crate::material::{AlphaMode, ClearcoatLayer, Material, MaterialLayers, SheenLayer};
 use crate::texture::{ColorSpace, Texture, TextureRef, TextureTransform, WrapMode};
 use glam::{Vec2, Vec3, Vec4};
 
@@ -41,7 +41,7 @@ pub(super) fn read_materials(ctx: &mut Ctx<'_>, doc: &gltf::Document) -> (Vec<Ma
         .materials()
         .enumerate()
         .map(|(i, m)| {
-            let (material, bake) = read_material(ctx, &m);
+            let (material, bake) = read_material(ctx, &m, doc.textures().len());
             bakes.extend(bake.map(|b| (i, b)));
             material
         })
@@ -78,7 +78,7 @@ fn texture_ref(
     Some(TextureRef { texture: info.texture().index() as u32, tex_coord, color_space: space, transform })
 }
 
-fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> (Material, Option<Bake>) {
+fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> (Material, Option<Bake>) {
     let i = m.index().unwrap_or(0);
     let p = format!("materials[{i}]");
     let pbr = match m.pbr_specular_glossiness() {
@@ -99,6 +99,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> (Material, Option
         specular_color_factor *= f0 / 0.04;
     }
     let mut transmission = transmission(ctx, m, &p);
+    let mut layers = layers(ctx, m, &p, textures);
     warn_ignored(ctx, m);
     let unlit = m.unlit();
     if unlit {
@@ -106,6 +107,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> (Material, Option
         (emissive, emissive_texture, normal_texture) = (Vec3::ZERO, None, None);
         transmission.factor = 0.0;
         transmission.texture = None;
+        layers = MaterialLayers::default();
     }
     let roughness_factor = pbr.roughness_factor;
     let transmissive = transmission.factor > 0.0;
@@ -137,6 +139,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) -> (Material, Option
         ior,
         volume: transmissive && transmission.volume,
         absorption: transmission.absorption,
+        layers,
         unlit,
     };
     (material, pbr.bake)
@@ -385,4 +388,148 @@ fn warn_ignored(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>) {
     if m.occlusion_texture().is_some() {
         ctx.warn("", "occlusionTexture ignored (a path tracer computes occlusion)");
     }
+}
+
+/// A texture reference written in an extension's JSON (`{"index", "texCoord", "extensions":
+/// {"KHR_texture_transform"}}`), as [`texture_ref`] reads the core's; an index out of range is
+/// a warning and no texture.
+fn texture_ref_json(
+    ctx: &mut Ctx<'_>,
+    value: Option<&gltf::json::Value>,
+    textures: usize,
+    space: ColorSpace,
+    path: String,
+) -> Option<TextureRef> {
+    let v = value?;
+    let index = v.get("index").and_then(gltf::json::Value::as_u64);
+    let Some(index) = index.filter(|&i| (i as usize) < textures) else {
+        ctx.warn(
+            path,
+            format!(
+                "texture index {} is not one of the file's {textures} textures: ignored",
+                v.get("index").map_or("(none)".to_string(), ToString::to_string)
+            ),
+        );
+        return None;
+    };
+    let num = |o: &gltf::json::Value, k: &str| o.get(k).and_then(gltf::json::Value::as_f64);
+    let pair = |o: &gltf::json::Value, k: &str, d: [f32; 2]| {
+        o.get(k).and_then(|a| a.as_array()).filter(|a| a.len() == 2).map_or(Vec2::from(d), |a| {
+            Vec2::new(
+                a[0].as_f64().unwrap_or(d[0] as f64) as f32,
+                a[1].as_f64().unwrap_or(d[1] as f64) as f32,
+            )
+        })
+    };
+    let tt = v.get("extensions").and_then(|e| e.get("KHR_texture_transform"));
+    let transform = tt.map(|t| TextureTransform {
+        offset: pair(t, "offset", [0.0, 0.0]),
+        rotation: num(t, "rotation").unwrap_or(0.0) as f32,
+        scale: pair(t, "scale", [1.0, 1.0]),
+    });
+    let tex_coord = tt.and_then(|t| num(t, "texCoord")).or_else(|| num(v, "texCoord")).unwrap_or(0.0) as u32;
+    let tex_coord = if (tex_coord as usize) < crate::MAX_UV_SETS {
+        tex_coord
+    } else {
+        ctx.warn(
+            path,
+            format!(
+                "uses TEXCOORD_{tex_coord}; sets up to TEXCOORD_{} are read: TEXCOORD_0 used",
+                crate::MAX_UV_SETS - 1
+            ),
+        );
+        0
+    };
+    Some(TextureRef { texture: index as u32, tex_coord, color_space: space, transform })
+}
+
+/// A factor of an extension's JSON in `[0, 1]` (`default` where absent; out of range or not a
+/// number: a warning and the value clamped, or the default).
+fn unit_factor(ctx: &mut Ctx<'_>, ext: &gltf::json::Value, key: &str, default: f32, path: &str) -> f32 {
+    match ext.get(key) {
+        None => default,
+        Some(v) => match v.as_f64() {
+            Some(x) if (0.0..=1.0).contains(&x) => x as f32,
+            Some(x) if x.is_finite() => {
+                ctx.warn(format!("{path}.{key}"), format!("{x} is outside [0, 1]: clamped"));
+                x.clamp(0.0, 1.0) as f32
+            }
+            _ => {
+                ctx.warn(format!("{path}.{key}"), format!("{v} is not a number: {default} used"));
+                default
+            }
+        },
+    }
+}
+
+/// KHR_materials_clearcoat and KHR_materials_sheen: the layers above the material.
+fn layers(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str, textures: usize) -> MaterialLayers {
+    let mut layers = MaterialLayers::default();
+    if let Some(ext) = m.extension_value("KHR_materials_clearcoat") {
+        let path = format!("{p}.extensions.KHR_materials_clearcoat");
+        let factor = unit_factor(ctx, ext, "clearcoatFactor", 0.0, &path);
+        let roughness = unit_factor(ctx, ext, "clearcoatRoughnessFactor", 0.0, &path);
+        if ext.get("clearcoatNormalTexture").is_some() {
+            ctx.warn(
+                format!("{path}.clearcoatNormalTexture"),
+                "not supported yet: the coat takes the shading normal",
+            );
+        }
+        if factor > 0.0 {
+            let texture = texture_ref_json(
+                ctx,
+                ext.get("clearcoatTexture"),
+                textures,
+                ColorSpace::Linear,
+                format!("{path}.clearcoatTexture"),
+            );
+            let roughness_texture = texture_ref_json(
+                ctx,
+                ext.get("clearcoatRoughnessTexture"),
+                textures,
+                ColorSpace::Linear,
+                format!("{path}.clearcoatRoughnessTexture"),
+            );
+            layers.clearcoat = Some(ClearcoatLayer { factor, texture, roughness, roughness_texture });
+        }
+    }
+    if let Some(ext) = m.extension_value("KHR_materials_sheen") {
+        let path = format!("{p}.extensions.KHR_materials_sheen");
+        let color = match ext.get("sheenColorFactor").and_then(|c| c.as_array()) {
+            Some(a)
+                if a.len() == 3
+                    && a.iter().all(|c| c.as_f64().is_some_and(|x| x.is_finite() && x >= 0.0)) =>
+            {
+                Vec3::new(
+                    a[0].as_f64().unwrap_or(0.0) as f32,
+                    a[1].as_f64().unwrap_or(0.0) as f32,
+                    a[2].as_f64().unwrap_or(0.0) as f32,
+                )
+            }
+            Some(_) => {
+                ctx.warn(format!("{path}.sheenColorFactor"), "not three non-negative numbers: no sheen");
+                Vec3::ZERO
+            }
+            None => Vec3::ZERO,
+        };
+        let roughness = unit_factor(ctx, ext, "sheenRoughnessFactor", 0.0, &path);
+        if color.max_element() > 0.0 {
+            let color_texture = texture_ref_json(
+                ctx,
+                ext.get("sheenColorTexture"),
+                textures,
+                ColorSpace::Srgb,
+                format!("{path}.sheenColorTexture"),
+            );
+            let roughness_texture = texture_ref_json(
+                ctx,
+                ext.get("sheenRoughnessTexture"),
+                textures,
+                ColorSpace::Linear,
+                format!("{path}.sheenRoughnessTexture"),
+            );
+            layers.sheen = Some(SheenLayer { color, color_texture, roughness, roughness_texture });
+        }
+    }
+    layers
 }
