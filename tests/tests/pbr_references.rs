@@ -257,8 +257,10 @@ fn compare(backend: Backend, scene_name: &str) {
     let dir = write_failure(&format!("{scene_name}_{backend}"), &candidate, &reference, &z, &regions);
     panic!(
         "{backend}, {scene_name}: {} fail the bar (ratio ±{MAX_RATIO_ERROR} with σ ≤ {MAX_RATIO_SIGMA}, \
-         z std in {Z_STD_RANGE:?} where resolved ≥ {MIN_RESOLVED}):\n{table}candidate EXR and ratio | z PNG in {}",
+         z std in [{:.2}, {:.2}] where resolved ≥ {MIN_RESOLVED}):\n{table}candidate EXR and ratio | z PNG in {}",
         failed.join(", "),
+        Z_STD_RANGE.0,
+        Z_STD_RANGE.1,
         dir.display()
     );
 }
@@ -303,4 +305,44 @@ fn the_scene_table_names_every_reference() {
     let mut listed: Vec<String> = SCENES.iter().map(|(s, _)| (*s).to_owned()).collect();
     listed.sort();
     assert_eq!(on_disk, listed);
+}
+
+/// The regions are the oracle's: at the references' full size its run log records, for
+/// `pbr_core`'s `gold_r0.1`, the centre (32, 32), the radius 23.2727… (64 pixels per 1.1 m at
+/// 12 m: 0.4 · 64/1.1) and 1224 interior pixels, and for the sheet `dt0.0` of
+/// `pbr_diffuse_transmission` the same centre and 1600 pixels; halving the size halves them.
+#[test]
+fn regions_match_the_oracle() {
+    let count = |r: &Region, (w, h): (usize, usize)| (0..w * h).filter(|i| r.contains(i % w, i / w)).count();
+    let core = pbr::regions(&furnace_tests::data::reference("pbr/pbr_core.gltf"), 256, 192).expect("regions");
+    assert_eq!(core.len(), 12);
+    assert_eq!(core[0].name, "gold_r0.1");
+    assert!((core[0].centre - glam::DVec2::new(32.0, 32.0)).length() < 1e-9, "{:?}", core[0]);
+    assert!((core[0].radius - 0.4 * 64.0 / 1.1).abs() < 1e-9, "{:?}", core[0]);
+    assert_eq!(count(&core[0], (256, 192)), 1224);
+    let half = pbr::regions(&furnace_tests::data::reference("pbr/pbr_core.gltf"), 128, 96).expect("regions");
+    assert!(
+        (half[0].centre * 2.0 - core[0].centre).length() < 1e-9
+            && (half[0].radius * 2.0 - core[0].radius).abs() < 1e-9
+    );
+    let dt = pbr::regions(&furnace_tests::data::reference("pbr/pbr_diffuse_transmission.gltf"), 320, 128)
+        .expect("regions");
+    assert_eq!((dt[0].name.as_str(), dt[0].shape), ("dt0.0", pbr::Shape::Square));
+    assert_eq!(count(&dt[0], (320, 128)), 1600);
+}
+
+/// Downsampling keeps each block's mean and takes its errors' mean (not the smaller pooled
+/// error of independent pixels).
+#[test]
+fn downsampling_averages_values_and_errors() {
+    let image = |f: fn(usize) -> f64| Image {
+        width: 4,
+        height: 2,
+        pixels: (0..8).map(|k| DVec3::splat(f(k))).collect(),
+    };
+    let (r, e) = pbr::downsample(&image(|k| k as f64), &image(|k| 1.0 + (k % 3) as f64), 2);
+    // Block (1, 0) holds pixels 2, 3, 6, 7: mean 4.5; errors 3, 1, 1, 2: mean 1.75.
+    assert_eq!((r.width, r.height), (2, 1));
+    assert_eq!(r.pixels[1], DVec3::splat(4.5));
+    assert_eq!(e.pixels[1], DVec3::splat(1.75));
 }
