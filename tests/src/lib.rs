@@ -12,7 +12,7 @@
 //! [`cbox`] (the Cornell box references and the z statistics), [`gpu`] (the GPU test context
 //! and small compute kernels), [`layout`] (WGSL struct layouts by reflection), [`lobes`] (the
 //! table of BSDF lobes that the chi-square, consistency, white-furnace and GPU parity tests
-//! iterate).
+//! iterate), [`pbr`] (the glTF PBR material references' object regions and per-object score).
 //!
 //! Crates below this one in the graph use the fixtures from their own integration tests through
 //! a dev-dependency (a cycle through dev-dependencies only, which Cargo allows).
@@ -25,6 +25,7 @@ pub mod gltf;
 pub mod gpu;
 pub mod layout;
 pub mod lobes;
+pub mod pbr;
 pub mod rng;
 
 pub use rng::Rng;

@@ -33,6 +33,8 @@ mod mitsuba;
 mod normal_map;
 #[path = "path_parity.rs"]
 mod path_parity;
+#[path = "pbr_references.rs"]
+mod pbr_references;
 #[path = "point_lights.rs"]
 mod point_lights;
 #[path = "present.rs"]
