@@ -121,7 +121,7 @@ pub struct HitBsdf {
 
 /// The smallest probability a present layer is sampled with: no lobe whose estimate is
 /// small at this view (a coat seen head-on reflects 4 %) is starved.
-const MIN_LAYER_PROBABILITY: f32 = 0.05;
+pub const MIN_LAYER_PROBABILITY: f32 = 0.05;
 
 impl HitBsdf {
     /// The BSDF of evaluated material parameters: the glTF metallic-roughness material, mixed

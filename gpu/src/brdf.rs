@@ -173,6 +173,13 @@ impl BsdfParams {
     }
 }
 
+/// The sheen albedo table `ln E(μ, roughness)` (`furnace_brdf::sheen::SHEEN_LN_E`, row-major),
+/// which scenes with a sheen append to [`turquin_table`] (the WGSL reads it from
+/// [`TURQUIN_TABLE_LEN`] on).
+pub fn sheen_table() -> Vec<f32> {
+    furnace_brdf::sheen::SHEEN_LN_E.iter().flatten().copied().collect()
+}
+
 /// The Turquin `E_ss(μ, α)` tables as the WGSL `turquin_table: array<f32>` holds them:
 /// `furnace_brdf::turquin::E_SS_SEPARABLE` then `E_SS_HEIGHT_CORRELATED`, each row-major
 /// `[α row j][μ column i]`, so entry `(m·64 + j)·64 + i` with `m` = 0 separable, 1

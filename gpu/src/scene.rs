@@ -202,6 +202,33 @@ crate::gpu_struct! {
     }
 }
 
+crate::gpu_struct! {
+    /// A material's layers (WGSL `SceneLayers`): KHR_materials_clearcoat and
+    /// KHR_materials_sheen. One per material in `scene_layers`, bound only for a scene with a
+    /// coat or a sheen (zeros for a material without). 224 bytes.
+    pub struct GpuLayers as "SceneLayers" {
+        /// `clearcoatTexture` (R channel).
+        pub clearcoat_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `clearcoatRoughnessTexture` (G channel).
+        pub clearcoat_roughness_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `sheenColorTexture` (RGB).
+        pub sheen_color_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `sheenRoughnessTexture` (A channel).
+        pub sheen_roughness_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `sheenColorFactor` (black: no sheen).
+        pub sheen_color: [f32; 3] => WgslType::VEC3_F32,
+        /// `sheenRoughnessFactor`.
+        pub sheen_roughness: f32 => WgslType::F32,
+        /// `clearcoatFactor` (0: no coat).
+        pub clearcoat: f32 => WgslType::F32,
+        /// `clearcoatRoughnessFactor`.
+        pub clearcoat_roughness: f32 => WgslType::F32,
+        /// Rust-only zeros up to 224 bytes (WGSL pads by itself).
+        pub pad: [u32; 2] => WgslType::PAD,
+    }
+}
+
+const _: () = assert!(size_of::<GpuLayers>() == 224);
 const _: () = assert!(size_of::<GpuTransmission>() == 80);
 const _: () = assert!(size_of::<GpuSceneTriangle>() == 16);
 const _: () = assert!(size_of::<GpuVertex>() == 16);
@@ -224,6 +251,7 @@ pub fn declarations() -> String {
         wgsl_struct::<GpuTextureRef>(false),
         wgsl_struct::<GpuMaterial>(false),
         wgsl_struct::<GpuTransmission>(false),
+        wgsl_struct::<GpuLayers>(false),
     ]
     .concat()
 }
@@ -276,6 +304,9 @@ pub struct SceneBuffers {
     pub image_count: usize,
     /// `scene_transmission`, one record per material; empty unless some material transmits.
     pub transmission: Vec<GpuTransmission>,
+    /// `scene_layers`, one record per material; empty unless some material has a coat or a
+    /// sheen.
+    pub layers: Vec<GpuLayers>,
 }
 
 /// Which optional vertex attributes a scene's shading reads: UVs only when some material is
@@ -352,7 +383,9 @@ impl ImageLayout {
                 &m.emissive_texture,
                 &m.transmission_texture,
             ];
-            for slot in slots {
+            let clearcoat = m.layers.clearcoat.iter().flat_map(|c| [&c.texture, &c.roughness_texture]);
+            let sheen = m.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]);
+            for slot in slots.into_iter().chain(clearcoat).chain(sheen) {
                 if let Some((_, tex)) = resolve(scene, slot) {
                     let i = tex.image as usize;
                     if offset[i].is_none() {
@@ -518,6 +551,27 @@ fn material_record(
     }
 }
 
+/// A material's layers record, its texture slots through `texture_ref` (zeros without layers).
+fn layers_record(
+    m: &furnace_scene::Material,
+    texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
+) -> GpuLayers {
+    let mut r = GpuLayers::zeroed();
+    if let Some(c) = &m.layers.clearcoat {
+        r.clearcoat = c.factor;
+        r.clearcoat_roughness = c.roughness;
+        r.clearcoat_texture = texture_ref(&c.texture);
+        r.clearcoat_roughness_texture = texture_ref(&c.roughness_texture);
+    }
+    if let Some(s) = &m.layers.sheen {
+        r.sheen_color = s.color.to_array();
+        r.sheen_roughness = s.roughness;
+        r.sheen_color_texture = texture_ref(&s.color_texture);
+        r.sheen_roughness_texture = texture_ref(&s.roughness_texture);
+    }
+    r
+}
+
 impl SceneBuffers {
     /// Packs `scene`, checking every buffer against `max_binding` bytes (pass
     /// [`GpuContext::max_storage_binding`], or a small value to test the error) before
@@ -570,6 +624,11 @@ impl SceneBuffers {
         } else {
             Vec::new()
         };
+        let layers = if scene.materials.iter().any(|m| !m.layers.is_empty()) {
+            scene.materials.iter().map(|m| layers_record(m, &texture_ref)).collect()
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             triangles,
             vertices,
@@ -579,6 +638,7 @@ impl SceneBuffers {
             texels: images.texels(scene),
             image_count: images.used.len(),
             transmission,
+            layers,
         })
     }
 
@@ -646,6 +706,8 @@ pub struct GpuScene {
     pub bytes: u64,
     /// `scene_transmission` ([`SceneBuffers::transmission`]); `None` without transmission.
     pub transmission: Option<wgpu::Buffer>,
+    /// `scene_layers` ([`SceneBuffers::layers`]); `None` without coats and sheens.
+    pub layers: Option<wgpu::Buffer>,
 }
 
 impl GpuScene {
@@ -683,6 +745,15 @@ impl GpuScene {
                 wgpu::BufferUsages::STORAGE,
             )?)
         };
+        let layers = if packed.layers.is_empty() {
+            None
+        } else {
+            Some(ctx.buffer_init(
+                "scene layers",
+                bytemuck::cast_slice(&packed.layers),
+                wgpu::BufferUsages::STORAGE,
+            )?)
+        };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Wgpu(e.to_string()));
         }
@@ -691,8 +762,11 @@ impl GpuScene {
             buffers,
             triangle_count: packed.triangles.len(),
             geometry_bytes: packed.geometry_bytes(),
-            bytes: packed.bytes() + size_of_val(packed.transmission.as_slice()) as u64,
+            bytes: packed.bytes()
+                + size_of_val(packed.transmission.as_slice()) as u64
+                + size_of_val(packed.layers.as_slice()) as u64,
             transmission,
+            layers,
         })
     }
 

@@ -58,6 +58,13 @@ pub const PATH: &str = include_str!("wgsl/path.wgsl");
 /// [`DIELECTRIC`] where its `// #if TRANSMISSION` blocks are kept.
 pub const MATERIAL: &str = include_str!("wgsl/layered.wgsl");
 
+/// The layers above the glTF material (KHR_materials_clearcoat, KHR_materials_sheen): the
+/// twins of `furnace-brdf`'s `clearcoat.rs`, `sheen.rs` and the layering of `layered.rs`.
+/// Composed before [`MATERIAL`] for scenes with a coat or a sheen, through [`select`]
+/// (`CLEARCOAT`, `SHEEN`, `VERTEX_ATTRIBUTES`); reads `scene_layers` and the sheen table at the
+/// end of `turquin_table`.
+pub const LAYERS: &str = include_str!("wgsl/layers.wgsl");
+
 /// Concatenates WGSL modules (in the order given) into one shader source.
 pub fn compose(parts: &[&str]) -> String {
     let mut s = String::with_capacity(parts.iter().map(|p| p.len() + 1).sum());

@@ -99,6 +99,20 @@ pub fn pipeline_source(
     crate::traverse::with_stack_size(&with_group_size(&source, group_size), stack_size)
 }
 
+/// The constants of `layers.wgsl`: the sheen table's size and place in `turquin_table`, the
+/// sheen's smallest α, the smallest probability of a layer and the largest `f32` below 1.
+fn layers_consts_wgsl() -> String {
+    use furnace_brdf::sheen::{SHEEN_ALPHA_MIN, SHEEN_TABLE_SIZE};
+    format!(
+        "const SHEEN_TABLE_SIZE: u32 = {SHEEN_TABLE_SIZE}u;\nconst SHEEN_TABLE_OFFSET: u32 = {}u;\n\
+         const SHEEN_ALPHA_MIN: f32 = {SHEEN_ALPHA_MIN:?};\nconst LAYER_MIN_PROBABILITY: f32 = {:?};\n\
+         const LAYER_ONE_BELOW: f32 = {:?};\n",
+        crate::brdf::TURQUIN_TABLE_LEN,
+        furnace_brdf::layered::MIN_LAYER_PROBABILITY,
+        furnace_brdf::dielectric::ONE_BELOW,
+    )
+}
+
 /// `source` (a [`shader_source`]) with workgroups of `n` invocations instead of [`GROUP_SIZE`].
 pub fn with_group_size(source: &str, n: u32) -> String {
     source.replace(
@@ -124,6 +138,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     bindings.push(Binding::read("point_lights", "array<PointLight>"));
     if features.transmission {
         bindings.push(Binding::read("scene_transmission", "array<SceneTransmission>"));
+    }
+    if features.clearcoat || features.sheen {
+        bindings.push(Binding::read("scene_layers", "array<SceneLayers>"));
     }
     if features.emitters {
         // Chosen by the light BVH: 16-byte records and nodes, read as vec4 (three loads a node).
@@ -207,6 +224,11 @@ pub struct SceneFeatures {
     pub uv_sets: bool,
     /// The scene has vertex colours (with `vertex_attributes`): only then are they read.
     pub vertex_colors: bool,
+    /// Some material has a clear coat (KHR_materials_clearcoat; `scene_layers` records).
+    pub clearcoat: bool,
+    /// Some material has a sheen (KHR_materials_sheen; `scene_layers` records, the sheen
+    /// albedo table after the Turquin tables).
+    pub sheen: bool,
     /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
     /// triangles per invocation, added to the ray counter at its end). Not a property of the
     /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
@@ -246,6 +268,8 @@ impl SceneFeatures {
                 || !scene.geometry.colors.is_empty(),
             uv_sets: scene.materials.iter().flat_map(|m| m.texture_refs()).any(|t| t.tex_coord > 0),
             vertex_colors: !scene.geometry.colors.is_empty(),
+            clearcoat: scene.materials.iter().any(|m| m.layers.clearcoat.is_some()),
+            sheen: scene.materials.iter().any(|m| m.layers.sheen.is_some()),
             trace_counters: false,
         }
     }
@@ -274,7 +298,7 @@ impl SceneFeatures {
     /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
     /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `BLEND`, `UNLIT`, `SHADOW_FILTER` (shadow rays
-    /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`, `UV_SETS`, `VERTEX_COLORS`,
+    /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`, `UV_SETS`, `VERTEX_COLORS`, `CLEARCOAT`, `SHEEN`, `LAYERS` (either),
     /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
@@ -299,6 +323,9 @@ impl SceneFeatures {
             "VERTEX_ATTRIBUTES" => self.vertex_attributes,
             "UV_SETS" => self.vertex_attributes && self.uv_sets,
             "VERTEX_COLORS" => self.vertex_attributes && self.vertex_colors,
+            "CLEARCOAT" => self.clearcoat,
+            "SHEEN" => self.sheen,
+            "LAYERS" => self.clearcoat || self.sheen,
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,
             _ => panic!("no scene feature {name} (an #if of the integrator's WGSL)"),
@@ -329,6 +356,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
             furnace_sampling::warp::SPHERICAL_TRIANGLE_MAX_SOLID_ANGLE
         ),
         features.wgsl(),
+        if features.enabled("LAYERS") { layers_consts_wgsl() } else { String::new() },
         binding_table(precision, features).wgsl(),
         if features.aovs { format!("alias aov_sum_t = {};\n", precision.aov_sum_type()) } else { String::new() },
     ]
@@ -355,6 +383,11 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         &environment,
         &precision.wgsl(),
         wgsl::PATH,
+        &if features.enabled("LAYERS") {
+            wgsl::select(wgsl::LAYERS, |name| features.enabled(name))
+        } else {
+            String::new()
+        },
         &wgsl::select(wgsl::MATERIAL, |name| features.enabled(name)),
         &wgsl::select(SHADOW_WGSL, integrator_feature),
         &wgsl::select(LIGHTS_WGSL, integrator_feature),

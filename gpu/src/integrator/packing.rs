@@ -236,13 +236,6 @@ impl PackedScene {
         limit: u64,
     ) -> Result<Self, GpuError> {
         let sampler = renderable_sampler(scene, &settings)?;
-        if let Some(m) = scene.materials.iter().find(|m| !m.layers.is_empty()) {
-            return Err(GpuError::Unsupported(format!(
-                "material {:?} has a clear coat or sheen, which only the CPU integrator renders so far \
-                 (--backend cpu)",
-                m.name.as_deref().unwrap_or("(unnamed)")
-            )));
-        }
         let g = &scene.geometry;
         if bvh.input_count() != g.triangle_count() || bvh.layout() != furnace_accel::Layout::Cwbvh {
             return Err(GpuError::Unsupported(format!(
@@ -283,6 +276,7 @@ impl PackedScene {
         let mut buffers: Vec<(&str, &[u32])> = vec![("BVH node", nodes), ("BVH triangle", tris)];
         buffers.extend(SceneBuffers::EXTRA_NAMES.into_iter().zip(self.scene_words.extra()));
         buffers.push(("scene transmission", bytemuck::cast_slice(&self.scene_words.transmission)));
+        buffers.push(("scene layers", bytemuck::cast_slice(&self.scene_words.layers)));
         buffers.extend(self.emitter_words.as_deref().map(|w| ("emitter", w)));
         buffers.extend(self.environment.iter().map(|(label, w)| (*label, w.as_slice())));
         for (what, words) in buffers {

@@ -291,6 +291,9 @@ impl GpuRenderer {
         if let Some(t) = &self.scene.transmission {
             resources.push(t.as_entire_binding());
         }
+        if let Some(l) = &self.scene.layers {
+            resources.push(l.as_entire_binding());
+        }
         if let Some(e) = &self.emitters {
             resources.push(e.as_entire_binding());
         }

@@ -131,7 +131,11 @@ impl GpuRenderer {
             bytemuck::cast_slice(&[0u32; COUNTER_WORDS]),
             wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC,
         )?;
-        let turquin = storage_buffer(&ctx, "turquin", bytemuck::cast_slice(&brdf::turquin_table()))?;
+        let mut tables = brdf::turquin_table();
+        if features.sheen {
+            tables.extend(brdf::sheen_table());
+        }
+        let turquin = storage_buffer(&ctx, "turquin", bytemuck::cast_slice(&tables))?;
         let point_lights = storage_buffer(&ctx, "point lights", bytemuck::cast_slice(&packed.point_lights))?;
         let emitters =
             packed.emitter_words.as_ref().map(|w| storage_buffer(&ctx, "emitters", w)).transpose()?;

@@ -184,7 +184,16 @@ fn scatter(path: ptr<function, Path>, pixel: u32, index: u32, bsdf: HitBsdf, wo:
     let dim = DIM_FIRST_BOUNCE + DIMS_PER_BOUNCE * path.event;
     let u = sampler_value_2d(params.sampler, pixel, index, dim + BOUNCE_BSDF_DIRECTION);
     let uc = sampler_value(params.sampler, pixel, index, dim + BOUNCE_BSDF_LOBE);
+    // #if LAYERS
+    var s: BsdfSample;
+    if bsdf.layered {
+        s = hit_sample_layered(bsdf, wo, uc, u);
+    } else {
+        s = bsdf_sample(bsdf.m, wo, uc, u);
+    }
+    // #else
     let s = bsdf_sample(bsdf.m, wo, uc, u);
+    // #endif
     if s.lobe == BSDF_LOBE_NONE {
         return false;
     }
@@ -226,7 +235,13 @@ fn scatter_transmissive(path: ptr<function, Path>, pixel: u32, index: u32, bsdf:
         uc = sampler_value(params.sampler, pixel, index, dim + BOUNCE_BSDF_LOBE);
     }
     var s: ScatterSample;
+    // #if LAYERS
+    if bsdf.layered {
+        s = hit_scatter_layered(bsdf, wo, uc, u);
+    } else if bsdf.kind != 0u {
+    // #else
     if bsdf.kind != 0u {
+    // #endif
         s = transmissive_sample(bsdf.t, wo, uc, u);
     } else {
         let o = bsdf_sample(bsdf.m, wo, uc, u);
@@ -351,6 +366,10 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
         shading = -shading;
     }
     delta = bsdf.kind != 0u && transmissive_is_delta(bsdf.t);
+    // #if LAYERS
+    // HitBsdf::is_delta: layers above a smooth dielectric reflect light samples.
+    delta = delta && !bsdf.layered;
+    // #endif
     // #endif
     let frame = frame_new(shading);
     let wo = frame_to_local(frame, -path.direction);

@@ -37,6 +37,11 @@ struct HitBsdf {
     // The absorption coefficient of the volume the vertex is in (0: air).
     medium: vec3<f32>,
     // #endif
+    // #if LAYERS
+    // The coat and sheen above the material, and whether there are any at this hit.
+    l: Layers,
+    layered: bool,
+    // #endif
 }
 
 // `HitBsdf::new`: the material's BSDF at a hit.
@@ -67,11 +72,15 @@ fn hit_bsdf(ms: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
         b.kind = tr.flags;
     }
     // #endif
+    // #if LAYERS
+    b.l = layers_new(material, at);
+    b.layered = layers_present(b.l);
+    // #endif
     return b;
 }
 
-// HitBsdf::eval.
-fn hit_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+// Core::eval: the material beneath the layers.
+fn hit_core_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     // #if TRANSMISSION
     if b.kind != 0u {
         return transmissive_eval(b.t, wo, wi);
@@ -80,8 +89,8 @@ fn hit_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     return bsdf_eval(b.m, wo, wi);
 }
 
-// HitBsdf::pdf.
-fn hit_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+// Core::pdf.
+fn hit_core_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     // #if TRANSMISSION
     if b.kind != 0u {
         return transmissive_pdf(b.t, wo, wi);
@@ -89,3 +98,113 @@ fn hit_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     // #endif
     return bsdf_pdf(b.m, wo, wi);
 }
+
+// HitBsdf::eval.
+fn hit_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let core = hit_core_eval(b, wo, wi);
+    // #if LAYERS
+    if b.layered {
+        return layers_eval(b.l, wo, wi, core);
+    }
+    // #endif
+    return core;
+}
+
+// HitBsdf::pdf.
+fn hit_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    // #if LAYERS
+    if b.layered {
+        let p = layers_probabilities(b.l, wo, hit_core_estimate(b, wo));
+        return layers_pdf(b.l, wo, wi, p) + p.z * hit_core_pdf(b, wo, wi);
+    }
+    // #endif
+    return hit_core_pdf(b, wo, wi);
+}
+
+// #if LAYERS
+// MetallicRoughness::albedo_estimates, summed: the opaque material's estimate at ωo.
+fn hit_opaque_estimate(m: BsdfParams, wo: vec3<f32>) -> f32 {
+    let mu = brdf_clamp(wo.z, 0.0, 1.0);
+    var spec = brdf_luminance(brdf_schlick(m.f0, vec3<f32>(m.f90), mu));
+    if (m.flags & BSDF_FLAG_COMPENSATION) == 0u {
+        spec *= bsdf_e_ss(mu, m.alpha, brdf_height_correlated(m));
+    }
+    return spec + brdf_luminance(m.diffuse) * brdf_diffuse_scale(m, mu);
+}
+
+// Core::albedo_estimate: a transmissive material's dielectric counts 1.
+fn hit_core_estimate(b: HitBsdf, wo: vec3<f32>) -> f32 {
+    // #if TRANSMISSION
+    if b.kind != 0u {
+        return b.t.weight + (1.0 - b.t.weight) * hit_opaque_estimate(b.t.opaque, wo);
+    }
+    // #endif
+    return hit_opaque_estimate(b.m, wo);
+}
+
+// HitBsdf::sample for an opaque material under its layers: a lobe by uc, then the mixture's
+// pdf and eval/pdf.
+fn hit_sample_layered(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> BsdfSample {
+    let p = layers_probabilities(b.l, wo, hit_core_estimate(b, wo));
+    var wi: vec3<f32>;
+    var lobe = BSDF_LOBE_SHEEN;
+    if uc < p.x + p.y {
+        let d = layers_sample_direction(b.l, wo, uc, u, p);
+        if !d.valid {
+            return brdf_no_sample();
+        }
+        wi = d.wi;
+        lobe = select(BSDF_LOBE_SHEEN, BSDF_LOBE_CLEARCOAT, uc < p.x);
+    } else {
+        let s = bsdf_sample(b.m, wo, layers_core_uc(uc, p), u);
+        if s.lobe == BSDF_LOBE_NONE {
+            return brdf_no_sample();
+        }
+        wi = s.wi;
+        lobe = s.lobe;
+    }
+    let pdf = layers_pdf(b.l, wo, wi, p) + p.z * bsdf_pdf(b.m, wo, wi);
+    if !brdf_positive_finite(pdf) {
+        return brdf_no_sample();
+    }
+    return BsdfSample(wi, pdf, hit_eval(b, wo, wi) / pdf, lobe);
+}
+
+// #if TRANSMISSION
+// HitBsdf::sample under the layers with a transmissive material: a delta event of the material
+// keeps its direction, weighted through the layers with the choice of the material divided out.
+fn hit_scatter_layered(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> ScatterSample {
+    let p = layers_probabilities(b.l, wo, hit_core_estimate(b, wo));
+    var wi: vec3<f32>;
+    if uc < p.x + p.y {
+        let d = layers_sample_direction(b.l, wo, uc, u, p);
+        if !d.valid {
+            return scatter_none();
+        }
+        wi = d.wi;
+    } else {
+        let rest = layers_core_uc(uc, p);
+        var s: ScatterSample;
+        if b.kind != 0u {
+            s = transmissive_sample(b.t, wo, rest, u);
+        } else {
+            let o = bsdf_sample(b.m, wo, rest, u);
+            s = ScatterSample(o.wi, o.pdf, o.weight, 0.0, false, false, o.lobe != BSDF_LOBE_NONE);
+        }
+        if !s.valid {
+            return s;
+        }
+        if s.delta {
+            s.weight *= layers_below(b.l, wo, s.wi) / p.z;
+            return s;
+        }
+        wi = s.wi;
+    }
+    let pdf = layers_pdf(b.l, wo, wi, p) + p.z * hit_core_pdf(b, wo, wi);
+    if !brdf_positive_finite(pdf) {
+        return scatter_none();
+    }
+    return ScatterSample(wi, pdf, hit_eval(b, wo, wi) / pdf, 0.0, false, wi.z < 0.0, true);
+}
+// #endif
+// #endif

@@ -61,7 +61,13 @@ fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {
             // CpuRenderer::transmittance: T′ at the angle to the sheet's shading normal.
             var n = scene_shading_normal(triangle_id, u, v);
             let cos = scene_dot(shadow_direction, n);
-            let through = b.t.weight * dielectric_shadow_transmittance(b.t.d, cos);
+            var through = b.t.weight * dielectric_shadow_transmittance(b.t.d, cos);
+            // #if LAYERS
+            // HitBsdf::sheet_transmittance: through the layers at that direction.
+            if b.layered {
+                through *= layers_below(b.l, vec3<f32>(0.0, 0.0, abs(cos)), vec3<f32>(0.0, 0.0, -abs(cos)));
+            }
+            // #endif
             // #if BLEND
             if coverage < 1.0 {
                 shadow_carried *= (1.0 - coverage) + coverage * through;
