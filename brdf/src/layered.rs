@@ -119,6 +119,15 @@ pub struct HitBsdf {
     pub layers: Option<Layers>,
 }
 
+/// How [`HitBsdf::sample_with`] chooses between the layers and the material.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LobeSelection {
+    /// In proportion to albedo estimates at ωo (what the renderers use).
+    Albedo,
+    /// The same probability for every present layer and the material (the naive rule).
+    Uniform,
+}
+
 /// The smallest probability a present layer is sampled with: no lobe whose estimate is
 /// small at this view (a coat seen head-on reflects 4 %) is starved.
 pub const MIN_LAYER_PROBABILITY: f32 = 0.05;
@@ -152,7 +161,19 @@ impl HitBsdf {
         match &self.layers {
             None => self.core.pdf(wo, wi),
             Some(l) => {
-                let p = l.probabilities(wo, &self.core);
+                let p = l.probabilities(wo, &self.core, LobeSelection::Albedo);
+                l.pdf(wo, wi, p) + p.core * self.core.pdf(wo, wi)
+            }
+        }
+    }
+
+    /// [`HitBsdf::pdf`] of [`HitBsdf::sample_with`] under `selection`.
+    #[inline]
+    pub fn pdf_with(&self, wo: Vec3, wi: Vec3, selection: LobeSelection) -> f32 {
+        match &self.layers {
+            None => self.core.pdf(wo, wi),
+            Some(l) => {
+                let p = l.probabilities(wo, &self.core, selection);
                 l.pdf(wo, wi, p) + p.core * self.core.pdf(wo, wi)
             }
         }
@@ -162,8 +183,21 @@ impl HitBsdf {
     /// ([`MetallicRoughness::sample_lazy`]).
     #[inline]
     pub fn sample(&self, wo: Vec3, u: Vec2, uc: impl FnOnce() -> f32) -> Option<ScatterSample> {
+        self.sample_with(wo, u, uc, LobeSelection::Albedo)
+    }
+
+    /// [`HitBsdf::sample`] with the layers chosen by `selection` (the renderers use
+    /// [`LobeSelection::Albedo`]; the other rule is there to be measured against).
+    #[inline]
+    pub fn sample_with(
+        &self,
+        wo: Vec3,
+        u: Vec2,
+        uc: impl FnOnce() -> f32,
+        selection: LobeSelection,
+    ) -> Option<ScatterSample> {
         let Some(l) = &self.layers else { return self.core.sample(wo, u, uc) };
-        let p = l.probabilities(wo, &self.core);
+        let p = l.probabilities(wo, &self.core, selection);
         let uc = uc();
         let wi = if uc < p.clearcoat {
             l.clearcoat?.sample_direction(wo, u)?
@@ -358,7 +392,16 @@ impl Layers {
     /// `(1 − c·Fc)·lum(sheenColor)·E(μo)`, material `(1 − c·Fc)·(1 − max(sheenColor)·E(μo))`
     /// times its own estimate), each present layer at least [`MIN_LAYER_PROBABILITY`].
     #[inline]
-    fn probabilities(&self, wo: Vec3, core: &Core) -> Probabilities {
+    fn probabilities(&self, wo: Vec3, core: &Core, selection: LobeSelection) -> Probabilities {
+        if selection == LobeSelection::Uniform {
+            let n = 1.0 + f32::from(u8::from(self.clearcoat.is_some()) + u8::from(self.sheen.is_some()));
+            let p = |present: bool| if present { 1.0 / n } else { 0.0 };
+            return Probabilities {
+                clearcoat: p(self.clearcoat.is_some()),
+                sheen: p(self.sheen.is_some()),
+                core: 1.0 / n,
+            };
+        }
         let rest = self.coat_rest(wo);
         let c = self.clearcoat.map_or(0.0, |c| c.albedo_estimate(wo));
         let (s, scale) = match &self.sheen {

@@ -80,7 +80,7 @@ pub use dielectric::{Dielectric, Fresnel, Interface, ScatterSample, Transmissive
 pub use frame::Frame;
 pub use ggx::{Ggx, Masking, SpecularSampling};
 pub use lambert::Lambert;
-pub use layered::{HitBsdf, LayeredParams};
+pub use layered::{HitBsdf, LayeredParams, LobeSelection};
 pub use metallic_roughness::{MetallicRoughness, MetallicRoughnessParams, luminance};
 pub use sheen::Sheen;
 pub use specular::{GgxSpecular, SpecularOptions};

@@ -42,8 +42,8 @@ use crate::common;
 use common::write_output;
 use furnace_brdf::ggx::{ALPHA_MIN, reflect};
 use furnace_brdf::{
-    Bsdf, Ggx, GgxSpecular, Lambert, Masking, MetallicRoughness, MetallicRoughnessParams, Rgb,
-    SpecularOptions, SpecularSampling,
+    Bsdf, Clearcoat, Ggx, GgxSpecular, HitBsdf, Lambert, LayeredParams, Masking, MetallicRoughness,
+    MetallicRoughnessParams, Rgb, Sheen, SpecularOptions, SpecularSampling,
 };
 use glam::{Vec2, Vec3};
 use std::fmt::Write as _;
@@ -189,12 +189,53 @@ fn check(name: &str, bsdf: &dyn Bsdf, dirs: &[(String, Vec3)], us: &[(f32, Vec2)
     }
 }
 
-/// Every raw lobe: Lambert at albedo 0, ½, 1; GGX at every α of [`ALPHAS`] × four F0 × every
+/// Every raw lobe: Lambert at albedo 0, ½, 1; the sheen and the clear coat at and past the ends
+/// of their ranges, and both over materials; GGX at every α of [`ALPHAS`] × four F0 × every
 /// option combination.
 fn raw_lobes() -> Vec<(String, Box<dyn Bsdf>)> {
     let mut v: Vec<(String, Box<dyn Bsdf>)> = vec![];
     for albedo in [0.0, 0.5, 1.0] {
         v.push((format!("Lambert({albedo})"), Box::new(Lambert::new(Rgb::splat(albedo)))));
+    }
+    // The layers' lobes at the ends of their ranges and past them.
+    for color in [0.0, 0.5, 1.0, f32::NAN, 2.0, f32::INFINITY] {
+        for roughness in [0.0, 1e-3, 0.25, 1.0, f32::NAN, -1.0, 2.0] {
+            v.push((
+                format!("Sheen::new({color}, {roughness})"),
+                Box::new(Sheen::new(Rgb::splat(color), roughness)),
+            ));
+        }
+    }
+    for factor in [0.0, 1.0, f32::NAN, 2.0] {
+        for roughness in [0.0, 1e-3, 0.5, 1.0, f32::NAN] {
+            for options in all_options() {
+                v.push((
+                    format!("Clearcoat::new({factor}, {roughness}, Z, {options:?})"),
+                    Box::new(Clearcoat::new(factor, roughness, Vec3::Z, options)),
+                ));
+            }
+        }
+    }
+    // Coat and sheen over a material, with degenerate layers (`HitBsdf` through [`Layered`]).
+    for (cc, ccr) in [(1.0, 0.0), (1.0, 1.0), (f32::NAN, 0.5), (0.5, f32::NAN)] {
+        for (sheen, sr) in [(0.0, 0.0), (1.0, 0.0), (1.0, 1.0), (f32::NAN, 0.5), (0.5, f32::NAN)] {
+            for (metallic, roughness) in [(0.0, 0.0), (1.0, 1e-3), (0.0, 1.0)] {
+                let p = LayeredParams {
+                    base_color: Rgb::splat(0.8),
+                    metallic,
+                    roughness,
+                    clearcoat: cc,
+                    clearcoat_roughness: ccr,
+                    sheen_color: Rgb::splat(sheen),
+                    sheen_roughness: sr,
+                    ..Default::default()
+                };
+                v.push((
+                    format!("HitBsdf::new({p:?})"),
+                    Box::new(Layered(HitBsdf::new(&p, SpecularOptions::default()))),
+                ));
+            }
+        }
     }
     for alpha in ALPHAS {
         for f0 in [Rgb::ZERO, Rgb::splat(0.04), Rgb::new(1.0, 0.78, 0.34), Rgb::ONE] {
@@ -207,6 +248,29 @@ fn raw_lobes() -> Vec<(String, Box<dyn Bsdf>)> {
         }
     }
     v
+}
+
+/// An opaque layered [`HitBsdf`] as a [`Bsdf`] (its samples reflect).
+struct Layered(HitBsdf);
+
+impl Bsdf for Layered {
+    fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        self.0.eval(wo, wi)
+    }
+
+    fn sample(&self, wo: Vec3, uc: f32, u: Vec2) -> Option<furnace_brdf::Sample> {
+        let s = self.0.sample(wo, u, || uc)?;
+        Some(furnace_brdf::Sample {
+            wi: s.wi,
+            weight: s.weight,
+            pdf: s.pdf,
+            lobe: furnace_brdf::Lobe::Diffuse,
+        })
+    }
+
+    fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        self.0.pdf(wo, wi)
+    }
 }
 
 /// glTF materials with degenerate parameters × every option combination.
