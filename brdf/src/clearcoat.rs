@@ -45,9 +45,15 @@ impl Clearcoat {
         let r = if roughness.is_nan() { 0.0 } else { roughness.clamp(0.0, 1.0) };
         let mut lobe = GgxSpecular::new(r * r, Rgb::ONE, SpecularOptions { compensation: false, ..options });
         lobe.f90 = Rgb::ONE;
+        Self { factor, lobe, frame: None }.with_normal(normal)
+    }
+
+    /// The same coat with its normal at `normal` in the base's frame (unit; `Vec3::Z` for the
+    /// base's own).
+    pub fn with_normal(self, normal: Vec3) -> Self {
         let frame = (normal != Vec3::Z && normal.is_finite() && normal.length_squared() > 0.0)
             .then(|| Frame::new(normal.normalize()));
-        Self { factor, lobe, frame }
+        Self { frame, ..self }
     }
 
     /// `c·Fc(|ωo·n_c|)`: the coat's weight, and `1 −` it the weight of what lies beneath.

@@ -222,6 +222,16 @@ impl HitBsdf {
         Some(ScatterSample { wi, weight: self.eval(wo, wi) / pdf, pdf, delta: false, transmitted, rest: 0.0 })
     }
 
+    /// The BSDF with its clear coat's normal at `normal` (unit, in the shading frame); the
+    /// same BSDF without a coat.
+    #[inline]
+    pub fn with_clearcoat_normal(mut self, normal: Vec3) -> Self {
+        if let Some(Layers { clearcoat: Some(c), .. }) = &mut self.layers {
+            *c = Clearcoat::with_normal(*c, normal);
+        }
+        self
+    }
+
     /// Only delta lobes: no light sample can reach a direction.
     #[inline]
     pub fn is_delta(&self) -> bool {

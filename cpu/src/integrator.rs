@@ -137,7 +137,7 @@ impl CpuRenderer {
                     let params = m.evaluate(&VertexAttributes::default(), &scene.textures, &scene.images);
                     ConstantMaterial {
                         emission: params.emission,
-                        bsdf: bsdf(&params, m, settings.specular),
+                        bsdf: bsdf(&params, m, settings.specular, Vec3::Z),
                         base_color: params.base_color,
                     }
                 })
@@ -463,7 +463,8 @@ impl CpuRenderer {
                 None => {
                     let at = scene.geometry.attributes(t as usize, b.x, b.y);
                     let p = material.evaluate(&at, &scene.textures, &scene.images);
-                    bsdf(&p, material, self.settings.specular).sheet_transmittance(direction.dot(normal))
+                    bsdf(&p, material, self.settings.specular, Vec3::Z)
+                        .sheet_transmittance(direction.dot(normal))
                 }
             };
             carried *= if coverage >= 1.0 { params } else { (1.0 - coverage) + coverage * params };
@@ -547,9 +548,15 @@ fn absorption(sigma: Vec3, t: f32) -> Vec3 {
     Vec3::new(f(sigma.x), f(sigma.y), f(sigma.z))
 }
 
-/// The BSDF of a hit's evaluated material parameters ([`HitBsdf::new`]).
+/// The BSDF of a hit's evaluated material parameters ([`HitBsdf::new`]), its clear coat's
+/// normal `coat_normal` in the shading frame (`Vec3::Z`: the shading normal).
 #[inline]
-fn bsdf(params: &MaterialSample, material: &furnace_scene::Material, specular: SpecularOptions) -> HitBsdf {
+fn bsdf(
+    params: &MaterialSample,
+    material: &furnace_scene::Material,
+    specular: SpecularOptions,
+    coat_normal: Vec3,
+) -> HitBsdf {
     HitBsdf::new(
         &LayeredParams {
             base_color: params.base_color,
@@ -562,7 +569,7 @@ fn bsdf(params: &MaterialSample, material: &furnace_scene::Material, specular: S
             volume: material.volume,
             clearcoat: params.clearcoat,
             clearcoat_roughness: params.clearcoat_roughness,
-            clearcoat_normal: Vec3::Z,
+            clearcoat_normal: coat_normal,
             sheen_color: params.sheen_color,
             sheen_roughness: params.sheen_roughness,
         },

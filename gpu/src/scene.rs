@@ -205,7 +205,7 @@ crate::gpu_struct! {
 crate::gpu_struct! {
     /// A material's layers (WGSL `SceneLayers`): KHR_materials_clearcoat and
     /// KHR_materials_sheen. One per material in `scene_layers`, bound only for a scene with a
-    /// coat or a sheen (zeros for a material without). 224 bytes.
+    /// coat or a sheen (zeros for a material without). 272 bytes.
     pub struct GpuLayers as "SceneLayers" {
         /// `clearcoatTexture` (R channel).
         pub clearcoat_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
@@ -215,6 +215,8 @@ crate::gpu_struct! {
         pub sheen_color_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
         /// `sheenRoughnessTexture` (A channel).
         pub sheen_roughness_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `clearcoatNormalTexture` (absent when the scene stores no tangents, as the base's).
+        pub clearcoat_normal_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
         /// `sheenColorFactor` (black: no sheen).
         pub sheen_color: [f32; 3] => WgslType::VEC3_F32,
         /// `sheenRoughnessFactor`.
@@ -223,12 +225,14 @@ crate::gpu_struct! {
         pub clearcoat: f32 => WgslType::F32,
         /// `clearcoatRoughnessFactor`.
         pub clearcoat_roughness: f32 => WgslType::F32,
-        /// Rust-only zeros up to 224 bytes (WGSL pads by itself).
-        pub pad: [u32; 2] => WgslType::PAD,
+        /// `clearcoatNormalTexture.scale`.
+        pub clearcoat_normal_scale: f32 => WgslType::F32,
+        /// Rust-only zeros up to 272 bytes (WGSL pads by itself).
+        pub pad: [u32; 1] => WgslType::PAD,
     }
 }
 
-const _: () = assert!(size_of::<GpuLayers>() == 224);
+const _: () = assert!(size_of::<GpuLayers>() == 272);
 const _: () = assert!(size_of::<GpuTransmission>() == 80);
 const _: () = assert!(size_of::<GpuSceneTriangle>() == 16);
 const _: () = assert!(size_of::<GpuVertex>() == 16);
@@ -326,7 +330,10 @@ impl Kept {
         let textured = scene.materials.iter().any(|m| m.uses_textures());
         Self {
             normal_mapped: !g.tangents.is_empty()
-                && scene.materials.iter().any(|m| m.normal_texture.is_some()),
+                && scene.materials.iter().any(|m| {
+                    m.normal_texture.is_some()
+                        || m.layers.clearcoat.as_ref().is_some_and(|c| c.normal_texture.is_some())
+                }),
             uv_sets: if textured { g.uv_sets().min(furnace_scene::MAX_UV_SETS) as u32 } else { 0 },
             colors: !g.colors.is_empty(),
         }
@@ -383,7 +390,9 @@ impl ImageLayout {
                 &m.emissive_texture,
                 &m.transmission_texture,
             ];
-            let clearcoat = m.layers.clearcoat.iter().flat_map(|c| [&c.texture, &c.roughness_texture]);
+            let clearcoat = m.layers.clearcoat.iter().flat_map(|c| {
+                [&c.texture, &c.roughness_texture, if kept.normal_mapped { &c.normal_texture } else { &None }]
+            });
             let sheen = m.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]);
             for slot in slots.into_iter().chain(clearcoat).chain(sheen) {
                 if let Some((_, tex)) = resolve(scene, slot) {
@@ -554,6 +563,7 @@ fn material_record(
 /// A material's layers record, its texture slots through `texture_ref` (zeros without layers).
 fn layers_record(
     m: &furnace_scene::Material,
+    kept: Kept,
     texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
 ) -> GpuLayers {
     let mut r = GpuLayers::zeroed();
@@ -562,6 +572,10 @@ fn layers_record(
         r.clearcoat_roughness = c.roughness;
         r.clearcoat_texture = texture_ref(&c.texture);
         r.clearcoat_roughness_texture = texture_ref(&c.roughness_texture);
+        if kept.normal_mapped {
+            r.clearcoat_normal_texture = texture_ref(&c.normal_texture);
+            r.clearcoat_normal_scale = c.normal_scale;
+        }
     }
     if let Some(s) = &m.layers.sheen {
         r.sheen_color = s.color.to_array();
@@ -625,7 +639,7 @@ impl SceneBuffers {
             Vec::new()
         };
         let layers = if scene.materials.iter().any(|m| !m.layers.is_empty()) {
-            scene.materials.iter().map(|m| layers_record(m, &texture_ref)).collect()
+            scene.materials.iter().map(|m| layers_record(m, kept, &texture_ref)).collect()
         } else {
             Vec::new()
         };

@@ -137,6 +137,11 @@ pub struct ClearcoatLayer {
     pub roughness: f32,
     /// `clearcoatRoughnessTexture` (linear, G channel).
     pub roughness_texture: Option<TextureRef>,
+    /// `clearcoatNormalTexture` (linear, tangent space): the coat's own normal map (without
+    /// it the coat takes the interpolated normal, not the base's normal map).
+    pub normal_texture: Option<TextureRef>,
+    /// `clearcoatNormalTexture.scale`.
+    pub normal_scale: f32,
 }
 
 /// KHR_materials_sheen's factors and textures.
@@ -197,7 +202,9 @@ impl Material {
             &self.transmission_texture,
         ]
         .into_iter()
-        .chain(self.layers.clearcoat.iter().flat_map(|c| [&c.texture, &c.roughness_texture]))
+        .chain(
+            self.layers.clearcoat.iter().flat_map(|c| [&c.texture, &c.roughness_texture, &c.normal_texture]),
+        )
         .chain(self.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]))
         .flatten()
     }

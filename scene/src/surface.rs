@@ -17,6 +17,9 @@ pub struct SurfacePoint {
     pub geometric: Vec3,
     /// Shading normal (interpolated, normal-mapped): the z axis of the BSDF frame.
     pub shading: Vec3,
+    /// The clear coat's normal (KHR_materials_clearcoat): the interpolated normal with the
+    /// coat's own normal map, not the base's; the shading normal for a material without a coat.
+    pub coat: Vec3,
     /// The ray hit the back of a double-sided surface (both normals were flipped to face it).
     /// Emission is one-sided: the back of an emitter does not emit.
     pub back_face: bool,
@@ -61,20 +64,19 @@ impl Scene {
         let [v0, v1, v2] = g.triangle(t)?;
         let position = (1.0 - b1 - b2) * v0 + b1 * v1 + b2 * v2;
         let mut geometric = geometric_normal(v0, v1, v2);
-        let mut shading = interpolated.filter(|n| *n != Vec3::ZERO).unwrap_or(geometric);
-        if let Some(normal_map) = &material.normal_texture
-            && let Some(tangent) = g.tangent(t, b1, b2)
-        {
-            // glTF normal map: tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame
-            // (T, B = w·N×T, N), with T made orthogonal to the shading normal N.
-            let m = normal_map.sample(at, &self.textures, &self.images).truncate();
-            let m = (2.0 * m - Vec3::ONE) * Vec3::new(material.normal_scale, material.normal_scale, 1.0);
-            let tn = (tangent.truncate() - shading * shading.dot(tangent.truncate())).normalize_or_zero();
-            if tn != Vec3::ZERO {
-                let bn = tangent.w * shading.cross(tn);
-                shading = (m.x * tn + m.y * bn + m.z * shading).normalize_or(shading);
-            }
-        }
+        let base = interpolated.filter(|n| *n != Vec3::ZERO).unwrap_or(geometric);
+        let mut shading = self.normal_mapped(
+            t,
+            (b1, b2),
+            base,
+            material.normal_texture.as_ref(),
+            material.normal_scale,
+            at,
+        );
+        let mut coat = match &material.layers.clearcoat {
+            Some(c) => self.normal_mapped(t, (b1, b2), base, c.normal_texture.as_ref(), c.normal_scale, at),
+            None => shading,
+        };
         let back_face = geometric.dot(direction) > 0.0;
         if back_face {
             if !material.double_sided {
@@ -82,8 +84,32 @@ impl Scene {
             }
             geometric = -geometric;
             shading = -shading;
+            coat = -coat;
         }
-        Some(SurfacePoint { position, geometric, shading, back_face })
+        Some(SurfacePoint { position, geometric, shading, coat, back_face })
+    }
+
+    /// `normal` with a glTF normal map applied at `at` through the vertex tangents: the
+    /// tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame (T, B = w·N×T, N), with T
+    /// made orthogonal to N. `normal` itself without a map or tangents.
+    fn normal_mapped(
+        &self,
+        t: usize,
+        (b1, b2): (f32, f32),
+        normal: Vec3,
+        map: Option<&crate::texture::TextureRef>,
+        scale: f32,
+        at: &VertexAttributes,
+    ) -> Vec3 {
+        let (Some(map), Some(tangent)) = (map, self.geometry.tangent(t, b1, b2)) else { return normal };
+        let m = map.sample(at, &self.textures, &self.images).truncate();
+        let m = (2.0 * m - Vec3::ONE) * Vec3::new(scale, scale, 1.0);
+        let tn = (tangent.truncate() - normal * normal.dot(tangent.truncate())).normalize_or_zero();
+        if tn == Vec3::ZERO {
+            return normal;
+        }
+        let bn = tangent.w * normal.cross(tn);
+        (m.x * tn + m.y * bn + m.z * normal).normalize_or(normal)
     }
 
     /// The alpha test of a hit of triangle `t` (of `material`) at barycentrics `(b1, b2)`: true

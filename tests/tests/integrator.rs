@@ -503,7 +503,8 @@ fn same_samples_give_the_same_image_with_glass() {
 
 /// The layers above the material (KHR_materials_clearcoat, KHR_materials_sheen): the clear-coat
 /// spheres of the PBR references with sheens added to every other material (coat alone, sheen
-/// alone, both), lit by their sun and sky; and the glass box with a coat and a sheen on its
+/// alone, both), lit by their sun and sky; the helmet under a coat with its own normal map (the
+/// coat's frame tilted from the shading frame); and the glass box with a coat and a sheen on its
 /// transmissive materials (the layers over a dielectric: delta events weighted through them,
 /// shadow rays crossing a coated sheet).
 #[test]
@@ -522,6 +523,25 @@ fn same_samples_give_the_same_image_with_clearcoat_and_sheen() {
         &scene,
         RenderSettings { width: 32, height: 24, bounces: 3, ..settings(SamplerKind::Sobol, 5) },
     );
+    // A coat with its own normal map over a normal-mapped base (the coat's frame tilted from
+    // the shading frame): the helmet's normal map, at scale 0.4 for the coat.
+    let mut helmet =
+        furnace_scene::Scene::load(furnace_tests::data::scene("DamagedHelmet/glTF-Binary/DamagedHelmet.glb"))
+            .unwrap();
+    for m in &mut helmet.materials {
+        m.layers.clearcoat = Some(furnace_scene::ClearcoatLayer {
+            factor: 1.0,
+            texture: None,
+            roughness: 0.15,
+            roughness_texture: None,
+            normal_texture: m.normal_texture,
+            normal_scale: 0.4,
+        });
+    }
+    same_samples_with(
+        &helmet,
+        RenderSettings { width: 24, height: 24, bounces: 2, ..settings(SamplerKind::Sobol, 7) },
+    );
     let mut glass =
         furnace_scene::Scene::load(furnace_tests::data::reference("glass/glass_box.gltf")).unwrap();
     for m in glass.materials.iter_mut().filter(|m| m.is_transmissive()) {
@@ -530,6 +550,8 @@ fn same_samples_give_the_same_image_with_clearcoat_and_sheen() {
             texture: None,
             roughness: 0.2,
             roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
         });
         m.layers.sheen = Some(furnace_scene::SheenLayer {
             color: glam::Vec3::new(0.3, 0.6, 0.9),

@@ -117,7 +117,11 @@ impl CpuRenderer {
             let bsdf = match &shading {
                 Shading::Constant(c) => &c.bsdf,
                 Shading::Evaluated(params) => {
-                    evaluated = bsdf(params, material, self.settings.specular);
+                    let b = bsdf(params, material, self.settings.specular, Vec3::Z);
+                    evaluated = match coat_normal(material, &b, surface) {
+                        Some(n) => b.with_clearcoat_normal(n),
+                        None => b,
+                    };
                     &evaluated
                 }
             };
@@ -321,4 +325,15 @@ fn first_hit_aov(shading: &Shading<'_>, surface: Option<&SurfacePoint>, depth: f
         normal: surface.map_or(Vec3::ZERO, |s| s.shading),
         depth: Some(depth),
     }
+}
+
+/// The clear coat's normal in the frame `bsdf` is shaded in (`vertex`'s: outward for a solid's
+/// interface), or `None` where it is the shading normal (no coat, or neither normal map).
+#[inline]
+fn coat_normal(material: &Material, bsdf: &HitBsdf, surface: &SurfacePoint) -> Option<Vec3> {
+    if material.layers.clearcoat.is_none() || surface.coat == surface.shading {
+        return None;
+    }
+    let sign = if bsdf.is_volume() && surface.back_face { -1.0 } else { 1.0 };
+    Some(Frame::new(sign * surface.shading).to_local(sign * surface.coat))
 }

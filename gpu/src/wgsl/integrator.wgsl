@@ -372,6 +372,21 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
     // #endif
     // #endif
     let frame = frame_new(shading);
+    // #if CLEARCOAT
+    // The coat's own normal (Clearcoat::with_normal), in the frame the BSDF is shaded in.
+    if bsdf.layered && bsdf.l.coat_factor > 0.0 {
+        let coat = layers_coat_normal(material, hit.triangle, hit.u, hit.v, at, surface);
+        if any(coat != surface.shading) {
+            var sign = 1.0;
+            // #if TRANSMISSION
+            if volume && surface.back_face != 0u {
+                sign = -1.0;
+            }
+            // #endif
+            bsdf.l = layers_with_coat_normal(bsdf.l, frame_to_local(frame, sign * coat));
+        }
+    }
+    // #endif
     let wo = frame_to_local(frame, -path.direction);
     let leave = offset_ray_origin_scaled(surface.position, surface.geometric, params.offset_scale);
     // #if TRANSMISSION

@@ -10,6 +10,10 @@ struct Layers {
     // #if CLEARCOAT
     coat: BsdfParams,
     coat_factor: f32,
+    // The coat's normal is not the shading normal (its own normal map, or the base's map that
+    // the coat does not take): its frame in the shading frame.
+    coat_tilted: bool,
+    coat_frame: Frame,
     // #endif
     // #if SHEEN
     sheen_color: vec3<f32>,
@@ -24,6 +28,61 @@ fn layers_coat_fresnel(cos_o: f32) -> f32 {
     let m = max(1.0 - min(abs(cos_o), 1.0), 0.0);
     let m2 = m * m;
     return 0.04 + 0.96 * (m2 * m2 * m);
+}
+
+// ωo·n_c, the cosine the coat's Fresnel weight and albedo estimate take.
+fn layers_coat_cos(l: Layers, wo: vec3<f32>) -> f32 {
+    if l.coat_tilted {
+        return dot(wo, l.coat_frame.z);
+    }
+    return wo.z;
+}
+
+// `Clearcoat::with_normal`: the layers with the coat's normal at `n` (unit, in the shading
+// frame).
+fn layers_with_coat_normal(l: Layers, n: vec3<f32>) -> Layers {
+    var r = l;
+    let len2 = dot(n, n);
+    if any(n != vec3<f32>(0.0, 0.0, 1.0)) && len2 > 0.0 && brdf_is_finite(len2) {
+        r.coat_tilted = true;
+        r.coat_frame = frame_new(normalize(n));
+    }
+    return r;
+}
+
+// `Clearcoat::lobe_eval` (D·V·cos θi in the coat's frame), 0 below the base's horizon.
+fn layers_coat_lobe_eval(l: Layers, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    if !(brdf_above(wo) && brdf_above(wi)) {
+        return 0.0;
+    }
+    if l.coat_tilted {
+        return bsdf_eval(l.coat, frame_to_local(l.coat_frame, wo), frame_to_local(l.coat_frame, wi)).x;
+    }
+    return bsdf_eval(l.coat, wo, wi).x;
+}
+
+// `Clearcoat::pdf`.
+fn layers_coat_pdf(l: Layers, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    if !(brdf_above(wo) && brdf_above(wi)) {
+        return 0.0;
+    }
+    if l.coat_tilted {
+        return bsdf_pdf(l.coat, frame_to_local(l.coat_frame, wo), frame_to_local(l.coat_frame, wi));
+    }
+    return bsdf_pdf(l.coat, wo, wi);
+}
+
+// The clear coat's normal at a hit (Scene::surface_point's `coat`): the interpolated normal
+// with the coat's own normal map, turned as the shading normal is.
+fn layers_coat_normal(material: u32, triangle: u32, b1: f32, b2: f32, at: SceneAttributes,
+                      surface: SceneSurfacePoint) -> vec3<f32> {
+    let r = scene_layers[material];
+    var base = scene_shading_normal(triangle, b1, b2);
+    if all(base == vec3<f32>(0.0)) {
+        base = select(surface.geometric, -surface.geometric, surface.back_face != 0u);
+    }
+    let coat = scene_normal_mapped(triangle, b1, b2, base, r.clearcoat_normal_texture, r.clearcoat_normal_scale, at);
+    return select(coat, -coat, surface.back_face != 0u);
 }
 // #endif
 
@@ -109,6 +168,7 @@ fn layers_new(material: u32, at: SceneAttributes) -> Layers {
     l.coat_factor = brdf_sanitize(coat, 0.0, 1.0, 0.0);
     l.coat = bsdf_params(vec3<f32>(1.0), 1.0, brdf_sanitize(coat_roughness, 0.0, 1.0, 0.0), 1.0, vec3<f32>(1.0),
                          params.bsdf_flags & ~BSDF_FLAG_COMPENSATION);
+    l.coat_tilted = false;
     // #endif
     // #if SHEEN
     var color = r.sheen_color;
@@ -140,7 +200,7 @@ fn layers_present(l: Layers) -> bool {
 fn layers_coat_rest(l: Layers, wo: vec3<f32>) -> f32 {
     // #if CLEARCOAT
     if l.coat_factor > 0.0 {
-        return 1.0 - l.coat_factor * layers_coat_fresnel(wo.z);
+        return 1.0 - l.coat_factor * layers_coat_fresnel(layers_coat_cos(l, wo));
     }
     // #endif
     return 1.0;
@@ -168,7 +228,7 @@ fn layers_eval(l: Layers, wo: vec3<f32>, wi: vec3<f32>, core: vec3<f32>) -> vec3
     var f = below * layers_coat_rest(l, wo);
     // #if CLEARCOAT
     if l.coat_factor > 0.0 {
-        f += vec3<f32>(l.coat_factor * layers_coat_fresnel(wo.z) * bsdf_eval(l.coat, wo, wi).x);
+        f += vec3<f32>(l.coat_factor * layers_coat_fresnel(layers_coat_cos(l, wo)) * layers_coat_lobe_eval(l, wo, wi));
     }
     // #endif
     return f;
@@ -182,8 +242,9 @@ fn layers_probabilities(l: Layers, wo: vec3<f32>, core_estimate: f32) -> vec3<f3
     var coat = false;
     // #if CLEARCOAT
     coat = l.coat_factor > 0.0;
-    if coat && wo.z > 0.0 {
-        c = l.coat_factor * layers_coat_fresnel(wo.z) * bsdf_e_ss(wo.z, l.coat.alpha, brdf_height_correlated(l.coat));
+    let mu = layers_coat_cos(l, wo);
+    if coat && mu > 0.0 {
+        c = l.coat_factor * layers_coat_fresnel(mu) * bsdf_e_ss(mu, l.coat.alpha, brdf_height_correlated(l.coat));
     }
     // #endif
     var s = 0.0;
@@ -220,7 +281,7 @@ fn layers_pdf(l: Layers, wo: vec3<f32>, wi: vec3<f32>, p: vec3<f32>) -> f32 {
     var pdf = 0.0;
     // #if CLEARCOAT
     if l.coat_factor > 0.0 {
-        pdf += p.x * bsdf_pdf(l.coat, wo, wi);
+        pdf += p.x * layers_coat_pdf(l, wo, wi);
     }
     // #endif
     // #if SHEEN
@@ -241,6 +302,10 @@ struct LayerDirection {
 fn layers_sample_direction(l: Layers, wo: vec3<f32>, uc: f32, u: vec2<f32>, p: vec3<f32>) -> LayerDirection {
     // #if CLEARCOAT
     if uc < p.x {
+        if l.coat_tilted {
+            let s = bsdf_sample(l.coat, frame_to_local(l.coat_frame, wo), 0.0, u);
+            return LayerDirection(frame_to_world(l.coat_frame, s.wi), s.lobe != BSDF_LOBE_NONE);
+        }
         let s = bsdf_sample(l.coat, wo, 0.0, u);
         return LayerDirection(s.wi, s.lobe != BSDF_LOBE_NONE);
     }

@@ -424,6 +424,24 @@ fn scene_blend_coverage(mi: u32, triangle_id: u32, b1: f32, b2: f32) -> f32 {
 }
 
 
+// Scene::normal_mapped: `normal` with a glTF normal map applied at `at` through the vertex
+// tangents: the tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame
+// (T, B = w·N×T, N), with T made orthogonal to N; `normal` itself without a map.
+fn scene_normal_mapped(triangle: u32, b1: f32, b2: f32, normal: vec3<f32>, map: SceneTextureRef, scale: f32,
+                       at: SceneAttributes) -> vec3<f32> {
+    if (map.flags & SCENE_TEXTURE_PRESENT) == 0u {
+        return normal;
+    }
+    let tangent = scene_tangent(triangle, b1, b2);
+    let m = (2.0 * scene_texture_sample_at(map, at).xyz - vec3<f32>(1.0)) * vec3<f32>(scale, scale, 1.0);
+    let tn = scene_normalize_or_zero(tangent.xyz - normal * scene_dot(normal, tangent.xyz));
+    if all(tn == vec3<f32>(0.0)) {
+        return normal;
+    }
+    let bn = tangent.w * scene_cross(normal, tn);
+    return scene_normalize_or(m.x * tn + m.y * bn + m.z * normal, normal);
+}
+
 // Renderer::surface_point for a ray travelling along `direction` that hit `triangle` at
 // barycentrics (b1, b2); `at` is the hit's attributes (used by a normal map only).
 fn scene_surface_point(triangle: u32, b1: f32, b2: f32, at: SceneAttributes, direction: vec3<f32>) -> SceneSurfacePoint {
@@ -437,19 +455,8 @@ fn scene_surface_point(triangle: u32, b1: f32, b2: f32, at: SceneAttributes, dir
     if all(shading == vec3<f32>(0.0)) {
         shading = geometric;
     }
-    let normal_map = scene_materials[t.material].normal_texture;
-    if (normal_map.flags & SCENE_TEXTURE_PRESENT) != 0u {
-        // glTF normal map: tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame
-        // (T, B = w·N×T, N), with T made orthogonal to the shading normal N.
-        let tangent = scene_tangent(triangle, b1, b2);
-        let s = scene_materials[t.material].normal_scale;
-        let m = (2.0 * scene_texture_sample_at(normal_map, at).xyz - vec3<f32>(1.0)) * vec3<f32>(s, s, 1.0);
-        let tn = scene_normalize_or_zero(tangent.xyz - shading * scene_dot(shading, tangent.xyz));
-        if any(tn != vec3<f32>(0.0)) {
-            let bn = tangent.w * scene_cross(shading, tn);
-            shading = scene_normalize_or(m.x * tn + m.y * bn + m.z * shading, shading);
-        }
-    }
+    shading = scene_normal_mapped(triangle, b1, b2, shading, scene_materials[t.material].normal_texture,
+                                  scene_materials[t.material].normal_scale, at);
     var valid = 1u;
     var back_face = 0u;
     if scene_dot(geometric, direction) > 0.0 {

@@ -469,12 +469,6 @@ fn layers(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str, textures: usize) -
         let path = format!("{p}.extensions.KHR_materials_clearcoat");
         let factor = unit_factor(ctx, ext, "clearcoatFactor", 0.0, &path);
         let roughness = unit_factor(ctx, ext, "clearcoatRoughnessFactor", 0.0, &path);
-        if ext.get("clearcoatNormalTexture").is_some() {
-            ctx.warn(
-                format!("{path}.clearcoatNormalTexture"),
-                "not supported yet: the coat takes the shading normal",
-            );
-        }
         if factor > 0.0 {
             let texture = texture_ref_json(
                 ctx,
@@ -490,7 +484,24 @@ fn layers(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str, textures: usize) -
                 ColorSpace::Linear,
                 format!("{path}.clearcoatRoughnessTexture"),
             );
-            layers.clearcoat = Some(ClearcoatLayer { factor, texture, roughness, roughness_texture });
+            let normal = ext.get("clearcoatNormalTexture");
+            let normal_texture = texture_ref_json(
+                ctx,
+                normal,
+                textures,
+                ColorSpace::Linear,
+                format!("{path}.clearcoatNormalTexture"),
+            );
+            let normal_scale =
+                normal.and_then(|n| n.get("scale")).and_then(gltf::json::Value::as_f64).unwrap_or(1.0) as f32;
+            layers.clearcoat = Some(ClearcoatLayer {
+                factor,
+                texture,
+                roughness,
+                roughness_texture,
+                normal_texture,
+                normal_scale,
+            });
         }
     }
     if let Some(ext) = m.extension_value("KHR_materials_sheen") {
