@@ -375,3 +375,55 @@ fn bad_variant_mappings_are_errors_naming_them() {
         assert!(load_variant(&bytes, None).is_ok());
     }
 }
+
+/// KHR_materials_clearcoat and KHR_materials_sheen read into `Material::layers`: factors,
+/// textures (the sheen colour in sRGB, the others linear; `texCoord` and the transform read),
+/// the coat's normal texture and its scale; no layer for a zero coat or a black sheen (the
+/// content hash then unchanged); a factor out of range clamped and a texture index out of range
+/// dropped, each with a warning naming its path; a file that requires both loads.
+#[test]
+fn clearcoat_and_sheen_are_read() {
+    use furnace_scene::ColorSpace;
+    let coat = r#"{"extensions":{"KHR_materials_clearcoat":{"clearcoatFactor":0.7,"clearcoatTexture":{"index":0,"texCoord":1},
+"clearcoatRoughnessFactor":0.3,"clearcoatRoughnessTexture":{"index":0},"clearcoatNormalTexture":{"index":0,"scale":0.5}}}}"#;
+    let sheen = r#"{"extensions":{"KHR_materials_sheen":{"sheenColorFactor":[1.0,0.5,0.25],"sheenColorTexture":{"index":0,
+"extensions":{"KHR_texture_transform":{"scale":[2,2]}}},"sheenRoughnessFactor":0.6,"sheenRoughnessTexture":{"index":0}}}}"#;
+    let off = r#"{"extensions":{"KHR_materials_clearcoat":{"clearcoatFactor":0},"KHR_materials_sheen":{"sheenColorFactor":[0,0,0]}}}"#;
+    let bad = r#"{"extensions":{"KHR_materials_clearcoat":{"clearcoatFactor":1.5,"clearcoatTexture":{"index":9}}}}"#;
+    let materials: Vec<String> = [coat, sheen, off, bad].iter().map(|s| s.to_string()).collect();
+    let prims = [r#""material":0"#, r#""material":1"#, r#""material":2"#, r#""material":3"#];
+    let used = r#""KHR_materials_clearcoat","KHR_materials_sheen""#;
+    let mut bytes = gltf(&materials, &prims, "", used);
+    // Required as well: both are supported.
+    let text = String::from_utf8(bytes).unwrap().replacen(
+        r#""extensionsUsed""#,
+        r#""extensionsRequired":["KHR_materials_clearcoat","KHR_materials_sheen"],"extensionsUsed""#,
+        1,
+    );
+    bytes = text.into_bytes();
+    let scene = Scene::from_slice(&bytes, "layers.gltf").unwrap();
+    let c = scene.materials[0].layers.clearcoat.as_ref().expect("a coat");
+    assert_eq!((c.factor, c.roughness, c.normal_scale), (0.7, 0.3, 0.5));
+    assert_eq!(c.texture.as_ref().map(|t| (t.tex_coord, t.color_space)), Some((1, ColorSpace::Linear)));
+    assert!(c.roughness_texture.is_some() && c.normal_texture.is_some());
+    assert!(scene.materials[0].layers.sheen.is_none());
+    let s = scene.materials[1].layers.sheen.as_ref().expect("a sheen");
+    assert_eq!((s.color, s.roughness), (Vec3::new(1.0, 0.5, 0.25), 0.6));
+    let ct = s.color_texture.as_ref().expect("a sheen colour texture");
+    assert_eq!(ct.color_space, ColorSpace::Srgb);
+    assert_eq!(ct.transform.map(|t| t.scale), Some(glam::Vec2::splat(2.0)));
+    assert!(scene.materials[2].layers.is_empty(), "a zero coat and a black sheen are no layers");
+    let c = scene.materials[3].layers.clearcoat.as_ref().expect("a coat");
+    assert_eq!(c.factor, 1.0, "clamped");
+    assert!(c.texture.is_none(), "a texture index out of range is dropped");
+    let paths: Vec<&str> = scene.warnings.iter().map(|w| w.path.as_str()).collect();
+    assert!(paths.contains(&"materials[3].extensions.KHR_materials_clearcoat.clearcoatFactor"), "{paths:?}");
+    assert!(paths.contains(&"materials[3].extensions.KHR_materials_clearcoat.clearcoatTexture"), "{paths:?}");
+    // A file whose layers are all off hashes as one without the extensions (files from before
+    // the layers keep their hash).
+    let plain =
+        Scene::from_slice(&gltf(&[off.to_string()], &[r#""material":0"#], "", used), "off.gltf").unwrap();
+    let none =
+        Scene::from_slice(&gltf(&["{}".to_string()], &[r#""material":0"#], "", ""), "none.gltf").unwrap();
+    assert_eq!(plain.content_hash(), none.content_hash());
+}

@@ -50,6 +50,21 @@ pub(super) fn read_materials(ctx: &mut Ctx<'_>, doc: &gltf::Document) -> (Vec<Ma
     (materials, bakes)
 }
 
+/// A texture's UV set, `TEXCOORD_0` with a warning past the sets furnace reads.
+fn read_uv_set(ctx: &mut Ctx<'_>, tex_coord: u32, path: String) -> u32 {
+    if (tex_coord as usize) < crate::MAX_UV_SETS {
+        return tex_coord;
+    }
+    ctx.warn(
+        path,
+        format!(
+            "uses TEXCOORD_{tex_coord}; sets up to TEXCOORD_{} are read: TEXCOORD_0 used",
+            crate::MAX_UV_SETS - 1
+        ),
+    );
+    0
+}
+
 fn texture_ref(
     ctx: &mut Ctx<'_>,
     info: Option<gltf::texture::Info<'_>>,
@@ -63,18 +78,7 @@ fn texture_ref(
         scale: Vec2::from(t.scale()),
     });
     let tex_coord = info.texture_transform().and_then(|t| t.tex_coord()).unwrap_or(info.tex_coord());
-    let tex_coord = if (tex_coord as usize) < crate::MAX_UV_SETS {
-        tex_coord
-    } else {
-        ctx.warn(
-            path,
-            format!(
-                "uses TEXCOORD_{tex_coord}; sets up to TEXCOORD_{} are read: TEXCOORD_0 used",
-                crate::MAX_UV_SETS - 1
-            ),
-        );
-        0
-    };
+    let tex_coord = read_uv_set(ctx, tex_coord, path);
     Some(TextureRef { texture: info.texture().index() as u32, tex_coord, color_space: space, transform })
 }
 
@@ -428,18 +432,7 @@ fn texture_ref_json(
         scale: pair(t, "scale", [1.0, 1.0]),
     });
     let tex_coord = tt.and_then(|t| num(t, "texCoord")).or_else(|| num(v, "texCoord")).unwrap_or(0.0) as u32;
-    let tex_coord = if (tex_coord as usize) < crate::MAX_UV_SETS {
-        tex_coord
-    } else {
-        ctx.warn(
-            path,
-            format!(
-                "uses TEXCOORD_{tex_coord}; sets up to TEXCOORD_{} are read: TEXCOORD_0 used",
-                crate::MAX_UV_SETS - 1
-            ),
-        );
-        0
-    };
+    let tex_coord = read_uv_set(ctx, tex_coord, path);
     Some(TextureRef { texture: index as u32, tex_coord, color_space: space, transform })
 }
 
