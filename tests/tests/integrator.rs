@@ -488,16 +488,7 @@ fn same_samples_give_the_same_image_with_glass() {
         assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
         let sphere = scene.materials.iter_mut().find(|m| m.volume && m.roughness_factor == 0.0).unwrap();
         sphere.absorption = glam::Vec3::new(0.351, 1.703, 4.013);
-        same_samples_with(
-            &scene,
-            RenderSettings {
-                width: 24,
-                height: 24,
-                bounces: 8,
-                specular: furnace_brdf::SpecularOptions::mitsuba(),
-                ..settings(SamplerKind::Sobol, 3)
-            },
-        );
+        same_samples_with(&scene, glass_settings());
     }
 }
 
@@ -560,16 +551,18 @@ fn same_samples_give_the_same_image_with_clearcoat_and_sheen() {
             roughness_texture: None,
         });
     }
-    same_samples_with(
-        &glass,
-        RenderSettings {
-            width: 24,
-            height: 24,
-            bounces: 8,
-            specular: furnace_brdf::SpecularOptions::mitsuba(),
-            ..settings(SamplerKind::Sobol, 3)
-        },
-    );
+    same_samples_with(&glass, glass_settings());
+}
+
+/// The glass box's settings for the same-samples tests: 24², 8 bounces, Mitsuba's masking.
+fn glass_settings() -> RenderSettings {
+    RenderSettings {
+        width: 24,
+        height: 24,
+        bounces: 8,
+        specular: furnace_brdf::SpecularOptions::mitsuba(),
+        ..settings(SamplerKind::Sobol, 3)
+    }
 }
 
 fn same_samples_with(scene: &furnace_scene::Scene, s: RenderSettings) {

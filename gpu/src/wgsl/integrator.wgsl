@@ -234,19 +234,16 @@ fn scatter_transmissive(path: ptr<function, Path>, pixel: u32, index: u32, bsdf:
     } else {
         uc = sampler_value(params.sampler, pixel, index, dim + BOUNCE_BSDF_LOBE);
     }
-    var s: ScatterSample;
     // #if LAYERS
+    var s: ScatterSample;
     if bsdf.layered {
         s = hit_scatter_layered(bsdf, wo, uc, u);
-    } else if bsdf.kind != 0u {
-    // #else
-    if bsdf.kind != 0u {
-    // #endif
-        s = transmissive_sample(bsdf.t, wo, uc, u);
     } else {
-        let o = bsdf_sample(bsdf.m, wo, uc, u);
-        s = ScatterSample(o.wi, o.pdf, o.weight, 0.0, false, false, o.lobe != BSDF_LOBE_NONE);
+        s = hit_core_scatter(bsdf, wo, uc, u);
     }
+    // #else
+    let s = hit_core_scatter(bsdf, wo, uc, u);
+    // #endif
     if !s.valid {
         return false;
     }

@@ -121,6 +121,18 @@ fn hit_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     return hit_core_pdf(b, wo, wi);
 }
 
+// #if TRANSMISSION
+// Core::sample in a kernel with transmission: the transmissive mixture, or the opaque
+// material's sample as a ScatterSample.
+fn hit_core_scatter(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> ScatterSample {
+    if b.kind != 0u {
+        return transmissive_sample(b.t, wo, uc, u);
+    }
+    let o = bsdf_sample(b.m, wo, uc, u);
+    return ScatterSample(o.wi, o.pdf, o.weight, 0.0, false, false, o.lobe != BSDF_LOBE_NONE);
+}
+// #endif
+
 // #if LAYERS
 // MetallicRoughness::albedo_estimates, summed: the opaque material's estimate at ωo.
 fn hit_opaque_estimate(m: BsdfParams, wo: vec3<f32>) -> f32 {
@@ -183,14 +195,7 @@ fn hit_scatter_layered(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Scat
         }
         wi = d.wi;
     } else {
-        let rest = layers_core_uc(uc, p);
-        var s: ScatterSample;
-        if b.kind != 0u {
-            s = transmissive_sample(b.t, wo, rest, u);
-        } else {
-            let o = bsdf_sample(b.m, wo, rest, u);
-            s = ScatterSample(o.wi, o.pdf, o.weight, 0.0, false, false, o.lobe != BSDF_LOBE_NONE);
-        }
+        var s = hit_core_scatter(b, wo, layers_core_uc(uc, p), u);
         if !s.valid {
             return s;
         }

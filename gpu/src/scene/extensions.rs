@@ -1,0 +1,103 @@
+//! The per-material records of the material extensions, each in a buffer of its own that a
+//! scene without the extension neither fills nor binds: `scene_transmission`
+//! (KHR_materials_transmission, _ior, _volume) and `scene_layers` (KHR_materials_clearcoat,
+//! KHR_materials_sheen).
+
+use super::{GpuTextureRef, Kept, TRANSMISSIVE, VOLUME};
+use crate::shared::WgslType;
+use bytemuck::Zeroable;
+use furnace_scene::TextureRef;
+
+crate::gpu_struct! {
+    /// A material's transmission (WGSL `SceneTransmission`): KHR_materials_transmission, _ior
+    /// and _volume. One per material in `scene_transmission`, bound only for a scene with a
+    /// transmissive material. 80 bytes.
+    pub struct GpuTransmission as "SceneTransmission" {
+        /// `transmissionTexture` (R channel).
+        pub transmission_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// σ_a per channel (1/m), `Material::absorption`.
+        pub absorption: [f32; 3] => WgslType::VEC3_F32,
+        /// `ior`.
+        pub ior: f32 => WgslType::F32,
+        /// `transmissionFactor`.
+        pub transmission_factor: f32 => WgslType::F32,
+        /// [`TRANSMISSIVE`], [`VOLUME`].
+        pub flags: u32 => WgslType::U32,
+        /// Rust-only zeros up to 80 bytes (WGSL pads by itself).
+        pub pad: [u32; 2] => WgslType::PAD,
+    }
+}
+
+crate::gpu_struct! {
+    /// A material's layers (WGSL `SceneLayers`): KHR_materials_clearcoat and
+    /// KHR_materials_sheen. One per material in `scene_layers`, bound only for a scene with a
+    /// coat or a sheen (zeros for a material without). 272 bytes.
+    pub struct GpuLayers as "SceneLayers" {
+        /// `clearcoatTexture` (R channel).
+        pub clearcoat_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `clearcoatRoughnessTexture` (G channel).
+        pub clearcoat_roughness_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `sheenColorTexture` (RGB).
+        pub sheen_color_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `sheenRoughnessTexture` (A channel).
+        pub sheen_roughness_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `clearcoatNormalTexture` (absent when the scene stores no tangents, as the base's).
+        pub clearcoat_normal_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `sheenColorFactor` (black: no sheen).
+        pub sheen_color: [f32; 3] => WgslType::VEC3_F32,
+        /// `sheenRoughnessFactor`.
+        pub sheen_roughness: f32 => WgslType::F32,
+        /// `clearcoatFactor` (0: no coat).
+        pub clearcoat: f32 => WgslType::F32,
+        /// `clearcoatRoughnessFactor`.
+        pub clearcoat_roughness: f32 => WgslType::F32,
+        /// `clearcoatNormalTexture.scale`.
+        pub clearcoat_normal_scale: f32 => WgslType::F32,
+        /// Rust-only zeros up to 272 bytes (WGSL pads by itself).
+        pub pad: [u32; 1] => WgslType::PAD,
+    }
+}
+
+const _: () = assert!(size_of::<GpuLayers>() == 272);
+const _: () = assert!(size_of::<GpuTransmission>() == 80);
+
+/// A material's transmission record, its texture slot through `texture_ref`.
+pub(super) fn transmission_record(
+    m: &furnace_scene::Material,
+    texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
+) -> GpuTransmission {
+    GpuTransmission {
+        transmission_texture: texture_ref(&m.transmission_texture),
+        absorption: m.absorption.to_array(),
+        ior: m.ior,
+        transmission_factor: m.transmission_factor,
+        flags: if m.is_transmissive() { TRANSMISSIVE } else { 0 } | if m.volume { VOLUME } else { 0 },
+        pad: [0; 2],
+    }
+}
+
+/// A material's layers record, its texture slots through `texture_ref` (zeros without layers).
+pub(super) fn layers_record(
+    m: &furnace_scene::Material,
+    kept: Kept,
+    texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
+) -> GpuLayers {
+    let mut r = GpuLayers::zeroed();
+    if let Some(c) = &m.layers.clearcoat {
+        r.clearcoat = c.factor;
+        r.clearcoat_roughness = c.roughness;
+        r.clearcoat_texture = texture_ref(&c.texture);
+        r.clearcoat_roughness_texture = texture_ref(&c.roughness_texture);
+        if kept.normal_mapped {
+            r.clearcoat_normal_texture = texture_ref(&c.normal_texture);
+            r.clearcoat_normal_scale = c.normal_scale;
+        }
+    }
+    if let Some(s) = &m.layers.sheen {
+        r.sheen_color = s.color.to_array();
+        r.sheen_roughness = s.roughness;
+        r.sheen_color_texture = texture_ref(&s.color_texture);
+        r.sheen_roughness_texture = texture_ref(&s.roughness_texture);
+    }
+    r
+}
