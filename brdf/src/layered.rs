@@ -8,6 +8,7 @@
 //! |---|---|---|---|
 //! | [`Lambert`](crate::Lambert) diffuse base | `lambert.rs` | `(1 − g)·(1 − m′)`, under the specular layer: `1 − sF·max(fr)` at the half vector | `baseColor` |
 //! | [`GgxSpecular`](crate::GgxSpecular) (with [`turquin`](crate::turquin) compensation) | `specular.rs`, `ggx.rs`, `turquin.rs` | `1 − g`, merged: F0 `mix(0.04·sF·sC, baseColor, m′)`, F90 `mix(sF, 1, m′)` | Fresnel |
+//! | thin film (KHR_materials_iridescence) | `iridescence.rs` | not a lobe: mixes its Fresnel into the two rows above by `i` | |
 //! | [`Dielectric`] interface (smooth, rough or thin-walled) | `dielectric.rs` | `g` | tint `baseColor` |
 //! | [`Sheen`] (KHR_materials_sheen, Charlie) | `sheen.rs` | `1 − c·Fc`; scales everything below by `1 − max(sheenColor)·max(E(μo), E(μi))` | `sheenColor·E` |
 //! | [`Clearcoat`] (KHR_materials_clearcoat, white GGX) | `clearcoat.rs` | `c·Fc(μo)`; scales everything below by `1 − c·Fc(μo)` | `c·Fc·E_ss` |
@@ -29,6 +30,7 @@
 
 use crate::clearcoat::Clearcoat;
 use crate::dielectric::{Dielectric, Interface, ONE_BELOW, ScatterSample, Transmissive};
+use crate::iridescence::ThinFilm;
 use crate::metallic_roughness::{MetallicRoughness, MetallicRoughnessParams};
 use crate::sheen::Sheen;
 use crate::specular::SpecularOptions;
@@ -67,6 +69,10 @@ pub struct LayeredParams {
     pub sheen_color: Rgb,
     /// KHR_materials_sheen `sheenRoughnessFactor × texture.a`.
     pub sheen_roughness: f32,
+    /// KHR_materials_iridescence `iridescenceFactor × texture.r` (0: no film).
+    pub iridescence: f32,
+    /// The film: `iridescenceIor` and its thickness in nm (`mix(min, max, texture.g)`).
+    pub film: ThinFilm,
 }
 
 impl Default for LayeredParams {
@@ -86,6 +92,8 @@ impl Default for LayeredParams {
             clearcoat_normal: Vec3::Z,
             sheen_color: Rgb::ZERO,
             sheen_roughness: 0.0,
+            iridescence: 0.0,
+            film: ThinFilm { ior: 1.3, thickness: 400.0 },
         }
     }
 }
@@ -274,16 +282,18 @@ impl HitBsdf {
 impl Core {
     fn new(params: &LayeredParams, specular: SpecularOptions) -> Self {
         let mr = |metallic: f32| {
-            MetallicRoughness::new(
-                MetallicRoughnessParams {
-                    base_color: params.base_color,
-                    metallic,
-                    roughness: params.roughness,
-                    specular_factor: params.specular_factor,
-                    specular_color: params.specular_color,
-                },
-                specular,
-            )
+            let p = MetallicRoughnessParams {
+                base_color: params.base_color,
+                metallic,
+                roughness: params.roughness,
+                specular_factor: params.specular_factor,
+                specular_color: params.specular_color,
+            };
+            if params.iridescence > 0.0 {
+                MetallicRoughness::new_iridescent(p, specular, params.iridescence, params.film)
+            } else {
+                MetallicRoughness::new(p, specular)
+            }
         };
         let metallic = params.metallic.clamp(0.0, 1.0);
         let g = params.transmission.clamp(0.0, 1.0) * (1.0 - metallic);

@@ -14,6 +14,8 @@
 //! * [`Dielectric`] — glass: smooth, rough (Walter et al. 2007) or thin-walled, with the exact
 //!   unpolarised Fresnel reflectance; [`Transmissive`] mixes one with the opaque material
 //!   (KHR_materials_transmission). Dielectrics see both hemispheres ([`dielectric`]).
+//! * [`iridescence`] — KHR_materials_iridescence's thin-film Fresnel, mixed into the
+//!   material's specular lobe ([`MetallicRoughness::new_iridescent`]).
 //! * [`Clearcoat`] and [`Sheen`] — KHR_materials_clearcoat's white GGX coat and
 //!   KHR_materials_sheen's Charlie lobe, the layers above the material.
 //! * [`HitBsdf`] — the glTF material at a hit as one layered BSDF: the lobes above, their
@@ -66,6 +68,7 @@ pub mod dielectric;
 mod frame;
 pub mod fresnel;
 pub mod ggx;
+pub mod iridescence;
 mod lambert;
 pub mod layered;
 mod metallic_roughness;

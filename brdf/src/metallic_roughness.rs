@@ -2,6 +2,7 @@
 //! under a GGX specular layer, mixed with a GGX conductor by `metallic`.
 
 use crate::fresnel::schlick;
+use crate::iridescence::{Iridescence, ThinFilm};
 use crate::lambert::Lambert;
 use crate::specular::{GgxSpecular, SpecularOptions};
 use crate::{Bsdf, Lobe, Rgb, Sample, above, clamp_rgb};
@@ -93,6 +94,35 @@ impl MetallicRoughness {
         Self { diffuse: Lambert::new(base * (1.0 - metallic)), specular, specular_factor: sf, f0_dielectric }
     }
 
+    /// The material under a thin film (KHR_materials_iridescence) of weight `factor`
+    /// (clamped to `[0, 1]`, NaN → 0: no film), index `film.ior` (clamped to `[0.01, 100]`,
+    /// NaN → 1.3) and thickness `film.thickness` nm (clamped to `[0, 10⁶]`, NaN → 0): the
+    /// Fresnel weights of both the dielectric and the metal mix in the film's
+    /// ([`crate::iridescence`]).
+    pub fn new_iridescent(
+        params: MetallicRoughnessParams,
+        options: SpecularOptions,
+        factor: f32,
+        film: ThinFilm,
+    ) -> Self {
+        let mut m = Self::new(params, options);
+        let factor = sanitize(factor, 0.0, 1.0, 0.0);
+        if factor > 0.0 {
+            let film = ThinFilm {
+                ior: sanitize(film.ior, 0.01, 100.0, 1.3),
+                thickness: sanitize(film.thickness, 0.0, 1.0e6, 0.0),
+            };
+            m.specular = m.specular.with_iridescence(Iridescence {
+                factor,
+                film,
+                f0_dielectric: m.f0_dielectric * m.specular_factor,
+                f0_metal: clamp_rgb(params.base_color, 1.0),
+                metallic: sanitize(params.metallic, 0.0, 1.0, 1.0),
+            });
+        }
+        m
+    }
+
     /// `sF` as the constructor sanitised it (`[0, 1]`, NaN → 1): scales the dielectric layer's
     /// Fresnel, and so the diffuse attenuation. With [`Self::f0_dielectric`], `diffuse` and
     /// `specular`, the whole record a GPU twin uploads.
@@ -106,9 +136,15 @@ impl MetallicRoughness {
         self.f0_dielectric
     }
 
-    /// The diffuse attenuation `1 − sF·max(fr(cos θd))` of the dielectric layer.
+    /// The diffuse attenuation `1 − sF·max(fr(cos θd))` of the dielectric layer; under a film
+    /// `1 − max((1 − i)·sF·fr + i·film(cos θd))`.
     #[inline]
     fn diffuse_scale(&self, cos_theta_d: f32) -> f32 {
+        if let Some((film, _)) = &self.specular.iridescence {
+            let fr = schlick(self.f0_dielectric, Rgb::ONE, cos_theta_d) * self.specular_factor;
+            let fw = (1.0 - film.factor) * fr + film.factor * film.dielectric(cos_theta_d);
+            return 1.0 - fw.max_element();
+        }
         if self.specular_factor == 0.0 {
             return 1.0; // `1 − 0·fr`, fr finite: the same value without the Fresnel term
         }
@@ -122,7 +158,7 @@ impl MetallicRoughness {
     #[inline]
     pub fn albedo_estimates(&self, wo: Vec3) -> (f32, f32) {
         let mu = wo.z.clamp(0.0, 1.0);
-        let mut spec = luminance(schlick(self.specular.f0, self.specular.f90, mu));
+        let mut spec = luminance(self.specular.fresnel(mu));
         if !self.specular.options.compensation {
             spec *= crate::turquin::e_ss(mu, self.specular.ggx.alpha(), self.specular.options.masking);
         }
@@ -151,7 +187,7 @@ impl MetallicRoughness {
     /// `eval` `+0` (every other factor is finite), so skipping it changes no bit of a result.
     #[inline]
     fn specular_is_zero(&self) -> bool {
-        self.specular.f0 == Rgb::ZERO && self.specular.f90 == Rgb::ZERO
+        self.specular.f0 == Rgb::ZERO && self.specular.f90 == Rgb::ZERO && self.specular.iridescence.is_none()
     }
 
     /// [`Bsdf::sample`] with the lobe-choice number `uc ∈ [0, 1)` drawn only when it decides
@@ -203,7 +239,7 @@ impl MetallicRoughness {
         if self.diffuse.albedo == Rgb::ZERO || !(above(wo) && above(wi)) {
             return Rgb::ZERO;
         }
-        if self.specular_factor == 0.0 {
+        if self.specular_factor == 0.0 && self.specular.iridescence.is_none() {
             // diffuse_scale is exactly 1: no half vector needed.
             return self.diffuse.albedo * (FRAC_1_PI * wi.z * 1.0);
         }

@@ -2,6 +2,7 @@
 
 use crate::fresnel::schlick;
 use crate::ggx::{Ggx, Masking, SpecularSampling, reflect};
+use crate::iridescence::Iridescence;
 use crate::{Bsdf, Lobe, Rgb, Sample, above, turquin};
 use glam::{Vec2, Vec3};
 
@@ -31,8 +32,9 @@ impl SpecularOptions {
 }
 
 /// GGX microfacet reflection (Walter et al. 2007) with Schlick's Fresnel
-/// `F = F0 + (F90 − F0)(1 − ωo·ωm)^5` and, when enabled, Turquin's compensation factor
-/// `1 + F0·(1/E_ss(μo, α) − 1)`.
+/// `F = F0 + (F90 − F0)(1 − ωo·ωm)^5` (mixed with a thin film's where the material is
+/// iridescent, [`crate::iridescence`]) and, when enabled, Turquin's compensation factor
+/// `1 + F0·(1/E_ss(μo, α) − 1)`, F0 then being the Fresnel weight at `ωo·ωm = 1`.
 ///
 /// `eval` includes the cosine: `F·D·G2/(4 cos θo)` (times the compensation factor).
 /// The sample weight is `eval/pdf` in the closed forms that never divide by D:
@@ -48,20 +50,49 @@ pub struct GgxSpecular {
     pub f90: Rgb,
     /// Model switches.
     pub options: SpecularOptions,
+    /// KHR_materials_iridescence: the film whose Fresnel is mixed into Schlick's, with the
+    /// compensation's F0 (the mixed Fresnel at `ωo·ωm = 1`). `None`: plain Schlick.
+    pub iridescence: Option<(Iridescence, Rgb)>,
 }
 
 impl GgxSpecular {
     /// A specular lobe of roughness α (clamped, see [`crate::ggx::ALPHA_MIN`]) with F90 = 1;
     /// F0 is clamped to `[0, 1]` per channel (NaN → 0).
     pub fn new(alpha: f32, f0: Rgb, options: SpecularOptions) -> Self {
-        Self { ggx: Ggx::new(alpha), f0: crate::clamp_rgb(f0, 1.0), f90: Rgb::ONE, options }
+        Self {
+            ggx: Ggx::new(alpha),
+            f0: crate::clamp_rgb(f0, 1.0),
+            f90: Rgb::ONE,
+            options,
+            iridescence: None,
+        }
+    }
+
+    /// The lobe with a thin film's Fresnel mixed in (`factor` 0: unchanged).
+    pub fn with_iridescence(mut self, iridescence: Iridescence) -> Self {
+        if iridescence.factor > 0.0 {
+            let f0 = iridescence.mix(schlick(self.f0, self.f90, 1.0), 1.0);
+            self.iridescence = Some((iridescence, f0));
+        }
+        self
+    }
+
+    /// The Fresnel weight at `ωo·ωm = cos_om`.
+    #[inline]
+    pub fn fresnel(&self, cos_om: f32) -> Rgb {
+        let f = schlick(self.f0, self.f90, cos_om);
+        match &self.iridescence {
+            None => f,
+            Some((film, _)) => film.mix(f, cos_om),
+        }
     }
 
     /// The Turquin factor for view cosine `mu_o` (1 when compensation is off).
     #[inline]
     pub fn compensation(&self, mu_o: f32) -> Rgb {
         if self.options.compensation {
-            turquin::compensation(self.f0, mu_o, self.ggx.alpha(), self.options.masking)
+            let f0 = self.iridescence.map_or(self.f0, |(_, f0)| f0);
+            turquin::compensation(f0, mu_o, self.ggx.alpha(), self.options.masking)
         } else {
             Rgb::ONE
         }
@@ -116,7 +147,7 @@ impl Bsdf for GgxSpecular {
         let Some((wm, cos_om)) = half_vector(wo, wi) else {
             return Rgb::ZERO;
         };
-        let f = schlick(self.f0, self.f90, cos_om);
+        let f = self.fresnel(cos_om);
         f * self.ggx.eval_cos(wo, wi, wm, self.options.masking) * self.compensation(wo.z)
     }
 
@@ -132,7 +163,7 @@ impl Bsdf for GgxSpecular {
             SpecularSampling::Ndf => g2 * cos_om / (wo.z * wm.z),
             SpecularSampling::Vndf | SpecularSampling::SphericalCaps => g2 / self.ggx.g1(wo),
         };
-        let weight = schlick(self.f0, self.f90, cos_om) * throughput * self.compensation(wo.z);
+        let weight = self.fresnel(cos_om) * throughput * self.compensation(wo.z);
         Some(Sample { wi, weight, pdf, lobe: Lobe::Specular })
     }
 

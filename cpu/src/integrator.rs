@@ -1,6 +1,7 @@
 //! [`CpuRenderer`]: the path tracer.
 
 use furnace_accel::{BuildOptions, Bvh, Hit, offset_scale_of_bounds};
+use furnace_brdf::iridescence::ThinFilm;
 use furnace_brdf::{HitBsdf, LayeredParams, SpecularOptions};
 use furnace_render::layout::DIM_PIXEL;
 use furnace_render::{
@@ -572,6 +573,8 @@ fn bsdf(
             clearcoat_normal: coat_normal,
             sheen_color: params.sheen_color,
             sheen_roughness: params.sheen_roughness,
+            iridescence: params.iridescence,
+            film: ThinFilm { ior: params.iridescence_ior, thickness: params.iridescence_thickness },
         },
         specular,
     )

@@ -18,6 +18,8 @@
 //! [`turquin_table`].
 
 use crate::shared::{WgslType, wgsl_struct};
+use bytemuck::Zeroable;
+use furnace_brdf::iridescence::ThinFilm;
 use furnace_brdf::turquin::{E_SS_HEIGHT_CORRELATED, E_SS_SEPARABLE, TABLE_SIZE};
 use furnace_brdf::{
     Lobe, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions, SpecularSampling,
@@ -29,6 +31,7 @@ use furnace_brdf::{
 pub const WGSL: &str = concat!(
     include_str!("wgsl/brdf.wgsl"),
     include_str!("wgsl/fresnel.wgsl"),
+    include_str!("wgsl/iridescence.wgsl"),
     include_str!("wgsl/ggx.wgsl"),
     include_str!("wgsl/turquin.wgsl"),
     include_str!("wgsl/specular.wgsl"),
@@ -98,8 +101,10 @@ pub fn lobe_code(lobe: Option<Lobe>) -> u32 {
 
 crate::gpu_struct! {
     /// The per-hit material record of the WGSL BSDF: a [`MetallicRoughness`] after its
-    /// constructor (clamping, α = roughness², F0/F90 of the merged lobe), 64 bytes. Its WGSL
-    /// declaration is generated ([`declarations`]).
+    /// constructor (clamping, α = roughness², F0/F90 of the merged lobe, the thin film), 96
+    /// bytes. Its WGSL declaration is generated ([`declarations`]). A kernel without
+    /// iridescence never reads the film's fields (its code is not composed), so the compiler
+    /// drops them.
     pub struct BsdfParams {
         /// Lambert albedo `baseColor·(1 − metallic)` (before the Fresnel weighting).
         pub diffuse: [f32; 3] => WgslType::VEC3_F32,
@@ -115,9 +120,22 @@ crate::gpu_struct! {
         pub specular_factor: f32 => WgslType::F32,
         /// The [`SpecularOptions`] ([`options_flags`]).
         pub flags: u32 => WgslType::U32,
+        /// KHR_materials_iridescence: the film's weight `i` (0: no film, the fields below
+        /// unused).
+        pub film_factor: f32 => WgslType::F32,
+        /// The film's index of refraction.
+        pub film_ior: f32 => WgslType::F32,
+        /// The film's thickness (nm).
+        pub film_thickness: f32 => WgslType::F32,
+        /// The metal's base F0 under the film, `baseColor`.
+        pub film_f0_metal: [f32; 3] => WgslType::VEC3_F32,
+        /// `metallic`, mixing the film over the dielectric and over the metal.
+        pub film_metallic: f32 => WgslType::F32,
+        /// The compensation's F0 under the film: the mixed Fresnel at `ωo·ωm = 1`.
+        pub film_f0: [f32; 3] => WgslType::VEC3_F32,
         /// Rust-only: `Pod` allows no implicit padding (WGSL pads the struct to its 16-byte
         /// alignment by itself).
-        pub pad: [u32; 3] => WgslType::PAD,
+        pub pad: [u32; 1] => WgslType::PAD,
     }
 }
 
@@ -137,15 +155,19 @@ pub fn luminance_const(name: &str) -> String {
     format!("const {name}: vec3<f32> = vec3<f32>({r:?}, {g:?}, {b:?});\n")
 }
 
-const _: () = assert!(size_of::<BsdfParams>() == 64);
+const _: () = assert!(size_of::<BsdfParams>() == 96);
 
 impl BsdfParams {
     /// The record of `MetallicRoughness::new(params, options)`, every field read from the Rust
     /// material itself.
     pub fn new(params: MetallicRoughnessParams, options: SpecularOptions) -> Self {
-        let bsdf = MetallicRoughness::new(params, options);
+        Self::of(&MetallicRoughness::new(params, options))
+    }
+
+    /// The record of a Rust material, every field read from it.
+    pub fn of(bsdf: &MetallicRoughness) -> Self {
         let spec = &bsdf.specular;
-        Self {
+        let mut r = Self {
             diffuse: bsdf.diffuse.albedo.to_array(),
             alpha: spec.ggx.alpha(),
             f0: spec.f0.to_array(),
@@ -153,23 +175,35 @@ impl BsdfParams {
             f0_dielectric: bsdf.f0_dielectric().to_array(),
             specular_factor: bsdf.specular_factor(),
             flags: options_flags(spec.options),
-            pad: [0; 3],
+            ..Self::zeroed()
+        };
+        if let Some((film, f0)) = &spec.iridescence {
+            r.film_factor = film.factor;
+            r.film_ior = film.film.ior;
+            r.film_thickness = film.film.thickness;
+            r.film_f0_metal = film.f0_metal.to_array();
+            r.film_metallic = film.metallic;
+            r.film_f0 = f0.to_array();
         }
+        r
     }
 
     /// The record the CPU integrator's material would be: `MetallicRoughness` of the
     /// material's evaluated parameters, exactly as `furnace-cpu` builds it per hit.
     pub fn from_material(sample: &furnace_scene::MaterialSample, options: SpecularOptions) -> Self {
-        Self::new(
-            MetallicRoughnessParams {
-                base_color: sample.base_color,
-                metallic: sample.metallic,
-                roughness: sample.roughness,
-                specular_factor: sample.specular_factor,
-                specular_color: sample.specular_color,
-            },
-            options,
-        )
+        let params = MetallicRoughnessParams {
+            base_color: sample.base_color,
+            metallic: sample.metallic,
+            roughness: sample.roughness,
+            specular_factor: sample.specular_factor,
+            specular_color: sample.specular_color,
+        };
+        if sample.iridescence > 0.0 {
+            let film = ThinFilm { ior: sample.iridescence_ior, thickness: sample.iridescence_thickness };
+            Self::of(&MetallicRoughness::new_iridescent(params, options, sample.iridescence, film))
+        } else {
+            Self::new(params, options)
+        }
     }
 }
 

@@ -39,8 +39,8 @@ use crate::{GpuContext, GpuError};
 
 mod extensions;
 
-pub use extensions::{GpuLayers, GpuTransmission};
-use extensions::{layers_record, transmission_record};
+pub use extensions::{GpuIridescence, GpuLayers, GpuTransmission};
+use extensions::{iridescence_record, layers_record, transmission_record};
 
 /// Number of bindings the scene uses ([`bindings`], [`GpuScene::layout_entries`]).
 pub const BINDING_COUNT: u32 = 6;
@@ -209,6 +209,7 @@ pub fn declarations() -> String {
         wgsl_struct::<GpuMaterial>(false),
         wgsl_struct::<GpuTransmission>(false),
         wgsl_struct::<GpuLayers>(false),
+        wgsl_struct::<GpuIridescence>(false),
     ]
     .concat()
 }
@@ -264,6 +265,8 @@ pub struct SceneBuffers {
     /// `scene_layers`, one record per material; empty unless some material has a coat or a
     /// sheen.
     pub layers: Vec<GpuLayers>,
+    /// `scene_iridescence`, one record per material; empty unless some material is iridescent.
+    pub iridescence: Vec<GpuIridescence>,
 }
 
 /// Which optional vertex attributes a scene's shading reads: UVs only when some material is
@@ -347,7 +350,8 @@ impl ImageLayout {
                 [&c.texture, &c.roughness_texture, if kept.normal_mapped { &c.normal_texture } else { &None }]
             });
             let sheen = m.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]);
-            for slot in slots.into_iter().chain(clearcoat).chain(sheen) {
+            let film = m.iridescence.iter().flat_map(|i| [&i.texture, &i.thickness_texture]);
+            for slot in slots.into_iter().chain(clearcoat).chain(sheen).chain(film) {
                 if let Some((_, tex)) = resolve(scene, slot) {
                     let i = tex.image as usize;
                     if offset[i].is_none() {
@@ -558,6 +562,11 @@ impl SceneBuffers {
         } else {
             Vec::new()
         };
+        let iridescence = if scene.materials.iter().any(|m| m.iridescence.is_some()) {
+            scene.materials.iter().map(|m| iridescence_record(m, &texture_ref)).collect()
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             triangles,
             vertices,
@@ -568,6 +577,7 @@ impl SceneBuffers {
             image_count: images.used.len(),
             transmission,
             layers,
+            iridescence,
         })
     }
 
@@ -637,6 +647,8 @@ pub struct GpuScene {
     pub transmission: Option<wgpu::Buffer>,
     /// `scene_layers` ([`SceneBuffers::layers`]); `None` without coats and sheens.
     pub layers: Option<wgpu::Buffer>,
+    /// `scene_iridescence` ([`SceneBuffers::iridescence`]); `None` without iridescence.
+    pub iridescence: Option<wgpu::Buffer>,
 }
 
 impl GpuScene {
@@ -674,15 +686,15 @@ impl GpuScene {
                 wgpu::BufferUsages::STORAGE,
             )?)
         };
-        let layers = if packed.layers.is_empty() {
-            None
-        } else {
-            Some(ctx.buffer_init(
-                "scene layers",
-                bytemuck::cast_slice(&packed.layers),
-                wgpu::BufferUsages::STORAGE,
-            )?)
+        let optional = |name: &str, words: &[u8]| {
+            if words.is_empty() {
+                Ok(None)
+            } else {
+                ctx.buffer_init(name, words, wgpu::BufferUsages::STORAGE).map(Some)
+            }
         };
+        let layers = optional("scene layers", bytemuck::cast_slice(&packed.layers))?;
+        let iridescence = optional("scene iridescence", bytemuck::cast_slice(&packed.iridescence))?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Wgpu(e.to_string()));
         }
@@ -693,9 +705,11 @@ impl GpuScene {
             geometry_bytes: packed.geometry_bytes(),
             bytes: packed.bytes()
                 + size_of_val(packed.transmission.as_slice()) as u64
-                + size_of_val(packed.layers.as_slice()) as u64,
+                + size_of_val(packed.layers.as_slice()) as u64
+                + size_of_val(packed.iridescence.as_slice()) as u64,
             transmission,
             layers,
+            iridescence,
         })
     }
 

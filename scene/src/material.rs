@@ -1,6 +1,7 @@
 //! Materials: glTF 2.0 metallic-roughness with KHR_materials_specular,
 //! KHR_materials_emissive_strength, KHR_materials_transmission, KHR_materials_ior,
-//! KHR_materials_volume, KHR_materials_clearcoat and KHR_materials_sheen, as factors and texture
+//! KHR_materials_volume, KHR_materials_clearcoat, KHR_materials_sheen and
+//! KHR_materials_iridescence, as factors and texture
 //! references. Textures are sampled by
 //! [`Material::evaluate`] into the per-shading-point values the integrator feeds to
 //! `furnace_brdf::MetallicRoughnessParams`.
@@ -74,6 +75,9 @@ pub struct Material {
     /// The layers above the material (KHR_materials_clearcoat, KHR_materials_sheen). The
     /// content hash leaves them out where there are none, so other files hash as before.
     pub layers: MaterialLayers,
+    /// KHR_materials_iridescence (an `iridescenceFactor` above 0). The content hash leaves it
+    /// out where it is `None`.
+    pub iridescence: Option<Iridescence>,
     /// KHR_materials_unlit: the surface shows its base colour (× texture × vertex colour) as
     /// is, to every ray and from either side, reflects nothing and is not a light source (the
     /// loader leaves it no emission, transmission or normal map). Kept last: the content hash
@@ -105,6 +109,7 @@ impl Default for Material {
             volume: false,
             absorption: Vec3::ZERO,
             layers: MaterialLayers::default(),
+            iridescence: None,
             unlit: false,
         }
     }
@@ -157,6 +162,24 @@ pub struct SheenLayer {
     pub roughness_texture: Option<TextureRef>,
 }
 
+/// KHR_materials_iridescence's factors and textures: a thin film on the material.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Iridescence {
+    /// `iridescenceFactor`.
+    pub factor: f32,
+    /// `iridescenceTexture` (linear, R channel).
+    pub texture: Option<TextureRef>,
+    /// `iridescenceIor`, the film's index of refraction.
+    pub ior: f32,
+    /// `iridescenceThicknessMinimum` (nm).
+    pub thickness_minimum: f32,
+    /// `iridescenceThicknessMaximum` (nm).
+    pub thickness_maximum: f32,
+    /// `iridescenceThicknessTexture` (linear, G channel): the thickness is
+    /// `mix(minimum, maximum, g)`; without it, the maximum.
+    pub thickness_texture: Option<TextureRef>,
+}
+
 /// A material evaluated at one shading point: every factor multiplied by its texture.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MaterialSample {
@@ -184,6 +207,12 @@ pub struct MaterialSample {
     pub sheen_color: Vec3,
     /// `sheenRoughnessFactor × texture.a`.
     pub sheen_roughness: f32,
+    /// `iridescenceFactor × texture.r` (0 without a film).
+    pub iridescence: f32,
+    /// `iridescenceIor`.
+    pub iridescence_ior: f32,
+    /// The film's thickness in nm, `mix(minimum, maximum, texture.g)`.
+    pub iridescence_thickness: f32,
 }
 
 impl Material {
@@ -206,6 +235,7 @@ impl Material {
             self.layers.clearcoat.iter().flat_map(|c| [&c.texture, &c.roughness_texture, &c.normal_texture]),
         )
         .chain(self.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]))
+        .chain(self.iridescence.iter().flat_map(|i| [&i.texture, &i.thickness_texture]))
         .flatten()
     }
 
@@ -248,6 +278,17 @@ impl Material {
             }
             None => (Vec3::ZERO, 0.0),
         };
+        let (iridescence, iridescence_ior, iridescence_thickness) = match &self.iridescence {
+            Some(i) => {
+                let t = match &i.thickness_texture {
+                    Some(t) => t.sample(at, textures, images).y,
+                    None => 1.0,
+                };
+                let thickness = i.thickness_minimum * (1.0 - t) + i.thickness_maximum * t;
+                (i.factor * sample(&i.texture).x, i.ior, thickness)
+            }
+            None => (0.0, 1.3, 0.0),
+        };
         MaterialSample {
             base_color: base.truncate(),
             alpha: base.w,
@@ -261,6 +302,9 @@ impl Material {
             clearcoat_roughness,
             sheen_color,
             sheen_roughness,
+            iridescence,
+            iridescence_ior,
+            iridescence_thickness,
         }
     }
 

@@ -1,7 +1,7 @@
 //! The per-material records of the material extensions, each in a buffer of its own that a
 //! scene without the extension neither fills nor binds: `scene_transmission`
-//! (KHR_materials_transmission, _ior, _volume) and `scene_layers` (KHR_materials_clearcoat,
-//! KHR_materials_sheen).
+//! (KHR_materials_transmission, _ior, _volume), `scene_layers` (KHR_materials_clearcoat,
+//! KHR_materials_sheen) and `scene_iridescence` (KHR_materials_iridescence).
 
 use super::{GpuTextureRef, Kept, TRANSMISSIVE, VOLUME};
 use crate::shared::WgslType;
@@ -58,7 +58,28 @@ crate::gpu_struct! {
     }
 }
 
+crate::gpu_struct! {
+    /// A material's thin film (WGSL `SceneIridescence`): KHR_materials_iridescence. One per
+    /// material in `scene_iridescence`, bound only for a scene with an iridescent material
+    /// (zeros for a material without). 112 bytes.
+    pub struct GpuIridescence as "SceneIridescence" {
+        /// `iridescenceTexture` (R channel).
+        pub texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `iridescenceThicknessTexture` (G channel).
+        pub thickness_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `iridescenceFactor` (0: no film).
+        pub factor: f32 => WgslType::F32,
+        /// `iridescenceIor`.
+        pub ior: f32 => WgslType::F32,
+        /// `iridescenceThicknessMinimum` (nm).
+        pub thickness_minimum: f32 => WgslType::F32,
+        /// `iridescenceThicknessMaximum` (nm).
+        pub thickness_maximum: f32 => WgslType::F32,
+    }
+}
+
 const _: () = assert!(size_of::<GpuLayers>() == 272);
+const _: () = assert!(size_of::<GpuIridescence>() == 112);
 const _: () = assert!(size_of::<GpuTransmission>() == 80);
 
 /// A material's transmission record, its texture slot through `texture_ref`.
@@ -98,6 +119,24 @@ pub(super) fn layers_record(
         r.sheen_roughness = s.roughness;
         r.sheen_color_texture = texture_ref(&s.color_texture);
         r.sheen_roughness_texture = texture_ref(&s.roughness_texture);
+    }
+    r
+}
+
+/// A material's iridescence record, its texture slots through `texture_ref` (zeros without a
+/// film).
+pub(super) fn iridescence_record(
+    m: &furnace_scene::Material,
+    texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
+) -> GpuIridescence {
+    let mut r = GpuIridescence::zeroed();
+    if let Some(i) = &m.iridescence {
+        r.factor = i.factor;
+        r.ior = i.ior;
+        r.thickness_minimum = i.thickness_minimum;
+        r.thickness_maximum = i.thickness_maximum;
+        r.texture = texture_ref(&i.texture);
+        r.thickness_texture = texture_ref(&i.thickness_texture);
     }
     r
 }

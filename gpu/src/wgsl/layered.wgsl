@@ -44,11 +44,35 @@ struct HitBsdf {
     // #endif
 }
 
+// #if IRIDESCENCE
+// Material::evaluate's film: (iridescenceFactor × texture.r, iridescenceIor, the thickness
+// mix(minimum, maximum, texture.g) in nm).
+fn hit_film(material: u32, at: SceneAttributes) -> vec3<f32> {
+    let r = scene_iridescence[material];
+    if !(r.factor > 0.0) { return vec3<f32>(0.0, 1.3, 0.0); }
+    // #if VERTEX_ATTRIBUTES
+    let factor = r.factor * scene_texture_sample_at(r.texture, at).x;
+    var t = 1.0;
+    if (r.thickness_texture.flags & SCENE_TEXTURE_PRESENT) != 0u {
+        t = scene_texture_sample_at(r.thickness_texture, at).y;
+    }
+    // #else
+    let factor = r.factor;
+    let t = 1.0;
+    // #endif
+    return vec3<f32>(factor, r.ior, r.thickness_minimum * (1.0 - t) + r.thickness_maximum * t);
+}
+// #endif
+
 // `HitBsdf::new`: the material's BSDF at a hit.
 fn hit_bsdf(ms: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
     var b: HitBsdf;
     b.m = bsdf_params(ms.base_color, ms.metallic, ms.roughness, ms.specular_factor, ms.specular_color,
                       params.bsdf_flags);
+    // #if IRIDESCENCE
+    let film = hit_film(material, at);
+    b.m = bsdf_with_film(b.m, ms.base_color, ms.metallic, film.x, film.y, film.z);
+    // #endif
     // #if TRANSMISSION
     let tr = scene_transmission[material];
     // #if VERTEX_ATTRIBUTES
@@ -66,8 +90,11 @@ fn hit_bsdf(ms: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
         if g < 1.0 {
             m_opaque = min(metallic / (1.0 - g), 1.0);
         }
-        let opaque = bsdf_params(ms.base_color, m_opaque, ms.roughness, ms.specular_factor, ms.specular_color,
+        var opaque = bsdf_params(ms.base_color, m_opaque, ms.roughness, ms.specular_factor, ms.specular_color,
                                  params.bsdf_flags);
+        // #if IRIDESCENCE
+        opaque = bsdf_with_film(opaque, ms.base_color, m_opaque, film.x, film.y, film.z);
+        // #endif
         b.t = Transmissive(d, opaque, min(g, 1.0));
         b.kind = tr.flags;
     }
@@ -137,7 +164,7 @@ fn hit_core_scatter(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Scatter
 // MetallicRoughness::albedo_estimates, summed: the opaque material's estimate at ωo.
 fn hit_opaque_estimate(m: BsdfParams, wo: vec3<f32>) -> f32 {
     let mu = brdf_clamp(wo.z, 0.0, 1.0);
-    var spec = brdf_luminance(brdf_schlick(m.f0, vec3<f32>(m.f90), mu));
+    var spec = brdf_luminance(brdf_specular_fresnel(m, mu));
     if (m.flags & BSDF_FLAG_COMPENSATION) == 0u {
         spec *= bsdf_e_ss(mu, m.alpha, brdf_height_correlated(m));
     }

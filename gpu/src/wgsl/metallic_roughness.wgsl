@@ -20,12 +20,39 @@ fn bsdf_params(base_color: vec3<f32>, metallic: f32, roughness: f32, specular_fa
     // Ggx::new: α = roughness² clamped to [ALPHA_MIN, 1].
     let alpha = brdf_sanitize(rough * rough, BSDF_ALPHA_MIN, 1.0, 1.0);
     let diffuse = brdf_clamp_rgb(base * (1.0 - metal), 1.0);
-    return BsdfParams(diffuse, alpha, f0, f90, f0d, sf, flags);
+    return BsdfParams(diffuse, alpha, f0, f90, f0d, sf, flags, 0.0, 0.0, 0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0));
 }
 
-// `MetallicRoughness::diffuse_scale`: 1 − sF·max(fr(cos θd)).
+// #if IRIDESCENCE
+// `MetallicRoughness::new_iridescent`: the record under a film of weight `factor`, index `ior`
+// and thickness `thickness` nm, clamped as the Rust does (`base_color`, `metallic` as given to
+// `bsdf_params`).
+fn bsdf_with_film(params: BsdfParams, base_color: vec3<f32>, metallic: f32, factor: f32, ior: f32,
+                  thickness: f32) -> BsdfParams {
+    var m = params;
+    let i = brdf_sanitize(factor, 0.0, 1.0, 0.0);
+    if i > 0.0 {
+        m.film_factor = i;
+        m.film_ior = brdf_sanitize(ior, 0.01, 100.0, 1.3);
+        m.film_thickness = brdf_sanitize(thickness, 0.0, 1.0e6, 0.0);
+        m.film_f0_metal = brdf_clamp_rgb(base_color, 1.0);
+        m.film_metallic = brdf_sanitize(metallic, 0.0, 1.0, 1.0);
+        m.film_f0 = brdf_film_mix(m, brdf_schlick(m.f0, vec3<f32>(m.f90), 1.0), 1.0);
+    }
+    return m;
+}
+// #endif
+
+// `MetallicRoughness::diffuse_scale`: 1 − sF·max(fr(cos θd)); under a film
+// 1 − max((1 − i)·sF·fr + i·film(cos θd)).
 fn brdf_diffuse_scale(m: BsdfParams, cos_theta_d: f32) -> f32 {
     let fr = brdf_schlick(m.f0_dielectric, vec3<f32>(1.0), cos_theta_d);
+    // #if IRIDESCENCE
+    if m.film_factor > 0.0 {
+        let fw = (1.0 - m.film_factor) * (fr * m.specular_factor) + m.film_factor * brdf_film_dielectric(m, cos_theta_d);
+        return 1.0 - brdf_max_element(fw);
+    }
+    // #endif
     return 1.0 - m.specular_factor * brdf_max_element(fr);
 }
 
@@ -33,7 +60,7 @@ fn brdf_diffuse_scale(m: BsdfParams, cos_theta_d: f32) -> f32 {
 // to [0.05, 0.95] when both lobes are present.
 fn bsdf_specular_probability(m: BsdfParams, wo: vec3<f32>) -> f32 {
     let mu = brdf_clamp(wo.z, 0.0, 1.0);
-    var spec = brdf_luminance(brdf_schlick(m.f0, vec3<f32>(m.f90), mu));
+    var spec = brdf_luminance(brdf_specular_fresnel(m, mu));
     if (m.flags & BSDF_FLAG_COMPENSATION) == 0u {
         spec *= bsdf_e_ss(mu, m.alpha, brdf_height_correlated(m));
     }

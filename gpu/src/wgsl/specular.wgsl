@@ -9,10 +9,23 @@ fn brdf_sampling(m: BsdfParams) -> u32 {
     return (m.flags >> BSDF_SAMPLING_SHIFT) & BSDF_SAMPLING_MASK;
 }
 
+// `GgxSpecular::fresnel`: Schlick's, with the thin film's mixed in (IRIDESCENCE).
+fn brdf_specular_fresnel(m: BsdfParams, cos_om: f32) -> vec3<f32> {
+    let f = brdf_schlick(m.f0, vec3<f32>(m.f90), cos_om);
+    // #if IRIDESCENCE
+    if m.film_factor > 0.0 { return brdf_film_mix(m, f, cos_om); }
+    // #endif
+    return f;
+}
+
 // `GgxSpecular::compensation`: the Turquin factor, 1 when compensation is off.
 fn brdf_specular_compensation(m: BsdfParams, mu_o: f32) -> vec3<f32> {
     if (m.flags & BSDF_FLAG_COMPENSATION) != 0u {
-        return brdf_turquin_compensation(m.f0, mu_o, m.alpha, brdf_height_correlated(m));
+        var f0 = m.f0;
+        // #if IRIDESCENCE
+        if m.film_factor > 0.0 { f0 = m.film_f0; }
+        // #endif
+        return brdf_turquin_compensation(f0, mu_o, m.alpha, brdf_height_correlated(m));
     }
     return vec3<f32>(1.0);
 }
@@ -30,7 +43,7 @@ fn brdf_specular_eval(m: BsdfParams, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> 
     if !(brdf_above(wo) && brdf_above(wi)) { return vec3<f32>(0.0); }
     let hv = brdf_half_vector(wo, wi);
     if !(hv.w > 0.0) { return vec3<f32>(0.0); }
-    let f = brdf_schlick(m.f0, vec3<f32>(m.f90), hv.w);
+    let f = brdf_specular_fresnel(m, hv.w);
     let d = brdf_ggx_eval_cos(m.alpha, wo, wi, hv.xyz, brdf_height_correlated(m));
     return f * d * brdf_specular_compensation(m, wo.z);
 }
@@ -53,7 +66,7 @@ fn brdf_specular_sample(m: BsdfParams, wo: vec3<f32>, u: vec2<f32>) -> BsdfSampl
     } else {
         throughput = g2 / brdf_ggx_g1(m.alpha, wo);
     }
-    let weight = brdf_schlick(m.f0, vec3<f32>(m.f90), cos_om) * throughput * brdf_specular_compensation(m, wo.z);
+    let weight = brdf_specular_fresnel(m, cos_om) * throughput * brdf_specular_compensation(m, wo.z);
     return BsdfSample(wi, pdf, weight, BSDF_LOBE_SPECULAR);
 }
 

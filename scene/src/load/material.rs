@@ -3,7 +3,7 @@
 
 use super::context::Ctx;
 use super::spec_gloss::Bake;
-use crate::material::{AlphaMode, ClearcoatLayer, Material, MaterialLayers, SheenLayer};
+use crate::material::{AlphaMode, ClearcoatLayer, Iridescence, Material, MaterialLayers, SheenLayer};
 use crate::texture::{ColorSpace, Texture, TextureRef, TextureTransform, WrapMode};
 use glam::{Vec2, Vec3, Vec4};
 
@@ -104,6 +104,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
     }
     let mut transmission = transmission(ctx, m, &p);
     let mut layers = layers(ctx, m, &p, textures);
+    let mut iridescence = iridescence(ctx, m, &p, textures);
     warn_ignored(ctx, m);
     let unlit = m.unlit();
     if unlit {
@@ -112,6 +113,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         transmission.factor = 0.0;
         transmission.texture = None;
         layers = MaterialLayers::default();
+        iridescence = None;
     }
     let roughness_factor = pbr.roughness_factor;
     let transmissive = transmission.factor > 0.0;
@@ -144,6 +146,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         volume: transmissive && transmission.volume,
         absorption: transmission.absorption,
         layers,
+        iridescence,
         unlit,
     };
     (material, pbr.bake)
@@ -453,6 +456,60 @@ fn unit_factor(ctx: &mut Ctx<'_>, ext: &gltf::json::Value, key: &str, default: f
             }
         },
     }
+}
+
+/// A number of an extension's JSON at least `min` (`default` where absent; below `min`: a
+/// warning and `min`; not a number: a warning and the default).
+fn number_at_least(
+    ctx: &mut Ctx<'_>,
+    ext: &gltf::json::Value,
+    key: &str,
+    default: f32,
+    min: f32,
+    path: &str,
+) -> f32 {
+    match ext.get(key) {
+        None => default,
+        Some(v) => match v.as_f64() {
+            Some(x) if x.is_finite() && x >= min as f64 => x as f32,
+            Some(x) if x.is_finite() => {
+                ctx.warn(format!("{path}.{key}"), format!("{x} is below {min}: {min} used"));
+                min
+            }
+            _ => {
+                ctx.warn(format!("{path}.{key}"), format!("{v} is not a number: {default} used"));
+                default
+            }
+        },
+    }
+}
+
+/// KHR_materials_iridescence: the thin film on the material (`None` for a factor of 0).
+fn iridescence(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str, textures: usize) -> Option<Iridescence> {
+    let ext = m.extension_value("KHR_materials_iridescence")?;
+    let path = format!("{p}.extensions.KHR_materials_iridescence");
+    let factor = unit_factor(ctx, ext, "iridescenceFactor", 0.0, &path);
+    let ior = number_at_least(ctx, ext, "iridescenceIor", 1.3, 1.0, &path);
+    let thickness_minimum = number_at_least(ctx, ext, "iridescenceThicknessMinimum", 100.0, 0.0, &path);
+    let thickness_maximum = number_at_least(ctx, ext, "iridescenceThicknessMaximum", 400.0, 0.0, &path);
+    if !(factor > 0.0) {
+        return None;
+    }
+    let texture = texture_ref_json(
+        ctx,
+        ext.get("iridescenceTexture"),
+        textures,
+        ColorSpace::Linear,
+        format!("{path}.iridescenceTexture"),
+    );
+    let thickness_texture = texture_ref_json(
+        ctx,
+        ext.get("iridescenceThicknessTexture"),
+        textures,
+        ColorSpace::Linear,
+        format!("{path}.iridescenceThicknessTexture"),
+    );
+    Some(Iridescence { factor, texture, ior, thickness_minimum, thickness_maximum, thickness_texture })
 }
 
 /// KHR_materials_clearcoat and KHR_materials_sheen: the layers above the material.
