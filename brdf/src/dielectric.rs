@@ -13,6 +13,13 @@
 //!   through (the sum of its inner reflections taken with the unpolarised R; Mitsuba's
 //!   `thindielectric`).
 //!
+//! A thin film on the interface (KHR_materials_iridescence, [`Dielectric::with_film`]) makes the
+//! reflectance a colour, `R = (1 − i)·R_exact + i·film(cos θ outside)` per channel, as the
+//! extension's `rgb_mix` weighs the dielectric's layers: reflection takes `R`, transmission
+//! `1 − max(R)`; reflection is chosen with probability `max(R)`. The film is taken at the
+//! cosine on the outside (index 1) of the interface from either side, so the interface stays
+//! symmetric as the exact Fresnel term is.
+//!
 //! Unlike the reflection models, a dielectric sees both hemispheres: the local frame's z is the
 //! surface's **outward** normal (the side of index 1), `wo` may be on either side, and which
 //! side it is on decides the relative index. Radiance is the transported quantity: light
@@ -20,6 +27,7 @@
 //! BSDF: on a path from a camera in air to lights in air the factors cancel).
 
 use crate::ggx::{ALPHA_MIN, Ggx, Masking, SpecularSampling, reflect};
+use crate::iridescence::{self, ThinFilm};
 use crate::metallic_roughness::MetallicRoughness;
 use crate::{Bsdf, Rgb, clamp_rgb};
 use glam::{Vec2, Vec3};
@@ -134,6 +142,9 @@ pub struct Dielectric {
     pub masking: Masking,
     /// Multiplies transmitted light (glTF: the base colour tints transmission).
     pub tint: Rgb,
+    /// A thin film on the interface: its weight `i` in `(0, 1]` and the film
+    /// ([`Dielectric::with_film`]); `None`: the exact Fresnel reflectance alone.
+    pub film: Option<(f32, ThinFilm)>,
 }
 
 /// The smallest relative index a [`Dielectric`] takes (inputs are clamped).
@@ -158,7 +169,52 @@ impl Dielectric {
         } else {
             Interface::Smooth
         };
-        Self { eta, ggx: Ggx::new(alpha), interface, masking, tint: clamp_rgb(tint, 1.0) }
+        Self { eta, ggx: Ggx::new(alpha), interface, masking, tint: clamp_rgb(tint, 1.0), film: None }
+    }
+
+    /// The interface under a thin film (KHR_materials_iridescence) of weight `factor` (clamped
+    /// to `[0, 1]`, NaN → 0: no film), index `film.ior` (`[0.01, 100]`, NaN → 1.3) and
+    /// thickness `film.thickness` nm (`[0, 10⁶]`, NaN → 0), over the interface's own F0
+    /// `((η − 1)/(η + 1))²`. An interface of η = 1 (invisible, straight through) takes none.
+    pub fn with_film(mut self, factor: f32, film: ThinFilm) -> Self {
+        let factor = if factor.is_nan() { 0.0 } else { factor.clamp(0.0, 1.0) };
+        if factor > 0.0 && self.eta != 1.0 {
+            let ior = if film.ior.is_nan() { 1.3 } else { film.ior.clamp(0.01, 100.0) };
+            let thickness = if film.thickness.is_nan() { 0.0 } else { film.thickness.clamp(0.0, 1.0e6) };
+            self.film = Some((factor, ThinFilm { ior, thickness }));
+        }
+        self
+    }
+
+    /// The reflectance per channel for the exact Fresnel record `fr` at `cos_i` (either side):
+    /// `fr.reflectance` in every channel without a film; under one (1 − i)·R + i·film at the
+    /// outside cosine, and 1 under total internal reflection.
+    #[inline]
+    pub fn reflectance(&self, fr: &Fresnel, cos_i: f32) -> Rgb {
+        let Some((i, film)) = self.film else { return Rgb::splat(fr.reflectance) };
+        if fr.cos_t == 0.0 {
+            return Rgb::ONE; // total internal reflection (or a grazing ray)
+        }
+        let c_out = if cos_i >= 0.0 { cos_i.min(1.0) } else { fr.cos_t.abs() };
+        let f0 = self.film_f0();
+        (1.0 - i) * fr.reflectance + i * iridescence::fresnel(film, Rgb::splat(f0), c_out)
+    }
+
+    /// The F0 the film lies on, `((η − 1)/(η + 1))²`.
+    #[inline]
+    fn film_f0(&self) -> f32 {
+        let r = (self.eta - 1.0) / (self.eta + 1.0);
+        r * r
+    }
+
+    /// A thin-walled sheet's reflectance per channel at `cos_i`: R′ in every channel without a
+    /// film; under one (1 − i)·R′ + i·film(|cos_i|).
+    #[inline]
+    pub fn thin_reflectance_rgb(&self, cos_i: f32) -> Rgb {
+        let r = thin_reflectance(cos_i, self.eta);
+        let Some((i, film)) = self.film else { return Rgb::splat(r) };
+        let f0 = self.film_f0();
+        (1.0 - i) * r + i * iridescence::fresnel(film, Rgb::splat(f0), cos_i.abs().min(1.0))
     }
 
     /// Whether every lobe is a delta (smooth or thin-walled): `eval` and `pdf` are 0.
@@ -175,12 +231,13 @@ impl Dielectric {
         let Some(m) = self.microfacet(wo, wi) else { return Rgb::ZERO };
         let d = self.ggx.d(m.h);
         let fr = fresnel_dielectric(m.cos_oh, self.eta);
+        let r = self.reflectance(&fr, m.cos_oh);
         let g_over_co = self.g2_over_cos_o(wo, wi);
         if m.reflect {
-            Rgb::splat(fr.reflectance * d * g_over_co * 0.25)
+            r * (d * g_over_co * 0.25)
         } else {
             let den = m.cos_oh + m.eta_it * m.cos_ih;
-            let f = (m.cos_oh * m.cos_ih).abs() * (1.0 - fr.reflectance) * d * g_over_co / (den * den);
+            let f = (m.cos_oh * m.cos_ih).abs() * (1.0 - r.max_element()) * d * g_over_co / (den * den);
             if f.is_finite() { self.tint * f } else { Rgb::ZERO }
         }
     }
@@ -192,16 +249,17 @@ impl Dielectric {
         }
         let Some(m) = self.microfacet(wo, wi) else { return 0.0 };
         let fr = fresnel_dielectric(m.cos_oh, self.eta);
+        let p_reflect = self.reflectance(&fr, m.cos_oh).max_element();
         // Visible normals of the side wo is on: G1(wo)·|wo·h|·D(h)/|cos θo|, G1/|cos| = 2/(|z| + a).
         let d_vis_over_cos_oh = 2.0 / (wo.z.abs() + self.ggx_a(wo)) * self.ggx.d(m.h);
         let pdf = if m.reflect {
             // pdf_h · F / (4|wo·h|)
-            d_vis_over_cos_oh * fr.reflectance * 0.25
+            d_vis_over_cos_oh * p_reflect * 0.25
         } else {
             let den = m.cos_oh + m.eta_it * m.cos_ih;
             d_vis_over_cos_oh
                 * m.cos_oh.abs()
-                * (1.0 - fr.reflectance)
+                * (1.0 - p_reflect)
                 * (m.eta_it * m.eta_it * m.cos_ih.abs() / (den * den))
         };
         if pdf.is_finite() { pdf } else { 0.0 }
@@ -217,33 +275,36 @@ impl Dielectric {
         match self.interface {
             Interface::Smooth => {
                 let fr = fresnel_dielectric(wo.z, self.eta);
-                Some(if uc < fr.reflectance {
+                let r = self.reflectance(&fr, wo.z);
+                let p = r.max_element();
+                Some(if uc < p {
                     ScatterSample {
                         wi: Vec3::new(-wo.x, -wo.y, wo.z),
-                        weight: Rgb::ONE,
-                        pdf: fr.reflectance,
+                        weight: if self.film.is_some() { r / p } else { Rgb::ONE },
+                        pdf: p,
                         delta: true,
                         transmitted: false,
-                        rest: rescale(uc, fr.reflectance, true),
+                        rest: rescale(uc, p, true),
                     }
                 } else {
                     let wi = Vec3::new(-fr.eta_ti * wo.x, -fr.eta_ti * wo.y, fr.cos_t);
                     ScatterSample {
                         wi,
                         weight: self.tint * (fr.eta_ti * fr.eta_ti),
-                        pdf: 1.0 - fr.reflectance,
+                        pdf: 1.0 - p,
                         delta: true,
                         transmitted: true,
-                        rest: rescale(uc, fr.reflectance, false),
+                        rest: rescale(uc, p, false),
                     }
                 })
             }
             Interface::ThinWalled => {
-                let r = thin_reflectance(wo.z, self.eta);
+                let rgb = self.thin_reflectance_rgb(wo.z);
+                let r = rgb.max_element();
                 Some(if uc < r {
                     ScatterSample {
                         wi: Vec3::new(-wo.x, -wo.y, wo.z),
-                        weight: Rgb::ONE,
+                        weight: if self.film.is_some() { rgb / r } else { Rgb::ONE },
                         pdf: r,
                         delta: true,
                         transmitted: false,
@@ -265,7 +326,9 @@ impl Dielectric {
                 let h = self.ggx.sample_wm(wo * flip, u, SpecularSampling::SphericalCaps);
                 let cos_oh = wo.dot(h);
                 let fr = fresnel_dielectric(cos_oh, self.eta);
-                let (wi, transmitted) = if uc < fr.reflectance {
+                let r = self.reflectance(&fr, cos_oh);
+                let p = r.max_element();
+                let (wi, transmitted) = if uc < p {
                     (reflect(wo, h), false)
                 } else {
                     // Mitsuba's refract: h·(cos_oh·η_ti + cos_t) − wo·η_ti.
@@ -288,8 +351,15 @@ impl Dielectric {
                     let eta_ti = if wo.z > 0.0 { 1.0 / self.eta } else { self.eta };
                     weight *= eta_ti * eta_ti;
                 }
-                let weight = if transmitted { self.tint * weight } else { Rgb::splat(weight) };
-                let rest = rescale(uc, fr.reflectance, !transmitted);
+                let weight = if transmitted {
+                    self.tint * weight
+                } else if self.film.is_some() {
+                    // The film's colour at the sampled normal over the probability max(R).
+                    r * (weight / p)
+                } else {
+                    Rgb::splat(weight)
+                };
+                let rest = rescale(uc, p, !transmitted);
                 Some(ScatterSample { wi, weight, pdf, delta: false, transmitted, rest })
             }
         }
@@ -300,7 +370,7 @@ impl Dielectric {
     /// any other interface of a solid (it blocks shadow rays, as Mitsuba's `volpath` does).
     pub fn shadow_transmittance(&self, cos: f32) -> Rgb {
         match self.interface {
-            Interface::ThinWalled => self.tint * (1.0 - thin_reflectance(cos, self.eta)),
+            Interface::ThinWalled => self.tint * (1.0 - self.thin_reflectance_rgb(cos).max_element()),
             Interface::Smooth if self.eta == 1.0 => self.tint,
             _ => Rgb::ZERO,
         }

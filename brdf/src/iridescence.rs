@@ -76,7 +76,10 @@ fn schlick1(r0: f32, cos: f32) -> f32 {
 /// reflectance of the film over a base of normal-incidence reflectance `base_f0`, seen from air
 /// at `cos θ1` (its absolute value, clamped to 1).
 ///
-/// Written as the extension's GLSL, with two changes that keep every input finite: the base's
+/// Written as the extension's GLSL, clamped to `[0, 1]` (the text clamps below only; its
+/// truncated sum overshoots 1 near grazing over bright bases, up to 1.28 for F0 0.8, film
+/// index 1.5, 325 nm: a reflectance above 1 would create energy), with two changes that keep
+/// every input finite: the base's
 /// Schlick reflectance `((η3 − ηf)/(η3 + ηf))²` with `η3 = (1 + s)/(1 − s)`, `s = √(F0 + 10⁻⁴)`,
 /// is computed as `((1 + s − ηf(1 − s))/(1 + s + ηf(1 − s)))²` (the same number without the
 /// division by `1 − s`, which is 0 for a white metal), and `η3 < ηf` as the sign test it
@@ -129,7 +132,7 @@ pub fn fresnel(film: ThinFilm, base_f0: Rgb, cos_theta1: f32) -> Rgb {
         let sm = 2.0 * sensitivity(m as f32 * opd, m as f32 * phi);
         i += cm * sm;
     }
-    i.max(Vec3::ZERO)
+    i.clamp(Vec3::ZERO, Vec3::ONE)
 }
 
 /// A material's iridescence at a shading point: the film and its weight, and the two Fresnel

@@ -308,7 +308,8 @@ impl Core {
             !params.volume,
             specular.masking,
             params.base_color,
-        );
+        )
+        .with_film(params.iridescence, params.film);
         // The opaque rest: metal m and the untransmitted dielectric (1 − m)(1 − T), renormalised.
         let opaque = mr(if g < 1.0 { (metallic / (1.0 - g)).min(1.0) } else { 0.0 });
         Self::Transmissive(Transmissive { dielectric, opaque, weight: g.min(1.0) }, params.volume)

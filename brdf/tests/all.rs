@@ -11,6 +11,8 @@ mod common;
 mod consistency;
 #[path = "dielectric.rs"]
 mod dielectric;
+#[path = "iridescence.rs"]
+mod iridescence;
 #[path = "layers.rs"]
 mod layers;
 #[path = "stability.rs"]

@@ -41,6 +41,7 @@
 use crate::common;
 use common::write_output;
 use furnace_brdf::ggx::{ALPHA_MIN, reflect};
+use furnace_brdf::iridescence::ThinFilm;
 use furnace_brdf::{
     Bsdf, Clearcoat, Ggx, GgxSpecular, HitBsdf, Lambert, LayeredParams, Masking, MetallicRoughness,
     MetallicRoughnessParams, Rgb, Sheen, SpecularOptions, SpecularSampling,
@@ -235,6 +236,34 @@ fn raw_lobes() -> Vec<(String, Box<dyn Bsdf>)> {
                     Box::new(Layered(HitBsdf::new(&p, SpecularOptions::default()))),
                 ));
             }
+        }
+    }
+    // Thin films (KHR_materials_iridescence) at and past their ranges over a white metal, a
+    // dielectric and a half metal: weight, index and thickness 0, edges, NaN and ∞.
+    for (factor, ior, thickness) in [
+        (1.0, 1.3, 0.0),
+        (1.0, 1.3, 2000.0),
+        (1.0, 1.0, 400.0),
+        (1.0, 3.0, 1e5),
+        (f32::NAN, 1.3, 400.0),
+        (1.0, f32::NAN, f32::NAN),
+        (1.0, 0.0, f32::INFINITY),
+        (2.0, f32::INFINITY, -5.0),
+        (0.5, 1e-8, 300.0),
+    ] {
+        for (metallic, roughness) in [(1.0, 0.0), (0.0, 0.3), (0.5, 1.0)] {
+            let p = LayeredParams {
+                base_color: Rgb::ONE,
+                metallic,
+                roughness,
+                iridescence: factor,
+                film: ThinFilm { ior, thickness },
+                ..Default::default()
+            };
+            v.push((
+                format!("HitBsdf::new({p:?})"),
+                Box::new(Layered(HitBsdf::new(&p, SpecularOptions::default()))),
+            ));
         }
     }
     for alpha in ALPHAS {

@@ -427,3 +427,49 @@ fn clearcoat_and_sheen_are_read() {
         Scene::from_slice(&gltf(&["{}".to_string()], &[r#""material":0"#], "", ""), "none.gltf").unwrap();
     assert_eq!(plain.content_hash(), none.content_hash());
 }
+
+/// KHR_materials_iridescence: factors, textures and defaults read, also when required;
+/// out-of-range values warn with the path; a factor of 0 is no film and keeps the hash.
+#[test]
+fn iridescence_is_read() {
+    let film = r#"{"extensions":{"KHR_materials_iridescence":{"iridescenceFactor":0.8,"iridescenceTexture":{"index":0},
+"iridescenceIor":1.6,"iridescenceThicknessMinimum":50,"iridescenceThicknessMaximum":700,
+"iridescenceThicknessTexture":{"index":0,"texCoord":1}}}}"#;
+    let defaults = r#"{"extensions":{"KHR_materials_iridescence":{"iridescenceFactor":1}}}"#;
+    let off = r#"{"extensions":{"KHR_materials_iridescence":{"iridescenceIor":2.0}}}"#;
+    let bad = r#"{"extensions":{"KHR_materials_iridescence":{"iridescenceFactor":1,"iridescenceIor":0.5,
+"iridescenceThicknessMaximum":-3,"iridescenceTexture":{"index":7}}}}"#;
+    let materials: Vec<String> = [film, defaults, off, bad].iter().map(|s| s.to_string()).collect();
+    let prims = [r#""material":0"#, r#""material":1"#, r#""material":2"#, r#""material":3"#];
+    let used = r#""KHR_materials_iridescence""#;
+    let text = String::from_utf8(gltf(&materials, &prims, "", used)).unwrap().replacen(
+        r#""extensionsUsed""#,
+        r#""extensionsRequired":["KHR_materials_iridescence"],"extensionsUsed""#,
+        1,
+    );
+    let scene = Scene::from_slice(text.as_bytes(), "film.gltf").unwrap();
+    let i = scene.materials[0].iridescence.as_ref().expect("a film");
+    assert_eq!((i.factor, i.ior, i.thickness_minimum, i.thickness_maximum), (0.8, 1.6, 50.0, 700.0));
+    assert!(i.texture.is_some());
+    assert_eq!(i.thickness_texture.as_ref().map(|t| t.tex_coord), Some(1));
+    let d = scene.materials[1].iridescence.as_ref().expect("a film");
+    assert_eq!(
+        (d.ior, d.thickness_minimum, d.thickness_maximum),
+        (1.3, 100.0, 400.0),
+        "the extension's defaults"
+    );
+    assert!(scene.materials[2].iridescence.is_none(), "factor 0 (the default): no film");
+    let b = scene.materials[3].iridescence.as_ref().expect("a film");
+    assert_eq!((b.ior, b.thickness_maximum), (1.0, 0.0), "clamped");
+    assert!(b.texture.is_none(), "a texture index out of range is dropped");
+    let paths: Vec<&str> = scene.warnings.iter().map(|w| w.path.as_str()).collect();
+    for key in ["iridescenceIor", "iridescenceThicknessMaximum", "iridescenceTexture"] {
+        let path = format!("materials[3].extensions.KHR_materials_iridescence.{key}");
+        assert!(paths.contains(&path.as_str()), "{path} not in {paths:?}");
+    }
+    let plain =
+        Scene::from_slice(&gltf(&[off.to_string()], &[r#""material":0"#], "", used), "off.gltf").unwrap();
+    let none =
+        Scene::from_slice(&gltf(&["{}".to_string()], &[r#""material":0"#], "", ""), "none.gltf").unwrap();
+    assert_eq!(plain.content_hash(), none.content_hash());
+}

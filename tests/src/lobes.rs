@@ -1,6 +1,7 @@
 //! The one table of lobes, [`LOBES`], that every per-lobe test iterates: one row ([`Lobe`]) per
-//! lobe of `furnace-brdf` that implements [`Bsdf`] (Lambert, the GGX specular lobe, and the glTF
-//! metallic-roughness material that mixes them), holding the configurations each test runs. A
+//! lobe of `furnace-brdf` that implements [`Bsdf`] (Lambert, the GGX specular lobe, the glTF
+//! metallic-roughness material that mixes them, and that material under a thin film,
+//! KHR_materials_iridescence), holding the configurations each test runs. A
 //! new lobe adds a row here; no test file changes.
 //!
 //! | row field | test | file |
@@ -29,6 +30,7 @@
 
 use crate::Rng;
 use furnace_brdf::ggx::ALPHA_MIN;
+use furnace_brdf::iridescence::ThinFilm;
 use furnace_brdf::turquin::{self, directional_albedo};
 use furnace_brdf::{
     Bsdf, GgxSpecular, Lambert, Masking, MetallicRoughness, MetallicRoughnessParams, Rgb, SpecularOptions,
@@ -140,14 +142,20 @@ pub struct Parity {
     /// Draws the glTF parameters of one material, with the lobe's edges and every other lobe
     /// off.
     pub params: fn(&mut Rng) -> MetallicRoughnessParams,
+    /// Draws the thin film over it (KHR_materials_iridescence: its weight and the film), after
+    /// the parameters; `None` for a row without one (its generator then draws nothing more).
+    pub film: Option<DrawFilm>,
     /// The seed of the row's generator (materials first, then the records).
     pub seed: u64,
     /// Records per option combination.
     pub records_per_option: usize,
 }
 
+/// Draws a thin film: its weight and the film ([`film_params`]).
+pub type DrawFilm = fn(&mut Rng) -> (f32, ThinFilm);
+
 /// The lobes. A new lobe adds a row.
-pub static LOBES: [Lobe; 3] = [
+pub static LOBES: [Lobe; 4] = [
     Lobe {
         name: "lambert",
         chi2: Chi2 { configs: || vec![lambert()], thetas: &CHI2_THETAS, seed: 100 },
@@ -161,6 +169,7 @@ pub static LOBES: [Lobe; 3] = [
         parity: Parity {
             options: all_options,
             params: lambert_params,
+            film: None,
             seed: 0x1a3b_e127,
             records_per_option: 20_000,
         },
@@ -182,6 +191,7 @@ pub static LOBES: [Lobe; 3] = [
         parity: Parity {
             options: all_options,
             params: metal_params,
+            film: None,
             seed: 0x0066_e75e,
             records_per_option: 20_000,
         },
@@ -205,8 +215,28 @@ pub static LOBES: [Lobe; 3] = [
         parity: Parity {
             options: all_options,
             params: gltf_params,
+            film: None,
             seed: 0x5eed_b5df,
             records_per_option: 100_000,
+        },
+    },
+    Lobe {
+        name: "iridescent",
+        chi2: Chi2 { configs: iridescent_chi2, thetas: &MATERIAL_CHI2_THETAS, seed: 3000 },
+        consistency: Consistency {
+            configs: iridescent_consistency,
+            seed: 2000,
+            integrals: &[Integrals { configs: iridescent_integrals, seed: 28_000 }],
+            reciprocal: iridescent_reciprocal,
+        },
+        // The film's reflectance has no closed-form albedo.
+        white_furnace: None,
+        parity: Parity {
+            options: all_options,
+            params: gltf_params,
+            film: Some(film_params),
+            seed: 0x1a7e_f11d,
+            records_per_option: 40_000,
         },
     },
 ];
@@ -494,6 +524,111 @@ fn material_reciprocal() -> Vec<Config> {
         }
     }
     configs
+}
+
+// --- the iridescent material -----------------------------------------------------------------
+
+/// Iridescent materials (KHR_materials_iridescence over the metallic-roughness material): the
+/// film changes the Fresnel weights and so the lobe choice, not the lobes' directions.
+fn iridescent_materials() -> Vec<(&'static str, MetallicRoughnessParams, f32, ThinFilm)> {
+    let p = |base: Vec3, metallic: f32, roughness: f32| MetallicRoughnessParams {
+        base_color: base,
+        metallic,
+        roughness,
+        ..Default::default()
+    };
+    vec![
+        (
+            "film_dielectric",
+            p(Vec3::new(0.04, 0.04, 0.06), 0.0, 0.3),
+            1.0,
+            ThinFilm { ior: 1.3, thickness: 400.0 },
+        ),
+        (
+            "film_half_metallic",
+            p(Vec3::new(0.9, 0.6, 0.3), 0.5, 0.5),
+            0.7,
+            ThinFilm { ior: 1.8, thickness: 1200.0 },
+        ),
+        (
+            "film_copper",
+            p(Vec3::new(0.95, 0.64, 0.54), 1.0, 0.2),
+            1.0,
+            ThinFilm { ior: 1.3, thickness: 300.0 },
+        ),
+    ]
+}
+
+/// Each iridescent material with the default switches.
+fn iridescent_chi2() -> Vec<Config> {
+    iridescent_materials()
+        .into_iter()
+        .map(|(name, params, factor, film)| {
+            let bsdf = MetallicRoughness::new_iridescent(params, SpecularOptions::default(), factor, film);
+            let alpha = bsdf.specular.ggx.alpha();
+            Config::new(name, bsdf, Some(alpha))
+        })
+        .collect()
+}
+
+/// Every iridescent material × sampling × masking × compensation.
+fn iridescent_consistency() -> Vec<Config> {
+    let mut configs = Vec::new();
+    for (name, params, factor, film) in iridescent_materials() {
+        for o in all_options() {
+            let bsdf = MetallicRoughness::new_iridescent(params, o, factor, film);
+            let alpha = bsdf.specular.ggx.alpha();
+            configs.push(Config::new(
+                format!("{name} {:?} {:?} comp={}", o.sampling, o.masking, o.compensation),
+                bsdf,
+                Some(alpha),
+            ));
+        }
+    }
+    configs
+}
+
+/// Each iridescent material with the default switches.
+fn iridescent_integrals() -> Vec<IntegralConfig> {
+    iridescent_chi2()
+        .into_iter()
+        .map(|config| {
+            let thetas = integral_thetas(config.alpha.unwrap_or(1.0));
+            IntegralConfig { config, thetas }
+        })
+        .collect()
+}
+
+/// Every iridescent material with both maskings, compensation off (the film at `ωo·ωm` is
+/// reciprocal).
+fn iridescent_reciprocal() -> Vec<Config> {
+    let mut configs = Vec::new();
+    for (name, params, factor, film) in iridescent_materials() {
+        for masking in MASKINGS {
+            let options = SpecularOptions { masking, compensation: false, ..SpecularOptions::default() };
+            let bsdf = MetallicRoughness::new_iridescent(params, options, factor, film);
+            let alpha = bsdf.specular.ggx.alpha();
+            configs.push(Config::new(format!("{name} {masking:?}"), bsdf, Some(alpha)));
+        }
+    }
+    configs
+}
+
+/// A thin film with the edges: weight 1 or partial, index 1 (no first interface) to 3,
+/// thickness 0 (still not plain Fresnel in the text's formula) to 2000 nm.
+pub fn film_params(rng: &mut Rng) -> (f32, ThinFilm) {
+    let factor = if rng.next_u64().is_multiple_of(2) { 1.0 } else { 0.05 + 0.95 * rng.f32() };
+    let ior = match rng.next_u64() % 5 {
+        0 => 1.0,
+        1 => 1.3,
+        _ => 1.0 + 2.0 * rng.f32(),
+    };
+    let thickness = match rng.next_u64() % 10 {
+        0 => 0.0,
+        1 => 2000.0,
+        _ => 1200.0 * rng.f32(),
+    };
+    (factor, ThinFilm { ior, thickness })
 }
 
 // --- the GPU white furnace -------------------------------------------------------------------

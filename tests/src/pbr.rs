@@ -187,6 +187,11 @@ pub struct ObjectScore {
     /// reference's error estimate there: how much of the candidate's noise is resolved at the
     /// reference's precision (see the module `pbr_references` of the tests for what it decides).
     pub resolved: f64,
+    /// `√(mean of σ²_c/(σ²_c + e_r²))` over the interior pixel-channels (σ²_c and e_r as z
+    /// takes them): the z std of an unbiased candidate if the reference were exact and its error
+    /// estimate only conservative. An unbiased render's z std lies between this and 1 (times
+    /// the Student factor of few degrees of freedom).
+    pub noise_share: f64,
 }
 
 /// Per-pixel `z = (c − r)/√(σ²_c + e_r²)` of two renders `a`, `b` (different seeds): `c` their
@@ -260,6 +265,25 @@ pub fn score(a: &Image, b: &Image, reference: &Image, error: &Image, regions: &[
                 .filter(|&r| r)
                 .count() as f64
                 / m;
+            let pooled = |i: usize| {
+                let (x, y) = ((i % w) as isize, (i / w) as isize);
+                let mut v = DVec3::ZERO;
+                for dy in -1..=1 {
+                    for dx in -1..=1 {
+                        let (xx, yy) = ((x + dx).clamp(0, w as isize - 1), (y + dy).clamp(0, h as isize - 1));
+                        v += var[yy as usize * w + xx as usize];
+                    }
+                }
+                v / 9.0
+            };
+            let share = inside
+                .iter()
+                .flat_map(|&i| {
+                    let (v, e) = (pooled(i), error.pixels[i]);
+                    (v / (v + e * e + DVec3::splat(1e-30))).to_array()
+                })
+                .sum::<f64>()
+                / m;
             ObjectScore {
                 name: r.name.clone(),
                 pixels: inside.len(),
@@ -268,6 +292,7 @@ pub fn score(a: &Image, b: &Image, reference: &Image, error: &Image, regions: &[
                 z_mean,
                 z_std,
                 resolved,
+                noise_share: share.sqrt(),
             }
         })
         .collect()

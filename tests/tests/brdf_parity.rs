@@ -27,13 +27,14 @@
 use furnace_tests::Rng;
 
 use furnace_brdf::ggx::ALPHA_MIN;
+use furnace_brdf::iridescence::ThinFilm;
 use furnace_brdf::{
     Bsdf, Masking, MetallicRoughness, MetallicRoughnessParams, SpecularOptions, SpecularSampling,
 };
 use furnace_gpu::brdf::{self, BsdfParams};
 use furnace_gpu::wgsl;
 use furnace_tests::gpu::{self as kernel, test_context};
-use furnace_tests::lobes::{LOBES, all_options, gltf_params};
+use furnace_tests::lobes::{LOBES, all_options, film_params, gltf_params};
 use glam::{Vec2, Vec3};
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
@@ -236,9 +237,10 @@ fn describe(
 ) -> String {
     let s = bsdf.sample(rec.wo, rec.uc, rec.u);
     format!(
-        "record {k}: params {p:?}\n  wo {:?} wi {:?} uc {:e} u {:?}\n  \
+        "record {k}: params {p:?} film {:?}\n  wo {:?} wi {:?} uc {:e} u {:?}\n  \
          Rust eval {:?} pdf {:e} sample {:?} (p_spec {})\n  \
          WGSL eval {:?} pdf {:e} sample wi {:?} pdf {:e} weight {:?} lobe {}",
+        bsdf.specular.iridescence,
         rec.wo,
         rec.wi,
         rec.uc,
@@ -265,6 +267,7 @@ fn eval_pdf_sample_match_furnace_brdf() {
     let mut groups = Vec::new();
     let mut params = Vec::new();
     let mut records_gpu = Vec::new();
+    let mut bsdfs = Vec::new();
     let total: usize =
         LOBES.iter().map(|row| (row.parity.options)().len() * row.parity.records_per_option).sum();
     let mut records = Vec::with_capacity(total);
@@ -278,8 +281,14 @@ fn eval_pdf_sample_match_furnace_brdf() {
             groups.push(Group { row: r, options: o });
             for _ in 0..MATERIALS_PER_CONFIG {
                 let p = (parity.params)(&mut rng);
-                records_gpu.push(BsdfParams::new(p, o));
+                let film = parity.film.map(|f| f(&mut rng));
+                let bsdf = match film {
+                    Some((factor, film)) => MetallicRoughness::new_iridescent(p, o, factor, film),
+                    None => MetallicRoughness::new(p, o),
+                };
+                records_gpu.push(BsdfParams::of(&bsdf));
                 params.push((p, o));
+                bsdfs.push(bsdf);
             }
         }
         for c in 0..options.len() {
@@ -304,7 +313,6 @@ fn eval_pdf_sample_match_furnace_brdf() {
             }
         }
     }
-    let bsdfs: Vec<MetallicRoughness> = params.iter().map(|&(p, o)| MetallicRoughness::new(p, o)).collect();
     let n = records.len();
 
     let table = brdf::turquin_table();
@@ -524,8 +532,19 @@ fn check(
         st.pdf_direct.add(direct_pdf, k);
         let pdf_err = direct_pdf.min(rel(g.pdf, rpdf, 0.0));
         let floor = Vec3::splat(WEIGHT_FLOOR);
-        let direct_scale = (diffuse_scale_at(bsdf, rec.wo, s.wi) / s.pdf).max(floor);
-        let at_wi_scale = (diffuse_scale_at(bsdf, rec.wo, g.wi) / rpdf).max(floor);
+        // A film's reflectance comes from cosines of phases up to ~100 rad: its rounding is
+        // absolute (~1e-6 of a reflectance of 1), so under a film a weight channel is compared
+        // relative to the lobe at full reflectance, as `eval` is.
+        let film_scale = |wi: Vec3, pdf: f32| {
+            if bsdf.specular.iridescence.is_some() {
+                specular_scale_at(bsdf, rec.wo, wi) / pdf
+            } else {
+                Vec3::ZERO
+            }
+        };
+        let direct_scale =
+            (diffuse_scale_at(bsdf, rec.wo, s.wi) / s.pdf + film_scale(s.wi, s.pdf)).max(floor);
+        let at_wi_scale = (diffuse_scale_at(bsdf, rec.wo, g.wi) / rpdf + film_scale(g.wi, rpdf)).max(floor);
         let weight_err = rel3(g.weight, s.weight, direct_scale).min(rel3(g.weight, rweight, at_wi_scale));
         let wi_err = dir_err(g.wi, s.wi);
         if wi_err <= REL_TOL && pdf_err <= REL_TOL && weight_err <= REL_TOL {
@@ -674,8 +693,10 @@ fn check(
 /// i.e. as absolute errors of F (≤ 1e-5 of the channel's possible reflectance).
 fn specular_scale_at(bsdf: &MetallicRoughness, wo: Vec3, wi: Vec3) -> Vec3 {
     let s = bsdf.specular;
-    let full = Vec3::splat(s.f0.max_element().max(s.f90.max_element()));
-    furnace_brdf::GgxSpecular { f0: full, f90: full, ..s }.eval(wo, wi)
+    // A film reflects up to 1 whatever F0 and F90 are.
+    let full = if s.iridescence.is_some() { 1.0 } else { s.f0.max_element().max(s.f90.max_element()) };
+    furnace_brdf::GgxSpecular { f0: Vec3::splat(full), f90: Vec3::splat(full), iridescence: None, ..s }
+        .eval(wo, wi)
 }
 
 /// The unattenuated diffuse term albedo·cos θi/π (the absolute scale of the diffuse rounding).
@@ -767,9 +788,9 @@ fn constants_and_bindings_match_rust() {
     }
 }
 
-/// `bsdf_params` (the WGSL constructor, for materials evaluated on the GPU) builds the record
-/// that `BsdfParams::new` builds, including the clamping of out-of-range, infinite and NaN
-/// inputs.
+/// `bsdf_params` and `bsdf_with_film` (the WGSL constructors, for materials evaluated on the
+/// GPU) build the record that `BsdfParams::of(MetallicRoughness::new_iridescent(…))` builds,
+/// including the clamping of out-of-range, infinite and NaN inputs.
 #[test]
 fn wgsl_constructor_matches_rust() {
     let Some(ctx) = test_context() else { return };
@@ -779,10 +800,13 @@ fn wgsl_constructor_matches_rust() {
     let mut cases = Vec::new();
     for k in 0..100_000 {
         let mut p = gltf_params(&mut rng);
-        if k % 4 == 0 {
+        // Half the cases under a film (weight 0: none).
+        let (mut factor, mut film) =
+            if k % 2 == 0 { (0.0, ThinFilm { ior: 1.3, thickness: 400.0 }) } else { film_params(&mut rng) };
+        if k % 4 < 2 {
             // One odd value in one field.
             let x = rng.pick(&odd);
-            match rng.next_u64() % 9 {
+            match rng.next_u64() % 12 {
                 0 => p.base_color.x = x,
                 1 => p.base_color.z = x,
                 2 => p.metallic = x,
@@ -791,19 +815,25 @@ fn wgsl_constructor_matches_rust() {
                 5 => p.specular_color.x = x,
                 6 => p.specular_color.y = x,
                 7 => p.specular_color = Vec3::splat(x),
+                8 => factor = x,
+                9 => film.ior = x,
+                10 => film.thickness = x,
                 _ => p.base_color = Vec3::splat(x),
             }
         }
-        cases.push((p, rng.pick(&configs)));
+        cases.push((p, rng.pick(&configs), factor, film));
     }
-    let mut input = Vec::with_capacity(cases.len() * 10);
-    for (p, o) in &cases {
+    const IN: usize = 13;
+    const OUT: usize = 24;
+    let mut input = Vec::with_capacity(cases.len() * IN);
+    for (p, o, factor, film) in &cases {
         let b = p.base_color;
         let c = p.specular_color;
         for x in [b.x, b.y, b.z, p.metallic, p.roughness, p.specular_factor, c.x, c.y, c.z] {
             input.push(x.to_bits());
         }
         input.push(brdf::options_flags(*o));
+        input.extend([factor.to_bits(), film.ior.to_bits(), film.thickness.to_bits()]);
     }
     let body = r#"
 @group(0) @binding(3) var<storage, read> turquin_table: array<f32>;
@@ -813,45 +843,55 @@ fn in_f32(k: u32) -> f32 { return bitcast<f32>(input[k]); }
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = invocation_index(gid, groups);
     if i >= params.x { return; }
-    let b = i * 10u;
-    let m = bsdf_params(vec3<f32>(in_f32(b), in_f32(b + 1u), in_f32(b + 2u)), in_f32(b + 3u), in_f32(b + 4u),
+    let b = i * 13u;
+    let base = vec3<f32>(in_f32(b), in_f32(b + 1u), in_f32(b + 2u));
+    var m = bsdf_params(base, in_f32(b + 3u), in_f32(b + 4u),
                         in_f32(b + 5u), vec3<f32>(in_f32(b + 6u), in_f32(b + 7u), in_f32(b + 8u)), input[b + 9u]);
-    var w = array<f32, 13>(m.diffuse.x, m.diffuse.y, m.diffuse.z, m.alpha, m.f0.x, m.f0.y, m.f0.z, m.f90,
+    m = bsdf_with_film(m, base, in_f32(b + 3u), in_f32(b + 10u), in_f32(b + 11u), in_f32(b + 12u));
+    var w = array<f32, 23>(m.diffuse.x, m.diffuse.y, m.diffuse.z, m.alpha, m.f0.x, m.f0.y, m.f0.z, m.f90,
                            m.f0_dielectric.x, m.f0_dielectric.y, m.f0_dielectric.z, m.specular_factor,
-                           bitcast<f32>(m.flags));
-    for (var k = 0u; k < 13u; k++) {
-        output[i * 16u + k] = bitcast<u32>(w[k]);
+                           bitcast<f32>(m.flags), m.film_factor, m.film_ior, m.film_thickness,
+                           m.film_f0_metal.x, m.film_f0_metal.y, m.film_f0_metal.z, m.film_metallic,
+                           m.film_f0.x, m.film_f0.y, m.film_f0.z);
+    for (var k = 0u; k < 23u; k++) {
+        output[i * 24u + k] = bitcast<u32>(w[k]);
     }
 }
 "#;
     let src = wgsl::compose(&[kernel::PREAMBLE, wgsl::SAMPLING, &brdf::declarations(), wgsl::BRDF, body]);
     let table = brdf::turquin_table();
-    let out = kernel::run_with(&ctx, &src, &input, &[&words(&table)], cases.len() * 16, cases.len() as u32)
+    let out = kernel::run_with(&ctx, &src, &input, &[&words(&table)], cases.len() * OUT, cases.len() as u32)
         .unwrap();
     let mut worst = 0.0f32;
     let mut bad = Vec::new();
-    for (k, (p, o)) in cases.iter().enumerate() {
-        let want: [u32; 16] = bytemuck::cast(BsdfParams::new(*p, *o));
-        let got = &out[k * 16..k * 16 + 16];
+    for (k, (p, o, factor, film)) in cases.iter().enumerate() {
+        let rust = MetallicRoughness::new_iridescent(*p, *o, *factor, *film);
+        let want: [u32; OUT] = bytemuck::cast(BsdfParams::of(&rust));
+        let got = &out[k * OUT..k * OUT + OUT];
         // Flags and padding exact; the floats within the tolerance (the same operations:
-        // clamps, a lerp, a square).
+        // clamps, a lerp, a square; the film's F0 a film reflectance, absolute to 1e-5 of 1
+        // (see the sample weights' film scale)).
         let mut err = 0.0f32;
-        for w in 0..16 {
-            err = err.max(if w < 12 {
-                rel(f32::from_bits(got[w]), f32::from_bits(want[w]), 0.0)
-            } else if got[w] == want[w] {
-                0.0
+        for w in 0..OUT {
+            err = err.max(if w == 12 || w == OUT - 1 {
+                if got[w] == want[w] { 0.0 } else { f32::INFINITY }
+            } else if w >= 20 {
+                rel(f32::from_bits(got[w]), f32::from_bits(want[w]), 1.0)
             } else {
-                f32::INFINITY
+                rel(f32::from_bits(got[w]), f32::from_bits(want[w]), 0.0)
             });
         }
         worst = worst.max(err);
         if !(err <= REL_TOL) && bad.len() < 5 {
-            bad.push(format!("{p:?} {o:?}:\n  Rust {:?}\n  WGSL {:?}", &want[..13], &got[..13]));
+            bad.push(format!(
+                "{p:?} {o:?} film {factor} {film:?}:\n  Rust {:?}\n  WGSL {:?}",
+                &want[..OUT - 1],
+                &got[..OUT - 1]
+            ));
         }
     }
-    eprintln!("bsdf_params: {} inputs, max relative error {worst:e}", cases.len());
-    assert!(bad.is_empty(), "bsdf_params differs from BsdfParams::new:\n{}", bad.join("\n"));
+    eprintln!("bsdf_params, bsdf_with_film: {} inputs, max relative error {worst:e}", cases.len());
+    assert!(bad.is_empty(), "bsdf_params / bsdf_with_film differ from BsdfParams::of:\n{}", bad.join("\n"));
 }
 
 /// `bsdf_e_ss` (WGSL) against `turquin::e_ss`: the table lookup, with a cube root that WGSL

@@ -149,6 +149,9 @@ fn absent_light_features_compose_no_code() {
         "scene_layers",
         "fn sheen_",
         "fn layers_",
+        "scene_iridescence",
+        "brdf_film_",
+        ".film_",
         "shadow_query",
         "fn absorption",
         "to_sun",
@@ -317,6 +320,7 @@ fn frame_params_layout_matches_wgsl() {
                 vertex_colors: light_bvh,
                 clearcoat: light_bvh,
                 sheen: !light_bvh,
+                iridescence: light_bvh,
                 one_point_light: !light_bvh,
             },
         ));
@@ -549,6 +553,53 @@ fn same_samples_give_the_same_image_with_clearcoat_and_sheen() {
             color_texture: None,
             roughness: 0.5,
             roughness_texture: None,
+        });
+    }
+    same_samples_with(&glass, glass_settings());
+}
+
+/// Same samples, same image with KHR_materials_iridescence: the helmet under a film read from
+/// textures (weight from its metallic-roughness texture's R, thickness from its G between 100
+/// and 900 nm) and a clear coat over it (the film beneath a layer); and the glass box with films
+/// on its transmissive materials (the interface's coloured reflectance: delta events, the rough
+/// slab, shadow rays through a filmed sheet).
+#[test]
+fn same_samples_give_the_same_image_with_iridescence() {
+    let mut helmet =
+        furnace_scene::Scene::load(furnace_tests::data::scene("DamagedHelmet/glTF-Binary/DamagedHelmet.glb"))
+            .unwrap();
+    for m in &mut helmet.materials {
+        m.iridescence = Some(furnace_scene::Iridescence {
+            factor: 1.0,
+            texture: m.metallic_roughness_texture,
+            ior: 1.4,
+            thickness_minimum: 100.0,
+            thickness_maximum: 900.0,
+            thickness_texture: m.metallic_roughness_texture,
+        });
+        m.layers.clearcoat = Some(furnace_scene::ClearcoatLayer {
+            factor: 0.5,
+            texture: None,
+            roughness: 0.2,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        });
+    }
+    same_samples_with(
+        &helmet,
+        RenderSettings { width: 24, height: 24, bounces: 2, ..settings(SamplerKind::Sobol, 13) },
+    );
+    let mut glass =
+        furnace_scene::Scene::load(furnace_tests::data::reference("glass/glass_box.gltf")).unwrap();
+    for m in glass.materials.iter_mut().filter(|m| m.is_transmissive()) {
+        m.iridescence = Some(furnace_scene::Iridescence {
+            factor: 0.8,
+            texture: None,
+            ior: 1.8,
+            thickness_minimum: 0.0,
+            thickness_maximum: 450.0,
+            thickness_texture: None,
         });
     }
     same_samples_with(&glass, glass_settings());

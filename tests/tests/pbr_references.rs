@@ -32,7 +32,11 @@
 //!   expected loss, ≈ 10 reference errors, with a two-seed variance of 0, and z std reaches 50
 //!   for an unbiased renderer. Such an object is judged by its ratio alone, whose standard error
 //!   pools every pixel's events. The rule reads only the two renders and the reference's error,
-//!   so a renderer whose noise grows (a new lobe sampled) gets its z tested.
+//!   so a renderer whose noise grows (a new lobe sampled) gets its z tested. The lower end is
+//!   scaled by the object's noise share `√(mean σ²/(σ² + e²))` ([`ObjectScore::noise_share`]):
+//!   the reference's error estimate is conservative, and where it is not small against the
+//!   candidate's noise an unbiased render's z std is below 1 by that share (`iri_d100` at
+//!   1024 spp: z std 0.83, share 0.88).
 //!
 //! The scenes whose extension furnace does not implement yet are `#[ignore]`d with the
 //! extension named ([`SCENES`]); `cargo nextest run -p furnace-tests --run-ignored all
@@ -58,7 +62,7 @@ const SCENES: [(&str, Option<&str>); 8] = [
     ("pbr_ior", None),
     ("pbr_clearcoat", None),
     ("pbr_sheen", None),
-    ("pbr_iridescence", Some("KHR_materials_iridescence")),
+    ("pbr_iridescence", None),
     ("pbr_anisotropy", Some("KHR_materials_anisotropy")),
     ("pbr_diffuse_transmission", Some("KHR_materials_diffuse_transmission")),
 ];
@@ -143,14 +147,14 @@ fn passes(o: &ObjectScore, plan: &Plan) -> (bool, bool) {
     let ratio_ok = !ratio_judged
         || ((o.ratio - 1.0).abs().max_element() <= MAX_RATIO_ERROR
             && o.ratio_sigma.max_element() <= MAX_RATIO_SIGMA);
-    let z_ok = !z_judged || (Z_STD_RANGE.0..=Z_STD_RANGE.1).contains(&o.z_std);
+    let z_ok = !z_judged || (Z_STD_RANGE.0 * o.noise_share..=Z_STD_RANGE.1).contains(&o.z_std);
     (ratio_ok, z_ok)
 }
 
 /// The per-object table (markdown).
 fn table(backend: Backend, scene: &str, scores: &[ObjectScore], plan: &Plan) -> String {
     let mut t = format!(
-        "{backend}, {scene}:\n| object | ratio R, G, B | ± σ | z mean | z std | resolved | verdict |\n|---|---|---|---|---|---|---|\n"
+        "{backend}, {scene}:\n| object | ratio R, G, B | ± σ | z mean | z std | noise share | resolved | verdict |\n|---|---|---|---|---|---|---|---|\n"
     );
     for o in scores {
         let (ratio_ok, z_ok) = passes(o, plan);
@@ -165,7 +169,7 @@ fn table(backend: Backend, scene: &str, scores: &[ObjectScore], plan: &Plan) -> 
         };
         writeln!(
             t,
-            "| {} | {:.4}, {:.4}, {:.4} | {:.5} | {:+.2} | {} | {:.2} | {verdict} |",
+            "| {} | {:.4}, {:.4}, {:.4} | {:.5} | {:+.2} | {} | {:.2} | {:.2} | {verdict} |",
             o.name,
             o.ratio.x,
             o.ratio.y,
@@ -173,6 +177,7 @@ fn table(backend: Backend, scene: &str, scores: &[ObjectScore], plan: &Plan) -> 
             o.ratio_sigma.max_element(),
             o.z_mean,
             z_std,
+            o.noise_share,
             o.resolved
         )
         .expect("a String");
@@ -288,7 +293,7 @@ reference_tests! {
     ior_cpu, ior_gpu: "pbr_ior";
     clearcoat_cpu, clearcoat_gpu: "pbr_clearcoat", cpu_ignore = "cc1.0_r0.05: the sun highlight of the α 0.0025 coat is smaller than a pixel, σ of the ratio 0.75 % at 1024 spp (the bar asks 0.1 %)";
     sheen_cpu, sheen_gpu: "pbr_sheen";
-    iridescence_cpu, iridescence_gpu: "pbr_iridescence", ignore = "KHR_materials_iridescence is not implemented yet";
+    iridescence_cpu, iridescence_gpu: "pbr_iridescence";
     anisotropy_cpu, anisotropy_gpu: "pbr_anisotropy", ignore = "KHR_materials_anisotropy is not implemented yet";
     diffuse_transmission_cpu, diffuse_transmission_gpu: "pbr_diffuse_transmission", ignore = "KHR_materials_diffuse_transmission is not implemented yet";
 }

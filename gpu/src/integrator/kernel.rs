@@ -384,7 +384,11 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         &generated,
         wgsl::SAMPLING,
         &wgsl::select(wgsl::BRDF, |name| features.enabled(name)),
-        if features.transmission { wgsl::DIELECTRIC } else { "" },
+        &if features.transmission {
+            wgsl::select(wgsl::DIELECTRIC, |name| features.enabled(name))
+        } else {
+            String::new()
+        },
         &wgsl::select(wgsl::SCENE, |name| features.enabled(name)),
         &wgsl::select(wgsl::TRAVERSE, |name| features.enabled(name)),
         &light_bvh,

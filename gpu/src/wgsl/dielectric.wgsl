@@ -51,13 +51,17 @@ fn thin_reflectance(cos_i: f32, eta: f32) -> f32 {
     return 2.0 * r / (1.0 + r);
 }
 
-// `Dielectric` (α already clamped for rough interfaces).
+// `Dielectric` (α already clamped for rough interfaces). The film's fields (weight 0: none)
+// are read only by the IRIDESCENCE code.
 struct Dielectric {
     eta: f32,
     alpha: f32,
     iface: u32,
     height_correlated: u32,
     tint: vec3<f32>,
+    film_factor: f32,
+    film_ior: f32,
+    film_thickness: f32,
 }
 
 // `Dielectric::new`.
@@ -71,7 +75,52 @@ fn dielectric_new(eta_in: f32, alpha: f32, thin_walled: bool, height_correlated:
         iface = DIELECTRIC_ROUGH;
     }
     let a = brdf_sanitize(alpha, BSDF_ALPHA_MIN, 1.0, 1.0);
-    return Dielectric(eta, a, iface, select(0u, 1u, height_correlated), brdf_clamp_rgb(tint, 1.0));
+    return Dielectric(eta, a, iface, select(0u, 1u, height_correlated), brdf_clamp_rgb(tint, 1.0), 0.0, 0.0, 0.0);
+}
+
+// #if IRIDESCENCE
+// `Dielectric::with_film`.
+fn dielectric_with_film(d: Dielectric, factor: f32, ior: f32, thickness: f32) -> Dielectric {
+    var r = d;
+    let i = brdf_sanitize(factor, 0.0, 1.0, 0.0);
+    if i > 0.0 && d.eta != 1.0 {
+        r.film_factor = i;
+        r.film_ior = brdf_sanitize(ior, 0.01, 100.0, 1.3);
+        r.film_thickness = brdf_sanitize(thickness, 0.0, 1.0e6, 0.0);
+    }
+    return r;
+}
+
+// The film's reflectance over the interface's own F0 at the outside cosine `c_out`.
+fn dielectric_film(d: Dielectric, c_out: f32) -> vec3<f32> {
+    let r = (d.eta - 1.0) / (d.eta + 1.0);
+    let f0 = r * r;
+    return brdf_film_fresnel(d.film_ior, d.film_thickness, vec3<f32>(f0), c_out);
+}
+// #endif
+
+// `Dielectric::reflectance`: per channel, the exact R without a film.
+fn dielectric_reflectance(d: Dielectric, fr: Fresnel, cos_i: f32) -> vec3<f32> {
+    // #if IRIDESCENCE
+    if d.film_factor > 0.0 {
+        if fr.cos_t == 0.0 { return vec3<f32>(1.0); }
+        var c_out = abs(fr.cos_t);
+        if cos_i >= 0.0 { c_out = min(cos_i, 1.0); }
+        return (1.0 - d.film_factor) * fr.reflectance + d.film_factor * dielectric_film(d, c_out);
+    }
+    // #endif
+    return vec3<f32>(fr.reflectance);
+}
+
+// `Dielectric::thin_reflectance_rgb`.
+fn dielectric_thin_reflectance(d: Dielectric, cos_i: f32) -> vec3<f32> {
+    let r = thin_reflectance(cos_i, d.eta);
+    // #if IRIDESCENCE
+    if d.film_factor > 0.0 {
+        return (1.0 - d.film_factor) * r + d.film_factor * dielectric_film(d, min(abs(cos_i), 1.0));
+    }
+    // #endif
+    return vec3<f32>(r);
 }
 
 // `dielectric::ScatterSample` (valid == false is `None`).
@@ -173,12 +222,13 @@ fn dielectric_eval(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     }
     let dd = brdf_ggx_d(d.alpha, m.h);
     let fr = fresnel_dielectric(m.cos_oh, d.eta);
+    let r = dielectric_reflectance(d, fr, m.cos_oh);
     let g = dielectric_g2_over_cos_o(d, wo, wi);
     if m.reflect {
-        return vec3<f32>(fr.reflectance * dd * g * 0.25);
+        return r * (dd * g * 0.25);
     }
     let den = m.cos_oh + m.eta_it * m.cos_ih;
-    let f = abs(m.cos_oh * m.cos_ih) * (1.0 - fr.reflectance) * dd * g / (den * den);
+    let f = abs(m.cos_oh * m.cos_ih) * (1.0 - brdf_max_element(r)) * dd * g / (den * den);
     if brdf_is_finite(f) {
         return d.tint * f;
     }
@@ -195,13 +245,14 @@ fn dielectric_pdf(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
         return 0.0;
     }
     let fr = fresnel_dielectric(m.cos_oh, d.eta);
+    let p_reflect = brdf_max_element(dielectric_reflectance(d, fr, m.cos_oh));
     let dv = 2.0 / (abs(wo.z) + brdf_ggx_a(d.alpha, wo)) * brdf_ggx_d(d.alpha, m.h);
     var pdf: f32;
     if m.reflect {
-        pdf = dv * fr.reflectance * 0.25;
+        pdf = dv * p_reflect * 0.25;
     } else {
         let den = m.cos_oh + m.eta_it * m.cos_ih;
-        pdf = dv * abs(m.cos_oh) * (1.0 - fr.reflectance) * (m.eta_it * m.eta_it * abs(m.cos_ih) / (den * den));
+        pdf = dv * abs(m.cos_oh) * (1.0 - p_reflect) * (m.eta_it * m.eta_it * abs(m.cos_ih) / (den * den));
     }
     if brdf_is_finite(pdf) {
         return pdf;
@@ -216,18 +267,29 @@ fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
     }
     if d.iface == DIELECTRIC_SMOOTH {
         let fr = fresnel_dielectric(wo.z, d.eta);
-        if uc < fr.reflectance {
-            return ScatterSample(vec3<f32>(-wo.x, -wo.y, wo.z), fr.reflectance, vec3<f32>(1.0),
-                                 dielectric_rescale(uc, fr.reflectance, true), true, false, true);
+        let rgb = dielectric_reflectance(d, fr, wo.z);
+        let p = brdf_max_element(rgb);
+        if uc < p {
+            var w = vec3<f32>(1.0);
+            // #if IRIDESCENCE
+            if d.film_factor > 0.0 { w = rgb / p; }
+            // #endif
+            return ScatterSample(vec3<f32>(-wo.x, -wo.y, wo.z), p, w,
+                                 dielectric_rescale(uc, p, true), true, false, true);
         }
         let wi = vec3<f32>(-fr.eta_ti * wo.x, -fr.eta_ti * wo.y, fr.cos_t);
-        return ScatterSample(wi, 1.0 - fr.reflectance, d.tint * (fr.eta_ti * fr.eta_ti),
-                             dielectric_rescale(uc, fr.reflectance, false), true, true, true);
+        return ScatterSample(wi, 1.0 - p, d.tint * (fr.eta_ti * fr.eta_ti),
+                             dielectric_rescale(uc, p, false), true, true, true);
     }
     if d.iface == DIELECTRIC_THIN {
-        let r = thin_reflectance(wo.z, d.eta);
+        let rgb = dielectric_thin_reflectance(d, wo.z);
+        let r = brdf_max_element(rgb);
         if uc < r {
-            return ScatterSample(vec3<f32>(-wo.x, -wo.y, wo.z), r, vec3<f32>(1.0),
+            var w = vec3<f32>(1.0);
+            // #if IRIDESCENCE
+            if d.film_factor > 0.0 { w = rgb / r; }
+            // #endif
+            return ScatterSample(vec3<f32>(-wo.x, -wo.y, wo.z), r, w,
                                  dielectric_rescale(uc, r, true), true, false, true);
         }
         return ScatterSample(-wo, 1.0 - r, d.tint, dielectric_rescale(uc, r, false), true, true, true);
@@ -236,8 +298,10 @@ fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
     let h = brdf_ggx_sample_vndf_caps(d.alpha, wo * flip, u);
     let cos_oh = brdf_dot(wo, h);
     let fr = fresnel_dielectric(cos_oh, d.eta);
+    let rgb = dielectric_reflectance(d, fr, cos_oh);
+    let p = brdf_max_element(rgb);
     var wi: vec3<f32>;
-    let transmitted = !(uc < fr.reflectance);
+    let transmitted = !(uc < p);
     if transmitted {
         wi = h * (cos_oh * fr.eta_ti + fr.cos_t) - wo * fr.eta_ti;
     } else {
@@ -265,13 +329,16 @@ fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
         }
         w = d.tint * (weight * (eta_ti * eta_ti));
     }
-    return ScatterSample(wi, pdf, w, dielectric_rescale(uc, fr.reflectance, !transmitted), false, transmitted, true);
+    // #if IRIDESCENCE
+    if !transmitted && d.film_factor > 0.0 { w = rgb * (weight / p); }
+    // #endif
+    return ScatterSample(wi, pdf, w, dielectric_rescale(uc, p, !transmitted), false, transmitted, true);
 }
 
 // `Dielectric::shadow_transmittance`: T′·tint for a sheet, the tint at η = 1, 0 otherwise.
 fn dielectric_shadow_transmittance(d: Dielectric, cos: f32) -> vec3<f32> {
     if d.iface == DIELECTRIC_THIN {
-        return d.tint * (1.0 - thin_reflectance(cos, d.eta));
+        return d.tint * (1.0 - brdf_max_element(dielectric_thin_reflectance(d, cos)));
     }
     if d.iface == DIELECTRIC_SMOOTH && d.eta == 1.0 {
         return d.tint;

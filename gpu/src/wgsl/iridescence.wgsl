@@ -21,7 +21,7 @@ fn brdf_film_sensitivity(opd: f32, shift: vec3<f32>) -> vec3<f32> {
         dot(vec3<f32>(0.0556434, -0.2040259, 1.0572252), xyz));
 }
 
-// `iridescence::fresnel`: the film's reflectance over a base of F0 `base_f0`, from air.
+// `iridescence::fresnel`: the film's reflectance over a base of F0 `base_f0`, from air, in [0, 1].
 fn brdf_film_fresnel(ior: f32, thickness: f32, base_f0: vec3<f32>, cos_theta1: f32) -> vec3<f32> {
     let c1 = min(abs(cos_theta1), 1.0);
     let sin2_sq = (1.0 / ior) * (1.0 / ior) * (1.0 - c1 * c1);
@@ -56,7 +56,7 @@ fn brdf_film_fresnel(ior: f32, thickness: f32, base_f0: vec3<f32>, cos_theta1: f
         let sm = 2.0 * brdf_film_sensitivity(f32(k) * opd, f32(k) * phi);
         i += cm * sm;
     }
-    return max(i, vec3<f32>(0.0));
+    return clamp(i, vec3<f32>(0.0), vec3<f32>(1.0));
 }
 
 // `Iridescence::dielectric`: the film over the dielectric's F0 `sF·f0d`.

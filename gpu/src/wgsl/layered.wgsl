@@ -84,8 +84,11 @@ fn hit_bsdf(ms: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
     let g = brdf_clamp(transmission, 0.0, 1.0) * (1.0 - metallic);
     if g > 0.0 {
         let rough = brdf_clamp(ms.roughness, 0.0, 1.0);
-        let d = dielectric_new(tr.ior, rough * rough, (tr.flags & SCENE_VOLUME) == 0u,
+        var d = dielectric_new(tr.ior, rough * rough, (tr.flags & SCENE_VOLUME) == 0u,
                                brdf_height_correlated(b.m), ms.base_color);
+        // #if IRIDESCENCE
+        d = dielectric_with_film(d, film.x, film.y, film.z);
+        // #endif
         var m_opaque = 0.0;
         if g < 1.0 {
             m_opaque = min(metallic / (1.0 - g), 1.0);
