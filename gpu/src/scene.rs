@@ -39,8 +39,8 @@ use crate::{GpuContext, GpuError};
 
 mod extensions;
 
-pub use extensions::{GpuIridescence, GpuLayers, GpuTransmission};
-use extensions::{iridescence_record, layers_record, transmission_record};
+pub use extensions::{GpuIridescence, GpuLayers, GpuSpecularTextures, GpuTransmission};
+use extensions::{iridescence_record, layers_record, specular_record, transmission_record};
 
 /// Number of bindings the scene uses ([`bindings`], [`GpuScene::layout_entries`]).
 pub const BINDING_COUNT: u32 = 6;
@@ -210,6 +210,7 @@ pub fn declarations() -> String {
         wgsl_struct::<GpuTransmission>(false),
         wgsl_struct::<GpuLayers>(false),
         wgsl_struct::<GpuIridescence>(false),
+        wgsl_struct::<GpuSpecularTextures>(false),
     ]
     .concat()
 }
@@ -267,6 +268,9 @@ pub struct SceneBuffers {
     pub layers: Vec<GpuLayers>,
     /// `scene_iridescence`, one record per material; empty unless some material is iridescent.
     pub iridescence: Vec<GpuIridescence>,
+    /// `scene_specular`, one record per material; empty unless some material has a
+    /// KHR_materials_specular texture.
+    pub specular: Vec<GpuSpecularTextures>,
 }
 
 /// Which optional vertex attributes a scene's shading reads: UVs only when some material is
@@ -345,6 +349,8 @@ impl ImageLayout {
                 if kept.normal_mapped { &m.normal_texture } else { &None },
                 &m.emissive_texture,
                 &m.transmission_texture,
+                &m.specular_textures.specular,
+                &m.specular_textures.color,
             ];
             let clearcoat = m.layers.clearcoat.iter().flat_map(|c| {
                 [&c.texture, &c.roughness_texture, if kept.normal_mapped { &c.normal_texture } else { &None }]
@@ -567,6 +573,11 @@ impl SceneBuffers {
         } else {
             Vec::new()
         };
+        let specular = if scene.materials.iter().any(|m| !m.specular_textures.is_empty()) {
+            scene.materials.iter().map(|m| specular_record(m, &texture_ref)).collect()
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             triangles,
             vertices,
@@ -578,6 +589,7 @@ impl SceneBuffers {
             transmission,
             layers,
             iridescence,
+            specular,
         })
     }
 
@@ -649,6 +661,8 @@ pub struct GpuScene {
     pub layers: Option<wgpu::Buffer>,
     /// `scene_iridescence` ([`SceneBuffers::iridescence`]); `None` without iridescence.
     pub iridescence: Option<wgpu::Buffer>,
+    /// `scene_specular` ([`SceneBuffers::specular`]); `None` without specular textures.
+    pub specular: Option<wgpu::Buffer>,
 }
 
 impl GpuScene {
@@ -695,6 +709,7 @@ impl GpuScene {
         };
         let layers = optional("scene layers", bytemuck::cast_slice(&packed.layers))?;
         let iridescence = optional("scene iridescence", bytemuck::cast_slice(&packed.iridescence))?;
+        let specular = optional("scene specular", bytemuck::cast_slice(&packed.specular))?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Wgpu(e.to_string()));
         }
@@ -706,10 +721,12 @@ impl GpuScene {
             bytes: packed.bytes()
                 + size_of_val(packed.transmission.as_slice()) as u64
                 + size_of_val(packed.layers.as_slice()) as u64
-                + size_of_val(packed.iridescence.as_slice()) as u64,
+                + size_of_val(packed.iridescence.as_slice()) as u64
+                + size_of_val(packed.specular.as_slice()) as u64,
             transmission,
             layers,
             iridescence,
+            specular,
         })
     }
 

@@ -56,12 +56,14 @@ impl Scene {
             env.map.texels().iter().flat_map(|t| t.to_array()).for_each(|c| h.word(c.to_bits()));
         }
         // The small parts by their Debug text: every field, floats in round-trip precision.
-        // A lit material's `unlit: false` (its last field), a material's empty layers and its
-        // absent iridescence are left out: files without them hash as they did before the
+        // A lit material's `unlit: false` (its last field), a material's empty layers, absent
+        // specular textures and absent iridescence are left out: files without them hash as they did before the
         // fields existed.
         let no_layers = format!(", layers: {:?}", crate::MaterialLayers::default());
+        let no_specular_textures = format!(", specular_textures: {:?}", crate::SpecularTextures::default());
         let materials = format!("{:?}", self.materials)
             .replace(&no_layers, "")
+            .replace(&no_specular_textures, "")
             .replace(", iridescence: None", "")
             .replace(", unlit: false }", " }");
         let small = format!("{materials}|{:?}|{:?}|{}", self.textures, self.cameras, self.lights_debug());

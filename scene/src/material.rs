@@ -60,6 +60,10 @@ pub struct Material {
     /// KHR_materials_ior into it for the opaque BSDF's Fresnel: `F0 = ((ior − 1)/(ior + 1))²`
     /// is `0.04 × specularColor` there.
     pub specular_color_factor: Vec3,
+    /// KHR_materials_specular `specularTexture` (linear, A channel) and `specularColorTexture`
+    /// (sRGB, RGB), multiplying the two factors. The content hash leaves them out where both
+    /// are absent.
+    pub specular_textures: SpecularTextures,
     /// KHR_materials_transmission `transmissionFactor` (default 0: opaque).
     pub transmission_factor: f32,
     /// KHR_materials_transmission `transmissionTexture` (linear, R channel).
@@ -103,6 +107,7 @@ impl Default for Material {
             double_sided: false,
             specular_factor: 1.0,
             specular_color_factor: Vec3::ONE,
+            specular_textures: SpecularTextures::default(),
             transmission_factor: 0.0,
             transmission_texture: None,
             ior: 1.5,
@@ -160,6 +165,22 @@ pub struct SheenLayer {
     pub roughness: f32,
     /// `sheenRoughnessTexture` (linear, A channel).
     pub roughness_texture: Option<TextureRef>,
+}
+
+/// KHR_materials_specular's textures.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SpecularTextures {
+    /// `specularTexture` (linear, A channel): multiplies `specularFactor`.
+    pub specular: Option<TextureRef>,
+    /// `specularColorTexture` (sRGB, RGB): multiplies `specularColorFactor`.
+    pub color: Option<TextureRef>,
+}
+
+impl SpecularTextures {
+    /// Neither texture.
+    pub fn is_empty(&self) -> bool {
+        self.specular.is_none() && self.color.is_none()
+    }
 }
 
 /// KHR_materials_iridescence's factors and textures: a thin film on the material.
@@ -229,6 +250,8 @@ impl Material {
             &self.normal_texture,
             &self.emissive_texture,
             &self.transmission_texture,
+            &self.specular_textures.specular,
+            &self.specular_textures.color,
         ]
         .into_iter()
         .chain(
@@ -295,8 +318,8 @@ impl Material {
             metallic: self.metallic_factor * mr.z,
             roughness: self.roughness_factor * mr.y,
             emission,
-            specular_factor: self.specular_factor,
-            specular_color: self.specular_color_factor,
+            specular_factor: self.specular_factor * sample(&self.specular_textures.specular).w,
+            specular_color: self.specular_color_factor * sample(&self.specular_textures.color).truncate(),
             transmission,
             clearcoat,
             clearcoat_roughness,

@@ -473,3 +473,48 @@ fn iridescence_is_read() {
         Scene::from_slice(&gltf(&["{}".to_string()], &[r#""material":0"#], "", ""), "none.gltf").unwrap();
     assert_eq!(plain.content_hash(), none.content_hash());
 }
+
+/// KHR_materials_specular's textures: `specularTexture` read linear and its A channel
+/// multiplying `specularFactor`, `specularColorTexture` read as sRGB multiplying
+/// `specularColorFactor`, each at its own UV set; an index out of range is an error naming the
+/// place; the textures are part of the scene's content.
+#[test]
+fn specular_textures_multiply_the_factors() {
+    use furnace_scene::{ColorSpace, VertexAttributes};
+    let texel = [[128u8, 64, 255, 51]];
+    let material = |ext: &str| format!(r#"{{"extensions":{{"KHR_materials_specular":{{{ext}}}}}}}"#);
+    let textured = material(
+        r#""specularFactor":0.5,"specularTexture":{"index":0},"specularColorFactor":[1,0.5,2],
+"specularColorTexture":{"index":0,"texCoord":1}"#,
+    );
+    let file = |m: &str| textured_gltf(&[m.to_string()], &[png(1, 1, &texel)], r#"[{"source":0}]"#, "[]");
+    let scene = Scene::from_slice(&file(&textured), "specular.gltf").unwrap();
+    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let m = &scene.materials[0];
+    let s = m.specular_textures.specular.expect("a specular texture");
+    let c = m.specular_textures.color.expect("a specular colour texture");
+    assert_eq!((s.color_space, s.tex_coord), (ColorSpace::Linear, 0));
+    assert_eq!((c.color_space, c.tex_coord), (ColorSpace::Srgb, 1));
+    let ms = m.evaluate(&VertexAttributes::from_uv(glam::Vec2::splat(0.5)), &scene.textures, &scene.images);
+    // One texel: every lookup returns it exactly (8-bit value / 255, through the sRGB table
+    // for the colour), so the products are exact up to f32 rounding of one multiply.
+    let lin = |v: u8| furnace_post::srgb_to_linear(f32::from(v) / 255.0);
+    assert!((ms.specular_factor - 0.5 * 51.0 / 255.0).abs() < 1e-6, "{}", ms.specular_factor);
+    let expected = Vec3::new(lin(128), 0.5 * lin(64), 2.0 * lin(255));
+    assert!((ms.specular_color - expected).abs().max_element() < 1e-6, "{} vs {expected}", ms.specular_color);
+    // Factors alone: the textures' slots are empty and the factors come through unchanged.
+    let factors = Scene::from_slice(
+        &file(&material(r#""specularFactor":0.5,"specularColorFactor":[1,0.5,2]"#)),
+        "f.gltf",
+    )
+    .unwrap();
+    let f = &factors.materials[0];
+    assert!(f.specular_textures.is_empty());
+    let fs = f.evaluate(&VertexAttributes::from_uv(glam::Vec2::ZERO), &factors.textures, &factors.images);
+    assert_eq!((fs.specular_factor, fs.specular_color), (0.5, Vec3::new(1.0, 0.5, 2.0)));
+    assert_ne!(scene.content_hash(), factors.content_hash(), "the textures are content");
+    // An index out of range is refused with its place in the file.
+    let bad = material(r#""specularColorTexture":{"index":4}"#);
+    let e = Scene::from_slice(&file(&bad), "bad.gltf").unwrap_err().to_string();
+    assert!(e.contains("bad.gltf") && e.contains("specularColorTexture"), "{e}");
+}

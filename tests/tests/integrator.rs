@@ -150,6 +150,7 @@ fn absent_light_features_compose_no_code() {
         "fn sheen_",
         "fn layers_",
         "scene_iridescence",
+        "scene_specular",
         "brdf_film_",
         ".film_",
         "shadow_query",
@@ -321,6 +322,7 @@ fn frame_params_layout_matches_wgsl() {
                 clearcoat: light_bvh,
                 sheen: !light_bvh,
                 iridescence: light_bvh,
+                specular_textures: light_bvh,
                 one_point_light: !light_bvh,
             },
         ));
@@ -520,9 +522,7 @@ fn same_samples_give_the_same_image_with_clearcoat_and_sheen() {
     );
     // A coat with its own normal map over a normal-mapped base (the coat's frame tilted from
     // the shading frame): the helmet's normal map, at scale 0.4 for the coat.
-    let mut helmet =
-        furnace_scene::Scene::load(furnace_tests::data::scene("DamagedHelmet/glTF-Binary/DamagedHelmet.glb"))
-            .unwrap();
+    let mut helmet = lit_helmet();
     for m in &mut helmet.materials {
         m.layers.clearcoat = Some(furnace_scene::ClearcoatLayer {
             factor: 1.0,
@@ -559,19 +559,18 @@ fn same_samples_give_the_same_image_with_clearcoat_and_sheen() {
 }
 
 /// Same samples, same image with KHR_materials_iridescence: the helmet under a film read from
-/// textures (weight from its metallic-roughness texture's R, thickness from its G between 100
+/// textures (weight from its metallic-roughness texture's G, thickness from its G between 100
 /// and 900 nm) and a clear coat over it (the film beneath a layer); and the glass box with films
 /// on its transmissive materials (the interface's coloured reflectance: delta events, the rough
 /// slab, shadow rays through a filmed sheet).
 #[test]
 fn same_samples_give_the_same_image_with_iridescence() {
-    let mut helmet =
-        furnace_scene::Scene::load(furnace_tests::data::scene("DamagedHelmet/glTF-Binary/DamagedHelmet.glb"))
-            .unwrap();
+    let mut helmet = lit_helmet();
+    let varying = varying_texture(&mut helmet);
     for m in &mut helmet.materials {
         m.iridescence = Some(furnace_scene::Iridescence {
             factor: 1.0,
-            texture: m.metallic_roughness_texture,
+            texture: varying,
             ior: 1.4,
             thickness_minimum: 100.0,
             thickness_maximum: 900.0,
@@ -603,6 +602,56 @@ fn same_samples_give_the_same_image_with_iridescence() {
         });
     }
     same_samples_with(&glass, glass_settings());
+}
+
+/// The helmet's metallic-roughness image with its G in R and its B in A, as a new texture (the
+/// image's R, occlusion, is near 0 and its A 1: the copy's R and A vary over the model).
+fn varying_texture(helmet: &mut furnace_scene::Scene) -> Option<furnace_scene::TextureRef> {
+    let t = helmet.materials.iter().find_map(|m| m.metallic_roughness_texture)?;
+    let source = helmet.textures[t.texture as usize];
+    let mut varying = helmet.images[source.image as usize].clone();
+    varying.texels.iter_mut().for_each(|t| *t = [t[1], t[1], t[2], t[2]]);
+    helmet.images.push(varying);
+    helmet.textures.push(furnace_scene::Texture { image: helmet.images.len() as u32 - 1, ..source });
+    Some(furnace_scene::TextureRef { texture: helmet.textures.len() as u32 - 1, ..t })
+}
+
+/// Same samples, same image with KHR_materials_specular textures: the helmet made a dielectric
+/// (metallic 0, so the specular weight and colour decide its whole reflection) with
+/// specularTexture varying over it (A channel, linear) and its base colour texture as
+/// specularColorTexture (sRGB).
+#[test]
+fn same_samples_give_the_same_image_with_specular_textures() {
+    let mut helmet = lit_helmet();
+    let varying = varying_texture(&mut helmet);
+    assert!(varying.is_some(), "the helmet has a metallic-roughness texture");
+    for m in &mut helmet.materials {
+        m.metallic_factor = 0.0;
+        m.specular_textures =
+            furnace_scene::SpecularTextures { specular: varying, color: m.base_color_texture };
+    }
+    same_samples_with(
+        &helmet,
+        RenderSettings { width: 24, height: 24, bounces: 2, ..settings(SamplerKind::Sobol, 17) },
+    );
+}
+
+/// DamagedHelmet under a white sky and a sun from the front left above (the file has no light:
+/// unlit, its same-samples images would be its emission alone). Neither light is sampled from a
+/// table, so the two backends' paths part only where their floats do.
+fn lit_helmet() -> furnace_scene::Scene {
+    use furnace_scene::{Light, Sky, Sun};
+    use glam::Vec3;
+    let mut helmet =
+        furnace_scene::Scene::load(furnace_tests::data::scene("DamagedHelmet/glTF-Binary/DamagedHelmet.glb"))
+            .unwrap();
+    helmet.lights.push(Light::Sky(Sky { radiance: Vec3::splat(0.5) }));
+    helmet.lights.push(Light::Sun(Sun {
+        direction: Vec3::new(0.4, -0.5, -0.8).normalize(),
+        irradiance: Vec3::splat(3.0),
+        angular_radius: 0.0,
+    }));
+    helmet
 }
 
 /// The glass box's settings for the same-samples tests: 24², 8 bounces, Mitsuba's masking.
@@ -648,8 +697,11 @@ fn same_samples_with(scene: &furnace_scene::Scene, s: RenderSettings) {
         let rel = (gm[c] - cm[c]).abs() / cm[c];
         assert!(rel < 1e-3, "channel {c}: GPU mean {} vs CPU {} (rel {rel:e})", gm[c], cm[c]);
     }
-    // Most paths must be the same paths (a twin that is merely unbiased would give ~0%).
-    assert!(close * 2 > n, "only {close}/{n} pixels agree within 1e-4 with the same sample points");
+    // The same sample points must give the same paths: a twin that is merely unbiased agrees in
+    // ~0 % of pixels, and one that reads a texture's wrong channel still in ~80 %, while the
+    // backends' float differences alone part ≤ 6 % of paths (the environment map's, whose
+    // table lookups split at cell edges; the others ≤ 2 %). Hence 90 %.
+    assert!(close * 10 >= n * 9, "only {close}/{n} pixels agree within 1e-4 with the same sample points");
 }
 
 #[test]

@@ -145,6 +145,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     if features.iridescence {
         bindings.push(Binding::read("scene_iridescence", "array<SceneIridescence>"));
     }
+    if features.specular_textures {
+        bindings.push(Binding::read("scene_specular", "array<SceneSpecular>"));
+    }
     if features.emitters {
         // Chosen by the light BVH: 16-byte records and nodes, read as vec4 (three loads a node).
         let ty = if features.light_bvh { "array<vec4<u32>>" } else { "array<u32>" };
@@ -235,6 +238,9 @@ pub struct SceneFeatures {
     /// Some material is iridescent (KHR_materials_iridescence; `scene_iridescence` records, the
     /// film's Fresnel in the brdf module).
     pub iridescence: bool,
+    /// Some material has a KHR_materials_specular texture (`scene_specular` records, read at
+    /// hits).
+    pub specular_textures: bool,
     /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
     /// triangles per invocation, added to the ray counter at its end). Not a property of the
     /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
@@ -277,6 +283,7 @@ impl SceneFeatures {
             clearcoat: scene.materials.iter().any(|m| m.layers.clearcoat.is_some()),
             sheen: scene.materials.iter().any(|m| m.layers.sheen.is_some()),
             iridescence: scene.materials.iter().any(|m| m.iridescence.is_some()),
+            specular_textures: scene.materials.iter().any(|m| !m.specular_textures.is_empty()),
             trace_counters: false,
         }
     }
@@ -305,7 +312,7 @@ impl SceneFeatures {
     /// `HAS_EMITTERS`, `HAS_DELTA_SUN`, `HAS_SUN_DISC`, `HAS_ENVIRONMENT`, `SAMPLES_ENVIRONMENT`,
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
     /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `BLEND`, `UNLIT`, `SHADOW_FILTER` (shadow rays
-    /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`, `UV_SETS`, `VERTEX_COLORS`, `CLEARCOAT`, `SHEEN`, `LAYERS` (either), `IRIDESCENCE`,
+    /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`, `UV_SETS`, `VERTEX_COLORS`, `CLEARCOAT`, `SHEEN`, `LAYERS` (either), `IRIDESCENCE`, `SPECULAR_TEXTURES`,
     /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
@@ -334,6 +341,7 @@ impl SceneFeatures {
             "SHEEN" => self.sheen,
             "LAYERS" => self.clearcoat || self.sheen,
             "IRIDESCENCE" => self.iridescence,
+            "SPECULAR_TEXTURES" => self.specular_textures,
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,
             _ => panic!("no scene feature {name} (an #if of the integrator's WGSL)"),

@@ -297,6 +297,9 @@ impl GpuRenderer {
         if let Some(i) = &self.scene.iridescence {
             resources.push(i.as_entire_binding());
         }
+        if let Some(t) = &self.scene.specular {
+            resources.push(t.as_entire_binding());
+        }
         if let Some(e) = &self.emitters {
             resources.push(e.as_entire_binding());
         }

@@ -1,7 +1,8 @@
 //! The per-material records of the material extensions, each in a buffer of its own that a
 //! scene without the extension neither fills nor binds: `scene_transmission`
 //! (KHR_materials_transmission, _ior, _volume), `scene_layers` (KHR_materials_clearcoat,
-//! KHR_materials_sheen) and `scene_iridescence` (KHR_materials_iridescence).
+//! KHR_materials_sheen), `scene_iridescence` (KHR_materials_iridescence) and `scene_specular`
+//! (KHR_materials_specular's textures).
 
 use super::{GpuTextureRef, Kept, TRANSMISSIVE, VOLUME};
 use crate::shared::WgslType;
@@ -78,7 +79,20 @@ crate::gpu_struct! {
     }
 }
 
+crate::gpu_struct! {
+    /// A material's KHR_materials_specular textures (WGSL `SceneSpecular`). One per material in
+    /// `scene_specular`, bound only for a scene where some material has one (absent slots for a
+    /// material without). 96 bytes.
+    pub struct GpuSpecularTextures as "SceneSpecular" {
+        /// `specularTexture` (A channel).
+        pub specular: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `specularColorTexture` (RGB, sRGB).
+        pub color: GpuTextureRef => GpuTextureRef::wgsl_type(),
+    }
+}
+
 const _: () = assert!(size_of::<GpuLayers>() == 272);
+const _: () = assert!(size_of::<GpuSpecularTextures>() == 96);
 const _: () = assert!(size_of::<GpuIridescence>() == 112);
 const _: () = assert!(size_of::<GpuTransmission>() == 80);
 
@@ -139,4 +153,15 @@ pub(super) fn iridescence_record(
         r.thickness_texture = texture_ref(&i.thickness_texture);
     }
     r
+}
+
+/// A material's specular textures record, through `texture_ref`.
+pub(super) fn specular_record(
+    m: &furnace_scene::Material,
+    texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
+) -> GpuSpecularTextures {
+    GpuSpecularTextures {
+        specular: texture_ref(&m.specular_textures.specular),
+        color: texture_ref(&m.specular_textures.color),
+    }
 }

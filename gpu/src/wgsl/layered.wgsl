@@ -64,8 +64,25 @@ fn hit_film(material: u32, at: SceneAttributes) -> vec3<f32> {
 }
 // #endif
 
+// #if SPECULAR_TEXTURES
+// Material::evaluate's KHR_materials_specular textures: the factors times specularTexture.a and
+// specularColorTexture.rgb.
+fn hit_specular(material: u32, at: SceneAttributes, ms: MaterialSample) -> MaterialSample {
+    var r = ms;
+    let t = scene_specular[material];
+    r.specular_factor *= scene_texture_sample_at(t.specular, at).w;
+    r.specular_color *= scene_texture_sample_at(t.color, at).xyz;
+    return r;
+}
+// #endif
+
 // `HitBsdf::new`: the material's BSDF at a hit.
-fn hit_bsdf(ms: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
+fn hit_bsdf(material_sample: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
+    // #if SPECULAR_TEXTURES
+    let ms = hit_specular(material, at, material_sample);
+    // #else
+    let ms = material_sample;
+    // #endif
     var b: HitBsdf;
     b.m = bsdf_params(ms.base_color, ms.metallic, ms.roughness, ms.specular_factor, ms.specular_color,
                       params.bsdf_flags);

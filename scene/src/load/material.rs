@@ -3,7 +3,9 @@
 
 use super::context::Ctx;
 use super::spec_gloss::Bake;
-use crate::material::{AlphaMode, ClearcoatLayer, Iridescence, Material, MaterialLayers, SheenLayer};
+use crate::material::{
+    AlphaMode, ClearcoatLayer, Iridescence, Material, MaterialLayers, SheenLayer, SpecularTextures,
+};
 use crate::texture::{ColorSpace, Texture, TextureRef, TextureTransform, WrapMode};
 use glam::{Vec2, Vec3, Vec4};
 
@@ -94,7 +96,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         texture_ref(ctx, m.emissive_texture(), ColorSpace::Srgb, format!("{p}.emissiveTexture"));
     let mut emissive = emissive(ctx, m, &p);
     let alpha_mode = alpha_mode(m);
-    let (specular_factor, mut specular_color_factor) = specular(ctx, m, &p);
+    let (specular_factor, mut specular_color_factor, specular_textures) = specular(ctx, m, &p);
     let ior = ior(ctx, m, &p);
     if ior != 1.5 {
         // The opaque BSDF's dielectric F0 is 0.04·specularColor; KHR_materials_ior sets it to
@@ -140,6 +142,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         double_sided: m.double_sided() || transmissive,
         specular_factor,
         specular_color_factor,
+        specular_textures,
         transmission_factor: transmission.factor,
         transmission_texture: transmission.texture,
         ior,
@@ -374,20 +377,27 @@ fn alpha_mode(m: &gltf::Material<'_>) -> AlphaMode {
     }
 }
 
-/// KHR_materials_specular's factors (its textures are not supported).
-fn specular(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> (f32, Vec3) {
-    match m.specular() {
-        Some(s) => {
-            if s.specular_texture().is_some() || s.specular_color_texture().is_some() {
-                ctx.warn(
-                    format!("{p}.extensions.KHR_materials_specular"),
-                    "specular textures are not supported: factors only",
-                );
-            }
-            (s.specular_factor(), Vec3::from(s.specular_color_factor()))
-        }
-        None => (1.0, Vec3::ONE),
-    }
+/// KHR_materials_specular's factors and textures (`specularTexture` linear, its A channel;
+/// `specularColorTexture` sRGB). gltf-json knows this extension, so its texture indices were
+/// checked with the rest of the file.
+fn specular(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> (f32, Vec3, SpecularTextures) {
+    let Some(s) = m.specular() else { return (1.0, Vec3::ONE, SpecularTextures::default()) };
+    let path = format!("{p}.extensions.KHR_materials_specular");
+    let maps = SpecularTextures {
+        specular: texture_ref(
+            ctx,
+            s.specular_texture(),
+            ColorSpace::Linear,
+            format!("{path}.specularTexture"),
+        ),
+        color: texture_ref(
+            ctx,
+            s.specular_color_texture(),
+            ColorSpace::Srgb,
+            format!("{path}.specularColorTexture"),
+        ),
+    };
+    (s.specular_factor(), Vec3::from(s.specular_color_factor()), maps)
 }
 
 /// Warns about the occlusion texture and the material extensions furnace ignores.
