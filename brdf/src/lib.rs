@@ -14,6 +14,8 @@
 //! * [`Dielectric`] — glass: smooth, rough (Walter et al. 2007) or thin-walled, with the exact
 //!   unpolarised Fresnel reflectance; [`Transmissive`] mixes one with the opaque material
 //!   (KHR_materials_transmission). Dielectrics see both hemispheres ([`dielectric`]).
+//! * [`DiffuseTransmission`] — KHR_materials_diffuse_transmission's Lambertian transmission
+//!   lobe, the part of the diffuse base that leaves on the other side.
 //! * [`Clearcoat`] and [`Sheen`] — KHR_materials_clearcoat's white GGX coat and
 //!   KHR_materials_sheen's Charlie lobe, the layers above the material.
 //! * [`HitBsdf`] — the glTF material at a hit as one layered BSDF: the lobes above, their
@@ -63,6 +65,7 @@
 
 pub mod clearcoat;
 pub mod dielectric;
+pub mod diffuse_transmission;
 mod frame;
 pub mod fresnel;
 pub mod ggx;
@@ -77,6 +80,7 @@ pub mod turquin;
 
 pub use clearcoat::Clearcoat;
 pub use dielectric::{Dielectric, Fresnel, Interface, ScatterSample, Transmissive, fresnel_dielectric};
+pub use diffuse_transmission::DiffuseTransmission;
 pub use frame::Frame;
 pub use ggx::{Ggx, Masking, SpecularSampling};
 pub use lambert::Lambert;

@@ -106,9 +106,10 @@ impl MetallicRoughness {
         self.f0_dielectric
     }
 
-    /// The diffuse attenuation `1 − sF·max(fr(cos θd))` of the dielectric layer.
+    /// The diffuse attenuation `1 − sF·max(fr(cos θd))` of the dielectric layer (also the
+    /// diffuse transmission lobe's).
     #[inline]
-    fn diffuse_scale(&self, cos_theta_d: f32) -> f32 {
+    pub(crate) fn diffuse_scale(&self, cos_theta_d: f32) -> f32 {
         if self.specular_factor == 0.0 {
             return 1.0; // `1 − 0·fr`, fr finite: the same value without the Fresnel term
         }

@@ -572,6 +572,8 @@ fn bsdf(
             clearcoat_normal: coat_normal,
             sheen_color: params.sheen_color,
             sheen_roughness: params.sheen_roughness,
+            diffuse_transmission: params.diffuse_transmission,
+            diffuse_transmission_color: params.diffuse_transmission_color,
         },
         specular,
     )

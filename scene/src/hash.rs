@@ -56,11 +56,14 @@ impl Scene {
             env.map.texels().iter().flat_map(|t| t.to_array()).for_each(|c| h.word(c.to_bits()));
         }
         // The small parts by their Debug text: every field, floats in round-trip precision.
-        // A lit material's `unlit: false` (its last field) and a material's empty layers are
-        // left out: files without them hash as they did before the fields existed.
+        // A lit material's `unlit: false` (its last field), a material's empty layers and its
+        // absent diffuse transmission are left out: files without them hash as they did before
+        // the fields existed.
         let no_layers = format!(", layers: {:?}", crate::MaterialLayers::default());
-        let materials =
-            format!("{:?}", self.materials).replace(&no_layers, "").replace(", unlit: false }", " }");
+        let materials = format!("{:?}", self.materials)
+            .replace(&no_layers, "")
+            .replace(", diffuse_transmission: None", "")
+            .replace(", unlit: false }", " }");
         let small = format!("{materials}|{:?}|{:?}|{}", self.textures, self.cameras, self.lights_debug());
         h.len(small.len());
         small.bytes().for_each(|b| h.word(u32::from(b)));

@@ -92,7 +92,10 @@ pub use geometry::{
 pub use light::{Light, PointLight, PointLightDistribution, Sky, SpotCone, Sun};
 pub use light_bvh::{LEAF as LIGHT_BVH_LEAF, LightBounds, LightBvh, LightBvhNode};
 pub use load::{ExtensionUse, MAX_COORDINATE, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
-pub use material::{AlphaMode, ClearcoatLayer, Material, MaterialLayers, MaterialSample, SheenLayer};
+pub use material::{
+    AlphaMode, ClearcoatLayer, DiffuseTransmissionFactors, Material, MaterialLayers, MaterialSample,
+    SheenLayer,
+};
 pub use surface::{SurfacePoint, blend_keeps, blend_seed, geometric_normal};
 pub use texture::{
     ColorSpace, Image, MAX_TEXTURE_SIZE, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear,

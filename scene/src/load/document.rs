@@ -18,6 +18,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_unlit",
     "KHR_materials_clearcoat",
     "KHR_materials_sheen",
+    "KHR_materials_diffuse_transmission",
     super::variants::EXTENSION,
     "KHR_texture_transform",
     "KHR_mesh_quantization",
