@@ -39,8 +39,8 @@ use crate::{GpuContext, GpuError};
 
 mod extensions;
 
-pub use extensions::{GpuLayers, GpuTransmission};
-use extensions::{layers_record, transmission_record};
+pub use extensions::{GpuDiffuseTransmission, GpuLayers, GpuTransmission};
+use extensions::{diffuse_transmission_record, layers_record, transmission_record};
 
 /// Number of bindings the scene uses ([`bindings`], [`GpuScene::layout_entries`]).
 pub const BINDING_COUNT: u32 = 6;
@@ -209,6 +209,7 @@ pub fn declarations() -> String {
         wgsl_struct::<GpuMaterial>(false),
         wgsl_struct::<GpuTransmission>(false),
         wgsl_struct::<GpuLayers>(false),
+        wgsl_struct::<GpuDiffuseTransmission>(false),
     ]
     .concat()
 }
@@ -264,6 +265,9 @@ pub struct SceneBuffers {
     /// `scene_layers`, one record per material; empty unless some material has a coat or a
     /// sheen.
     pub layers: Vec<GpuLayers>,
+    /// `scene_diffuse_transmission`, one record per material; empty unless some material
+    /// transmits diffusely.
+    pub diffuse_transmission: Vec<GpuDiffuseTransmission>,
 }
 
 /// Which optional vertex attributes a scene's shading reads: UVs only when some material is
@@ -347,7 +351,8 @@ impl ImageLayout {
                 [&c.texture, &c.roughness_texture, if kept.normal_mapped { &c.normal_texture } else { &None }]
             });
             let sheen = m.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]);
-            for slot in slots.into_iter().chain(clearcoat).chain(sheen) {
+            let dt = m.diffuse_transmission.iter().flat_map(|d| [&d.texture, &d.color_texture]);
+            for slot in slots.into_iter().chain(clearcoat).chain(sheen).chain(dt) {
                 if let Some((_, tex)) = resolve(scene, slot) {
                     let i = tex.image as usize;
                     if offset[i].is_none() {
@@ -548,13 +553,21 @@ impl SceneBuffers {
         };
         let texture_ref = |slot: &Option<TextureRef>| images.texture_ref(scene, slot);
         let materials = scene.materials.iter().map(|m| material_record(m, kept, &texture_ref)).collect();
-        let transmission = if scene.materials.iter().any(|m| m.is_transmissive()) {
+        // Diffuse transmission scatters through the transmission kernels (their records say
+        // which material bounds a solid).
+        let diffuse = scene.materials.iter().any(|m| m.diffuse_transmission.is_some());
+        let transmission = if diffuse || scene.materials.iter().any(|m| m.is_transmissive()) {
             scene.materials.iter().map(|m| transmission_record(m, &texture_ref)).collect()
         } else {
             Vec::new()
         };
         let layers = if scene.materials.iter().any(|m| !m.layers.is_empty()) {
             scene.materials.iter().map(|m| layers_record(m, kept, &texture_ref)).collect()
+        } else {
+            Vec::new()
+        };
+        let diffuse_transmission = if diffuse {
+            scene.materials.iter().map(|m| diffuse_transmission_record(m, &texture_ref)).collect()
         } else {
             Vec::new()
         };
@@ -568,6 +581,7 @@ impl SceneBuffers {
             image_count: images.used.len(),
             transmission,
             layers,
+            diffuse_transmission,
         })
     }
 
@@ -637,6 +651,9 @@ pub struct GpuScene {
     pub transmission: Option<wgpu::Buffer>,
     /// `scene_layers` ([`SceneBuffers::layers`]); `None` without coats and sheens.
     pub layers: Option<wgpu::Buffer>,
+    /// `scene_diffuse_transmission` ([`SceneBuffers::diffuse_transmission`]); `None` without
+    /// diffuse transmission.
+    pub diffuse_transmission: Option<wgpu::Buffer>,
 }
 
 impl GpuScene {
@@ -683,6 +700,15 @@ impl GpuScene {
                 wgpu::BufferUsages::STORAGE,
             )?)
         };
+        let diffuse_transmission = if packed.diffuse_transmission.is_empty() {
+            None
+        } else {
+            Some(ctx.buffer_init(
+                "scene diffuse transmission",
+                bytemuck::cast_slice(&packed.diffuse_transmission),
+                wgpu::BufferUsages::STORAGE,
+            )?)
+        };
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Wgpu(e.to_string()));
         }
@@ -693,9 +719,11 @@ impl GpuScene {
             geometry_bytes: packed.geometry_bytes(),
             bytes: packed.bytes()
                 + size_of_val(packed.transmission.as_slice()) as u64
-                + size_of_val(packed.layers.as_slice()) as u64,
+                + size_of_val(packed.layers.as_slice()) as u64
+                + size_of_val(packed.diffuse_transmission.as_slice()) as u64,
             transmission,
             layers,
+            diffuse_transmission,
         })
     }
 

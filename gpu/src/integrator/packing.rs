@@ -277,6 +277,10 @@ impl PackedScene {
         buffers.extend(SceneBuffers::EXTRA_NAMES.into_iter().zip(self.scene_words.extra()));
         buffers.push(("scene transmission", bytemuck::cast_slice(&self.scene_words.transmission)));
         buffers.push(("scene layers", bytemuck::cast_slice(&self.scene_words.layers)));
+        buffers.push((
+            "scene diffuse transmission",
+            bytemuck::cast_slice(&self.scene_words.diffuse_transmission),
+        ));
         buffers.extend(self.emitter_words.as_deref().map(|w| ("emitter", w)));
         buffers.extend(self.environment.iter().map(|(label, w)| (*label, w.as_slice())));
         for (what, words) in buffers {

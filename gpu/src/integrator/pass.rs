@@ -294,6 +294,9 @@ impl GpuRenderer {
         if let Some(l) = &self.scene.layers {
             resources.push(l.as_entire_binding());
         }
+        if let Some(d) = &self.scene.diffuse_transmission {
+            resources.push(d.as_entire_binding());
+        }
         if let Some(e) = &self.emitters {
             resources.push(e.as_entire_binding());
         }

@@ -1,7 +1,7 @@
 //! The per-material records of the material extensions, each in a buffer of its own that a
 //! scene without the extension neither fills nor binds: `scene_transmission`
-//! (KHR_materials_transmission, _ior, _volume) and `scene_layers` (KHR_materials_clearcoat,
-//! KHR_materials_sheen).
+//! (KHR_materials_transmission, _ior, _volume), `scene_layers` (KHR_materials_clearcoat,
+//! KHR_materials_sheen) and `scene_diffuse_transmission` (KHR_materials_diffuse_transmission).
 
 use super::{GpuTextureRef, Kept, TRANSMISSIVE, VOLUME};
 use crate::shared::WgslType;
@@ -58,6 +58,24 @@ crate::gpu_struct! {
     }
 }
 
+crate::gpu_struct! {
+    /// A material's diffuse transmission (WGSL `SceneDiffuseTransmission`):
+    /// KHR_materials_diffuse_transmission. One per material in `scene_diffuse_transmission`,
+    /// bound only for a scene with diffuse transmission (zeros for a material without). 112
+    /// bytes.
+    pub struct GpuDiffuseTransmission as "SceneDiffuseTransmission" {
+        /// `diffuseTransmissionTexture` (A channel).
+        pub texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `diffuseTransmissionColorTexture` (RGB, sRGB).
+        pub color_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `diffuseTransmissionColorFactor`.
+        pub color: [f32; 3] => WgslType::VEC3_F32,
+        /// `diffuseTransmissionFactor` (0: none).
+        pub factor: f32 => WgslType::F32,
+    }
+}
+
+const _: () = assert!(size_of::<GpuDiffuseTransmission>() == 112);
 const _: () = assert!(size_of::<GpuLayers>() == 272);
 const _: () = assert!(size_of::<GpuTransmission>() == 80);
 
@@ -98,6 +116,22 @@ pub(super) fn layers_record(
         r.sheen_roughness = s.roughness;
         r.sheen_color_texture = texture_ref(&s.color_texture);
         r.sheen_roughness_texture = texture_ref(&s.roughness_texture);
+    }
+    r
+}
+
+/// A material's diffuse transmission record, its texture slots through `texture_ref` (zeros
+/// without it).
+pub(super) fn diffuse_transmission_record(
+    m: &furnace_scene::Material,
+    texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
+) -> GpuDiffuseTransmission {
+    let mut r = GpuDiffuseTransmission::zeroed();
+    if let Some(d) = &m.diffuse_transmission {
+        r.texture = texture_ref(&d.texture);
+        r.color_texture = texture_ref(&d.color_texture);
+        r.color = d.color.to_array();
+        r.factor = d.factor;
     }
     r
 }
