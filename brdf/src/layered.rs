@@ -169,8 +169,10 @@ impl HitBsdf {
             .then(|| Sheen::new(params.sheen_color, params.sheen_roughness));
         let layers = (clearcoat.is_some() || sheen.is_some()).then_some(Layers { clearcoat, sheen });
         let dt = unit(params.diffuse_transmission);
-        // The share of the material that is the opaque dielectric: (1 − m)(1 − T).
-        let dielectric = (1.0 - unit(params.metallic)) * (1.0 - unit(params.transmission));
+        // The share of the material that is the opaque dielectric: (1 − m)(1 − T), a NaN
+        // metallic read as 1 as the metallic-roughness BSDF reads it.
+        let metallic = if params.metallic.is_nan() { 1.0 } else { unit(params.metallic) };
+        let dielectric = (1.0 - metallic) * (1.0 - unit(params.transmission));
         let diffuse_transmission = (dt > 0.0)
             .then(|| {
                 let color = crate::clamp_rgb(params.diffuse_transmission_color, 1.0) * (dielectric * dt);
