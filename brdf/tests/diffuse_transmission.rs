@@ -140,28 +140,25 @@ fn uncompensated() -> SpecularOptions {
 
 #[test]
 fn eval_matches_the_oracle() {
-    // f32 arithmetic against the oracle's f64 is ~1e-6 relative; the third material's sheen
-    // scale takes E from the table (≤ 2e-3 absolute, `layers::sheen_table_interpolation`),
-    // which reaches the value through the material beneath: 2e-3 of the value bounds both.
-    const TOLERANCE: f64 = 2e-3;
+    // f32 arithmetic against the oracle's f64: a few dozen roundings, 2e-6 relative. The third
+    // material's sheen scale takes E from the table (≤ 2e-3 absolute,
+    // `layers::sheen_table_interpolation`), which reaches the value through the material
+    // beneath: 2e-3 of the value there.
     let mut report =
         String::from("| material | pair | furnace | oracle | relative error |\n|---|---|---|---|---|\n");
-    let mut worst = 0.0f64;
+    let mut failures = 0;
     for ((name, params), expected) in materials().iter().zip(&ORACLE) {
+        let tolerance = if params.sheen_color == Rgb::ZERO { 2e-6 } else { 2e-3 };
         let bsdf = HitBsdf::new(params, uncompensated());
         for (&(o, i), want) in PAIRS.iter().zip(expected) {
             let got = bsdf.eval(dir(o.0, o.1), dir(i.0, i.1));
             let err = (0..3).map(|c| (got[c] as f64 - want[c]).abs() / want[c].abs()).fold(0.0, f64::max);
-            worst = worst.max(err);
+            failures += usize::from(!(err < tolerance));
             let _ = writeln!(report, "| {name} | {o:?} → {i:?} | {got:?} | {want:?} | {err:.2e} |");
         }
     }
     let path = write_output("diffuse_transmission_eval.md", &report);
-    assert!(
-        worst < TOLERANCE,
-        "eval off the oracle by {worst:.2e} (> {TOLERANCE:e}); see {}",
-        path.display()
-    );
+    assert_eq!(failures, 0, "eval off the oracle; see {}", path.display());
 }
 
 #[test]
@@ -169,40 +166,42 @@ fn directional_albedo_matches_the_oracle() {
     const SAMPLES: usize = 400_000;
     let mut rng = furnace_tests::Rng::new(0xd1ff_0001);
     let mut report =
-        String::from("| material | μo | albedo (all, transmitted) | oracle | σ |\n|---|---|---|---|---|\n");
+        String::from("| material | μo | albedo ± σ (all, transmitted) | oracle |\n|---|---|---|---|\n");
     let mut failures = 0;
     for ((name, params), expected) in materials().iter().zip(&ORACLE_ALBEDO) {
         let bsdf = HitBsdf::new(params, uncompensated());
+        // The sheen table's error (2e-3 of E, `layers::sheen_table_interpolation`) reaches the
+        // albedo of a material with a sheen through its base scale.
+        let table = if params.sheen_color == Rgb::ZERO { 0.0 } else { 2e-3 };
         for &(mu, all, transmitted) in expected {
             let wo = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
-            let (mut sum, mut sum2, mut through) = ([0.0f64; 3], [0.0f64; 3], [0.0f64; 3]);
+            // Per channel: sum and sum of squares of the weights, and of their transmitted part.
+            let (mut whole, mut through) = ([[0.0f64; 2]; 3], [[0.0f64; 2]; 3]);
             for _ in 0..SAMPLES {
                 let (u, uc) = (Vec2::new(rng.f32(), rng.f32()), rng.f32());
                 let Some(s) = bsdf.sample(wo, u, || uc) else { continue };
                 for c in 0..3 {
                     let w = f64::from(s.weight[c]);
-                    sum[c] += w;
-                    sum2[c] += w * w;
+                    whole[c] = [whole[c][0] + w, whole[c][1] + w * w];
                     if s.wi.z < 0.0 {
-                        through[c] += w;
+                        through[c] = [through[c][0] + w, through[c][1] + w * w];
                     }
                 }
             }
             let n = SAMPLES as f64;
+            let stats = |[s, s2]: [f64; 2]| (s / n, ((s2 / n - (s / n).powi(2)).max(0.0) / n).sqrt());
             for c in 0..3 {
-                let mean = sum[c] / n;
-                let sigma = ((sum2[c] / n - mean * mean).max(0.0) / n).sqrt();
+                let ((mean, sigma), (t, t_sigma)) = (stats(whole[c]), stats(through[c]));
                 // 5σ (two-sided, 6e-7 per check over 54 checks) plus the sheen table's error
-                // (2e-3 of the value, third material) and the oracle's quadrature (< 1e-6 at n
-                // = 64, its README). The transmitted part has no more variance than the whole.
-                let bound = 5.0 * sigma + 2e-3 * all[c];
-                let t = through[c] / n;
-                if (mean - all[c]).abs() > bound || (t - transmitted[c]).abs() > bound {
+                // and the oracle's quadrature (< 1e-6 at n = 64, its README).
+                if (mean - all[c]).abs() > 5.0 * sigma + table * all[c] + 1e-6
+                    || (t - transmitted[c]).abs() > 5.0 * t_sigma + table * all[c] + 1e-6
+                {
                     failures += 1;
                 }
                 let _ = writeln!(
                     report,
-                    "| {name} | {mu} | {mean:.5}, {t:.5} | {:.5}, {:.5} | {sigma:.1e} |",
+                    "| {name} | {mu} | {mean:.5} ± {sigma:.1e}, {t:.5} ± {t_sigma:.1e} | {:.5}, {:.5} |",
                     all[c], transmitted[c]
                 );
             }
