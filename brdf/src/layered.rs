@@ -227,7 +227,12 @@ impl HitBsdf {
     #[inline]
     fn material_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
         let Some(d) = &self.diffuse_transmission else { return self.core.pdf(wo, wi) };
-        let q = self.transmission_probability(d, wo);
+        self.mixture_pdf(d, self.transmission_probability(d, wo), wo, wi)
+    }
+
+    /// [`Self::material_pdf`] with the lobe's probability `q` given.
+    #[inline]
+    fn mixture_pdf(&self, d: &DiffuseTransmission, q: f32, wo: Vec3, wi: Vec3) -> f32 {
         let (wo_l, wi_l) = self.lobe_side(wo, wi);
         (1.0 - q) * self.core.pdf(wo, wi) + q * d.pdf(wo_l, wi_l)
     }
@@ -285,7 +290,7 @@ impl HitBsdf {
             }
             s.wi
         };
-        let pdf = self.material_pdf(wo, wi);
+        let pdf = self.mixture_pdf(d, q, wo, wi);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }

@@ -172,12 +172,18 @@ fn hit_material_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     return core;
 }
 
-// HitBsdf::material_pdf: (1 − q)·core + q·transmission.
+// #if DIFFUSE_TRANSMISSION
+// HitBsdf::mixture_pdf: (1 − q)·core + q·transmission, q given.
+fn hit_dt_mixture_pdf(b: HitBsdf, q: f32, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    return (1.0 - q) * hit_core_pdf(b, wo, wi) + q * dt_pdf(hit_dt_side(b, wo, wo), hit_dt_side(b, wo, wi));
+}
+// #endif
+
+// HitBsdf::material_pdf: (1 − q)·core + q·transmission, q the lobe's probability.
 fn hit_material_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     // #if DIFFUSE_TRANSMISSION
     if any(b.dt != vec3<f32>(0.0)) {
-        let q = hit_dt_probability(b, wo);
-        return (1.0 - q) * hit_core_pdf(b, wo, wi) + q * dt_pdf(hit_dt_side(b, wo, wo), hit_dt_side(b, wo, wi));
+        return hit_dt_mixture_pdf(b, hit_dt_probability(b, wo), wo, wi);
     }
     // #endif
     return hit_core_pdf(b, wo, wi);
@@ -241,7 +247,7 @@ fn hit_material_scatter(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
             }
             wi = s.wi;
         }
-        let pdf = hit_material_pdf(b, wo, wi);
+        let pdf = hit_dt_mixture_pdf(b, q, wo, wi);
         if !brdf_positive_finite(pdf) {
             return scatter_none();
         }
