@@ -10,6 +10,7 @@
 //! | [`GgxSpecular`](crate::GgxSpecular) (with [`turquin`](crate::turquin) compensation) | `specular.rs`, `ggx.rs`, `turquin.rs` | `1 − g`, merged: F0 `mix(0.04·sF·sC, baseColor, m′)`, F90 `mix(sF, 1, m′)` | Fresnel |
 //! | thin film (KHR_materials_iridescence) | `iridescence.rs` | not a lobe: mixes its Fresnel into the two rows above by `i` | |
 //! | [`Dielectric`] interface (smooth, rough or thin-walled) | `dielectric.rs` | `g` | tint `baseColor` |
+//! | [`DiffuseTransmission`] (KHR_materials_diffuse_transmission, Lambert below) | `diffuse_transmission.rs` | `(1 − m)(1 − T)·dt`, the Lambert base's `(1 − dt)` moved to it, under the same Fresnel weight (half vector mirrored) | `dtColor` |
 //! | [`Sheen`] (KHR_materials_sheen, Charlie) | `sheen.rs` | `1 − c·Fc`; scales everything below by `1 − max(sheenColor)·max(E(μo), E(μi))` | `sheenColor·E` |
 //! | [`Clearcoat`] (KHR_materials_clearcoat, white GGX) | `clearcoat.rs` | `c·Fc(μo)`; scales everything below by `1 − c·Fc(μo)` | `c·Fc·E_ss` |
 //!
@@ -18,7 +19,10 @@
 //! (`metallic` itself when `g = 0`): glTF's `mix(dielectric(mix(diffuse, transmission, T)),
 //! metal, metallic)` regrouped as `g·dielectric + (1 − g)·opaque`. The first two rows are
 //! [`MetallicRoughness`] (`metallic_roughness.rs`), the mixture with the third
-//! [`Transmissive`].
+//! [`Transmissive`]. The diffuse transmission lobe sits beside that core: the Lambert base of
+//! the opaque part keeps `(1 − dt)` of its albedo and the lobe takes `dt` of it, coloured
+//! `diffuseTransmissionColor` (`dt = clamp(diffuseTransmission)`); the core and the lobe
+//! together are the material the layers cover. A material without it is exactly the core.
 //!
 //! The layers above the material are the extensions' own rules, outermost first:
 //! `coat + (1 − c·Fc)·(sheen + s·material)` with the coat's `c`, `Fc` of [`crate::clearcoat`]
@@ -29,8 +33,10 @@
 //! [`LayeredParams`], its weight in [`HitBsdf::new`] and its row above.
 
 use crate::clearcoat::Clearcoat;
-use crate::dielectric::{Dielectric, Interface, ONE_BELOW, ScatterSample, Transmissive};
+use crate::dielectric::{Dielectric, Interface, ONE_BELOW, ScatterSample, Transmissive, rescale};
+use crate::diffuse_transmission::DiffuseTransmission;
 use crate::iridescence::ThinFilm;
+use crate::lambert::Lambert;
 use crate::metallic_roughness::{MetallicRoughness, MetallicRoughnessParams};
 use crate::sheen::Sheen;
 use crate::specular::SpecularOptions;
@@ -73,6 +79,10 @@ pub struct LayeredParams {
     pub iridescence: f32,
     /// The film: `iridescenceIor` and its thickness in nm (`mix(min, max, texture.g)`).
     pub film: ThinFilm,
+    /// KHR_materials_diffuse_transmission `diffuseTransmissionFactor × texture.a` (0: none).
+    pub diffuse_transmission: f32,
+    /// KHR_materials_diffuse_transmission `diffuseTransmissionColorFactor × texture.rgb`.
+    pub diffuse_transmission_color: Rgb,
 }
 
 impl Default for LayeredParams {
@@ -94,6 +104,8 @@ impl Default for LayeredParams {
             sheen_roughness: 0.0,
             iridescence: 0.0,
             film: ThinFilm { ior: 1.3, thickness: 400.0 },
+            diffuse_transmission: 0.0,
+            diffuse_transmission_color: Rgb::ONE,
         }
     }
 }
@@ -117,12 +129,15 @@ pub struct Layers {
     pub sheen: Option<Sheen>,
 }
 
-/// The BSDF at a hit: the material ([`Core`]) under its layers. See the [module docs](self)
-/// for the layering.
+/// The BSDF at a hit: the material ([`Core`] and its diffuse transmission) under its layers.
+/// See the [module docs](self) for the layering.
 #[derive(Debug, Clone, Copy)]
 pub struct HitBsdf {
     /// The material beneath.
     pub core: Core,
+    /// KHR_materials_diffuse_transmission's lobe beside the core, `None` without it (or where
+    /// it is black).
+    pub diffuse_transmission: Option<DiffuseTransmission>,
     /// The layers above it, `None` without coat or sheen.
     pub layers: Option<Layers>,
 }
@@ -140,6 +155,16 @@ pub enum LobeSelection {
 /// small at this view (a coat seen head-on reflects 4 %) is starved.
 pub const MIN_LAYER_PROBABILITY: f32 = 0.05;
 
+/// The smallest probability the diffuse transmission lobe and the core beside it are each
+/// sampled with, for the same reason.
+pub const MIN_TRANSMISSION_PROBABILITY: f32 = 0.05;
+
+/// A clamped factor: `[0, 1]`, NaN → 0.
+#[inline]
+fn unit(x: f32) -> f32 {
+    if x.is_nan() { 0.0 } else { x.clamp(0.0, 1.0) }
+}
+
 impl HitBsdf {
     /// The BSDF of evaluated material parameters: the glTF metallic-roughness material, mixed
     /// with a dielectric interface where it transmits, under its coat and sheen.
@@ -151,40 +176,141 @@ impl HitBsdf {
         let sheen = (params.sheen_color.max_element() > 0.0)
             .then(|| Sheen::new(params.sheen_color, params.sheen_roughness));
         let layers = (clearcoat.is_some() || sheen.is_some()).then_some(Layers { clearcoat, sheen });
-        Self { core: Core::new(params, specular), layers }
+        let dt = unit(params.diffuse_transmission);
+        // The share of the material that is the opaque dielectric: (1 − m)(1 − T), a NaN
+        // metallic read as 1 as the metallic-roughness BSDF reads it.
+        let metallic = if params.metallic.is_nan() { 1.0 } else { unit(params.metallic) };
+        let dielectric = (1.0 - metallic) * (1.0 - unit(params.transmission));
+        let diffuse_transmission = (dt > 0.0)
+            .then(|| {
+                let color = crate::clamp_rgb(params.diffuse_transmission_color, 1.0) * (dielectric * dt);
+                DiffuseTransmission::new(color, params.volume)
+            })
+            .filter(|d| d.color != Rgb::ZERO);
+        Self { core: Core::new(params, specular, dt), diffuse_transmission, layers }
     }
 
     /// The BSDF times `|cos θi|`.
     #[inline]
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
         match &self.layers {
-            None => self.core.eval(wo, wi),
-            Some(l) => l.eval(wo, wi, self.core.eval(wo, wi)),
+            None => self.material_eval(wo, wi),
+            Some(l) => l.eval(wo, wi, self.material_eval(wo, wi)),
         }
     }
 
     /// The density of the non-delta part of `sample`.
     #[inline]
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match &self.layers {
-            None => self.core.pdf(wo, wi),
-            Some(l) => {
-                let p = l.probabilities(wo, &self.core, LobeSelection::Albedo);
-                l.pdf(wo, wi, p) + p.core * self.core.pdf(wo, wi)
-            }
-        }
+        self.pdf_with(wo, wi, LobeSelection::Albedo)
     }
 
     /// [`HitBsdf::pdf`] of [`HitBsdf::sample_with`] under `selection`.
     #[inline]
     pub fn pdf_with(&self, wo: Vec3, wi: Vec3, selection: LobeSelection) -> f32 {
         match &self.layers {
-            None => self.core.pdf(wo, wi),
+            None => self.material_pdf(wo, wi),
             Some(l) => {
-                let p = l.probabilities(wo, &self.core, selection);
-                l.pdf(wo, wi, p) + p.core * self.core.pdf(wo, wi)
+                let p = l.probabilities(wo, self.material_estimate(wo), selection);
+                l.pdf(wo, wi, p) + p.core * self.material_pdf(wo, wi)
             }
         }
+    }
+
+    /// The material beneath the layers, times `|cos θi|`: the core plus its diffuse
+    /// transmission.
+    #[inline]
+    fn material_eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        let core = self.core.eval(wo, wi);
+        match &self.diffuse_transmission {
+            None => core,
+            Some(d) => {
+                let (wo, wi) = self.lobe_side(wo, wi);
+                core + d.eval(self.core.opaque(), wo, wi)
+            }
+        }
+    }
+
+    /// The material's density: `(1 − q)·core + q·transmission`, `q` the lobe's probability.
+    #[inline]
+    fn material_pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let Some(d) = &self.diffuse_transmission else { return self.core.pdf(wo, wi) };
+        self.mixture_pdf(d, self.transmission_probability(d, wo), wo, wi)
+    }
+
+    /// [`Self::material_pdf`] with the lobe's probability `q` given.
+    #[inline]
+    fn mixture_pdf(&self, d: &DiffuseTransmission, q: f32, wo: Vec3, wi: Vec3) -> f32 {
+        let (wo_l, wi_l) = self.lobe_side(wo, wi);
+        (1.0 - q) * self.core.pdf(wo, wi) + q * d.pdf(wo_l, wi_l)
+    }
+
+    /// The material's albedo estimate at ωo (for the layers' choice): the core's plus the
+    /// diffuse transmission's.
+    #[inline]
+    fn material_estimate(&self, wo: Vec3) -> f32 {
+        let core = self.core.albedo_estimate(wo);
+        match &self.diffuse_transmission {
+            None => core,
+            Some(d) => core + d.albedo_estimate(self.core.opaque(), self.lobe_side(wo, wo).0),
+        }
+    }
+
+    /// The probability of sampling the diffuse transmission lobe rather than the core: in
+    /// proportion to their albedo estimates at ωo, each at least
+    /// [`MIN_TRANSMISSION_PROBABILITY`].
+    #[inline]
+    fn transmission_probability(&self, d: &DiffuseTransmission, wo: Vec3) -> f32 {
+        let t = d.albedo_estimate(self.core.opaque(), self.lobe_side(wo, wo).0);
+        let q = t / (t + self.core.albedo_estimate(wo));
+        let q = if q.is_finite() { q } else { 0.5 };
+        q.clamp(MIN_TRANSMISSION_PROBABILITY, 1.0 - MIN_TRANSMISSION_PROBABILITY)
+    }
+
+    /// `(ωo, ωi)` in the frame the diffuse transmission lobe is defined in (ωo above): as
+    /// given, or both mirrored where a solid's interface is seen from inside (its outward
+    /// frame puts ωo below; the lobe is the same from either side).
+    #[inline]
+    fn lobe_side(&self, wo: Vec3, wi: Vec3) -> (Vec3, Vec3) {
+        if wo.z < 0.0 && self.is_volume() {
+            let m = Vec3::new(1.0, 1.0, -1.0);
+            (wo * m, wi * m)
+        } else {
+            (wo, wi)
+        }
+    }
+
+    /// Samples the material beneath the layers: the diffuse transmission lobe or the core by
+    /// `uc` (drawn only with the lobe, or where the core draws it), then the mixture's pdf and
+    /// weight; a delta event of the core keeps its direction with the choice divided out.
+    #[inline]
+    fn material_sample(&self, wo: Vec3, u: Vec2, uc: impl FnOnce() -> f32) -> Option<ScatterSample> {
+        let Some(d) = &self.diffuse_transmission else { return self.core.sample(wo, u, uc) };
+        let q = self.transmission_probability(d, wo);
+        let uc = uc();
+        let wi = if uc < q {
+            let (wo_l, _) = self.lobe_side(wo, wo);
+            self.lobe_side(wo, d.sample_direction(wo_l, u)?).1
+        } else {
+            let s = self.core.sample(wo, u, || rescale(uc, q, false))?;
+            if s.delta {
+                return Some(ScatterSample { weight: s.weight / (1.0 - q), ..s });
+            }
+            s.wi
+        };
+        let pdf = self.mixture_pdf(d, q, wo, wi);
+        if !(pdf > 0.0 && pdf.is_finite()) {
+            return None;
+        }
+        let transmitted = (wi.z < 0.0) != (wo.z < 0.0);
+        Some(ScatterSample {
+            wi,
+            weight: self.material_eval(wo, wi) / pdf,
+            pdf,
+            delta: false,
+            transmitted,
+            rest: 0.0,
+        })
     }
 
     /// Samples a direction; the lobe number `uc` is drawn only where it decides something
@@ -204,8 +330,8 @@ impl HitBsdf {
         uc: impl FnOnce() -> f32,
         selection: LobeSelection,
     ) -> Option<ScatterSample> {
-        let Some(l) = &self.layers else { return self.core.sample(wo, u, uc) };
-        let p = l.probabilities(wo, &self.core, selection);
+        let Some(l) = &self.layers else { return self.material_sample(wo, u, uc) };
+        let p = l.probabilities(wo, self.material_estimate(wo), selection);
         let uc = uc();
         let wi = if uc < p.clearcoat {
             l.clearcoat?.sample_direction(wo, u)?
@@ -213,7 +339,7 @@ impl HitBsdf {
             l.sheen?.sample(wo, 0.0, u)?.wi
         } else {
             let rest = ((uc - p.clearcoat - p.sheen) / p.core).min(ONE_BELOW);
-            let s = self.core.sample(wo, u, || rest)?;
+            let s = self.material_sample(wo, u, || rest)?;
             if s.delta {
                 // A delta event of the material: its weight through the layers, the choice of
                 // the material divided out.
@@ -222,7 +348,7 @@ impl HitBsdf {
             }
             s.wi
         };
-        let pdf = l.pdf(wo, wi, p) + p.core * self.core.pdf(wo, wi);
+        let pdf = l.pdf(wo, wi, p) + p.core * self.material_pdf(wo, wi);
         if !(pdf > 0.0 && pdf.is_finite()) {
             return None;
         }
@@ -243,7 +369,7 @@ impl HitBsdf {
     /// Only delta lobes: no light sample can reach a direction.
     #[inline]
     pub fn is_delta(&self) -> bool {
-        self.layers.is_none() && self.core.is_delta()
+        self.layers.is_none() && self.diffuse_transmission.is_none() && self.core.is_delta()
     }
 
     /// A thin-walled sheet or an η = 1 interface: straight passes are no events.
@@ -258,10 +384,19 @@ impl HitBsdf {
         matches!(self.core, Core::Transmissive(_, true))
     }
 
-    /// Light samples may arrive from behind the surface (a rough solid interface).
+    /// Light samples may arrive from behind the surface (a rough solid interface, diffuse
+    /// transmission).
     #[inline]
     pub fn transmits_light_samples(&self) -> bool {
-        matches!(self.core, Core::Transmissive(b, true) if b.dielectric.interface == Interface::Rough)
+        self.diffuse_transmission.is_some()
+            || matches!(self.core, Core::Transmissive(b, true) if b.dielectric.interface == Interface::Rough)
+    }
+
+    /// A scattered ray that crosses the surface changes medium: the interface of a solid, by
+    /// refraction or by diffuse transmission (KHR_materials_volume).
+    #[inline]
+    pub fn bounds_medium(&self) -> bool {
+        self.is_volume() || self.diffuse_transmission.is_some_and(|d| d.volume)
     }
 
     /// What a shadow ray crossing a sheet (or an η = 1 interface) at cosine `cos` keeps:
@@ -280,7 +415,9 @@ impl HitBsdf {
 }
 
 impl Core {
-    fn new(params: &LayeredParams, specular: SpecularOptions) -> Self {
+    /// The core of `params`; with diffuse transmission `dt` (in `[0, 1]`) the Lambert base of
+    /// the opaque part keeps `1 − dt` of its albedo.
+    fn new(params: &LayeredParams, specular: SpecularOptions, dt: f32) -> Self {
         let mr = |metallic: f32| {
             let p = MetallicRoughnessParams {
                 base_color: params.base_color,
@@ -289,11 +426,15 @@ impl Core {
                 specular_factor: params.specular_factor,
                 specular_color: params.specular_color,
             };
-            if params.iridescence > 0.0 {
+            let mut m = if params.iridescence > 0.0 {
                 MetallicRoughness::new_iridescent(p, specular, params.iridescence, params.film)
             } else {
                 MetallicRoughness::new(p, specular)
+            };
+            if dt > 0.0 {
+                m.diffuse = Lambert::new(m.diffuse.albedo * (1.0 - dt));
             }
+            m
         };
         let metallic = params.metallic.clamp(0.0, 1.0);
         let g = params.transmission.clamp(0.0, 1.0) * (1.0 - metallic);
@@ -342,6 +483,16 @@ impl Core {
     #[inline]
     fn is_delta(&self) -> bool {
         matches!(self, Self::Transmissive(b, _) if b.is_delta())
+    }
+
+    /// The opaque metallic-roughness part (whose Fresnel weight the diffuse transmission
+    /// shares).
+    #[inline]
+    pub fn opaque(&self) -> &MetallicRoughness {
+        match self {
+            Self::Opaque(m) => m,
+            Self::Transmissive(t, _) => &t.opaque,
+        }
     }
 
     /// The material's albedo estimate (luminance) at `wo`, for choosing between it and the
@@ -413,7 +564,7 @@ impl Layers {
     /// `(1 − c·Fc)·lum(sheenColor)·E(μo)`, material `(1 − c·Fc)·(1 − max(sheenColor)·E(μo))`
     /// times its own estimate), each present layer at least [`MIN_LAYER_PROBABILITY`].
     #[inline]
-    fn probabilities(&self, wo: Vec3, core: &Core, selection: LobeSelection) -> Probabilities {
+    fn probabilities(&self, wo: Vec3, material_estimate: f32, selection: LobeSelection) -> Probabilities {
         if selection == LobeSelection::Uniform {
             let n = 1.0 + f32::from(u8::from(self.clearcoat.is_some()) + u8::from(self.sheen.is_some()));
             let p = |present: bool| if present { 1.0 / n } else { 0.0 };
@@ -429,7 +580,7 @@ impl Layers {
             Some(s) => (rest * s.albedo_estimate(wo.z), s.base_scale(wo.z, wo.z)),
             None => (0.0, 1.0),
         };
-        let m = rest * scale * core.albedo_estimate(wo);
+        let m = rest * scale * material_estimate;
         let floor = |present: bool, x: f32| if present { x.max(MIN_LAYER_PROBABILITY) } else { 0.0 };
         let total = c + s + m;
         let (c, s) = if total > 0.0 && total.is_finite() { (c / total, s / total) } else { (0.0, 0.0) };

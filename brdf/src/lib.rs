@@ -16,6 +16,8 @@
 //!   (KHR_materials_transmission). Dielectrics see both hemispheres ([`dielectric`]).
 //! * [`iridescence`] — KHR_materials_iridescence's thin-film Fresnel, mixed into the
 //!   material's specular lobe ([`MetallicRoughness::new_iridescent`]).
+//! * [`DiffuseTransmission`] — KHR_materials_diffuse_transmission's Lambertian transmission
+//!   lobe, the part of the diffuse base that leaves on the other side.
 //! * [`Clearcoat`] and [`Sheen`] — KHR_materials_clearcoat's white GGX coat and
 //!   KHR_materials_sheen's Charlie lobe, the layers above the material.
 //! * [`HitBsdf`] — the glTF material at a hit as one layered BSDF: the lobes above, their
@@ -65,6 +67,7 @@
 
 pub mod clearcoat;
 pub mod dielectric;
+pub mod diffuse_transmission;
 mod frame;
 pub mod fresnel;
 pub mod ggx;
@@ -80,6 +83,7 @@ pub mod turquin;
 
 pub use clearcoat::Clearcoat;
 pub use dielectric::{Dielectric, Fresnel, Interface, ScatterSample, Transmissive, fresnel_dielectric};
+pub use diffuse_transmission::DiffuseTransmission;
 pub use frame::Frame;
 pub use ggx::{Ggx, Masking, SpecularSampling};
 pub use lambert::Lambert;

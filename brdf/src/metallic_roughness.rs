@@ -136,10 +136,10 @@ impl MetallicRoughness {
         self.f0_dielectric
     }
 
-    /// The diffuse attenuation `1 − sF·max(fr(cos θd))` of the dielectric layer; under a film
-    /// `1 − max((1 − i)·sF·fr + i·film(cos θd))`.
+    /// The diffuse attenuation `1 − sF·max(fr(cos θd))` of the dielectric layer (also the
+    /// diffuse transmission lobe's); under a film `1 − max((1 − i)·sF·fr + i·film(cos θd))`.
     #[inline]
-    fn diffuse_scale(&self, cos_theta_d: f32) -> f32 {
+    pub(crate) fn diffuse_scale(&self, cos_theta_d: f32) -> f32 {
         if let Some((film, _)) = &self.specular.iridescence {
             let fr = schlick(self.f0_dielectric, Rgb::ONE, cos_theta_d) * self.specular_factor;
             let fw = (1.0 - film.factor) * fr + film.factor * film.dielectric(cos_theta_d);

@@ -11,6 +11,8 @@ mod common;
 mod consistency;
 #[path = "dielectric.rs"]
 mod dielectric;
+#[path = "diffuse_transmission.rs"]
+mod diffuse_transmission;
 #[path = "iridescence.rs"]
 mod iridescence;
 #[path = "layers.rs"]

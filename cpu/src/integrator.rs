@@ -575,6 +575,8 @@ fn bsdf(
             sheen_roughness: params.sheen_roughness,
             iridescence: params.iridescence,
             film: ThinFilm { ior: params.iridescence_ior, thickness: params.iridescence_thickness },
+            diffuse_transmission: params.diffuse_transmission,
+            diffuse_transmission_color: params.diffuse_transmission_color,
         },
         specular,
     )

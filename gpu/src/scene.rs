@@ -39,8 +39,12 @@ use crate::{GpuContext, GpuError};
 
 mod extensions;
 
-pub use extensions::{GpuIridescence, GpuLayers, GpuSpecularTextures, GpuTransmission};
-use extensions::{iridescence_record, layers_record, specular_record, transmission_record};
+pub use extensions::{
+    GpuDiffuseTransmission, GpuIridescence, GpuLayers, GpuSpecularTextures, GpuTransmission,
+};
+use extensions::{
+    diffuse_transmission_record, iridescence_record, layers_record, specular_record, transmission_record,
+};
 
 /// Number of bindings the scene uses ([`bindings`], [`GpuScene::layout_entries`]).
 pub const BINDING_COUNT: u32 = 6;
@@ -211,6 +215,7 @@ pub fn declarations() -> String {
         wgsl_struct::<GpuLayers>(false),
         wgsl_struct::<GpuIridescence>(false),
         wgsl_struct::<GpuSpecularTextures>(false),
+        wgsl_struct::<GpuDiffuseTransmission>(false),
     ]
     .concat()
 }
@@ -271,6 +276,9 @@ pub struct SceneBuffers {
     /// `scene_specular`, one record per material; empty unless some material has a
     /// KHR_materials_specular texture.
     pub specular: Vec<GpuSpecularTextures>,
+    /// `scene_diffuse_transmission`, one record per material; empty unless some material
+    /// transmits diffusely.
+    pub diffuse_transmission: Vec<GpuDiffuseTransmission>,
 }
 
 /// Which optional vertex attributes a scene's shading reads: UVs only when some material is
@@ -357,7 +365,8 @@ impl ImageLayout {
             });
             let sheen = m.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]);
             let film = m.iridescence.iter().flat_map(|i| [&i.texture, &i.thickness_texture]);
-            for slot in slots.into_iter().chain(clearcoat).chain(sheen).chain(film) {
+            let dt = m.diffuse_transmission.iter().flat_map(|d| [&d.texture, &d.color_texture]);
+            for slot in slots.into_iter().chain(clearcoat).chain(sheen).chain(film).chain(dt) {
                 if let Some((_, tex)) = resolve(scene, slot) {
                     let i = tex.image as usize;
                     if offset[i].is_none() {
@@ -558,7 +567,10 @@ impl SceneBuffers {
         };
         let texture_ref = |slot: &Option<TextureRef>| images.texture_ref(scene, slot);
         let materials = scene.materials.iter().map(|m| material_record(m, kept, &texture_ref)).collect();
-        let transmission = if scene.materials.iter().any(|m| m.is_transmissive()) {
+        // Diffuse transmission scatters through the transmission kernels (their records say
+        // which material bounds a solid).
+        let diffuse = scene.materials.iter().any(|m| m.diffuse_transmission.is_some());
+        let transmission = if diffuse || scene.materials.iter().any(|m| m.is_transmissive()) {
             scene.materials.iter().map(|m| transmission_record(m, &texture_ref)).collect()
         } else {
             Vec::new()
@@ -578,6 +590,11 @@ impl SceneBuffers {
         } else {
             Vec::new()
         };
+        let diffuse_transmission = if diffuse {
+            scene.materials.iter().map(|m| diffuse_transmission_record(m, &texture_ref)).collect()
+        } else {
+            Vec::new()
+        };
         Ok(Self {
             triangles,
             vertices,
@@ -590,6 +607,7 @@ impl SceneBuffers {
             layers,
             iridescence,
             specular,
+            diffuse_transmission,
         })
     }
 
@@ -663,6 +681,9 @@ pub struct GpuScene {
     pub iridescence: Option<wgpu::Buffer>,
     /// `scene_specular` ([`SceneBuffers::specular`]); `None` without specular textures.
     pub specular: Option<wgpu::Buffer>,
+    /// `scene_diffuse_transmission` ([`SceneBuffers::diffuse_transmission`]); `None` without
+    /// diffuse transmission.
+    pub diffuse_transmission: Option<wgpu::Buffer>,
 }
 
 impl GpuScene {
@@ -710,6 +731,8 @@ impl GpuScene {
         let layers = optional("scene layers", bytemuck::cast_slice(&packed.layers))?;
         let iridescence = optional("scene iridescence", bytemuck::cast_slice(&packed.iridescence))?;
         let specular = optional("scene specular", bytemuck::cast_slice(&packed.specular))?;
+        let diffuse_transmission =
+            optional("scene diffuse transmission", bytemuck::cast_slice(&packed.diffuse_transmission))?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Wgpu(e.to_string()));
         }
@@ -722,11 +745,13 @@ impl GpuScene {
                 + size_of_val(packed.transmission.as_slice()) as u64
                 + size_of_val(packed.layers.as_slice()) as u64
                 + size_of_val(packed.iridescence.as_slice()) as u64
-                + size_of_val(packed.specular.as_slice()) as u64,
+                + size_of_val(packed.specular.as_slice()) as u64
+                + size_of_val(packed.diffuse_transmission.as_slice()) as u64,
             transmission,
             layers,
             iridescence,
             specular,
+            diffuse_transmission,
         })
     }
 

@@ -25,6 +25,10 @@ pub const BRDF: &str = crate::brdf::WGSL;
 /// and the glTF transmissive mixture. Needs [`BRDF`].
 pub const DIELECTRIC: &str = include_str!("wgsl/dielectric.wgsl");
 
+/// `furnace-brdf`'s diffuse transmission lobe (KHR_materials_diffuse_transmission). Needs
+/// [`BRDF`]; composed for scenes with diffuse transmission only.
+pub const DIFFUSE_TRANSMISSION: &str = include_str!("wgsl/diffuse_transmission.wgsl");
+
 /// `furnace-scene`'s per-hit code over the scene buffers of [`crate::scene`]: attribute
 /// interpolation (octahedral normals, UVs, tangents), bilinear RGBA8 texture lookups with wrap
 /// modes, sRGB decode and KHR_texture_transform, `Material::evaluate`, furnace-cpu's

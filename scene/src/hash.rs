@@ -57,14 +57,15 @@ impl Scene {
         }
         // The small parts by their Debug text: every field, floats in round-trip precision.
         // A lit material's `unlit: false` (its last field), a material's empty layers, absent
-        // specular textures and absent iridescence are left out: files without them hash as they did before the
-        // fields existed.
+        // specular textures, absent iridescence and absent diffuse transmission are left out:
+        // files without them hash as they did before the fields existed.
         let no_layers = format!(", layers: {:?}", crate::MaterialLayers::default());
         let no_specular_textures = format!(", specular_textures: {:?}", crate::SpecularTextures::default());
         let materials = format!("{:?}", self.materials)
             .replace(&no_layers, "")
             .replace(&no_specular_textures, "")
             .replace(", iridescence: None", "")
+            .replace(", diffuse_transmission: None", "")
             .replace(", unlit: false }", " }");
         let small = format!("{materials}|{:?}|{:?}|{}", self.textures, self.cameras, self.lights_debug());
         h.len(small.len());

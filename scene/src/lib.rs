@@ -93,8 +93,8 @@ pub use light::{Light, PointLight, PointLightDistribution, Sky, SpotCone, Sun};
 pub use light_bvh::{LEAF as LIGHT_BVH_LEAF, LightBounds, LightBvh, LightBvhNode};
 pub use load::{ExtensionUse, MAX_COORDINATE, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
 pub use material::{
-    AlphaMode, ClearcoatLayer, Iridescence, Material, MaterialLayers, MaterialSample, SheenLayer,
-    SpecularTextures,
+    AlphaMode, ClearcoatLayer, DiffuseTransmissionFactors, Iridescence, Material, MaterialLayers,
+    MaterialSample, SheenLayer, SpecularTextures,
 };
 pub use surface::{SurfacePoint, blend_keeps, blend_seed, geometric_normal};
 pub use texture::{

@@ -1,7 +1,7 @@
 //! Materials: glTF 2.0 metallic-roughness with KHR_materials_specular,
 //! KHR_materials_emissive_strength, KHR_materials_transmission, KHR_materials_ior,
 //! KHR_materials_volume, KHR_materials_clearcoat, KHR_materials_sheen and
-//! KHR_materials_iridescence, as factors and texture
+//! KHR_materials_iridescence and KHR_materials_diffuse_transmission, as factors and texture
 //! references. Textures are sampled by
 //! [`Material::evaluate`] into the per-shading-point values the integrator feeds to
 //! `furnace_brdf::MetallicRoughnessParams`.
@@ -71,11 +71,15 @@ pub struct Material {
     /// KHR_materials_ior `ior` (default 1.5): the index of the transmissive solid or sheet.
     pub ior: f32,
     /// KHR_materials_volume: the surface bounds a solid (`thicknessFactor` > 0, a flag only:
-    /// distances are ray-traced); otherwise a transmissive surface is thin-walled.
+    /// distances are ray-traced); otherwise a transmissive (or diffusely transmissive) surface
+    /// is thin-walled.
     pub volume: bool,
     /// The volume's absorption coefficient σ_a = −ln(attenuationColor)/attenuationDistance per
     /// channel, in 1/m (0: clear; +∞ where a channel is black).
     pub absorption: Vec3,
+    /// KHR_materials_diffuse_transmission (a `diffuseTransmissionFactor` above 0). The content
+    /// hash leaves it out where it is `None`, so other files hash as before.
+    pub diffuse_transmission: Option<DiffuseTransmissionFactors>,
     /// The layers above the material (KHR_materials_clearcoat, KHR_materials_sheen). The
     /// content hash leaves them out where there are none, so other files hash as before.
     pub layers: MaterialLayers,
@@ -113,6 +117,7 @@ impl Default for Material {
             ior: 1.5,
             volume: false,
             absorption: Vec3::ZERO,
+            diffuse_transmission: None,
             layers: MaterialLayers::default(),
             iridescence: None,
             unlit: false,
@@ -201,6 +206,19 @@ pub struct Iridescence {
     pub thickness_texture: Option<TextureRef>,
 }
 
+/// KHR_materials_diffuse_transmission's factors and textures.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiffuseTransmissionFactors {
+    /// `diffuseTransmissionFactor`: the share of the diffuse base that is transmitted.
+    pub factor: f32,
+    /// `diffuseTransmissionTexture` (linear, A channel).
+    pub texture: Option<TextureRef>,
+    /// `diffuseTransmissionColorFactor` (linear RGB).
+    pub color: Vec3,
+    /// `diffuseTransmissionColorTexture` (sRGB, RGB channels).
+    pub color_texture: Option<TextureRef>,
+}
+
 /// A material evaluated at one shading point: every factor multiplied by its texture.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct MaterialSample {
@@ -234,6 +252,10 @@ pub struct MaterialSample {
     pub iridescence_ior: f32,
     /// The film's thickness in nm, `mix(minimum, maximum, texture.g)`.
     pub iridescence_thickness: f32,
+    /// `diffuseTransmissionFactor × texture.a` (0 without diffuse transmission).
+    pub diffuse_transmission: f32,
+    /// `diffuseTransmissionColorFactor × texture.rgb`.
+    pub diffuse_transmission_color: Vec3,
 }
 
 impl Material {
@@ -259,6 +281,7 @@ impl Material {
         )
         .chain(self.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]))
         .chain(self.iridescence.iter().flat_map(|i| [&i.texture, &i.thickness_texture]))
+        .chain(self.diffuse_transmission.iter().flat_map(|d| [&d.texture, &d.color_texture]))
         .flatten()
     }
 
@@ -312,6 +335,10 @@ impl Material {
             }
             None => (0.0, 1.3, 0.0),
         };
+        let (diffuse_transmission, diffuse_transmission_color) = match &self.diffuse_transmission {
+            Some(d) => (d.factor * sample(&d.texture).w, d.color * sample(&d.color_texture).truncate()),
+            None => (0.0, Vec3::ONE),
+        };
         MaterialSample {
             base_color: base.truncate(),
             alpha: base.w,
@@ -328,6 +355,8 @@ impl Material {
             iridescence,
             iridescence_ior,
             iridescence_thickness,
+            diffuse_transmission,
+            diffuse_transmission_color,
         }
     }
 

@@ -474,6 +474,65 @@ fn iridescence_is_read() {
     assert_eq!(plain.content_hash(), none.content_hash());
 }
 
+/// KHR_materials_diffuse_transmission read into `Material::diffuse_transmission`: factor,
+/// texture (linear, A channel) and colour texture (sRGB); no lobe for a zero factor (the content
+/// hash then unchanged); a factor and a colour out of range clamped and a texture index out of
+/// range dropped, each with a warning naming its path; the surface two-sided, a solid with
+/// KHR_materials_volume (no warning that the volume is ignored); a file that requires it loads.
+#[test]
+fn diffuse_transmission_is_read() {
+    use furnace_scene::ColorSpace;
+    const EXT: &str = "KHR_materials_diffuse_transmission";
+    let full = format!(
+        r#"{{"extensions":{{"{EXT}":{{"diffuseTransmissionFactor":0.25,"diffuseTransmissionTexture":{{"index":0,"texCoord":1}},
+"diffuseTransmissionColorFactor":[1.0,0.9,0.85],"diffuseTransmissionColorTexture":{{"index":0}}}}}}}}"#
+    );
+    let off = format!(r#"{{"extensions":{{"{EXT}":{{"diffuseTransmissionColorFactor":[1.0,0.0,0.0]}}}}}}"#);
+    let bad = format!(
+        r#"{{"extensions":{{"{EXT}":{{"diffuseTransmissionFactor":1.5,"diffuseTransmissionColorFactor":[2.0,0.5,-1.0],
+"diffuseTransmissionColorTexture":{{"index":9}}}}}}}}"#
+    );
+    let solid = format!(
+        r#"{{"extensions":{{"{EXT}":{{"diffuseTransmissionFactor":1.0}},
+"KHR_materials_volume":{{"thicknessFactor":0.1,"attenuationDistance":2.0,"attenuationColor":[0.5,1.0,1.0]}}}}}}"#
+    );
+    let materials = [full, off.clone(), bad, solid];
+    let prims = [r#""material":0"#, r#""material":1"#, r#""material":2"#, r#""material":3"#];
+    let used = format!(r#""{EXT}","KHR_materials_volume""#);
+    let text = String::from_utf8(gltf(&materials, &prims, "", &used)).unwrap().replacen(
+        r#""extensionsUsed""#,
+        &format!(r#""extensionsRequired":["{EXT}"],"extensionsUsed""#),
+        1,
+    );
+    let scene = Scene::from_slice(text.as_bytes(), "dt.gltf").unwrap();
+    let d = scene.materials[0].diffuse_transmission.as_ref().expect("diffuse transmission");
+    assert_eq!((d.factor, d.color), (0.25, Vec3::new(1.0, 0.9, 0.85)));
+    assert_eq!(d.texture.as_ref().map(|t| (t.tex_coord, t.color_space)), Some((1, ColorSpace::Linear)));
+    assert_eq!(d.color_texture.as_ref().map(|t| t.color_space), Some(ColorSpace::Srgb));
+    assert!(scene.materials[0].double_sided && !scene.materials[0].volume);
+    assert!(scene.materials[1].diffuse_transmission.is_none(), "factor 0 (the default) is no lobe");
+    assert!(!scene.materials[1].double_sided);
+    let d = scene.materials[2].diffuse_transmission.as_ref().expect("diffuse transmission");
+    assert_eq!((d.factor, d.color), (1.0, Vec3::new(1.0, 0.5, 0.0)), "clamped");
+    assert!(d.color_texture.is_none(), "a texture index out of range is dropped");
+    let m = &scene.materials[3];
+    assert!(m.volume && m.diffuse_transmission.is_some(), "a translucent solid");
+    assert!((m.absorption.x - 2f32.ln() / 2.0).abs() < 1e-6 && m.absorption.y == 0.0);
+    let p = |i: usize, key: &str| format!("materials[{i}].extensions.{EXT}.{key}");
+    let paths: Vec<&str> = scene.warnings.iter().map(|w| w.path.as_str()).collect();
+    for key in
+        ["diffuseTransmissionFactor", "diffuseTransmissionColorFactor", "diffuseTransmissionColorTexture"]
+    {
+        assert!(paths.contains(&p(2, key).as_str()), "{key}: {paths:?}");
+    }
+    assert!(!paths.iter().any(|p| p.contains("KHR_materials_volume")), "{paths:?}");
+    // A material whose factor is 0 hashes as one without the extension.
+    let plain = Scene::from_slice(&gltf(&[off], &[r#""material":0"#], "", &used), "off.gltf").unwrap();
+    let none =
+        Scene::from_slice(&gltf(&["{}".to_string()], &[r#""material":0"#], "", ""), "none.gltf").unwrap();
+    assert_eq!(plain.content_hash(), none.content_hash());
+}
+
 /// KHR_materials_specular's textures: `specularTexture` read linear and its A channel
 /// multiplying `specularFactor`, `specularColorTexture` read as sRGB multiplying
 /// `specularColorFactor`, each at its own UV set; an index out of range is an error naming the

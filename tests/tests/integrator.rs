@@ -153,6 +153,9 @@ fn absent_light_features_compose_no_code() {
         "scene_specular",
         "brdf_film_",
         ".film_",
+        "scene_diffuse_transmission",
+        "fn dt_",
+        "fn hit_material_estimate",
         "shadow_query",
         "fn absorption",
         "to_sun",
@@ -202,6 +205,17 @@ fn absent_light_features_compose_no_code() {
         assert!(glass.contains(present), "{present} missing from the shader of a scene with glass");
     }
     assert!(!glass.contains("shadow_query"), "the sheets' filter in a shader without sheets");
+    for absent in ["fn dt_", "scene_diffuse_transmission", "DT_MIN_PROBABILITY"] {
+        assert!(!glass.contains(absent), "{absent} in the shader of a scene without diffuse transmission");
+    }
+    let translucent = shader_source(
+        FilmPrecision::F64,
+        SceneFeatures { transmission: true, diffuse_transmission: true, ..Default::default() },
+    );
+    for present in ["fn dt_eval", "var<storage, read> scene_diffuse_transmission", "fn hit_material_estimate"]
+    {
+        assert!(translucent.contains(present), "{present} missing from a diffuse transmission shader");
+    }
     let sheets = shader_source(
         FilmPrecision::F64,
         SceneFeatures { transmission: true, thin_walled: true, ..Default::default() },
@@ -323,6 +337,7 @@ fn frame_params_layout_matches_wgsl() {
                 sheen: !light_bvh,
                 iridescence: light_bvh,
                 specular_textures: light_bvh,
+                diffuse_transmission: light_bvh,
                 one_point_light: !light_bvh,
             },
         ));
@@ -339,6 +354,10 @@ fn frame_params_layout_matches_wgsl() {
     furnace_tests::layout::assert_gpu_struct::<furnace_gpu::scene::GpuTransmission>(&shader_source(
         FilmPrecision::F64,
         SceneFeatures { transmission: true, ..Default::default() },
+    ));
+    furnace_tests::layout::assert_gpu_struct::<furnace_gpu::scene::GpuDiffuseTransmission>(&shader_source(
+        FilmPrecision::F64,
+        SceneFeatures { transmission: true, diffuse_transmission: true, ..Default::default() },
     ));
 }
 
@@ -600,6 +619,67 @@ fn same_samples_give_the_same_image_with_iridescence() {
             thickness_maximum: 450.0,
             thickness_texture: None,
         });
+    }
+    same_samples_with(&glass, glass_settings());
+}
+
+/// KHR_materials_diffuse_transmission on both integrators from the same samples: the
+/// reference's back-lit sheets; the clear-coat scene's spheres made translucent (every other one
+/// a solid with absorption, KHR_materials_volume: paths enter through the lobe, are absorbed
+/// inside and leave through it), some under a sheen; the helmet with its base colour texture
+/// as both diffuse transmission textures (the A channel, the sRGB RGB); the glass box with
+/// diffuse transmission beside its dielectrics (the lobe within the transmissive mixture).
+#[test]
+fn same_samples_give_the_same_image_with_diffuse_transmission() {
+    use furnace_scene::{DiffuseTransmissionFactors, Scene};
+    use glam::Vec3;
+    let lobe = |factor: f32, color: Vec3| DiffuseTransmissionFactors {
+        factor,
+        texture: None,
+        color,
+        color_texture: None,
+    };
+    let sheets = Scene::load(furnace_tests::data::reference("pbr/pbr_diffuse_transmission.gltf")).unwrap();
+    same_samples_with(
+        &sheets,
+        RenderSettings { width: 40, height: 16, bounces: 3, ..settings(SamplerKind::Sobol, 5) },
+    );
+    let mut spheres = Scene::load(furnace_tests::data::reference("pbr/pbr_clearcoat.gltf")).unwrap();
+    for (i, m) in spheres.materials.iter_mut().enumerate() {
+        m.diffuse_transmission = Some(lobe(0.3 + 0.15 * (i % 5) as f32, Vec3::new(0.9, 0.6, 0.3)));
+        m.double_sided = true;
+        m.volume = i % 2 == 0;
+        m.absorption = Vec3::new(0.5, 1.0, 2.0);
+        if i % 3 == 0 {
+            m.layers.sheen = Some(furnace_scene::SheenLayer {
+                color: Vec3::new(0.4, 0.5, 0.9),
+                color_texture: None,
+                roughness: 0.4,
+                roughness_texture: None,
+            });
+        }
+    }
+    same_samples_with(
+        &spheres,
+        RenderSettings { width: 32, height: 24, bounces: 4, ..settings(SamplerKind::Sobol, 6) },
+    );
+    let mut helmet = lit_helmet();
+    for m in &mut helmet.materials {
+        m.diffuse_transmission = Some(DiffuseTransmissionFactors {
+            texture: m.base_color_texture,
+            color_texture: m.base_color_texture,
+            ..lobe(0.8, Vec3::new(1.0, 0.8, 0.6))
+        });
+        m.double_sided = true;
+    }
+    same_samples_with(
+        &helmet,
+        RenderSettings { width: 24, height: 24, bounces: 2, ..settings(SamplerKind::Sobol, 7) },
+    );
+    let mut glass = Scene::load(furnace_tests::data::reference("glass/glass_box.gltf")).unwrap();
+    for m in &mut glass.materials {
+        m.diffuse_transmission = Some(lobe(0.5, Vec3::new(0.8, 0.9, 1.0)));
+        m.double_sided = true;
     }
     same_samples_with(&glass, glass_settings());
 }

@@ -285,8 +285,8 @@ impl CpuRenderer {
         path.event += 1;
         path.passes = 0;
         path.carried_uc = None;
-        if crosses && bsdf.is_volume() {
-            // Into the solid from outside, or out of it.
+        if crosses && bsdf.bounds_medium() {
+            // Into the solid from outside, or out of it (refracted or diffusely transmitted).
             path.medium = if surface.back_face { Vec3::ZERO } else { material.absorption };
         }
         if self.settings.russian_roulette && path.event >= 3 {

@@ -148,6 +148,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     if features.specular_textures {
         bindings.push(Binding::read("scene_specular", "array<SceneSpecular>"));
     }
+    if features.enabled("DIFFUSE_TRANSMISSION") {
+        bindings.push(Binding::read("scene_diffuse_transmission", "array<SceneDiffuseTransmission>"));
+    }
     if features.emitters {
         // Chosen by the light BVH: 16-byte records and nodes, read as vec4 (three loads a node).
         let ty = if features.light_bvh { "array<vec4<u32>>" } else { "array<u32>" };
@@ -209,7 +212,8 @@ pub struct SceneFeatures {
     /// `f64` film the test runs on the GPU, the `converge` entry point).
     pub adaptive: bool,
     /// A transmissive material (the dielectric BSDF, volumes' absorption, the
-    /// `scene_transmission` records).
+    /// `scene_transmission` records), or a diffusely transmissive one (which needs the same
+    /// scattering stage: rays that cross, media, light samples from behind).
     pub transmission: bool,
     /// A material shadow rays cross (a thin-walled sheet, multiplied by its T′; an η = 1 solid).
     pub thin_walled: bool,
@@ -241,6 +245,9 @@ pub struct SceneFeatures {
     /// Some material has a KHR_materials_specular texture (`scene_specular` records, read at
     /// hits).
     pub specular_textures: bool,
+    /// Some material transmits diffusely (KHR_materials_diffuse_transmission; with
+    /// `transmission`, the `scene_diffuse_transmission` records).
+    pub diffuse_transmission: bool,
     /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
     /// triangles per invocation, added to the ray counter at its end). Not a property of the
     /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
@@ -271,7 +278,10 @@ impl SceneFeatures {
                 && settings.env_sampling.light_samples(settings.light_sampling).is_some(),
             aovs: settings.aovs,
             adaptive: settings.adaptive.is_some(),
-            transmission: scene.materials.iter().any(|m| m.is_transmissive()),
+            transmission: scene
+                .materials
+                .iter()
+                .any(|m| m.is_transmissive() || m.diffuse_transmission.is_some()),
             thin_walled: scene.materials.iter().any(|m| m.passes_shadow_rays()),
             blend: scene.materials.iter().any(|m| m.alpha_mode == AlphaMode::Blend),
             unlit: scene.materials.iter().any(|m| m.unlit),
@@ -284,6 +294,7 @@ impl SceneFeatures {
             sheen: scene.materials.iter().any(|m| m.layers.sheen.is_some()),
             iridescence: scene.materials.iter().any(|m| m.iridescence.is_some()),
             specular_textures: scene.materials.iter().any(|m| !m.specular_textures.is_empty()),
+            diffuse_transmission: scene.materials.iter().any(|m| m.diffuse_transmission.is_some()),
             trace_counters: false,
         }
     }
@@ -313,6 +324,8 @@ impl SceneFeatures {
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
     /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `BLEND`, `UNLIT`, `SHADOW_FILTER` (shadow rays
     /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`, `UV_SETS`, `VERTEX_COLORS`, `CLEARCOAT`, `SHEEN`, `LAYERS` (either), `IRIDESCENCE`, `SPECULAR_TEXTURES`,
+    /// `DIFFUSE_TRANSMISSION` (with `TRANSMISSION`), `LOBE_ESTIMATES` (the material's albedo
+    /// estimate: `LAYERS` or `DIFFUSE_TRANSMISSION`),
     /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
     pub fn enabled(self, name: &str) -> bool {
@@ -342,6 +355,8 @@ impl SceneFeatures {
             "LAYERS" => self.clearcoat || self.sheen,
             "IRIDESCENCE" => self.iridescence,
             "SPECULAR_TEXTURES" => self.specular_textures,
+            "DIFFUSE_TRANSMISSION" => self.transmission && self.diffuse_transmission,
+            "LOBE_ESTIMATES" => self.enabled("LAYERS") || self.enabled("DIFFUSE_TRANSMISSION"),
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,
             _ => panic!("no scene feature {name} (an #if of the integrator's WGSL)"),
@@ -373,6 +388,14 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         ),
         features.wgsl(),
         if features.enabled("LAYERS") { layers_consts_wgsl() } else { String::new() },
+        if features.enabled("DIFFUSE_TRANSMISSION") {
+            format!(
+                "const DT_MIN_PROBABILITY: f32 = {:?};\n",
+                furnace_brdf::layered::MIN_TRANSMISSION_PROBABILITY
+            )
+        } else {
+            String::new()
+        },
         binding_table(precision, features).wgsl(),
         if features.aovs { format!("alias aov_sum_t = {};\n", precision.aov_sum_type()) } else { String::new() },
     ]
@@ -397,6 +420,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         } else {
             String::new()
         },
+        if features.enabled("DIFFUSE_TRANSMISSION") { wgsl::DIFFUSE_TRANSMISSION } else { "" },
         &wgsl::select(wgsl::SCENE, |name| features.enabled(name)),
         &wgsl::select(wgsl::TRAVERSE, |name| features.enabled(name)),
         &light_bvh,

@@ -279,6 +279,10 @@ impl PackedScene {
         buffers.push(("scene layers", bytemuck::cast_slice(&self.scene_words.layers)));
         buffers.push(("scene iridescence", bytemuck::cast_slice(&self.scene_words.iridescence)));
         buffers.push(("scene specular", bytemuck::cast_slice(&self.scene_words.specular)));
+        buffers.push((
+            "scene diffuse transmission",
+            bytemuck::cast_slice(&self.scene_words.diffuse_transmission),
+        ));
         buffers.extend(self.emitter_words.as_deref().map(|w| ("emitter", w)));
         buffers.extend(self.environment.iter().map(|(label, w)| (*label, w.as_slice())));
         for (what, words) in buffers {

@@ -300,6 +300,9 @@ impl GpuRenderer {
         if let Some(t) = &self.scene.specular {
             resources.push(t.as_entire_binding());
         }
+        if let Some(d) = &self.scene.diffuse_transmission {
+            resources.push(d.as_entire_binding());
+        }
         if let Some(e) = &self.emitters {
             resources.push(e.as_entire_binding());
         }

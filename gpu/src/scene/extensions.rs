@@ -1,8 +1,9 @@
 //! The per-material records of the material extensions, each in a buffer of its own that a
 //! scene without the extension neither fills nor binds: `scene_transmission`
 //! (KHR_materials_transmission, _ior, _volume), `scene_layers` (KHR_materials_clearcoat,
-//! KHR_materials_sheen), `scene_iridescence` (KHR_materials_iridescence) and `scene_specular`
-//! (KHR_materials_specular's textures).
+//! KHR_materials_sheen), `scene_iridescence` (KHR_materials_iridescence), `scene_specular`
+//! (KHR_materials_specular's textures) and `scene_diffuse_transmission`
+//! (KHR_materials_diffuse_transmission).
 
 use super::{GpuTextureRef, Kept, TRANSMISSIVE, VOLUME};
 use crate::shared::WgslType;
@@ -91,6 +92,24 @@ crate::gpu_struct! {
     }
 }
 
+crate::gpu_struct! {
+    /// A material's diffuse transmission (WGSL `SceneDiffuseTransmission`):
+    /// KHR_materials_diffuse_transmission. One per material in `scene_diffuse_transmission`,
+    /// bound only for a scene with diffuse transmission (zeros for a material without). 112
+    /// bytes.
+    pub struct GpuDiffuseTransmission as "SceneDiffuseTransmission" {
+        /// `diffuseTransmissionTexture` (A channel).
+        pub texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `diffuseTransmissionColorTexture` (RGB, sRGB).
+        pub color_texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `diffuseTransmissionColorFactor`.
+        pub color: [f32; 3] => WgslType::VEC3_F32,
+        /// `diffuseTransmissionFactor` (0: none).
+        pub factor: f32 => WgslType::F32,
+    }
+}
+
+const _: () = assert!(size_of::<GpuDiffuseTransmission>() == 112);
 const _: () = assert!(size_of::<GpuLayers>() == 272);
 const _: () = assert!(size_of::<GpuSpecularTextures>() == 96);
 const _: () = assert!(size_of::<GpuIridescence>() == 112);
@@ -164,4 +183,20 @@ pub(super) fn specular_record(
         specular: texture_ref(&m.specular_textures.specular),
         color: texture_ref(&m.specular_textures.color),
     }
+}
+
+/// A material's diffuse transmission record, its texture slots through `texture_ref` (zeros
+/// without it).
+pub(super) fn diffuse_transmission_record(
+    m: &furnace_scene::Material,
+    texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
+) -> GpuDiffuseTransmission {
+    let mut r = GpuDiffuseTransmission::zeroed();
+    if let Some(d) = &m.diffuse_transmission {
+        r.texture = texture_ref(&d.texture);
+        r.color_texture = texture_ref(&d.color_texture);
+        r.color = d.color.to_array();
+        r.factor = d.factor;
+    }
+    r
 }

@@ -239,10 +239,10 @@ fn scatter_transmissive(path: ptr<function, Path>, pixel: u32, index: u32, bsdf:
     if bsdf.layered {
         s = hit_scatter_layered(bsdf, wo, uc, u);
     } else {
-        s = hit_core_scatter(bsdf, wo, uc, u);
+        s = hit_material_scatter(bsdf, wo, uc, u);
     }
     // #else
-    let s = hit_core_scatter(bsdf, wo, uc, u);
+    let s = hit_material_scatter(bsdf, wo, uc, u);
     // #endif
     if !s.valid {
         return false;
@@ -284,7 +284,12 @@ fn scatter_transmissive(path: ptr<function, Path>, pixel: u32, index: u32, bsdf:
     // #endif
     path.passes = 0u;
     path.carried_uc = -1.0;
-    if crosses && volume {
+    // HitBsdf::bounds_medium: a solid's interface, refracting or diffusely transmitting.
+    var bounds_medium = volume;
+    // #if DIFFUSE_TRANSMISSION
+    bounds_medium = bounds_medium || (bsdf.dt_volume && any(bsdf.dt != vec3<f32>(0.0)));
+    // #endif
+    if crosses && bounds_medium {
         // Into the solid from outside, or out of it.
         path.medium = select(scene_transmission[material].absorption, vec3<f32>(0.0), surface.back_face != 0u);
     }
@@ -389,6 +394,10 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
     // #if TRANSMISSION
     let behind = offset_ray_origin_scaled(surface.position, -surface.geometric, params.offset_scale);
     bsdf.two_sided = volume && bsdf.t.d.iface == DIELECTRIC_ROUGH;
+    // #if DIFFUSE_TRANSMISSION
+    // HitBsdf::transmits_light_samples: diffuse transmission is lit from behind too.
+    bsdf.two_sided = bsdf.two_sided || any(bsdf.dt != vec3<f32>(0.0));
+    // #endif
     bsdf.behind = behind;
     bsdf.medium = path.medium;
     // #endif

@@ -1,6 +1,7 @@
 // furnace-gpu: the glTF material's layering, the twin of `furnace-brdf`'s src/layered.rs
 // (`HitBsdf`): which lobes a hit has and their weights. Composed after the generated bindings
-// and before integrator.wgsl, with the TRANSMISSION parts only when a scene has them.
+// and before integrator.wgsl, with the TRANSMISSION (and DIFFUSE_TRANSMISSION, which implies
+// it) parts only when a scene has them.
 
 // What a hit's material reads of its vertices (Geometry::attributes): its UV sets and vertex
 // colour where the scene has any (the VERTEX_ATTRIBUTES kernels), else nothing, a constant.
@@ -36,6 +37,12 @@ struct HitBsdf {
     behind: vec3<f32>,
     // The absorption coefficient of the volume the vertex is in (0: air).
     medium: vec3<f32>,
+    // #endif
+    // #if DIFFUSE_TRANSMISSION
+    // The diffuse transmission lobe's colour (black: none) and whether a ray it transmits
+    // enters or leaves a solid (KHR_materials_volume).
+    dt: vec3<f32>,
+    dt_volume: bool,
     // #endif
     // #if LAYERS
     // The coat and sheen above the material, and whether there are any at this hit.
@@ -99,6 +106,25 @@ fn hit_bsdf(material_sample: MaterialSample, material: u32, at: SceneAttributes)
     // #endif
     let metallic = brdf_clamp(ms.metallic, 0.0, 1.0);
     let g = brdf_clamp(transmission, 0.0, 1.0) * (1.0 - metallic);
+    // #if DIFFUSE_TRANSMISSION
+    let dr = scene_diffuse_transmission[material];
+    // #if VERTEX_ATTRIBUTES
+    let dt = brdf_sanitize(dr.factor * scene_texture_sample_at(dr.texture, at).w, 0.0, 1.0, 0.0);
+    let dt_color = dr.color * scene_texture_sample_at(dr.color_texture, at).xyz;
+    // #else
+    let dt = brdf_sanitize(dr.factor, 0.0, 1.0, 0.0);
+    let dt_color = dr.color;
+    // #endif
+    if dt > 0.0 {
+        // The Lambert base keeps 1 − dt of its albedo; the lobe takes dt of the opaque
+        // dielectric's share (1 − m)(1 − T), coloured dtColor.
+        b.m.diffuse = b.m.diffuse * (1.0 - dt);
+        let dielectric = (1.0 - brdf_sanitize(ms.metallic, 0.0, 1.0, 1.0))
+            * (1.0 - brdf_sanitize(transmission, 0.0, 1.0, 0.0));
+        b.dt = brdf_clamp_rgb(dt_color, 1.0) * (dielectric * dt);
+        b.dt_volume = (tr.flags & SCENE_VOLUME) != 0u;
+    }
+    // #endif
     if g > 0.0 {
         let rough = brdf_clamp(ms.roughness, 0.0, 1.0);
         var d = dielectric_new(tr.ior, rough * rough, (tr.flags & SCENE_VOLUME) == 0u,
@@ -114,6 +140,11 @@ fn hit_bsdf(material_sample: MaterialSample, material: u32, at: SceneAttributes)
                                  params.bsdf_flags);
         // #if IRIDESCENCE
         opaque = bsdf_with_film(opaque, ms.base_color, m_opaque, film.x, film.y, film.z);
+        // #endif
+        // #if DIFFUSE_TRANSMISSION
+        if dt > 0.0 {
+            opaque.diffuse = opaque.diffuse * (1.0 - dt);
+        }
         // #endif
         b.t = Transmissive(d, opaque, min(g, 1.0));
         b.kind = tr.flags;
@@ -146,9 +177,68 @@ fn hit_core_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     return bsdf_pdf(b.m, wo, wi);
 }
 
+// #if DIFFUSE_TRANSMISSION
+// Core::opaque: the opaque metallic-roughness part, whose Fresnel weight the diffuse
+// transmission shares.
+fn hit_opaque(b: HitBsdf) -> BsdfParams {
+    if b.kind != 0u {
+        return b.t.opaque;
+    }
+    return b.m;
+}
+
+// HitBsdf::lobe_side: `w` in the frame the diffuse transmission lobe is defined in, mirrored
+// where a solid's interface is seen from inside (ωo below its outward frame).
+fn hit_dt_side(b: HitBsdf, wo: vec3<f32>, w: vec3<f32>) -> vec3<f32> {
+    if wo.z < 0.0 && (b.kind & SCENE_VOLUME) != 0u {
+        return vec3<f32>(w.x, w.y, -w.z);
+    }
+    return w;
+}
+
+// HitBsdf::transmission_probability: the lobe against the core by their albedo estimates,
+// each at least DT_MIN_PROBABILITY.
+fn hit_dt_probability(b: HitBsdf, wo: vec3<f32>) -> f32 {
+    let t = dt_estimate(b.dt, hit_opaque(b), hit_dt_side(b, wo, wo));
+    var q = t / (t + hit_core_estimate(b, wo));
+    if !(abs(q) <= BRDF_F32_MAX) {
+        q = 0.5;
+    }
+    return brdf_clamp(q, DT_MIN_PROBABILITY, 1.0 - DT_MIN_PROBABILITY);
+}
+// #endif
+
+// HitBsdf::material_eval: the core plus its diffuse transmission.
+fn hit_material_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let core = hit_core_eval(b, wo, wi);
+    // #if DIFFUSE_TRANSMISSION
+    if any(b.dt != vec3<f32>(0.0)) {
+        return core + dt_eval(b.dt, hit_opaque(b), hit_dt_side(b, wo, wo), hit_dt_side(b, wo, wi));
+    }
+    // #endif
+    return core;
+}
+
+// #if DIFFUSE_TRANSMISSION
+// HitBsdf::mixture_pdf: (1 − q)·core + q·transmission, q given.
+fn hit_dt_mixture_pdf(b: HitBsdf, q: f32, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    return (1.0 - q) * hit_core_pdf(b, wo, wi) + q * dt_pdf(hit_dt_side(b, wo, wo), hit_dt_side(b, wo, wi));
+}
+// #endif
+
+// HitBsdf::material_pdf: (1 − q)·core + q·transmission, q the lobe's probability.
+fn hit_material_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    // #if DIFFUSE_TRANSMISSION
+    if any(b.dt != vec3<f32>(0.0)) {
+        return hit_dt_mixture_pdf(b, hit_dt_probability(b, wo), wo, wi);
+    }
+    // #endif
+    return hit_core_pdf(b, wo, wi);
+}
+
 // HitBsdf::eval.
 fn hit_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
-    let core = hit_core_eval(b, wo, wi);
+    let core = hit_material_eval(b, wo, wi);
     // #if LAYERS
     if b.layered {
         return layers_eval(b.l, wo, wi, core);
@@ -161,11 +251,11 @@ fn hit_eval(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
 fn hit_pdf(b: HitBsdf, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     // #if LAYERS
     if b.layered {
-        let p = layers_probabilities(b.l, wo, hit_core_estimate(b, wo));
-        return layers_pdf(b.l, wo, wi, p) + p.z * hit_core_pdf(b, wo, wi);
+        let p = layers_probabilities(b.l, wo, hit_material_estimate(b, wo));
+        return layers_pdf(b.l, wo, wi, p) + p.z * hit_material_pdf(b, wo, wi);
     }
     // #endif
-    return hit_core_pdf(b, wo, wi);
+    return hit_material_pdf(b, wo, wi);
 }
 
 // #if TRANSMISSION
@@ -178,9 +268,45 @@ fn hit_core_scatter(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Scatter
     let o = bsdf_sample(b.m, wo, uc, u);
     return ScatterSample(o.wi, o.pdf, o.weight, 0.0, false, false, o.lobe != BSDF_LOBE_NONE);
 }
+
+// HitBsdf::material_sample: the diffuse transmission lobe or the core by uc, then the
+// mixture's pdf and weight; a delta event of the core keeps its direction with the choice
+// divided out.
+fn hit_material_scatter(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> ScatterSample {
+    // #if DIFFUSE_TRANSMISSION
+    if any(b.dt != vec3<f32>(0.0)) {
+        let q = hit_dt_probability(b, wo);
+        var wi: vec3<f32>;
+        if uc < q {
+            let d = dt_sample_direction(hit_dt_side(b, wo, wo), u);
+            if d.w == 0.0 {
+                return scatter_none();
+            }
+            wi = hit_dt_side(b, wo, d.xyz);
+        } else {
+            var s = hit_core_scatter(b, wo, dielectric_rescale(uc, q, false), u);
+            if !s.valid {
+                return s;
+            }
+            if s.delta {
+                s.weight = s.weight / (1.0 - q);
+                return s;
+            }
+            wi = s.wi;
+        }
+        let pdf = hit_dt_mixture_pdf(b, q, wo, wi);
+        if !brdf_positive_finite(pdf) {
+            return scatter_none();
+        }
+        return ScatterSample(wi, pdf, hit_material_eval(b, wo, wi) / pdf, 0.0, false,
+                             (wi.z < 0.0) != (wo.z < 0.0), true);
+    }
+    // #endif
+    return hit_core_scatter(b, wo, uc, u);
+}
 // #endif
 
-// #if LAYERS
+// #if LOBE_ESTIMATES
 // MetallicRoughness::albedo_estimates, summed: the opaque material's estimate at ωo.
 fn hit_opaque_estimate(m: BsdfParams, wo: vec3<f32>) -> f32 {
     let mu = brdf_clamp(wo.z, 0.0, 1.0);
@@ -201,10 +327,24 @@ fn hit_core_estimate(b: HitBsdf, wo: vec3<f32>) -> f32 {
     return hit_opaque_estimate(b.m, wo);
 }
 
+// HitBsdf::material_estimate: the core's plus the diffuse transmission's.
+fn hit_material_estimate(b: HitBsdf, wo: vec3<f32>) -> f32 {
+    let core = hit_core_estimate(b, wo);
+    // #if DIFFUSE_TRANSMISSION
+    if any(b.dt != vec3<f32>(0.0)) {
+        return core + dt_estimate(b.dt, hit_opaque(b), hit_dt_side(b, wo, wo));
+    }
+    // #endif
+    return core;
+}
+// #endif
+
+// #if LAYERS
+
 // HitBsdf::sample for an opaque material under its layers: a lobe by uc, then the mixture's
 // pdf and eval/pdf.
 fn hit_sample_layered(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> BsdfSample {
-    let p = layers_probabilities(b.l, wo, hit_core_estimate(b, wo));
+    let p = layers_probabilities(b.l, wo, hit_material_estimate(b, wo));
     var wi: vec3<f32>;
     var lobe = BSDF_LOBE_SHEEN;
     if uc < p.x + p.y {
@@ -233,7 +373,7 @@ fn hit_sample_layered(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> BsdfS
 // HitBsdf::sample under the layers with a transmissive material: a delta event of the material
 // keeps its direction, weighted through the layers with the choice of the material divided out.
 fn hit_scatter_layered(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> ScatterSample {
-    let p = layers_probabilities(b.l, wo, hit_core_estimate(b, wo));
+    let p = layers_probabilities(b.l, wo, hit_material_estimate(b, wo));
     var wi: vec3<f32>;
     if uc < p.x + p.y {
         let d = layers_sample_direction(b.l, wo, uc, u, p);
@@ -242,7 +382,7 @@ fn hit_scatter_layered(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Scat
         }
         wi = d.wi;
     } else {
-        var s = hit_core_scatter(b, wo, layers_core_uc(uc, p), u);
+        var s = hit_material_scatter(b, wo, layers_core_uc(uc, p), u);
         if !s.valid {
             return s;
         }
@@ -252,7 +392,7 @@ fn hit_scatter_layered(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Scat
         }
         wi = s.wi;
     }
-    let pdf = layers_pdf(b.l, wo, wi, p) + p.z * hit_core_pdf(b, wo, wi);
+    let pdf = layers_pdf(b.l, wo, wi, p) + p.z * hit_material_pdf(b, wo, wi);
     if !brdf_positive_finite(pdf) {
         return scatter_none();
     }

@@ -4,7 +4,8 @@
 use super::context::Ctx;
 use super::spec_gloss::Bake;
 use crate::material::{
-    AlphaMode, ClearcoatLayer, Iridescence, Material, MaterialLayers, SheenLayer, SpecularTextures,
+    AlphaMode, ClearcoatLayer, DiffuseTransmissionFactors, Iridescence, Material, MaterialLayers, SheenLayer,
+    SpecularTextures,
 };
 use crate::texture::{ColorSpace, Texture, TextureRef, TextureTransform, WrapMode};
 use glam::{Vec2, Vec3, Vec4};
@@ -107,6 +108,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
     let mut transmission = transmission(ctx, m, &p);
     let mut layers = layers(ctx, m, &p, textures);
     let mut iridescence = iridescence(ctx, m, &p, textures);
+    let mut diffuse_transmission = diffuse_transmission(ctx, m, &p, textures);
     warn_ignored(ctx, m);
     let unlit = m.unlit();
     if unlit {
@@ -116,9 +118,12 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         transmission.texture = None;
         layers = MaterialLayers::default();
         iridescence = None;
+        diffuse_transmission = None;
     }
     let roughness_factor = pbr.roughness_factor;
     let transmissive = transmission.factor > 0.0;
+    // Light passes through either way: KHR_materials_volume makes the surface a solid's.
+    let passes_light = transmissive || diffuse_transmission.is_some();
     if transmissive && !transmission.volume && roughness_factor > 0.0 {
         ctx.warn(
             format!("{p}.extensions.KHR_materials_transmission"),
@@ -138,16 +143,17 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         emissive_texture,
         alpha_mode,
         // A solid's surface is one interface whatever doubleSided says (KHR_materials_volume),
-        // and a sheet is seen from both sides: transmissive surfaces are two-sided.
-        double_sided: m.double_sided() || transmissive,
+        // and a sheet is seen from both sides: (diffusely) transmissive surfaces are two-sided.
+        double_sided: m.double_sided() || passes_light,
         specular_factor,
         specular_color_factor,
         specular_textures,
         transmission_factor: transmission.factor,
         transmission_texture: transmission.texture,
         ior,
-        volume: transmissive && transmission.volume,
+        volume: passes_light && transmission.volume,
         absorption: transmission.absorption,
+        diffuse_transmission,
         layers,
         iridescence,
         unlit,
@@ -303,8 +309,11 @@ fn transmission(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> Transmiss
     }
     if let Some(v) = m.volume() {
         let path = format!("{p}.extensions.KHR_materials_volume");
-        if m.transmission().is_none() {
-            ctx.warn(path.clone(), "a volume without KHR_materials_transmission is opaque: ignored");
+        if m.transmission().is_none() && m.extension_value(DIFFUSE_TRANSMISSION).is_none() {
+            ctx.warn(
+                path.clone(),
+                "a volume without KHR_materials_transmission or _diffuse_transmission is opaque: ignored",
+            );
         }
         t.volume = v.thickness_factor() > 0.0;
         if v.thickness_texture().is_some() {
@@ -603,4 +612,58 @@ fn layers(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str, textures: usize) -
         }
     }
     layers
+}
+
+/// The extension's name.
+const DIFFUSE_TRANSMISSION: &str = "KHR_materials_diffuse_transmission";
+
+/// KHR_materials_diffuse_transmission: `None` without it or with `diffuseTransmissionFactor` 0.
+fn diffuse_transmission(
+    ctx: &mut Ctx<'_>,
+    m: &gltf::Material<'_>,
+    p: &str,
+    textures: usize,
+) -> Option<DiffuseTransmissionFactors> {
+    let ext = m.extension_value(DIFFUSE_TRANSMISSION)?;
+    let path = format!("{p}.extensions.{DIFFUSE_TRANSMISSION}");
+    let factor = unit_factor(ctx, ext, "diffuseTransmissionFactor", 0.0, &path);
+    let color = match ext.get("diffuseTransmissionColorFactor") {
+        None => Vec3::ONE,
+        Some(c) => match c.as_array().map(|a| a.iter().map(gltf::json::Value::as_f64).collect::<Vec<_>>()) {
+            Some(a) if a.len() == 3 && a.iter().all(|x| x.is_some_and(f64::is_finite)) => {
+                let a = a.iter().map(|x| x.unwrap_or(1.0) as f32).collect::<Vec<_>>();
+                let c = Vec3::new(a[0], a[1], a[2]);
+                let clamped = c.clamp(Vec3::ZERO, Vec3::ONE);
+                if clamped != c {
+                    ctx.warn(
+                        format!("{path}.diffuseTransmissionColorFactor"),
+                        format!("{c} is outside [0, 1]: clamped"),
+                    );
+                }
+                clamped
+            }
+            _ => {
+                ctx.warn(format!("{path}.diffuseTransmissionColorFactor"), "not three numbers: white used");
+                Vec3::ONE
+            }
+        },
+    };
+    if !(factor > 0.0) {
+        return None;
+    }
+    let texture = texture_ref_json(
+        ctx,
+        ext.get("diffuseTransmissionTexture"),
+        textures,
+        ColorSpace::Linear,
+        format!("{path}.diffuseTransmissionTexture"),
+    );
+    let color_texture = texture_ref_json(
+        ctx,
+        ext.get("diffuseTransmissionColorTexture"),
+        textures,
+        ColorSpace::Srgb,
+        format!("{path}.diffuseTransmissionColorTexture"),
+    );
+    Some(DiffuseTransmissionFactors { factor, texture, color, color_texture })
 }
