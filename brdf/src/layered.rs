@@ -83,6 +83,10 @@ pub struct LayeredParams {
     pub diffuse_transmission: f32,
     /// KHR_materials_diffuse_transmission `diffuseTransmissionColorFactor × texture.rgb`.
     pub diffuse_transmission_color: Rgb,
+    /// KHR_materials_anisotropy's strength `anisotropyStrength × texture.b` (0: isotropic): the
+    /// base's specular lobe is stretched along the shading frame's x axis, which the caller
+    /// aligns with the anisotropy direction ([`MetallicRoughness::with_anisotropy`]).
+    pub anisotropy: f32,
 }
 
 impl Default for LayeredParams {
@@ -106,6 +110,7 @@ impl Default for LayeredParams {
             film: ThinFilm { ior: 1.3, thickness: 400.0 },
             diffuse_transmission: 0.0,
             diffuse_transmission_color: Rgb::ONE,
+            anisotropy: 0.0,
         }
     }
 }
@@ -434,7 +439,7 @@ impl Core {
             if dt > 0.0 {
                 m.diffuse = Lambert::new(m.diffuse.albedo * (1.0 - dt));
             }
-            m
+            m.with_anisotropy(params.anisotropy)
         };
         let metallic = params.metallic.clamp(0.0, 1.0);
         let g = params.transmission.clamp(0.0, 1.0) * (1.0 - metallic);

@@ -94,6 +94,18 @@ impl MetallicRoughness {
         Self { diffuse: Lambert::new(base * (1.0 - metallic)), specular, specular_factor: sf, f0_dielectric }
     }
 
+    /// The material with an anisotropic specular lobe (KHR_materials_anisotropy) of strength
+    /// `s` (clamped to `[0, 1]`, NaN → 0: isotropic): `αx = mix(α, 1, s²)` along the shading
+    /// frame's x axis, which the caller aligns with the anisotropy direction, and `αy = α`.
+    pub fn with_anisotropy(mut self, strength: f32) -> Self {
+        let s = sanitize(strength, 0.0, 1.0, 0.0);
+        if s > 0.0 {
+            let (alpha, s2) = (self.specular.ggx.alpha(), s * s);
+            self.specular.ggx = crate::ggx::Ggx::anisotropic(alpha * (1.0 - s2) + s2, alpha);
+        }
+        self
+    }
+
     /// The material under a thin film (KHR_materials_iridescence) of weight `factor`
     /// (clamped to `[0, 1]`, NaN → 0: no film), index `film.ior` (clamped to `[0.01, 100]`,
     /// NaN → 1.3) and thickness `film.thickness` nm (clamped to `[0, 10⁶]`, NaN → 0): the
@@ -153,14 +165,16 @@ impl MetallicRoughness {
     }
 
     /// The albedo estimates (luminance) of the specular and diffuse lobes at `wo` that lobe
-    /// selection weighs them by: specular `lum(F(μo))`, times `E_ss` without compensation;
+    /// selection weighs them by: specular `lum(F(μo))`, times `E_ss` without compensation (or
+    /// when anisotropic, uncompensated, at [`crate::Ggx::alpha_effective`]);
     /// diffuse `lum(albedo)·(1 − sF·max(fr(μo)))`.
     #[inline]
     pub fn albedo_estimates(&self, wo: Vec3) -> (f32, f32) {
         let mu = wo.z.clamp(0.0, 1.0);
         let mut spec = luminance(self.specular.fresnel(mu));
-        if !self.specular.options.compensation {
-            spec *= crate::turquin::e_ss(mu, self.specular.ggx.alpha(), self.specular.options.masking);
+        if !self.specular.options.compensation || self.specular.ggx.is_anisotropic() {
+            spec *=
+                crate::turquin::e_ss(mu, self.specular.ggx.alpha_effective(), self.specular.options.masking);
         }
         (spec, luminance(self.diffuse.albedo) * self.diffuse_scale(mu))
     }

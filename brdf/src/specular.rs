@@ -87,12 +87,14 @@ impl GgxSpecular {
         }
     }
 
-    /// The Turquin factor for view cosine `mu_o` (1 when compensation is off).
+    /// The Turquin factor for the view direction `wo` (1 when compensation is off, and for an
+    /// anisotropic lobe: the isotropic tables do not bound its loss, see
+    /// [`Ggx::alpha_effective`]; its multiple scattering is lost, docs/stability.md).
     #[inline]
-    pub fn compensation(&self, mu_o: f32) -> Rgb {
-        if self.options.compensation {
+    pub fn compensation(&self, wo: Vec3) -> Rgb {
+        if self.options.compensation && !self.ggx.is_anisotropic() {
             let f0 = self.iridescence.map_or(self.f0, |(_, f0)| f0);
-            turquin::compensation(f0, mu_o, self.ggx.alpha(), self.options.masking)
+            turquin::compensation(f0, wo.z, self.ggx.alpha(), self.options.masking)
         } else {
             Rgb::ONE
         }
@@ -148,7 +150,7 @@ impl Bsdf for GgxSpecular {
             return Rgb::ZERO;
         };
         let f = self.fresnel(cos_om);
-        f * self.ggx.eval_cos(wo, wi, wm, self.options.masking) * self.compensation(wo.z)
+        f * self.ggx.eval_cos(wo, wi, wm, self.options.masking) * self.compensation(wo)
     }
 
     #[inline]
@@ -163,7 +165,7 @@ impl Bsdf for GgxSpecular {
             SpecularSampling::Ndf => g2 * cos_om / (wo.z * wm.z),
             SpecularSampling::Vndf | SpecularSampling::SphericalCaps => g2 / self.ggx.g1(wo),
         };
-        let weight = self.fresnel(cos_om) * throughput * self.compensation(wo.z);
+        let weight = self.fresnel(cos_om) * throughput * self.compensation(wo);
         Some(Sample { wi, weight, pdf, lobe: Lobe::Specular })
     }
 

@@ -3,6 +3,8 @@
 //! 2 cores). Each module is one file beside this one, run alone with
 //! `cargo test -p furnace-brdf --test all MODULE::`.
 
+#[path = "anisotropy.rs"]
+mod anisotropy;
 #[path = "chi2.rs"]
 mod chi2;
 /// Helpers the modules share.

@@ -570,7 +570,7 @@ struct Mc {
 fn mc(lobe: &GgxSpecular, wo: Vec3, n: u32, scramble: u32) -> Mc {
     let sampler = OwenSobol::new(99);
     let vndf = lobe.options.sampling != SpecularSampling::Ndf;
-    let comp = lobe.compensation(wo.z).x as f64;
+    let comp = lobe.compensation(wo).x as f64;
     let mut w = Vec::with_capacity(n as usize);
     let mut out = Mc::default();
     for i in 0..n {
@@ -642,7 +642,7 @@ fn near_mirror_lobes_bounded_weights_and_unbiased() {
                             Rgb::ONE,
                             SpecularOptions { masking, sampling, compensation },
                         );
-                        (lobe.compensation(mu).x as f64, mc(&lobe, wo, N, scramble))
+                        (lobe.compensation(wo).x as f64, mc(&lobe, wo, N, scramble))
                     });
                     let comp = stats[0].0;
                     let expected = comp * e;
