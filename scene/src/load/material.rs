@@ -317,7 +317,7 @@ fn transmission(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> Transmiss
         }
         t.volume = v.thickness_factor() > 0.0;
         if v.thickness_texture().is_some() {
-            ctx.warn(path.clone(), "thicknessTexture ignored (thickness is ray-traced)");
+            ctx.warn(path.clone(), "thicknessTexture not read: the thickness through the solid is traced");
         }
         let d = v.attenuation_distance();
         let c = Vec3::from(v.attenuation_color());
