@@ -6,7 +6,7 @@
 //!
 //! | lobe | Rust file | weight in the mixture | albedo |
 //! |---|---|---|---|
-//! | [`Lambert`](crate::Lambert) diffuse base | `lambert.rs` | `(1 − g)·(1 − m′)`, under the specular layer: `1 − sF·max(fr)` at the half vector | `baseColor` |
+//! | [`Lambert`] diffuse base | `lambert.rs` | `(1 − g)·(1 − m′)`, under the specular layer: `1 − sF·max(fr)` at the half vector | `baseColor` |
 //! | [`GgxSpecular`](crate::GgxSpecular) (with [`turquin`](crate::turquin) compensation) | `specular.rs`, `ggx.rs`, `turquin.rs` | `1 − g`, merged: F0 `mix(0.04·sF·sC, baseColor, m′)`, F90 `mix(sF, 1, m′)` | Fresnel |
 //! | thin film (KHR_materials_iridescence) | `iridescence.rs` | not a lobe: mixes its Fresnel into the two rows above by `i` | |
 //! | [`Dielectric`] interface (smooth, rough or thin-walled) | `dielectric.rs` | `g` | tint `baseColor` |

@@ -11,15 +11,9 @@
 //!
 //! Tables that explain a failure go to `target/test-output/brdf/anisotropy*.md`.
 
-use crate::common::write_output;
+use crate::common::{dir, eval_against_oracle, sample_is_consistent, write_output};
 use furnace_brdf::{HitBsdf, LayeredParams, Rgb, SpecularOptions, SpecularSampling};
-use glam::Vec3;
 use std::fmt::Write as _;
-
-fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
-    let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
-    Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
-}
 
 /// The direction pairs (θo, φo), (θi, φi) in degrees, φ from the anisotropy direction.
 const PAIRS: [((f32, f32), (f32, f32)); 6] = [
@@ -104,20 +98,9 @@ fn anisotropic_eval_matches_the_oracle() {
     // relative; 1e-4 leaves room for the sharpest lobe (αy 0.0025) without hiding a wrong axis
     // (which moves these values by factors, not fractions).
     const TOLERANCE: f64 = 1e-4;
-    let mut report =
-        String::from("| material | pair | furnace | oracle | relative error |\n|---|---|---|---|---|\n");
-    let mut worst = 0.0f64;
-    for ((name, params), expected) in materials().iter().zip(&ORACLE) {
-        let bsdf = HitBsdf::new(params, SpecularOptions { compensation: false, ..Default::default() });
-        for (&(o, i), want) in PAIRS.iter().zip(expected) {
-            let got = bsdf.eval(dir(o.0, o.1), dir(i.0, i.1));
-            let err = (0..3)
-                .map(|c| (got[c] as f64 - want[c]).abs() / want[c].abs().max(1e-12))
-                .fold(0.0, f64::max);
-            worst = worst.max(err);
-            let _ = writeln!(report, "| {name} | {o:?} → {i:?} | {got:?} | {want:?} | {err:.2e} |");
-        }
-    }
+    let oracle: Vec<&[[f64; 3]]> = ORACLE.iter().map(|o| o.as_slice()).collect();
+    let options = SpecularOptions { compensation: false, ..Default::default() };
+    let (worst, report) = eval_against_oracle(&materials(), &PAIRS, &oracle, options);
     let path = write_output("anisotropy_eval.md", &report);
     assert!(worst < TOLERANCE, "anisotropic eval off the oracle by {worst:.2e}; see {}", path.display());
 }
@@ -173,13 +156,8 @@ fn anisotropic_samples_are_consistent() {
                 checked += 1;
                 let pdf = bsdf.pdf(wo, s.wi);
                 let eval = bsdf.eval(wo, s.wi);
-                let rel = |a: f32, b: f32| (a - b).abs() / b.abs().max(1e-20);
-                let w_err = (0..3).map(|c| rel(s.weight[c] * s.pdf, eval[c])).fold(0.0, f32::max);
                 let finite = s.weight.is_finite() && s.weight.min_element() >= 0.0;
-                if s.delta
-                    || !finite
-                    || !(rel(s.pdf, pdf) < TOLERANCE && (eval.max_element() == 0.0 || w_err < TOLERANCE))
-                {
+                if s.delta || !finite || !sample_is_consistent(s.pdf, s.weight, pdf, eval, TOLERANCE) {
                     failures
                         .push(format!("{name}, θo {theta} φo {phi}: sample {s:?}, pdf {pdf}, eval {eval:?}"));
                 }

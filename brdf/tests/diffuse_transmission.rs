@@ -19,15 +19,10 @@
 //!
 //! Tables that explain a failure go to `target/test-output/brdf/diffuse_transmission*.md`.
 
-use crate::common::write_output;
+use crate::common::{dir, sample_is_consistent, write_output};
 use furnace_brdf::{HitBsdf, LayeredParams, Rgb, SpecularOptions};
 use glam::{Vec2, Vec3};
 use std::fmt::Write as _;
-
-fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
-    let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
-    Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
-}
 
 /// The direction pairs (θo, φo), (θi, φi) in degrees the oracle was evaluated at: two
 /// reflections, then four transmissions (θi > 90°).
@@ -273,10 +268,8 @@ fn samples_are_consistent() {
                     transmitted += usize::from((s.wi.z < 0.0) != (wo.z < 0.0));
                     let pdf = bsdf.pdf(wo, s.wi);
                     let eval = bsdf.eval(wo, s.wi);
-                    let rel = |a: f32, b: f32| (a - b).abs() / b.abs().max(1e-20);
-                    let w_err = (0..3).map(|c| rel(s.weight[c] * s.pdf, eval[c])).fold(0.0, f32::max);
                     let crossed = (s.wi.z < 0.0) != (wo.z < 0.0);
-                    if !(rel(s.pdf, pdf) < TOLERANCE && (eval.max_element() == 0.0 || w_err < TOLERANCE))
+                    if !sample_is_consistent(s.pdf, s.weight, pdf, eval, TOLERANCE)
                         || s.transmitted != crossed
                     {
                         failures.push(format!(

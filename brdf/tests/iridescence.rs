@@ -13,16 +13,10 @@
 //!
 //! Tables that explain a failure go to `target/test-output/brdf/iridescence*.md`.
 
-use crate::common::write_output;
+use crate::common::{dir, eval_against_oracle, sample_is_consistent, write_output};
 use furnace_brdf::iridescence::{self, ThinFilm};
 use furnace_brdf::{HitBsdf, LayeredParams, Rgb, SpecularOptions};
-use glam::Vec3;
 use std::fmt::Write as _;
-
-fn dir(theta_deg: f32, phi_deg: f32) -> Vec3 {
-    let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
-    Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
-}
 
 /// `(film ior, thickness nm, base F0, cos θ1, the oracle's reflectance)`.
 type FilmPoint = (f32, f32, [f32; 3], f32, [f64; 3]);
@@ -145,20 +139,9 @@ fn iridescent_eval_matches_the_oracle() {
     // absolute error (2e-5, `film_fresnel_matches_the_oracle`) over the smallest Fresnel
     // weight here (~0.03) gives ~7e-4 relative. 1e-3 bounds both.
     const TOLERANCE: f64 = 1e-3;
-    let mut report =
-        String::from("| material | pair | furnace | oracle | relative error |\n|---|---|---|---|---|\n");
-    let mut worst = 0.0f64;
-    for ((name, params), expected) in materials().iter().zip(&ORACLE) {
-        let bsdf = HitBsdf::new(params, SpecularOptions { compensation: false, ..Default::default() });
-        for (&(o, i), want) in PAIRS.iter().zip(expected) {
-            let got = bsdf.eval(dir(o.0, o.1), dir(i.0, i.1));
-            let err = (0..3)
-                .map(|c| (got[c] as f64 - want[c]).abs() / want[c].abs().max(1e-12))
-                .fold(0.0, f64::max);
-            worst = worst.max(err);
-            let _ = writeln!(report, "| {name} | {o:?} → {i:?} | {got:?} | {want:?} | {err:.2e} |");
-        }
-    }
+    let oracle: Vec<&[[f64; 3]]> = ORACLE.iter().map(|o| o.as_slice()).collect();
+    let options = SpecularOptions { compensation: false, ..Default::default() };
+    let (worst, report) = eval_against_oracle(&materials(), &PAIRS, &oracle, options);
     let path = write_output("iridescence_eval.md", &report);
     assert!(worst < TOLERANCE, "iridescent eval off the oracle by {worst:.2e}; see {}", path.display());
 }
@@ -211,13 +194,8 @@ fn iridescent_samples_are_consistent() {
                 let Some(s) = bsdf.sample(wo, u, || uc) else { continue };
                 let pdf = bsdf.pdf(wo, s.wi);
                 let eval = bsdf.eval(wo, s.wi);
-                let rel = |a: f32, b: f32| (a - b).abs() / b.abs().max(1e-20);
-                let w_err = (0..3).map(|c| rel(s.weight[c] * s.pdf, eval[c])).fold(0.0, f32::max);
                 let finite = s.weight.is_finite() && s.weight.min_element() >= 0.0;
-                if s.delta
-                    || !finite
-                    || !(rel(s.pdf, pdf) < TOLERANCE && (eval.max_element() == 0.0 || w_err < TOLERANCE))
-                {
+                if s.delta || !finite || !sample_is_consistent(s.pdf, s.weight, pdf, eval, TOLERANCE) {
                     failures.push(format!("{name}, θo {theta}: sample {s:?}, pdf {pdf}, eval {eval:?}"));
                 }
             }
@@ -295,10 +273,7 @@ fn filmed_interface_samples_are_consistent() {
                         reflected += usize::from(!s.transmitted);
                         let pdf = d.pdf(wo, s.wi);
                         let eval = d.eval(wo, s.wi);
-                        let rel = |a: f32, b: f32| (a - b).abs() / b.abs().max(1e-20);
-                        let w_err = (0..3).map(|c| rel(s.weight[c] * s.pdf, eval[c])).fold(0.0, f32::max);
-                        if !(rel(s.pdf, pdf) < TOLERANCE && (eval.max_element() == 0.0 || w_err < TOLERANCE))
-                        {
+                        if !sample_is_consistent(s.pdf, s.weight, pdf, eval, TOLERANCE) {
                             failures.push(format!(
                                 "η {eta} α {alpha} d {thickness}, θo {theta}: {s:?}, pdf {pdf}, eval {eval:?}"
                             ));

@@ -38,3 +38,54 @@ impl Worst {
         }
     }
 }
+
+/// The unit direction of polar angle `theta_deg` and azimuth `phi_deg` (degrees) in the
+/// shading frame.
+pub fn dir(theta_deg: f32, phi_deg: f32) -> glam::Vec3 {
+    let (t, p) = (theta_deg.to_radians(), phi_deg.to_radians());
+    glam::Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
+}
+
+/// Whether a sample's bookkeeping holds: its pdf is what `pdf` gives for its direction and its
+/// weight times its pdf is `eval` (where `eval` is not 0), each within `tolerance` relative.
+pub fn sample_is_consistent(
+    sample_pdf: f32,
+    weight: glam::Vec3,
+    pdf: f32,
+    eval: glam::Vec3,
+    tolerance: f32,
+) -> bool {
+    let rel = |a: f32, b: f32| (a - b).abs() / b.abs().max(1e-20);
+    let w_err = (0..3).map(|c| rel(weight[c] * sample_pdf, eval[c])).fold(0.0, f32::max);
+    rel(sample_pdf, pdf) < tolerance && (eval.max_element() == 0.0 || w_err < tolerance)
+}
+
+/// A direction pair ((θo, φo), (θi, φi)) in degrees.
+pub type DirectionPair = ((f32, f32), (f32, f32));
+
+/// `HitBsdf::eval` of each of `materials` at each of `pairs` ((θo, φo), (θi, φi) in degrees)
+/// against `oracle`'s values (the same order): the worst relative error over the channels,
+/// and a Markdown table of every value for a human.
+pub fn eval_against_oracle(
+    materials: &[(&str, furnace_brdf::LayeredParams)],
+    pairs: &[DirectionPair],
+    oracle: &[&[[f64; 3]]],
+    options: furnace_brdf::SpecularOptions,
+) -> (f64, String) {
+    use std::fmt::Write as _;
+    let mut report =
+        String::from("| material | pair | furnace | oracle | relative error |\n|---|---|---|---|---|\n");
+    let mut worst = 0.0f64;
+    for ((name, params), expected) in materials.iter().zip(oracle) {
+        let bsdf = furnace_brdf::HitBsdf::new(params, options);
+        for (&(o, i), want) in pairs.iter().zip(expected.iter()) {
+            let got = bsdf.eval(dir(o.0, o.1), dir(i.0, i.1));
+            let err = (0..3)
+                .map(|c| (got[c] as f64 - want[c]).abs() / want[c].abs().max(1e-12))
+                .fold(0.0, f64::max);
+            worst = worst.max(err);
+            let _ = writeln!(report, "| {name} | {o:?} → {i:?} | {got:?} | {want:?} | {err:.2e} |");
+        }
+    }
+    (worst, report)
+}
