@@ -31,11 +31,14 @@ impl Frame {
     /// The frame of unit normal `n` whose x axis is `tangent` made orthogonal to `n` (an
     /// anisotropic lobe's direction); `y = n × x`. [`Frame::new`]'s where `tangent` is within
     /// ~0.06° of `n` (or zero, or not finite): there its part across `n` is mostly rounding.
+    /// The part across is projected twice ("twice is enough", Parlett): once, a tangent near
+    /// `n` leaves x off orthogonal by the rounding of `n·t` over that part's length.
     pub fn with_tangent(n: Vec3, tangent: Vec3) -> Self {
         let across = tangent - n * n.dot(tangent);
         if !(across.length_squared() > 1e-6 * tangent.length_squared()) {
             return Self::new(n);
         }
+        let across = across - n * n.dot(across);
         let x = across.normalize();
         Self { x, y: n.cross(x), z: n }
     }

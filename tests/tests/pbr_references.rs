@@ -295,7 +295,7 @@ reference_tests! {
     clearcoat_cpu, clearcoat_gpu: "pbr_clearcoat", cpu_ignore = "cc1.0_r0.05: the sun highlight of the α 0.0025 coat is smaller than a pixel, σ of the ratio 0.75 % at 1024 spp (the bar asks 0.1 %)";
     sheen_cpu, sheen_gpu: "pbr_sheen";
     iridescence_cpu, iridescence_gpu: "pbr_iridescence";
-    anisotropy_cpu, anisotropy_gpu: "pbr_anisotropy", gpu_ignore = "KHR_materials_anisotropy's WGSL twin is not written yet";
+    anisotropy_cpu, anisotropy_gpu: "pbr_anisotropy";
     diffuse_transmission_cpu, diffuse_transmission_gpu: "pbr_diffuse_transmission";
 }
 
