@@ -577,7 +577,7 @@ fn bsdf(
             film: ThinFilm { ior: params.iridescence_ior, thickness: params.iridescence_thickness },
             diffuse_transmission: params.diffuse_transmission,
             diffuse_transmission_color: params.diffuse_transmission_color,
-            anisotropy: 0.0,
+            anisotropy: params.anisotropy,
         },
         specular,
     )

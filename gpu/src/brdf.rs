@@ -101,8 +101,8 @@ pub fn lobe_code(lobe: Option<Lobe>) -> u32 {
 
 crate::gpu_struct! {
     /// The per-hit material record of the WGSL BSDF: a [`MetallicRoughness`] after its
-    /// constructor (clamping, α = roughness², F0/F90 of the merged lobe, the thin film), 96
-    /// bytes. Its WGSL declaration is generated ([`declarations`]). A kernel without
+    /// constructor (clamping, α = roughness², F0/F90 of the merged lobe, the thin film, the
+    /// anisotropic α), 96 bytes. Its WGSL declaration is generated ([`declarations`]). A kernel without
     /// iridescence never reads the film's fields (its code is not composed), so the compiler
     /// drops them.
     pub struct BsdfParams {
@@ -133,9 +133,10 @@ crate::gpu_struct! {
         pub film_metallic: f32 => WgslType::F32,
         /// The compensation's F0 under the film: the mixed Fresnel at `ωo·ωm = 1`.
         pub film_f0: [f32; 3] => WgslType::VEC3_F32,
-        /// Rust-only: `Pod` allows no implicit padding (WGSL pads the struct to its 16-byte
-        /// alignment by itself).
-        pub pad: [u32; 1] => WgslType::PAD,
+        /// GGX α along the frame's y axis: `alpha` unless the lobe is anisotropic
+        /// (KHR_materials_anisotropy, `alpha` then along x, the anisotropy direction). Read only
+        /// by kernels composed with `ANISOTROPY`.
+        pub alpha_y: f32 => WgslType::F32,
     }
 }
 
@@ -169,7 +170,8 @@ impl BsdfParams {
         let spec = &bsdf.specular;
         let mut r = Self {
             diffuse: bsdf.diffuse.albedo.to_array(),
-            alpha: spec.ggx.alpha(),
+            alpha: spec.ggx.alphas().0,
+            alpha_y: spec.ggx.alphas().1,
             f0: spec.f0.to_array(),
             f90: spec.f90.x,
             f0_dielectric: bsdf.f0_dielectric().to_array(),
@@ -198,12 +200,13 @@ impl BsdfParams {
             specular_factor: sample.specular_factor,
             specular_color: sample.specular_color,
         };
-        if sample.iridescence > 0.0 {
+        let m = if sample.iridescence > 0.0 {
             let film = ThinFilm { ior: sample.iridescence_ior, thickness: sample.iridescence_thickness };
-            Self::of(&MetallicRoughness::new_iridescent(params, options, sample.iridescence, film))
+            MetallicRoughness::new_iridescent(params, options, sample.iridescence, film)
         } else {
-            Self::new(params, options)
-        }
+            MetallicRoughness::new(params, options)
+        };
+        Self::of(&m.with_anisotropy(sample.anisotropy))
     }
 }
 

@@ -11,7 +11,7 @@
 //! | `scene_triangles` | [`GpuSceneTriangle`] | 16 per triangle | vertex indices, material index (clamped like furnace-cpu's) |
 //! | `scene_vertices` | [`GpuVertex`] | 16 per vertex | world position, octahedral shading normal (`oct_encode`, decoded in WGSL as `oct_decode`) |
 //! | `scene_attributes` | `vec2<u32>` | 8 per UV set and vertex, **only when some material is textured**, + 8 per vertex **only with vertex colours** | the UV sets materials sample (`f32` bits), then `COLOR_0` as RGBA unorm16, vertex by vertex (the stride in each material's flags) |
-//! | `scene_tangents` | `vec2<u32>` | 8 per vertex, **only when some material is normal-mapped** | snorm16 tangent + handedness, as `Geometry::tangents` |
+//! | `scene_tangents` | `vec2<u32>` | 8 per vertex, **only when some material is normal-mapped or anisotropic** | snorm16 tangent + handedness, as `Geometry::tangents` |
 //! | `scene_materials` | [`GpuMaterial`] | 256 per material | factors, flags, four resolved [`GpuTextureRef`]s |
 //! | `scene_texels` | `u32` | 4 per texel of each **used** image, + 2 KiB | the sRGB and linear decode tables (512 `f32`), then RGBA8 texels (R in the low byte) |
 //!
@@ -40,10 +40,11 @@ use crate::{GpuContext, GpuError};
 mod extensions;
 
 pub use extensions::{
-    GpuDiffuseTransmission, GpuIridescence, GpuLayers, GpuSpecularTextures, GpuTransmission,
+    GpuAnisotropy, GpuDiffuseTransmission, GpuIridescence, GpuLayers, GpuSpecularTextures, GpuTransmission,
 };
 use extensions::{
-    diffuse_transmission_record, iridescence_record, layers_record, specular_record, transmission_record,
+    anisotropy_record, diffuse_transmission_record, iridescence_record, layers_record, specular_record,
+    transmission_record,
 };
 
 /// Number of bindings the scene uses ([`bindings`], [`GpuScene::layout_entries`]).
@@ -215,6 +216,7 @@ pub fn declarations() -> String {
         wgsl_struct::<GpuLayers>(false),
         wgsl_struct::<GpuIridescence>(false),
         wgsl_struct::<GpuSpecularTextures>(false),
+        wgsl_struct::<GpuAnisotropy>(false),
         wgsl_struct::<GpuDiffuseTransmission>(false),
     ]
     .concat()
@@ -258,7 +260,7 @@ pub struct SceneBuffers {
     /// `scene_attributes` (empty when no material is textured and the scene has no vertex
     /// colours).
     pub attributes: Vec<[u32; 2]>,
-    /// `scene_tangents` (empty when no material is normal-mapped).
+    /// `scene_tangents` (empty when no material is normal-mapped or anisotropic).
     pub tangents: Vec<[u32; 2]>,
     /// `scene_materials`.
     pub materials: Vec<GpuMaterial>,
@@ -279,14 +281,16 @@ pub struct SceneBuffers {
     /// `scene_diffuse_transmission`, one record per material; empty unless some material
     /// transmits diffusely.
     pub diffuse_transmission: Vec<GpuDiffuseTransmission>,
+    /// `scene_anisotropy`, one record per material; empty unless some material is anisotropic.
+    pub anisotropy: Vec<GpuAnisotropy>,
 }
 
 /// Which optional vertex attributes a scene's shading reads: UVs only when some material is
-/// textured, tangents only when some material has a normal map (and the scene has tangents),
-/// colours when the scene has them.
+/// textured, tangents only when some material has a normal map or an anisotropy direction (and
+/// the scene has tangents), colours when the scene has them.
 #[derive(Clone, Copy)]
 struct Kept {
-    normal_mapped: bool,
+    tangents: bool,
     /// UV sets stored per vertex (0 unless textured).
     uv_sets: u32,
     colors: bool,
@@ -297,10 +301,11 @@ impl Kept {
         let g = &scene.geometry;
         let textured = scene.materials.iter().any(|m| m.uses_textures());
         Self {
-            normal_mapped: !g.tangents.is_empty()
+            tangents: !g.tangents.is_empty()
                 && scene.materials.iter().any(|m| {
                     m.normal_texture.is_some()
                         || m.layers.clearcoat.as_ref().is_some_and(|c| c.normal_texture.is_some())
+                        || m.anisotropy.is_some()
                 }),
             uv_sets: if textured { g.uv_sets().min(furnace_scene::MAX_UV_SETS) as u32 } else { 0 },
             colors: !g.colors.is_empty(),
@@ -329,7 +334,7 @@ fn check_sizes(scene: &Scene, kept: Kept, limit: u64) -> Result<(), GpuError> {
             nv * 8 * u64::from(kept.stride()),
         )?;
     }
-    if kept.normal_mapped {
+    if kept.tangents {
         check(format!("the scene's tangent buffer ({nv} vertices)"), nv * 8)?;
     }
     check(format!("the scene's material buffer ({} materials)", scene.materials.len()), {
@@ -354,19 +359,22 @@ impl ImageLayout {
             let slots = [
                 &m.base_color_texture,
                 &m.metallic_roughness_texture,
-                if kept.normal_mapped { &m.normal_texture } else { &None },
+                if kept.tangents { &m.normal_texture } else { &None },
                 &m.emissive_texture,
                 &m.transmission_texture,
                 &m.specular_textures.specular,
                 &m.specular_textures.color,
             ];
             let clearcoat = m.layers.clearcoat.iter().flat_map(|c| {
-                [&c.texture, &c.roughness_texture, if kept.normal_mapped { &c.normal_texture } else { &None }]
+                [&c.texture, &c.roughness_texture, if kept.tangents { &c.normal_texture } else { &None }]
             });
             let sheen = m.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]);
             let film = m.iridescence.iter().flat_map(|i| [&i.texture, &i.thickness_texture]);
             let dt = m.diffuse_transmission.iter().flat_map(|d| [&d.texture, &d.color_texture]);
-            for slot in slots.into_iter().chain(clearcoat).chain(sheen).chain(film).chain(dt) {
+            let anisotropy = m.anisotropy.iter().map(|a| &a.texture);
+            for slot in
+                slots.into_iter().chain(clearcoat).chain(sheen).chain(film).chain(dt).chain(anisotropy)
+            {
                 if let Some((_, tex)) = resolve(scene, slot) {
                     let i = tex.image as usize;
                     if offset[i].is_none() {
@@ -523,11 +531,7 @@ fn material_record(
         flags,
         base_color_texture: texture_ref(&m.base_color_texture),
         metallic_roughness_texture: texture_ref(&m.metallic_roughness_texture),
-        normal_texture: if kept.normal_mapped {
-            texture_ref(&m.normal_texture)
-        } else {
-            GpuTextureRef::zeroed()
-        },
+        normal_texture: if kept.tangents { texture_ref(&m.normal_texture) } else { GpuTextureRef::zeroed() },
         emissive_texture: texture_ref(&m.emissive_texture),
     }
 }
@@ -538,7 +542,7 @@ impl SceneBuffers {
     /// allocating it.
     ///
     /// Only what shading reads is kept: UVs only when some material is textured, tangents only
-    /// when some material has a normal map (and the scene has tangents), images only when a
+    /// when some material has a normal map or is anisotropic (and the scene has tangents), images only when a
     /// material slot uses them. Triangles' material indices are clamped to the last material
     /// (glTF's default), as furnace-cpu does; a texture or image index out of range makes the
     /// slot untextured (the CPU's lookup then returns white too).
@@ -553,7 +557,7 @@ impl SceneBuffers {
         let (triangles, vertices) = geometry(scene);
         let g = &scene.geometry;
         let attributes = vertex_attributes(g, kept);
-        let tangents = if kept.normal_mapped {
+        let tangents = if kept.tangents {
             (0..g.positions.len())
                 .map(|i| {
                     // A missing tangent reads as None on the CPU; zero here gives the same (no
@@ -590,6 +594,11 @@ impl SceneBuffers {
         } else {
             Vec::new()
         };
+        let anisotropy = if scene.materials.iter().any(|m| m.anisotropy.is_some()) {
+            scene.materials.iter().map(|m| anisotropy_record(m, kept, &texture_ref)).collect()
+        } else {
+            Vec::new()
+        };
         let diffuse_transmission = if diffuse {
             scene.materials.iter().map(|m| diffuse_transmission_record(m, &texture_ref)).collect()
         } else {
@@ -608,6 +617,7 @@ impl SceneBuffers {
             iridescence,
             specular,
             diffuse_transmission,
+            anisotropy,
         })
     }
 
@@ -684,6 +694,8 @@ pub struct GpuScene {
     /// `scene_diffuse_transmission` ([`SceneBuffers::diffuse_transmission`]); `None` without
     /// diffuse transmission.
     pub diffuse_transmission: Option<wgpu::Buffer>,
+    /// `scene_anisotropy` ([`SceneBuffers::anisotropy`]); `None` without anisotropy.
+    pub anisotropy: Option<wgpu::Buffer>,
 }
 
 impl GpuScene {
@@ -733,6 +745,7 @@ impl GpuScene {
         let specular = optional("scene specular", bytemuck::cast_slice(&packed.specular))?;
         let diffuse_transmission =
             optional("scene diffuse transmission", bytemuck::cast_slice(&packed.diffuse_transmission))?;
+        let anisotropy = optional("scene anisotropy", bytemuck::cast_slice(&packed.anisotropy))?;
         if let Some(e) = pollster::block_on(scope.pop()) {
             return Err(GpuError::Wgpu(e.to_string()));
         }
@@ -746,12 +759,14 @@ impl GpuScene {
                 + size_of_val(packed.layers.as_slice()) as u64
                 + size_of_val(packed.iridescence.as_slice()) as u64
                 + size_of_val(packed.specular.as_slice()) as u64
-                + size_of_val(packed.diffuse_transmission.as_slice()) as u64,
+                + size_of_val(packed.diffuse_transmission.as_slice()) as u64
+                + size_of_val(packed.anisotropy.as_slice()) as u64,
             transmission,
             layers,
             iridescence,
             specular,
             diffuse_transmission,
+            anisotropy,
         })
     }
 

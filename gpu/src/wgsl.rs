@@ -14,7 +14,9 @@ pub const SAMPLING: &str = include_str!("wgsl/sampling.wgsl");
 
 /// `furnace-brdf`'s BSDFs: Lambert, GGX (NDF / VNDF / spherical-cap sampling, separable and
 /// height-correlated Smith masking, Schlick Fresnel), Turquin compensation, glTF
-/// metallic-roughness. Needs [`SAMPLING`] (warps) and [`crate::brdf::declarations`].
+/// metallic-roughness. Needs [`SAMPLING`] (warps) and [`crate::brdf::declarations`]. Compose
+/// it through [`select`]: `IRIDESCENCE` keeps the thin film, `ANISOTROPY` the stretched GGX
+/// (`GgxAlpha` is then `(αx, αy)`, else `α`).
 ///
 /// One WGSL file per Rust file of `furnace-brdf` (`brdf.wgsl` is the twin of its `lib.rs`),
 /// concatenated in dependency order; the list lives beside the GPU record, in
@@ -54,7 +56,8 @@ pub const TRAVERSE: &str = include_str!("wgsl/traverse.wgsl");
 /// The integrator's per-path pieces with Rust twins: the camera ray (`furnace-scene`'s
 /// `Camera::generate_ray`), the shading frame (`furnace_brdf::Frame`) and Russian roulette's
 /// survival probability (`furnace_render::russian_roulette_survival`). Needs the `FRAME_*`
-/// constants and a `params: FrameParams` (see [`crate::integrator`]).
+/// constants and a `params: FrameParams` (see [`crate::integrator`]). Compose it through
+/// [`select`]: `ANISOTROPY` keeps the frame along a tangent (`Frame::with_tangent`).
 pub const PATH: &str = include_str!("wgsl/path.wgsl");
 
 /// The BSDF at a hit (`HitBsdf`, `hit_bsdf`, `hit_eval`, `hit_pdf`): the glTF material's

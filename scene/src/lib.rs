@@ -93,7 +93,7 @@ pub use light::{Light, PointLight, PointLightDistribution, Sky, SpotCone, Sun};
 pub use light_bvh::{LEAF as LIGHT_BVH_LEAF, LightBounds, LightBvh, LightBvhNode};
 pub use load::{ExtensionUse, MAX_COORDINATE, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
 pub use material::{
-    AlphaMode, ClearcoatLayer, DiffuseTransmissionFactors, Iridescence, Material, MaterialLayers,
+    AlphaMode, Anisotropy, ClearcoatLayer, DiffuseTransmissionFactors, Iridescence, Material, MaterialLayers,
     MaterialSample, SheenLayer, SpecularTextures,
 };
 pub use surface::{SurfacePoint, blend_keeps, blend_seed, geometric_normal};

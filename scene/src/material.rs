@@ -86,6 +86,9 @@ pub struct Material {
     /// KHR_materials_iridescence (an `iridescenceFactor` above 0). The content hash leaves it
     /// out where it is `None`.
     pub iridescence: Option<Iridescence>,
+    /// KHR_materials_anisotropy (an `anisotropyStrength` above 0). The content hash leaves it
+    /// out where it is `None`.
+    pub anisotropy: Option<Anisotropy>,
     /// KHR_materials_unlit: the surface shows its base colour (× texture × vertex colour) as
     /// is, to every ray and from either side, reflects nothing and is not a light source (the
     /// loader leaves it no emission, transmission or normal map). Kept last: the content hash
@@ -120,6 +123,7 @@ impl Default for Material {
             diffuse_transmission: None,
             layers: MaterialLayers::default(),
             iridescence: None,
+            anisotropy: None,
             unlit: false,
         }
     }
@@ -186,6 +190,20 @@ impl SpecularTextures {
     pub fn is_empty(&self) -> bool {
         self.specular.is_none() && self.color.is_none()
     }
+}
+
+/// KHR_materials_anisotropy's factors and texture: the base's specular lobe stretched along a
+/// direction in the tangent plane.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Anisotropy {
+    /// `anisotropyStrength` in `[0, 1]`: `αt = mix(α, 1, strength²)` along the direction.
+    pub strength: f32,
+    /// `anisotropyRotation` (radians): the direction's angle from the tangent towards the
+    /// bitangent (counter-clockwise in the tangent plane).
+    pub rotation: f32,
+    /// `anisotropyTexture` (linear): RG the direction in tangent space (`2·rg − 1`, rotated by
+    /// `rotation`), B a factor on the strength.
+    pub texture: Option<TextureRef>,
 }
 
 /// KHR_materials_iridescence's factors and textures: a thin film on the material.
@@ -256,6 +274,9 @@ pub struct MaterialSample {
     pub diffuse_transmission: f32,
     /// `diffuseTransmissionColorFactor × texture.rgb`.
     pub diffuse_transmission_color: Vec3,
+    /// `anisotropyStrength × texture.b` (0 without anisotropy). Its direction is the
+    /// surface's ([`crate::SurfacePoint::anisotropy`]).
+    pub anisotropy: f32,
 }
 
 impl Material {
@@ -281,6 +302,7 @@ impl Material {
         )
         .chain(self.layers.sheen.iter().flat_map(|s| [&s.color_texture, &s.roughness_texture]))
         .chain(self.iridescence.iter().flat_map(|i| [&i.texture, &i.thickness_texture]))
+        .chain(self.anisotropy.iter().map(|a| &a.texture))
         .chain(self.diffuse_transmission.iter().flat_map(|d| [&d.texture, &d.color_texture]))
         .flatten()
     }
@@ -339,6 +361,7 @@ impl Material {
             Some(d) => (d.factor * sample(&d.texture).w, d.color * sample(&d.color_texture).truncate()),
             None => (0.0, Vec3::ONE),
         };
+        let anisotropy = self.anisotropy.as_ref().map_or(0.0, |a| a.strength * sample(&a.texture).z);
         MaterialSample {
             base_color: base.truncate(),
             alpha: base.w,
@@ -357,6 +380,7 @@ impl Material {
             iridescence_thickness,
             diffuse_transmission,
             diffuse_transmission_color,
+            anisotropy,
         }
     }
 

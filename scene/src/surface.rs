@@ -23,6 +23,9 @@ pub struct SurfacePoint {
     /// The ray hit the back of a double-sided surface (both normals were flipped to face it).
     /// Emission is one-sided: the back of an emitter does not emit.
     pub back_face: bool,
+    /// KHR_materials_anisotropy's direction: a unit vector orthogonal to `shading`, the x axis
+    /// of the BSDF frame; `None` without anisotropy (or without tangents to place it by).
+    pub anisotropy: Option<Vec3>,
 }
 
 /// The unit normal `(v1 − v0) × (v2 − v0)` of a triangle, or zero if it has none.
@@ -77,6 +80,10 @@ impl Scene {
             Some(c) => self.normal_mapped(t, (b1, b2), base, c.normal_texture.as_ref(), c.normal_scale, at),
             None => shading,
         };
+        // Before the flip: the back of a double-sided surface has the front's direction (the
+        // same line on the surface; the lobe is symmetric about it).
+        let anisotropy =
+            material.anisotropy.as_ref().and_then(|a| self.anisotropy_direction(t, (b1, b2), shading, a, at));
         let back_face = geometric.dot(direction) > 0.0;
         if back_face {
             if !material.double_sided {
@@ -86,7 +93,36 @@ impl Scene {
             shading = -shading;
             coat = -coat;
         }
-        Some(SurfacePoint { position, geometric, shading, coat, back_face })
+        Some(SurfacePoint { position, geometric, shading, coat, back_face, anisotropy })
+    }
+
+    /// KHR_materials_anisotropy's direction at a hit: `(cos r, sin r)` — or, with the texture,
+    /// `2·rg − 1` rotated by r — in the tangent frame (T, B = w·N×T), made orthogonal to the
+    /// shading `normal` and unit. `None` without tangents or where the direction vanishes.
+    fn anisotropy_direction(
+        &self,
+        t: usize,
+        (b1, b2): (f32, f32),
+        normal: Vec3,
+        anisotropy: &crate::Anisotropy,
+        at: &VertexAttributes,
+    ) -> Option<Vec3> {
+        let tangent = self.geometry.tangent(t, b1, b2)?;
+        let d = match &anisotropy.texture {
+            Some(map) => {
+                let rg = map.sample(at, &self.textures, &self.images);
+                glam::Vec2::new(2.0 * rg.x - 1.0, 2.0 * rg.y - 1.0)
+            }
+            None => glam::Vec2::X,
+        };
+        let (s, c) = anisotropy.rotation.sin_cos();
+        let d = glam::Vec2::new(c * d.x - s * d.y, s * d.x + c * d.y);
+        let tn = tangent.truncate();
+        let bn = tangent.w * normal.cross(tn);
+        let dir = d.x * tn + d.y * bn;
+        let dir = dir - normal * normal.dot(dir);
+        let dir = dir.normalize_or_zero();
+        (dir != Vec3::ZERO).then_some(dir)
     }
 
     /// `normal` with a glTF normal map applied at `at` through the vertex tangents: the

@@ -34,7 +34,7 @@ use furnace_brdf::{
 use furnace_gpu::brdf::{self, BsdfParams};
 use furnace_gpu::wgsl;
 use furnace_tests::gpu::{self as kernel, test_context};
-use furnace_tests::lobes::{LOBES, all_options, film_params, gltf_params};
+use furnace_tests::lobes::{LOBES, all_options, anisotropy_strength, film_params, gltf_params};
 use glam::{Vec2, Vec3};
 use std::f64::consts::TAU;
 use std::fmt::Write as _;
@@ -182,7 +182,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     output[o + 11u] = s.lobe;
 }
 "#;
-    wgsl::compose(&[kernel::PREAMBLE, wgsl::SAMPLING, &brdf::declarations(), wgsl::BRDF, body])
+    wgsl::compose(&[
+        kernel::PREAMBLE,
+        wgsl::SAMPLING,
+        &brdf::declarations(),
+        &wgsl::select(wgsl::BRDF, |_| true),
+        body,
+    ])
 }
 
 fn words<T: bytemuck::Pod>(v: &[T]) -> Vec<u32> {
@@ -282,10 +288,13 @@ fn eval_pdf_sample_match_furnace_brdf() {
             for _ in 0..MATERIALS_PER_CONFIG {
                 let p = (parity.params)(&mut rng);
                 let film = parity.film.map(|f| f(&mut rng));
-                let bsdf = match film {
+                let mut bsdf = match film {
                     Some((factor, film)) => MetallicRoughness::new_iridescent(p, o, factor, film),
                     None => MetallicRoughness::new(p, o),
                 };
+                if let Some(strength) = parity.anisotropy.map(|f| f(&mut rng)) {
+                    bsdf = bsdf.with_anisotropy(strength);
+                }
                 records_gpu.push(BsdfParams::of(&bsdf));
                 params.push((p, o));
                 bsdfs.push(bsdf);
@@ -714,7 +723,7 @@ fn module_source() -> String {
     wgsl::compose(&[
         wgsl::SAMPLING,
         &brdf::declarations(),
-        wgsl::BRDF,
+        &wgsl::select(wgsl::BRDF, |_| true),
         "@group(0) @binding(0) var<storage, read> turquin_table: array<f32>;",
     ])
 }
@@ -789,7 +798,8 @@ fn constants_and_bindings_match_rust() {
 }
 
 /// `bsdf_params` and `bsdf_with_film` (the WGSL constructors, for materials evaluated on the
-/// GPU) build the record that `BsdfParams::of(MetallicRoughness::new_iridescent(…))` builds,
+/// GPU) build the record that `BsdfParams::of(MetallicRoughness::new_iridescent(…))` builds
+/// (and `bsdf_with_anisotropy` that of `with_anisotropy`),
 /// including the clamping of out-of-range, infinite and NaN inputs.
 #[test]
 fn wgsl_constructor_matches_rust() {
@@ -803,10 +813,13 @@ fn wgsl_constructor_matches_rust() {
         // Half the cases under a film (weight 0: none).
         let (mut factor, mut film) =
             if k % 2 == 0 { (0.0, ThinFilm { ior: 1.3, thickness: 400.0 }) } else { film_params(&mut rng) };
+        // A third anisotropic.
+        let mut strength = if k % 3 == 0 { anisotropy_strength(&mut rng) } else { 0.0 };
         if k % 4 < 2 {
             // One odd value in one field.
             let x = rng.pick(&odd);
-            match rng.next_u64() % 12 {
+            match rng.next_u64() % 13 {
+                11 => strength = x,
                 0 => p.base_color.x = x,
                 1 => p.base_color.z = x,
                 2 => p.metallic = x,
@@ -821,19 +834,19 @@ fn wgsl_constructor_matches_rust() {
                 _ => p.base_color = Vec3::splat(x),
             }
         }
-        cases.push((p, rng.pick(&configs), factor, film));
+        cases.push((p, rng.pick(&configs), factor, film, strength));
     }
-    const IN: usize = 13;
+    const IN: usize = 14;
     const OUT: usize = 24;
     let mut input = Vec::with_capacity(cases.len() * IN);
-    for (p, o, factor, film) in &cases {
+    for (p, o, factor, film, strength) in &cases {
         let b = p.base_color;
         let c = p.specular_color;
         for x in [b.x, b.y, b.z, p.metallic, p.roughness, p.specular_factor, c.x, c.y, c.z] {
             input.push(x.to_bits());
         }
         input.push(brdf::options_flags(*o));
-        input.extend([factor.to_bits(), film.ior.to_bits(), film.thickness.to_bits()]);
+        input.extend([factor.to_bits(), film.ior.to_bits(), film.thickness.to_bits(), strength.to_bits()]);
     }
     let body = r#"
 @group(0) @binding(3) var<storage, read> turquin_table: array<f32>;
@@ -843,39 +856,46 @@ fn in_f32(k: u32) -> f32 { return bitcast<f32>(input[k]); }
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let i = invocation_index(gid, groups);
     if i >= params.x { return; }
-    let b = i * 13u;
+    let b = i * 14u;
     let base = vec3<f32>(in_f32(b), in_f32(b + 1u), in_f32(b + 2u));
     var m = bsdf_params(base, in_f32(b + 3u), in_f32(b + 4u),
                         in_f32(b + 5u), vec3<f32>(in_f32(b + 6u), in_f32(b + 7u), in_f32(b + 8u)), input[b + 9u]);
     m = bsdf_with_film(m, base, in_f32(b + 3u), in_f32(b + 10u), in_f32(b + 11u), in_f32(b + 12u));
-    var w = array<f32, 23>(m.diffuse.x, m.diffuse.y, m.diffuse.z, m.alpha, m.f0.x, m.f0.y, m.f0.z, m.f90,
+    m = bsdf_with_anisotropy(m, in_f32(b + 13u));
+    var w = array<f32, 24>(m.diffuse.x, m.diffuse.y, m.diffuse.z, m.alpha, m.f0.x, m.f0.y, m.f0.z, m.f90,
                            m.f0_dielectric.x, m.f0_dielectric.y, m.f0_dielectric.z, m.specular_factor,
                            bitcast<f32>(m.flags), m.film_factor, m.film_ior, m.film_thickness,
                            m.film_f0_metal.x, m.film_f0_metal.y, m.film_f0_metal.z, m.film_metallic,
-                           m.film_f0.x, m.film_f0.y, m.film_f0.z);
-    for (var k = 0u; k < 23u; k++) {
+                           m.film_f0.x, m.film_f0.y, m.film_f0.z, m.alpha_y);
+    for (var k = 0u; k < 24u; k++) {
         output[i * 24u + k] = bitcast<u32>(w[k]);
     }
 }
 "#;
-    let src = wgsl::compose(&[kernel::PREAMBLE, wgsl::SAMPLING, &brdf::declarations(), wgsl::BRDF, body]);
+    let src = wgsl::compose(&[
+        kernel::PREAMBLE,
+        wgsl::SAMPLING,
+        &brdf::declarations(),
+        &wgsl::select(wgsl::BRDF, |_| true),
+        body,
+    ]);
     let table = brdf::turquin_table();
     let out = kernel::run_with(&ctx, &src, &input, &[&words(&table)], cases.len() * OUT, cases.len() as u32)
         .unwrap();
     let mut worst = 0.0f32;
     let mut bad = Vec::new();
-    for (k, (p, o, factor, film)) in cases.iter().enumerate() {
-        let rust = MetallicRoughness::new_iridescent(*p, *o, *factor, *film);
+    for (k, (p, o, factor, film, strength)) in cases.iter().enumerate() {
+        let rust = MetallicRoughness::new_iridescent(*p, *o, *factor, *film).with_anisotropy(*strength);
         let want: [u32; OUT] = bytemuck::cast(BsdfParams::of(&rust));
         let got = &out[k * OUT..k * OUT + OUT];
-        // Flags and padding exact; the floats within the tolerance (the same operations:
-        // clamps, a lerp, a square; the film's F0 a film reflectance, absolute to 1e-5 of 1
-        // (see the sample weights' film scale)).
+        // Flags exact; the floats within the tolerance (the same operations: clamps, a lerp, a
+        // square; the film's F0 a film reflectance, absolute to 1e-5 of 1 (see the sample
+        // weights' film scale)).
         let mut err = 0.0f32;
         for w in 0..OUT {
-            err = err.max(if w == 12 || w == OUT - 1 {
+            err = err.max(if w == 12 {
                 if got[w] == want[w] { 0.0 } else { f32::INFINITY }
-            } else if w >= 20 {
+            } else if (20..23).contains(&w) {
                 rel(f32::from_bits(got[w]), f32::from_bits(want[w]), 1.0)
             } else {
                 rel(f32::from_bits(got[w]), f32::from_bits(want[w]), 0.0)
@@ -884,13 +904,16 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         worst = worst.max(err);
         if !(err <= REL_TOL) && bad.len() < 5 {
             bad.push(format!(
-                "{p:?} {o:?} film {factor} {film:?}:\n  Rust {:?}\n  WGSL {:?}",
-                &want[..OUT - 1],
-                &got[..OUT - 1]
+                "{p:?} {o:?} film {factor} {film:?} anisotropy {strength}:\n  Rust {:?}\n  WGSL {:?}",
+                &want[..],
+                got
             ));
         }
     }
-    eprintln!("bsdf_params, bsdf_with_film: {} inputs, max relative error {worst:e}", cases.len());
+    eprintln!(
+        "bsdf_params, bsdf_with_film, bsdf_with_anisotropy: {} inputs, max relative error {worst:e}",
+        cases.len()
+    );
     assert!(bad.is_empty(), "bsdf_params / bsdf_with_film differ from BsdfParams::of:\n{}", bad.join("\n"));
 }
 
@@ -933,7 +956,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     output[i] = bitcast<u32>(e);
 }
 "#;
-    let src = wgsl::compose(&[kernel::PREAMBLE, wgsl::SAMPLING, &brdf::declarations(), wgsl::BRDF, body]);
+    let src = wgsl::compose(&[
+        kernel::PREAMBLE,
+        wgsl::SAMPLING,
+        &brdf::declarations(),
+        &wgsl::select(wgsl::BRDF, |_| true),
+        body,
+    ]);
     let table = brdf::turquin_table();
     let out =
         kernel::run_with(&ctx, &src, &input, &[&words(&table)], cases.len(), cases.len() as u32).unwrap();

@@ -155,6 +155,11 @@ fn absent_light_features_compose_no_code() {
         ".film_",
         "scene_diffuse_transmission",
         "fn dt_",
+        "scene_anisotropy",
+        "fn hit_anisotropy",
+        "frame_with_tangent",
+        ".alpha_y",
+        "GgxAlpha = vec2",
         "fn hit_material_estimate",
         "shadow_query",
         "fn absorption",
@@ -338,6 +343,8 @@ fn frame_params_layout_matches_wgsl() {
                 iridescence: light_bvh,
                 specular_textures: light_bvh,
                 diffuse_transmission: light_bvh,
+                // Both ways: with and without textures (VERTEX_ATTRIBUTES).
+                anisotropy: true,
                 one_point_light: !light_bvh,
             },
         ));
@@ -358,6 +365,10 @@ fn frame_params_layout_matches_wgsl() {
     furnace_tests::layout::assert_gpu_struct::<furnace_gpu::scene::GpuDiffuseTransmission>(&shader_source(
         FilmPrecision::F64,
         SceneFeatures { transmission: true, diffuse_transmission: true, ..Default::default() },
+    ));
+    furnace_tests::layout::assert_gpu_struct::<furnace_gpu::scene::GpuAnisotropy>(&shader_source(
+        FilmPrecision::F64,
+        SceneFeatures { anisotropy: true, ..Default::default() },
     ));
 }
 
@@ -714,6 +725,39 @@ fn same_samples_give_the_same_image_with_specular_textures() {
         &helmet,
         RenderSettings { width: 24, height: 24, bounces: 2, ..settings(SamplerKind::Sobol, 17) },
     );
+}
+
+/// Same samples, same image with KHR_materials_anisotropy: the helmet (normal-mapped, with
+/// tangents) anisotropic with the direction and strength read from a texture that varies over
+/// it, rotated, under a clear coat (the coat's normal in the anisotropic frame); and the glass
+/// box, whose files have no tangents (the stretched lobe in the plain frame), anisotropic on its
+/// transmissive materials (the opaque part of the transmissive mixture) and the rest.
+#[test]
+fn same_samples_give_the_same_image_with_anisotropy() {
+    let mut helmet = lit_helmet();
+    let varying = varying_texture(&mut helmet);
+    assert!(!helmet.geometry.tangents.is_empty(), "the helmet has tangents");
+    for m in &mut helmet.materials {
+        m.anisotropy = Some(furnace_scene::Anisotropy { strength: 0.8, rotation: 0.7, texture: varying });
+        m.layers.clearcoat = Some(furnace_scene::ClearcoatLayer {
+            factor: 0.5,
+            texture: None,
+            roughness: 0.2,
+            roughness_texture: None,
+            normal_texture: None,
+            normal_scale: 1.0,
+        });
+    }
+    same_samples_with(
+        &helmet,
+        RenderSettings { width: 24, height: 24, bounces: 2, ..settings(SamplerKind::Sobol, 19) },
+    );
+    let mut glass =
+        furnace_scene::Scene::load(furnace_tests::data::reference("glass/glass_box.gltf")).unwrap();
+    for m in &mut glass.materials {
+        m.anisotropy = Some(furnace_scene::Anisotropy { strength: 0.9, rotation: 0.0, texture: None });
+    }
+    same_samples_with(&glass, glass_settings());
 }
 
 /// DamagedHelmet under a white sky and a sun from the front left above (the file has no light:

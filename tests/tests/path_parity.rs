@@ -39,7 +39,7 @@ fn index(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
     return gid.x + gid.y * groups.x * 64u;
 }
 "#,
-        wgsl::PATH,
+        &wgsl::select(wgsl::PATH, |_| true),
         main,
     ])
 }
@@ -72,6 +72,26 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     for (var k = 0u; k < 4u; k++) {
         for (var c = 0u; c < 3u; c++) {
             output[12u * i + 3u * k + c] = bitcast<u32>(out[k][c]);
+        }
+    }
+}
+"#;
+
+const TANGENT_FRAME_KERNEL: &str = r#"
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = index(gid, groups);
+    if i >= kernel_params.x { return; }
+    var w: array<vec3<f32>, 2>;
+    for (var k = 0u; k < 2u; k++) {
+        let b = 6u * i + 3u * k;
+        w[k] = vec3<f32>(bitcast<f32>(input[b]), bitcast<f32>(input[b + 1u]), bitcast<f32>(input[b + 2u]));
+    }
+    let f = frame_with_tangent(w[0], w[1]);
+    let out = array<vec3<f32>, 2>(f.x, f.y);
+    for (var k = 0u; k < 2u; k++) {
+        for (var c = 0u; c < 3u; c++) {
+            output[6u * i + 3u * k + c] = bitcast<u32>(out[k][c]);
         }
     }
 }
@@ -227,6 +247,63 @@ fn frames_match_furnace_brdf() {
         }
     }
     println!("frames: {identical} of {total} vectors bit-identical");
+}
+
+/// `frame_with_tangent` (the anisotropic BSDF's frame) against `Frame::with_tangent`: tangents
+/// at random, near the normal (on both sides of the fallback's threshold), along it and zero
+/// (the integrator's directions are unit or zero, never NaN). 2e-6: a few ULP of unit vectors, as for the plain frames, divided by the
+/// tangent's part across the normal relative to its length (x is that part normalised, so the
+/// rounding of the tangent's components grows by its inverse); a pair whose tangent sits at
+/// the threshold may take either branch, and is only checked for a valid frame.
+#[test]
+fn frames_with_tangent_match_furnace_brdf() {
+    let Some(ctx) = test_context() else { return };
+    let mut rng = Rng(34);
+    let mut pairs: Vec<(Vec3, Vec3)> = (0..20_000).map(|_| (rng.unit_vector(), rng.unit_vector())).collect();
+    for k in 0..2_000 {
+        let n = rng.unit_vector();
+        let across = (rng.unit_vector() - n * n.dot(rng.unit_vector())).normalize_or(Vec3::X);
+        // |across part|² / |t|² from 1e-9 to 1e-3 around the 1e-6 threshold.
+        let e = 10f32.powf(-3.0 + 3.0 * (k as f32 / 2_000.0 - 0.5)) * rng.range(0.5, 2.0);
+        pairs.push((n, 3.0 * (n + e * across)));
+    }
+    for n in [Vec3::Z, Vec3::NEG_Z, Vec3::new(0.6, 0.0, 0.8)] {
+        pairs.extend([(n, n), (n, -2.0 * n), (n, Vec3::ZERO)]);
+    }
+    let input: Vec<u32> =
+        pairs.iter().flat_map(|(n, t)| [n.to_array(), t.to_array()]).flatten().map(f32::to_bits).collect();
+    let sampler = SamplerParams::new(SamplerKind::Random, 0, None).expect("the random sampler");
+    let scene = builtin::cornell_box().expect("the built-in Cornell box");
+    let params = frame_params(&scene, &scene.default_camera(), &RenderSettings::default(), sampler);
+    let out = kernel::run_with(
+        &ctx,
+        &shader(TANGENT_FRAME_KERNEL),
+        &input,
+        &[&words(&params)],
+        6 * pairs.len(),
+        pairs.len() as u32,
+    )
+    .expect("the tangent frame kernel");
+    let (mut identical, mut total, mut boundary) = (0, 0, 0);
+    for (k, &(n, t)) in pairs.iter().enumerate() {
+        let f = furnace_brdf::Frame::with_tangent(n, t);
+        let across = t - n * n.dot(t);
+        let ratio = across.length_squared() / t.length_squared();
+        if (ratio / 1e-6 - 1.0).abs() < 1e-3 {
+            // At the threshold: either frame, but a frame around n.
+            let (x, y) = (vec3_at(&out, 6 * k), vec3_at(&out, 6 * k + 3));
+            assert!(x.dot(n).abs() < 1e-5 && y.dot(n).abs() < 1e-5 && (x.cross(y) - n).length() < 1e-5);
+            boundary += 1;
+            continue;
+        }
+        let tol = if !(ratio >= 1e-6) { 2e-6 } else { 2e-6 / ratio.sqrt().min(1.0) };
+        for (j, (name, w)) in ["x", "y"].iter().zip([f.x, f.y]).enumerate() {
+            let what = format!("normal {n:?} tangent {t:?}: {name}");
+            identical += usize::from(close(&what, vec3_at(&out, 6 * k + 3 * j), w, tol));
+            total += 1;
+        }
+    }
+    println!("tangent frames: {identical} of {total} vectors bit-identical, {boundary} at the threshold");
 }
 
 #[test]

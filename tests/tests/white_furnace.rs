@@ -73,7 +73,13 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     output[i] = bitcast<u32>(w);
 }
 "#;
-    wgsl::compose(&[kernel::PREAMBLE, wgsl::SAMPLING, &brdf::declarations(), wgsl::BRDF, body])
+    wgsl::compose(&[
+        kernel::PREAMBLE,
+        wgsl::SAMPLING,
+        &brdf::declarations(),
+        &wgsl::select(wgsl::BRDF, |_| true),
+        body,
+    ])
 }
 
 /// The bound of the grid's own integration error, |grid mean − analytic| (see the module

@@ -208,7 +208,7 @@ impl CpuRenderer {
         // A solid's interface is shaded in its outward frame (the side of index 1), where
         // `wo` may be inside; every other surface in the frame facing the ray.
         let outward = if bsdf.is_volume() && surface.back_face { -surface.shading } else { surface.shading };
-        let frame = Frame::new(outward);
+        let frame = shading_frame(outward, surface);
         let wo = frame.to_local(-path.direction);
         let leave = offset_ray_origin_scaled(surface.position, surface.geometric, self.offset_scale);
         Vertex {
@@ -335,5 +335,15 @@ fn coat_normal(material: &Material, bsdf: &HitBsdf, surface: &SurfacePoint) -> O
         return None;
     }
     let sign = if bsdf.is_volume() && surface.back_face { -1.0 } else { 1.0 };
-    Some(Frame::new(sign * surface.shading).to_local(sign * surface.coat))
+    Some(shading_frame(sign * surface.shading, surface).to_local(sign * surface.coat))
+}
+
+/// The BSDF's frame around `normal` (the shading normal, or its opposite for a solid seen from
+/// inside): x along the anisotropy direction where the material has one.
+#[inline]
+fn shading_frame(normal: Vec3, surface: &SurfacePoint) -> Frame {
+    match surface.anisotropy {
+        Some(t) => Frame::with_tangent(normal, t),
+        None => Frame::new(normal),
+    }
 }

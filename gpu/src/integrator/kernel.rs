@@ -151,6 +151,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     if features.enabled("DIFFUSE_TRANSMISSION") {
         bindings.push(Binding::read("scene_diffuse_transmission", "array<SceneDiffuseTransmission>"));
     }
+    if features.anisotropy {
+        bindings.push(Binding::read("scene_anisotropy", "array<SceneAnisotropy>"));
+    }
     if features.emitters {
         // Chosen by the light BVH: 16-byte records and nodes, read as vec4 (three loads a node).
         let ty = if features.light_bvh { "array<vec4<u32>>" } else { "array<u32>" };
@@ -248,6 +251,9 @@ pub struct SceneFeatures {
     /// Some material transmits diffusely (KHR_materials_diffuse_transmission; with
     /// `transmission`, the `scene_diffuse_transmission` records).
     pub diffuse_transmission: bool,
+    /// Some material is anisotropic (KHR_materials_anisotropy; `scene_anisotropy` records, the
+    /// stretched GGX in the brdf module, the BSDF frame along the direction).
+    pub anisotropy: bool,
     /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
     /// triangles per invocation, added to the ray counter at its end). Not a property of the
     /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
@@ -295,6 +301,7 @@ impl SceneFeatures {
             iridescence: scene.materials.iter().any(|m| m.iridescence.is_some()),
             specular_textures: scene.materials.iter().any(|m| !m.specular_textures.is_empty()),
             diffuse_transmission: scene.materials.iter().any(|m| m.diffuse_transmission.is_some()),
+            anisotropy: scene.materials.iter().any(|m| m.anisotropy.is_some()),
             trace_counters: false,
         }
     }
@@ -324,7 +331,7 @@ impl SceneFeatures {
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
     /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `BLEND`, `UNLIT`, `SHADOW_FILTER` (shadow rays
     /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`, `UV_SETS`, `VERTEX_COLORS`, `CLEARCOAT`, `SHEEN`, `LAYERS` (either), `IRIDESCENCE`, `SPECULAR_TEXTURES`,
-    /// `DIFFUSE_TRANSMISSION` (with `TRANSMISSION`), `LOBE_ESTIMATES` (the material's albedo
+    /// `DIFFUSE_TRANSMISSION` (with `TRANSMISSION`), `ANISOTROPY`, `LOBE_ESTIMATES` (the material's albedo
     /// estimate: `LAYERS` or `DIFFUSE_TRANSMISSION`),
     /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
@@ -356,6 +363,7 @@ impl SceneFeatures {
             "IRIDESCENCE" => self.iridescence,
             "SPECULAR_TEXTURES" => self.specular_textures,
             "DIFFUSE_TRANSMISSION" => self.transmission && self.diffuse_transmission,
+            "ANISOTROPY" => self.anisotropy,
             "LOBE_ESTIMATES" => self.enabled("LAYERS") || self.enabled("DIFFUSE_TRANSMISSION"),
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,
@@ -426,7 +434,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         &light_bvh,
         &environment,
         &precision.wgsl(),
-        wgsl::PATH,
+        &wgsl::select(wgsl::PATH, |name| features.enabled(name)),
         &if features.enabled("LAYERS") {
             wgsl::select(wgsl::LAYERS, |name| features.enabled(name))
         } else {

@@ -283,6 +283,7 @@ impl PackedScene {
             "scene diffuse transmission",
             bytemuck::cast_slice(&self.scene_words.diffuse_transmission),
         ));
+        buffers.push(("scene anisotropy", bytemuck::cast_slice(&self.scene_words.anisotropy)));
         buffers.extend(self.emitter_words.as_deref().map(|w| ("emitter", w)));
         buffers.extend(self.environment.iter().map(|(label, w)| (*label, w.as_slice())));
         for (what, words) in buffers {

@@ -303,6 +303,9 @@ impl GpuRenderer {
         if let Some(d) = &self.scene.diffuse_transmission {
             resources.push(d.as_entire_binding());
         }
+        if let Some(a) = &self.scene.anisotropy {
+            resources.push(a.as_entire_binding());
+        }
         if let Some(e) = &self.emitters {
             resources.push(e.as_entire_binding());
         }

@@ -2,8 +2,8 @@
 //! scene without the extension neither fills nor binds: `scene_transmission`
 //! (KHR_materials_transmission, _ior, _volume), `scene_layers` (KHR_materials_clearcoat,
 //! KHR_materials_sheen), `scene_iridescence` (KHR_materials_iridescence), `scene_specular`
-//! (KHR_materials_specular's textures) and `scene_diffuse_transmission`
-//! (KHR_materials_diffuse_transmission).
+//! (KHR_materials_specular's textures), `scene_diffuse_transmission`
+//! (KHR_materials_diffuse_transmission) and `scene_anisotropy` (KHR_materials_anisotropy).
 
 use super::{GpuTextureRef, Kept, TRANSMISSIVE, VOLUME};
 use crate::shared::WgslType;
@@ -110,7 +110,27 @@ crate::gpu_struct! {
 }
 
 const _: () = assert!(size_of::<GpuDiffuseTransmission>() == 112);
+crate::gpu_struct! {
+    /// A material's anisotropy (WGSL `SceneAnisotropy`): KHR_materials_anisotropy. One per
+    /// material in `scene_anisotropy`, bound only for a scene with an anisotropic material
+    /// (strength 0 for a material without). 64 bytes.
+    pub struct GpuAnisotropy as "SceneAnisotropy" {
+        /// `anisotropyTexture` (RG the direction in tangent space, B a factor on the strength).
+        pub texture: GpuTextureRef => GpuTextureRef::wgsl_type(),
+        /// `anisotropyStrength` (0: isotropic).
+        pub strength: f32 => WgslType::F32,
+        /// `cos(anisotropyRotation)`, by Rust's `sin_cos` (the CPU's own values).
+        pub cos_rotation: f32 => WgslType::F32,
+        /// `sin(anisotropyRotation)`.
+        pub sin_rotation: f32 => WgslType::F32,
+        /// 1 where the scene keeps tangents to place the direction by, 0 where it has none
+        /// (the CPU's `Geometry::tangent` is then `None`: the lobe keeps the plain frame).
+        pub directed: u32 => WgslType::U32,
+    }
+}
+
 const _: () = assert!(size_of::<GpuLayers>() == 272);
+const _: () = assert!(size_of::<GpuAnisotropy>() == 64);
 const _: () = assert!(size_of::<GpuSpecularTextures>() == 96);
 const _: () = assert!(size_of::<GpuIridescence>() == 112);
 const _: () = assert!(size_of::<GpuTransmission>() == 80);
@@ -142,7 +162,7 @@ pub(super) fn layers_record(
         r.clearcoat_roughness = c.roughness;
         r.clearcoat_texture = texture_ref(&c.texture);
         r.clearcoat_roughness_texture = texture_ref(&c.roughness_texture);
-        if kept.normal_mapped {
+        if kept.tangents {
             r.clearcoat_normal_texture = texture_ref(&c.normal_texture);
             r.clearcoat_normal_scale = c.normal_scale;
         }
@@ -197,6 +217,25 @@ pub(super) fn diffuse_transmission_record(
         r.color_texture = texture_ref(&d.color_texture);
         r.color = d.color.to_array();
         r.factor = d.factor;
+    }
+    r
+}
+
+/// A material's anisotropy record, its texture slot through `texture_ref` (zeros without
+/// anisotropy).
+pub(super) fn anisotropy_record(
+    m: &furnace_scene::Material,
+    kept: Kept,
+    texture_ref: &dyn Fn(&Option<TextureRef>) -> GpuTextureRef,
+) -> GpuAnisotropy {
+    let mut r = GpuAnisotropy::zeroed();
+    if let Some(a) = &m.anisotropy {
+        let (sin, cos) = a.rotation.sin_cos();
+        r.texture = texture_ref(&a.texture);
+        r.strength = a.strength;
+        r.cos_rotation = cos;
+        r.sin_rotation = sin;
+        r.directed = u32::from(kept.tangents);
     }
     r
 }

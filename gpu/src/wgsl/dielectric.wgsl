@@ -156,8 +156,8 @@ fn dielectric_rescale(uc: f32, p: f32, taken: bool) -> f32 {
 fn dielectric_g2_over_cos_o(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     let zo = abs(wo.z);
     let zi = abs(wi.z);
-    let ao = brdf_ggx_a(d.alpha, wo);
-    let ai = brdf_ggx_a(d.alpha, wi);
+    let ao = brdf_ggx_a(brdf_ggx_isotropic(d.alpha), wo);
+    let ai = brdf_ggx_a(brdf_ggx_isotropic(d.alpha), wi);
     var r: f32;
     if d.height_correlated != 0u {
         r = 2.0 * zi / (ao * zi + ai * zo);
@@ -220,7 +220,7 @@ fn dielectric_eval(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     if !m.valid {
         return vec3<f32>(0.0);
     }
-    let dd = brdf_ggx_d(d.alpha, m.h);
+    let dd = brdf_ggx_d(brdf_ggx_isotropic(d.alpha), m.h);
     let fr = fresnel_dielectric(m.cos_oh, d.eta);
     let r = dielectric_reflectance(d, fr, m.cos_oh);
     let g = dielectric_g2_over_cos_o(d, wo, wi);
@@ -246,7 +246,7 @@ fn dielectric_pdf(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     }
     let fr = fresnel_dielectric(m.cos_oh, d.eta);
     let p_reflect = brdf_max_element(dielectric_reflectance(d, fr, m.cos_oh));
-    let dv = 2.0 / (abs(wo.z) + brdf_ggx_a(d.alpha, wo)) * brdf_ggx_d(d.alpha, m.h);
+    let dv = 2.0 / (abs(wo.z) + brdf_ggx_a(brdf_ggx_isotropic(d.alpha), wo)) * brdf_ggx_d(brdf_ggx_isotropic(d.alpha), m.h);
     var pdf: f32;
     if m.reflect {
         pdf = dv * p_reflect * 0.25;
@@ -295,7 +295,7 @@ fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
         return ScatterSample(-wo, 1.0 - r, d.tint, dielectric_rescale(uc, r, false), true, true, true);
     }
     let flip = select(-1.0, 1.0, wo.z > 0.0);
-    let h = brdf_ggx_sample_vndf_caps(d.alpha, wo * flip, u);
+    let h = brdf_ggx_sample_vndf_caps(brdf_ggx_isotropic(d.alpha), wo * flip, u);
     let cos_oh = brdf_dot(wo, h);
     let fr = fresnel_dielectric(cos_oh, d.eta);
     let rgb = dielectric_reflectance(d, fr, cos_oh);
@@ -315,7 +315,7 @@ fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
     if !(pdf > 0.0) {
         return scatter_none();
     }
-    let g1o = brdf_ggx_g1(d.alpha, wo);
+    let g1o = brdf_ggx_g1(brdf_ggx_isotropic(d.alpha), wo);
     let g = dielectric_g2_over_cos_o(d, wo, wi) * abs(wo.z);
     var weight = 0.0;
     if g1o > 0.0 {

@@ -355,6 +355,11 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
     }
     // #endif
     var bsdf = hit_bsdf(ms, material, at);
+    // #if ANISOTROPY
+    let facing = select(surface.shading, -surface.shading, surface.back_face != 0u);
+    let anisotropy = hit_anisotropy(material, hit.triangle, hit.u, hit.v, at, facing);
+    bsdf = hit_with_anisotropy(bsdf, anisotropy.w);
+    // #endif
     var shading = surface.shading;
     var delta = false;
     // #if TRANSMISSION
@@ -373,7 +378,12 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
     delta = delta && !bsdf.layered;
     // #endif
     // #endif
+    // #if ANISOTROPY
+    // The BSDF's frame: x along the anisotropy direction where there is one.
+    let frame = frame_with_tangent(shading, anisotropy.xyz);
+    // #else
     let frame = frame_new(shading);
+    // #endif
     // #if CLEARCOAT
     // The coat's own normal (Clearcoat::with_normal), in the frame the BSDF is shaded in.
     if bsdf.layered && bsdf.l.coat_factor > 0.0 {

@@ -83,6 +83,49 @@ fn hit_specular(material: u32, at: SceneAttributes, ms: MaterialSample) -> Mater
 }
 // #endif
 
+// #if ANISOTROPY
+// KHR_materials_anisotropy at a hit: xyz its direction (Scene::surface_point's `anisotropy`,
+// zero where there is none), w its strength (MaterialSample::anisotropy). `normal` is the
+// shading normal before a back face's flip: the back of a double-sided surface has the front's
+// direction.
+fn hit_anisotropy(material: u32, triangle: u32, b1: f32, b2: f32, at: SceneAttributes,
+                  normal: vec3<f32>) -> vec4<f32> {
+    let r = scene_anisotropy[material];
+    // #if VERTEX_ATTRIBUTES
+    let texel = scene_texture_sample_at(r.texture, at);
+    // #else
+    let texel = vec4<f32>(1.0);
+    // #endif
+    let strength = r.strength * texel.z;
+    if r.directed == 0u {
+        return vec4<f32>(0.0, 0.0, 0.0, strength);
+    }
+    // (cos r, sin r), or the texture's 2·rg − 1 rotated by r, in the tangent frame (T, w·N×T).
+    var d = vec2<f32>(1.0, 0.0);
+    if (r.texture.flags & SCENE_TEXTURE_PRESENT) != 0u {
+        d = vec2<f32>(2.0 * texel.x - 1.0, 2.0 * texel.y - 1.0);
+    }
+    let c = r.cos_rotation;
+    let s = r.sin_rotation;
+    let e = vec2<f32>(c * d.x - s * d.y, s * d.x + c * d.y);
+    let tangent = scene_tangent(triangle, b1, b2);
+    let bn = tangent.w * scene_cross(normal, tangent.xyz);
+    let dir = e.x * tangent.xyz + e.y * bn;
+    return vec4<f32>(scene_normalize_or_zero(dir - normal * scene_dot(normal, dir)), strength);
+}
+
+// MetallicRoughness::with_anisotropy on the hit's metallic-roughness records (HitBsdf::new's
+// last step for each).
+fn hit_with_anisotropy(bsdf: HitBsdf, strength: f32) -> HitBsdf {
+    var b = bsdf;
+    b.m = bsdf_with_anisotropy(b.m, strength);
+    // #if TRANSMISSION
+    b.t.opaque = bsdf_with_anisotropy(b.t.opaque, strength);
+    // #endif
+    return b;
+}
+// #endif
+
 // `HitBsdf::new`: the material's BSDF at a hit.
 fn hit_bsdf(material_sample: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
     // #if SPECULAR_TEXTURES
@@ -310,11 +353,7 @@ fn hit_material_scatter(b: HitBsdf, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
 // MetallicRoughness::albedo_estimates, summed: the opaque material's estimate at ωo.
 fn hit_opaque_estimate(m: BsdfParams, wo: vec3<f32>) -> f32 {
     let mu = brdf_clamp(wo.z, 0.0, 1.0);
-    var spec = brdf_luminance(brdf_specular_fresnel(m, mu));
-    if (m.flags & BSDF_FLAG_COMPENSATION) == 0u {
-        spec *= bsdf_e_ss(mu, m.alpha, brdf_height_correlated(m));
-    }
-    return spec + brdf_luminance(m.diffuse) * brdf_diffuse_scale(m, mu);
+    return brdf_specular_estimate(m, mu) + brdf_luminance(m.diffuse) * brdf_diffuse_scale(m, mu);
 }
 
 // Core::albedo_estimate: a transmissive material's dielectric counts 1.

@@ -20,8 +20,23 @@ fn bsdf_params(base_color: vec3<f32>, metallic: f32, roughness: f32, specular_fa
     // Ggx::new: α = roughness² clamped to [ALPHA_MIN, 1].
     let alpha = brdf_sanitize(rough * rough, BSDF_ALPHA_MIN, 1.0, 1.0);
     let diffuse = brdf_clamp_rgb(base * (1.0 - metal), 1.0);
-    return BsdfParams(diffuse, alpha, f0, f90, f0d, sf, flags, 0.0, 0.0, 0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0));
+    return BsdfParams(diffuse, alpha, f0, f90, f0d, sf, flags, 0.0, 0.0, 0.0, vec3<f32>(0.0), 0.0, vec3<f32>(0.0),
+                      alpha);
 }
+
+// #if ANISOTROPY
+// `MetallicRoughness::with_anisotropy`: the specular lobe of strength `strength` (clamped to
+// [0, 1], NaN → 0: isotropic) stretched to αx = mix(α, 1, s²) along the frame's x axis.
+fn bsdf_with_anisotropy(params: BsdfParams, strength: f32) -> BsdfParams {
+    var m = params;
+    let s = brdf_sanitize(strength, 0.0, 1.0, 0.0);
+    if s > 0.0 {
+        let s2 = s * s;
+        m.alpha = brdf_sanitize(params.alpha * (1.0 - s2) + s2, BSDF_ALPHA_MIN, 1.0, 1.0);
+    }
+    return m;
+}
+// #endif
 
 // #if IRIDESCENCE
 // `MetallicRoughness::new_iridescent`: the record under a film of weight `factor`, index `ior`
@@ -56,14 +71,21 @@ fn brdf_diffuse_scale(m: BsdfParams, cos_theta_d: f32) -> f32 {
     return 1.0 - m.specular_factor * brdf_max_element(fr);
 }
 
+// `MetallicRoughness::albedo_estimates`' specular half at μo: lum(F(μo)), times E_ss where the
+// lobe is not compensated (an anisotropic lobe's at `Ggx::alpha_effective`).
+fn brdf_specular_estimate(m: BsdfParams, mu: f32) -> f32 {
+    var spec = brdf_luminance(brdf_specular_fresnel(m, mu));
+    if !brdf_specular_compensated(m) {
+        spec *= bsdf_e_ss(mu, brdf_ggx_alpha_effective(brdf_specular_ggx(m)), brdf_height_correlated(m));
+    }
+    return spec;
+}
+
 // `MetallicRoughness::specular_probability`: Fresnel-weighted albedo estimates at μo, clamped
 // to [0.05, 0.95] when both lobes are present.
 fn bsdf_specular_probability(m: BsdfParams, wo: vec3<f32>) -> f32 {
     let mu = brdf_clamp(wo.z, 0.0, 1.0);
-    var spec = brdf_luminance(brdf_specular_fresnel(m, mu));
-    if (m.flags & BSDF_FLAG_COMPENSATION) == 0u {
-        spec *= bsdf_e_ss(mu, m.alpha, brdf_height_correlated(m));
-    }
+    let spec = brdf_specular_estimate(m, mu);
     let diff = brdf_luminance(m.diffuse) * brdf_diffuse_scale(m, mu);
     // Only a diffuse lobe that is zero everywhere may go unsampled (see the Rust).
     if !(diff > 0.0) { return select(0.95, 1.0, all(m.diffuse == vec3<f32>(0.0))); }

@@ -47,6 +47,21 @@ fn frame_new(n: vec3<f32>) -> Frame {
     return Frame(x, y, n);
 }
 
+// #if ANISOTROPY
+// Frame::with_tangent: x along `tangent` made orthogonal to `n`, y = n × x; frame_new(n) where
+// that part is within rounding of zero (a tangent along n, zero, or not finite).
+fn frame_with_tangent(n: vec3<f32>, tangent: vec3<f32>) -> Frame {
+    let across = tangent - n * dot(n, tangent);
+    if !(dot(across, across) > 1e-6 * dot(tangent, tangent)) {
+        return frame_new(n);
+    }
+    // Projected twice, as the Rust (orthogonal to rounding for a tangent near n).
+    let a2 = across - n * dot(n, across);
+    let x = a2 * (1.0 / sqrt(dot(a2, a2)));
+    return Frame(x, cross(n, x), n);
+}
+// #endif
+
 fn frame_to_local(f: Frame, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(v, f.x), dot(v, f.y), dot(v, f.z));
 }

@@ -9,6 +9,24 @@ fn brdf_sampling(m: BsdfParams) -> u32 {
     return (m.flags >> BSDF_SAMPLING_SHIFT) & BSDF_SAMPLING_MASK;
 }
 
+// The lobe's distribution (`GgxSpecular::ggx`): α, with ANISOTROPY (αx, αy).
+fn brdf_specular_ggx(m: BsdfParams) -> GgxAlpha {
+    // #if ANISOTROPY
+    return vec2<f32>(m.alpha, m.alpha_y);
+    // #else
+    return m.alpha;
+    // #endif
+}
+
+// Whether the lobe is Turquin-compensated: with the option, and not anisotropic (no isotropic
+// table bounds an anisotropic lobe's loss).
+fn brdf_specular_compensated(m: BsdfParams) -> bool {
+    // #if ANISOTROPY
+    if m.alpha != m.alpha_y { return false; }
+    // #endif
+    return (m.flags & BSDF_FLAG_COMPENSATION) != 0u;
+}
+
 // `GgxSpecular::fresnel`: Schlick's, with the thin film's mixed in (IRIDESCENCE).
 fn brdf_specular_fresnel(m: BsdfParams, cos_om: f32) -> vec3<f32> {
     let f = brdf_schlick(m.f0, vec3<f32>(m.f90), cos_om);
@@ -18,9 +36,10 @@ fn brdf_specular_fresnel(m: BsdfParams, cos_om: f32) -> vec3<f32> {
     return f;
 }
 
-// `GgxSpecular::compensation`: the Turquin factor, 1 when compensation is off.
+// `GgxSpecular::compensation`: the Turquin factor, 1 when compensation is off or the lobe
+// anisotropic.
 fn brdf_specular_compensation(m: BsdfParams, mu_o: f32) -> vec3<f32> {
-    if (m.flags & BSDF_FLAG_COMPENSATION) != 0u {
+    if brdf_specular_compensated(m) {
         var f0 = m.f0;
         // #if IRIDESCENCE
         if m.film_factor > 0.0 { f0 = m.film_f0; }
@@ -44,7 +63,7 @@ fn brdf_specular_eval(m: BsdfParams, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> 
     let hv = brdf_half_vector(wo, wi);
     if !(hv.w > 0.0) { return vec3<f32>(0.0); }
     let f = brdf_specular_fresnel(m, hv.w);
-    let d = brdf_ggx_eval_cos(m.alpha, wo, wi, hv.xyz, brdf_height_correlated(m));
+    let d = brdf_ggx_eval_cos(brdf_specular_ggx(m), wo, wi, hv.xyz, brdf_height_correlated(m));
     return f * d * brdf_specular_compensation(m, wo.z);
 }
 
@@ -52,19 +71,20 @@ fn brdf_specular_eval(m: BsdfParams, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> 
 fn brdf_specular_sample(m: BsdfParams, wo: vec3<f32>, u: vec2<f32>) -> BsdfSample {
     if !brdf_above(wo) { return brdf_no_sample(); }
     let method = brdf_sampling(m);
-    let wm = brdf_ggx_sample_wm(m.alpha, wo, u, method);
+    let ggx = brdf_specular_ggx(m);
+    let wm = brdf_ggx_sample_wm(ggx, wo, u, method);
     let cos_om = brdf_dot(wo, wm);
     if !(cos_om > 0.0) { return brdf_no_sample(); } // NDF sampled a back-facing microfacet
     let wi = brdf_reflect(wo, wm);
     if !brdf_above(wi) { return brdf_no_sample(); } // reflected below the horizon
-    let pdf = brdf_ggx_pdf_reflected(m.alpha, wo, wm, cos_om, method);
+    let pdf = brdf_ggx_pdf_reflected(ggx, wo, wm, cos_om, method);
     if !brdf_positive_finite(pdf) { return brdf_no_sample(); }
-    let g2 = brdf_ggx_g2(m.alpha, wo, wi, brdf_height_correlated(m));
+    let g2 = brdf_ggx_g2(ggx, wo, wi, brdf_height_correlated(m));
     var throughput: f32;
     if method == BSDF_SAMPLING_NDF {
         throughput = g2 * cos_om / (wo.z * wm.z);
     } else {
-        throughput = g2 / brdf_ggx_g1(m.alpha, wo);
+        throughput = g2 / brdf_ggx_g1(ggx, wo);
     }
     let weight = brdf_specular_fresnel(m, cos_om) * throughput * brdf_specular_compensation(m, wo.z);
     return BsdfSample(wi, pdf, weight, BSDF_LOBE_SPECULAR);
@@ -75,5 +95,5 @@ fn brdf_specular_pdf(m: BsdfParams, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     if !(brdf_above(wo) && brdf_above(wi)) { return 0.0; }
     let hv = brdf_half_vector(wo, wi);
     if !(hv.w > 0.0) { return 0.0; }
-    return brdf_ggx_pdf_reflected(m.alpha, wo, hv.xyz, hv.w, brdf_sampling(m));
+    return brdf_ggx_pdf_reflected(brdf_specular_ggx(m), wo, hv.xyz, hv.w, brdf_sampling(m));
 }

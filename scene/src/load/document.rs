@@ -19,6 +19,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_clearcoat",
     "KHR_materials_sheen",
     "KHR_materials_iridescence",
+    "KHR_materials_anisotropy",
     "KHR_materials_diffuse_transmission",
     super::variants::EXTENSION,
     "KHR_texture_transform",

@@ -4,8 +4,8 @@
 use super::context::Ctx;
 use super::spec_gloss::Bake;
 use crate::material::{
-    AlphaMode, ClearcoatLayer, DiffuseTransmissionFactors, Iridescence, Material, MaterialLayers, SheenLayer,
-    SpecularTextures,
+    AlphaMode, Anisotropy, ClearcoatLayer, DiffuseTransmissionFactors, Iridescence, Material, MaterialLayers,
+    SheenLayer, SpecularTextures,
 };
 use crate::texture::{ColorSpace, Texture, TextureRef, TextureTransform, WrapMode};
 use glam::{Vec2, Vec3, Vec4};
@@ -108,6 +108,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
     let mut transmission = transmission(ctx, m, &p);
     let mut layers = layers(ctx, m, &p, textures);
     let mut iridescence = iridescence(ctx, m, &p, textures);
+    let mut anisotropy = anisotropy(ctx, m, &p, textures);
     let mut diffuse_transmission = diffuse_transmission(ctx, m, &p, textures);
     warn_ignored(ctx, m);
     let unlit = m.unlit();
@@ -118,6 +119,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         transmission.texture = None;
         layers = MaterialLayers::default();
         iridescence = None;
+        anisotropy = None;
         diffuse_transmission = None;
     }
     let roughness_factor = pbr.roughness_factor;
@@ -156,6 +158,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         diffuse_transmission,
         layers,
         iridescence,
+        anisotropy,
         unlit,
     };
     (material, pbr.bake)
@@ -529,6 +532,34 @@ fn iridescence(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str, textures: usi
         format!("{path}.iridescenceThicknessTexture"),
     );
     Some(Iridescence { factor, texture, ior, thickness_minimum, thickness_maximum, thickness_texture })
+}
+
+/// KHR_materials_anisotropy (`None` for a strength of 0).
+fn anisotropy(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str, textures: usize) -> Option<Anisotropy> {
+    let ext = m.extension_value("KHR_materials_anisotropy")?;
+    let path = format!("{p}.extensions.KHR_materials_anisotropy");
+    let strength = unit_factor(ctx, ext, "anisotropyStrength", 0.0, &path);
+    let rotation = match ext.get("anisotropyRotation") {
+        None => 0.0,
+        Some(v) => match v.as_f64().filter(|r| r.is_finite()) {
+            Some(r) => r as f32,
+            None => {
+                ctx.warn(format!("{path}.anisotropyRotation"), format!("{v} is not a number: 0 used"));
+                0.0
+            }
+        },
+    };
+    if !(strength > 0.0) {
+        return None;
+    }
+    let texture = texture_ref_json(
+        ctx,
+        ext.get("anisotropyTexture"),
+        textures,
+        ColorSpace::Linear,
+        format!("{path}.anisotropyTexture"),
+    );
+    Some(Anisotropy { strength, rotation, texture })
 }
 
 /// KHR_materials_clearcoat and KHR_materials_sheen: the layers above the material.

@@ -69,7 +69,8 @@ pub(crate) fn load(
         .map(|t| t.tex_coord as usize + 1)
         .max()
         .unwrap_or(0);
-    let needs_tangent = materials.iter().any(|m| m.normal_texture.is_some());
+    // Normal maps and anisotropy directions are given in tangent space.
+    let needs_tangent = materials.iter().any(|m| m.normal_texture.is_some() || m.anisotropy.is_some());
     let needs_color =
         doc.meshes().flat_map(|m| m.primitives()).any(|p| p.get(&gltf::Semantic::Colors(0)).is_some());
     let mut images = resources::load_images(&mut ctx, &doc, &buffers, &mut materials, &textures)?;
@@ -88,8 +89,13 @@ pub(crate) fn load(
             ),
         )));
     }
-    let normal_sets =
-        materials.iter().map(|m| m.normal_texture.as_ref().map_or(0, |t| t.tex_coord as usize)).collect();
+    let normal_sets = materials
+        .iter()
+        .map(|m| {
+            let anisotropy = m.anisotropy.as_ref().and_then(|a| a.texture.as_ref());
+            m.normal_texture.as_ref().or(anisotropy).map_or(0, |t| t.tex_coord as usize)
+        })
+        .collect();
     let mut meshes =
         Meshes::new(&doc, &buffers, uv_sets, needs_tangent, needs_color, normal_sets, default_material);
     meshes.variant = variant.map(|v| (v, variant_names.len()));

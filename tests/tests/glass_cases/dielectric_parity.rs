@@ -819,7 +819,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         p_d = thin_reflectance(wo.z, d.eta);
     } else {
         let flip = select(-1.0, 1.0, wo.z > 0.0);
-        let h = brdf_ggx_sample_vndf_caps(d.alpha, wo * flip, u);
+        let h = brdf_ggx_sample_vndf_caps(brdf_ggx_isotropic(d.alpha), wo * flip, u);
         p_d = fresnel_dielectric(brdf_dot(wo, h), d.eta).reflectance;
     }
     out_f32(o + 28u, p_d);
@@ -830,7 +830,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         kernel::PREAMBLE,
         wgsl::SAMPLING,
         &brdf::declarations(),
-        wgsl::BRDF,
+        &wgsl::select(wgsl::BRDF, |_| true),
         wgsl::DIELECTRIC,
         body,
     ])
@@ -1536,7 +1536,7 @@ fn constants_match_rust() {
     let src = wgsl::compose(&[
         wgsl::SAMPLING,
         &brdf::declarations(),
-        wgsl::BRDF,
+        &wgsl::select(wgsl::BRDF, |_| true),
         wgsl::DIELECTRIC,
         "@group(0) @binding(0) var<storage, read> turquin_table: array<f32>;",
     ]);
