@@ -96,7 +96,7 @@ pub use material::{
     AlphaMode, Anisotropy, ClearcoatLayer, DiffuseTransmissionFactors, Iridescence, Material, MaterialLayers,
     MaterialSample, SheenLayer, SpecularTextures,
 };
-pub use surface::{SurfacePoint, blend_keeps, blend_seed, geometric_normal};
+pub use surface::{SurfacePoint, blend_keeps, blend_seed, geometric_normal, valid_reflection_normal};
 pub use texture::{
     ColorSpace, Image, MAX_TEXTURE_SIZE, Texture, TextureRef, TextureTransform, WrapMode, srgb_to_linear,
 };

@@ -442,6 +442,34 @@ fn scene_normal_mapped(triangle: u32, b1: f32, b2: f32, normal: vec3<f32>, map: 
     return scene_normalize_or(m.x * tn + m.y * bn + m.z * normal, normal);
 }
 
+// valid_reflection_normal: `n` bent towards `ng` just enough that the mirror reflection of
+// `wo` leaves the surface at least min(0.9·(wo·ng), 0.01) above it (the normal-mapped normal
+// of a hit; see the Rust for the quadratic).
+fn scene_valid_reflection_normal(ng: vec3<f32>, wo: vec3<f32>, n: vec3<f32>) -> vec3<f32> {
+    let iz = scene_dot(wo, ng);
+    let t = min(0.9 * iz, 0.01);
+    let r = 2.0 * scene_dot(n, wo) * n - wo;
+    if !(iz > 0.0) || scene_dot(r, ng) >= t {
+        return n;
+    }
+    let x = scene_normalize_or_zero(n - ng * scene_dot(n, ng));
+    if all(x == vec3<f32>(0.0)) {
+        return ng;
+    }
+    let ix = scene_dot(wo, x);
+    let a = ix * ix + iz * iz;
+    let b = 2.0 * (a + iz * t);
+    let c = (t + iz) * (t + iz);
+    let root = sqrt(max(b * b - 4.0 * a * c, 0.0));
+    var z2 = c / (b + root);
+    var x2 = 0.25 * (2.0 * (a - iz * t) + root) / a;
+    if ix < 0.0 {
+        z2 = 0.25 * (b + root) / a;
+        x2 = (iz - t) * (iz - t) / (2.0 * (a - iz * t) + root);
+    }
+    return scene_normalize_or(x * sqrt(clamp(x2, 0.0, 1.0)) + ng * sqrt(clamp(z2, 0.0, 1.0)), ng);
+}
+
 // Renderer::surface_point for a ray travelling along `direction` that hit `triangle` at
 // barycentrics (b1, b2); `at` is the hit's attributes (used by a normal map only).
 fn scene_surface_point(triangle: u32, b1: f32, b2: f32, at: SceneAttributes, direction: vec3<f32>) -> SceneSurfacePoint {
@@ -455,8 +483,10 @@ fn scene_surface_point(triangle: u32, b1: f32, b2: f32, at: SceneAttributes, dir
     if all(shading == vec3<f32>(0.0)) {
         shading = geometric;
     }
+    let base = shading;
     shading = scene_normal_mapped(triangle, b1, b2, shading, scene_materials[t.material].normal_texture,
                                   scene_materials[t.material].normal_scale, at);
+    let mapped = any(shading != base);
     var valid = 1u;
     var back_face = 0u;
     if scene_dot(geometric, direction) > 0.0 {
@@ -466,6 +496,9 @@ fn scene_surface_point(triangle: u32, b1: f32, b2: f32, at: SceneAttributes, dir
         back_face = 1u;
         geometric = -geometric;
         shading = -shading;
+    }
+    if mapped {
+        shading = scene_valid_reflection_normal(geometric, -direction, shading);
     }
     return SceneSurfacePoint(position, valid, geometric, back_face, shading);
 }
