@@ -12,6 +12,12 @@
 //! * Thin-walled: a sheet that reflects R′ = 2R/(1 + R) and lets T′ = 1 − R′ pass straight
 //!   through (the sum of its inner reflections taken with the unpolarised R; Mitsuba's
 //!   `thindielectric`).
+//! * Rough thin-walled: a sheet whose faces are GGX microfacets. It reflects the rough lobe of
+//!   the reflection model, weighted R′ at the microfacet, and transmits the same lobe mirrored
+//!   through the sheet's plane, weighted T′ (a sheet of parallel rough faces: the light that
+//!   crosses it leaves as the mirror image of what the first face reflects, as the thin-walled
+//!   modes of Autodesk Standard Surface and Enterprise PBR model it). Sampled by visible
+//!   normals of the side `wo` is on, then reflection or transmission by R′ at that normal.
 //!
 //! A thin film on the interface (KHR_materials_iridescence, [`Dielectric::with_film`]) makes the
 //! reflectance a colour, `R = (1 − i)·R_exact + i·film(cos θ outside)` per channel, as the
@@ -91,6 +97,9 @@ pub enum Interface {
     Rough,
     /// A smooth thin-walled sheet: reflection R′, straight transmission T′ (delta lobes).
     ThinWalled,
+    /// A rough thin-walled sheet: the GGX reflection weighted R′ and its mirror image through
+    /// the sheet weighted T′.
+    RoughThinWalled,
 }
 
 /// A sampled direction of a [`Dielectric`] or [`Transmissive`] BSDF.
@@ -134,7 +143,8 @@ pub fn rescale(uc: f32, p: f32, taken: bool) -> f32 {
 pub struct Dielectric {
     /// Inside over outside index, in `[ETA_MIN, ETA_MAX]`.
     pub eta: f32,
-    /// The microfacet distribution (used when [`Interface::Rough`]).
+    /// The microfacet distribution (used when [`Interface::Rough`] or
+    /// [`Interface::RoughThinWalled`]).
     pub ggx: Ggx,
     /// Smooth, rough or thin-walled.
     pub interface: Interface,
@@ -155,19 +165,19 @@ pub const ETA_MAX: f32 = 1e2;
 impl Dielectric {
     /// An interface of relative index `eta` (NaN → 1.5, clamped to `[ETA_MIN, ETA_MAX]`) and
     /// roughness `alpha` (α = glTF roughness²): smooth below [`ALPHA_MIN`] (and for NaN ≤ 0) or
-    /// at η = 1,
-    /// else rough with α clamped to 1; `thin_walled` makes it a smooth sheet whatever α.
+    /// at η = 1, else rough with α clamped to 1; `thin_walled` makes it a sheet, smooth or rough
+    /// by the same rule.
     /// `tint` is clamped to `[0, 1]` (NaN → 0).
     pub fn new(eta: f32, alpha: f32, thin_walled: bool, masking: Masking, tint: Rgb) -> Self {
         let eta = if eta.is_nan() { 1.5 } else { eta.clamp(ETA_MIN, ETA_MAX) };
         // At η = 1 exactly the interface is invisible whatever α (every microfacet refracts
         // straight through, a delta the microfacet form cannot represent).
-        let interface = if thin_walled {
-            Interface::ThinWalled
-        } else if alpha >= ALPHA_MIN && eta != 1.0 {
-            Interface::Rough
-        } else {
-            Interface::Smooth
+        let rough = alpha >= ALPHA_MIN && eta != 1.0;
+        let interface = match (thin_walled, rough) {
+            (true, true) => Interface::RoughThinWalled,
+            (true, false) => Interface::ThinWalled,
+            (false, true) => Interface::Rough,
+            (false, false) => Interface::Smooth,
         };
         Self { eta, ggx: Ggx::new(alpha), interface, masking, tint: clamp_rgb(tint, 1.0), film: None }
     }
@@ -217,14 +227,20 @@ impl Dielectric {
         (1.0 - i) * r + i * iridescence::fresnel(film, Rgb::splat(f0), cos_i.abs().min(1.0))
     }
 
-    /// Whether every lobe is a delta (smooth or thin-walled): `eval` and `pdf` are 0.
+    /// Whether every lobe is a delta (smooth or smooth thin-walled): `eval` and `pdf` are 0.
     #[inline]
     pub fn is_delta(&self) -> bool {
-        self.interface != Interface::Rough
+        !matches!(self.interface, Interface::Rough | Interface::RoughThinWalled)
     }
 
     /// The BSDF times `|cos θi|`, per channel: 0 for delta interfaces.
     pub fn eval(&self, wo: Vec3, wi: Vec3) -> Rgb {
+        if self.interface == Interface::RoughThinWalled {
+            let Some(m) = self.sheet_microfacet(wo, wi) else { return Rgb::ZERO };
+            let rgb = self.thin_reflectance_rgb(m.cos_oh);
+            let f = self.ggx.d(m.h) * self.g2_over_cos_o(wo, wi) * 0.25;
+            return if m.transmitted { self.tint * ((1.0 - rgb.max_element()) * f) } else { rgb * f };
+        }
         if self.interface != Interface::Rough {
             return Rgb::ZERO;
         }
@@ -244,6 +260,14 @@ impl Dielectric {
 
     /// The solid-angle density of [`Dielectric::sample`] at `wi`: 0 for delta interfaces.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if self.interface == Interface::RoughThinWalled {
+            let Some(m) = self.sheet_microfacet(wo, wi) else { return 0.0 };
+            let p = self.thin_reflectance_rgb(m.cos_oh).max_element();
+            // Visible normals of wo's side over 4|wo·h|: the reflection's, then the choice.
+            let pdf = 2.0 / (wo.z.abs() + self.ggx_a(wo)) * self.ggx.d(m.h) * 0.25;
+            let pdf = pdf * if m.transmitted { 1.0 - p } else { p };
+            return if pdf.is_finite() { pdf } else { 0.0 };
+        }
         if self.interface != Interface::Rough {
             return 0.0;
         }
@@ -321,6 +345,38 @@ impl Dielectric {
                     }
                 })
             }
+            Interface::RoughThinWalled => {
+                let flip = if wo.z > 0.0 { 1.0 } else { -1.0 };
+                let h = self.ggx.sample_wm(wo * flip, u, SpecularSampling::SphericalCaps) * flip;
+                let cos_oh = wo.dot(h);
+                let r = reflect(wo, h);
+                if !(cos_oh > 0.0) || !(r.z * flip > 0.0) {
+                    return None;
+                }
+                let rgb = self.thin_reflectance_rgb(cos_oh);
+                let p = rgb.max_element();
+                let transmitted = uc >= p;
+                // The transmitted direction: the reflection mirrored through the sheet.
+                let wi = if transmitted { Vec3::new(r.x, r.y, -r.z) } else { r }.normalize_or_zero();
+                let pdf = self.pdf(wo, wi);
+                if !(pdf > 0.0) {
+                    return None;
+                }
+                // eval/pdf: G2/G1(wo), tinted when transmitted; under a film the colour over
+                // the probability max(R′).
+                let g1o = self.ggx.g1(wo);
+                let g = self.g2_over_cos_o(wo, wi) * wo.z.abs();
+                let w = if g1o > 0.0 { g / g1o } else { 0.0 };
+                let weight = if transmitted {
+                    self.tint * w
+                } else if self.film.is_some() {
+                    rgb * (w / p)
+                } else {
+                    Rgb::splat(w)
+                };
+                let rest = rescale(uc, p, !transmitted);
+                Some(ScatterSample { wi, weight, pdf, delta: false, transmitted, rest })
+            }
             Interface::Rough => {
                 let flip = if wo.z > 0.0 { 1.0 } else { -1.0 };
                 let h = self.ggx.sample_wm(wo * flip, u, SpecularSampling::SphericalCaps);
@@ -367,7 +423,9 @@ impl Dielectric {
 
     /// The fraction a shadow ray crossing this surface at cosine `cos` keeps: T′ = 1 − R′ times
     /// the tint for a thin-walled sheet, the tint for an interface of η = 1 (invisible); 0 for
-    /// any other interface of a solid (it blocks shadow rays, as Mitsuba's `volpath` does).
+    /// a rough sheet (its transmission is a lobe: light crosses it by scattering, found by
+    /// light samples from behind it) and for any other interface of a solid (it blocks shadow
+    /// rays, as Mitsuba's `volpath` does).
     pub fn shadow_transmittance(&self, cos: f32) -> Rgb {
         match self.interface {
             Interface::ThinWalled => self.tint * (1.0 - self.thin_reflectance_rgb(cos).max_element()),
@@ -403,6 +461,30 @@ impl Dielectric {
         if r.is_finite() { r } else { 0.0 }
     }
 
+    /// A rough sheet's microfacet normal for `wo` and `wi` (on either side): the half vector of
+    /// `wo` and `wi` mirrored to `wo`'s side, oriented to that side, with `wo·h`; `None` where
+    /// the BSDF is 0 (a direction in the plane, a normal seen from behind).
+    #[inline]
+    fn sheet_microfacet(&self, wo: Vec3, wi: Vec3) -> Option<SheetMicrofacet> {
+        let (zo, zi) = (wo.z, wi.z);
+        if zo == 0.0 || zi == 0.0 || !(zo.is_finite() && zi.is_finite()) {
+            return None;
+        }
+        let transmitted = (zo > 0.0) != (zi > 0.0);
+        let wr = if transmitted { Vec3::new(wi.x, wi.y, -wi.z) } else { wi };
+        let h = (wo + wr).normalize_or_zero();
+        if h == Vec3::ZERO {
+            return None;
+        }
+        // D is read on the upper hemisphere: the normal of wo's side, turned up.
+        let h = if h.z < 0.0 { -h } else { h };
+        let cos_oh = wo.dot(h);
+        if !(cos_oh * zo > 0.0 && wr.dot(h) * zo > 0.0) {
+            return None;
+        }
+        Some(SheetMicrofacet { h, cos_oh, transmitted })
+    }
+
     /// The microfacet normal joining `wo` and `wi` and its cosines, or `None` where the BSDF is
     /// 0 (a direction in the plane, a normal that either direction sees from behind).
     #[inline]
@@ -426,6 +508,12 @@ impl Dielectric {
         }
         Some(Microfacet { h, cos_oh, cos_ih, reflect, eta_it })
     }
+}
+
+struct SheetMicrofacet {
+    h: Vec3,
+    cos_oh: f32,
+    transmitted: bool,
 }
 
 struct Microfacet {

@@ -389,12 +389,13 @@ impl HitBsdf {
         matches!(self.core, Core::Transmissive(_, true))
     }
 
-    /// Light samples may arrive from behind the surface (a rough solid interface, diffuse
-    /// transmission).
+    /// Light samples may arrive from behind the surface (a rough solid interface, a rough
+    /// sheet, diffuse transmission).
     #[inline]
     pub fn transmits_light_samples(&self) -> bool {
         self.diffuse_transmission.is_some()
             || matches!(self.core, Core::Transmissive(b, true) if b.dielectric.interface == Interface::Rough)
+            || matches!(self.core, Core::Transmissive(b, _) if b.dielectric.interface == Interface::RoughThinWalled)
     }
 
     /// A scattered ray that crosses the surface changes medium: the interface of a solid, by
@@ -447,7 +448,7 @@ impl Core {
             return Self::Opaque(mr(params.metallic));
         }
         let roughness = params.roughness.clamp(0.0, 1.0);
-        // Sheets are smooth (the loader warns about rough ones).
+        // A sheet (no volume) is smooth or rough by the same rule as a solid's interface.
         let dielectric = Dielectric::new(
             params.ior,
             roughness * roughness,

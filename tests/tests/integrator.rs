@@ -760,6 +760,23 @@ fn same_samples_give_the_same_image_with_anisotropy() {
     same_samples_with(&glass, glass_settings());
 }
 
+/// Same samples, same image with a rough thin-walled sheet: the glass box's sheet at roughness
+/// 0.3 and 0.8 (its reflection and mirrored transmission lobes, light samples from behind it,
+/// shadow rays it blocks).
+#[test]
+fn same_samples_give_the_same_image_with_rough_sheets() {
+    for roughness in [0.3, 0.8] {
+        let mut glass =
+            furnace_scene::Scene::load(furnace_tests::data::reference("glass/glass_box.gltf")).unwrap();
+        let sheets: Vec<_> = glass.materials.iter_mut().filter(|m| m.is_thin_walled()).collect();
+        assert!(!sheets.is_empty(), "the glass box has a sheet");
+        for m in sheets {
+            m.roughness_factor = roughness;
+        }
+        same_samples_with(&glass, glass_settings());
+    }
+}
+
 /// DamagedHelmet under a white sky and a sun from the front left above (the file has no light:
 /// unlit, its same-samples images would be its emission alone). Neither light is sampled from a
 /// table, so the two backends' paths part only where their floats do.

@@ -1,5 +1,5 @@
 // furnace-gpu: twin of furnace-brdf's `dielectric` module — the exact unpolarised Fresnel
-// reflectance, smooth / rough (Walter et al. 2007) / thin-walled dielectric interfaces and the
+// reflectance, smooth / rough (Walter et al. 2007) / thin-walled (smooth or rough) dielectric interfaces and the
 // glTF transmissive mixture (`Transmissive`). Composed only for scenes with a transmissive
 // material. Requires brdf.wgsl (its GGX helpers and BsdfParams functions) before it.
 //
@@ -8,6 +8,7 @@
 const DIELECTRIC_SMOOTH: u32 = 0u;
 const DIELECTRIC_ROUGH: u32 = 1u;
 const DIELECTRIC_THIN: u32 = 2u;
+const DIELECTRIC_ROUGH_THIN: u32 = 3u;
 // `dielectric::ETA_MIN`, `ETA_MAX`, `ONE_BELOW`.
 const DIELECTRIC_ETA_MIN: f32 = 1e-2;
 const DIELECTRIC_ETA_MAX: f32 = 1e2;
@@ -68,10 +69,13 @@ struct Dielectric {
 fn dielectric_new(eta_in: f32, alpha: f32, thin_walled: bool, height_correlated: bool,
                   tint: vec3<f32>) -> Dielectric {
     let eta = brdf_sanitize(eta_in, DIELECTRIC_ETA_MIN, DIELECTRIC_ETA_MAX, 1.5);
+    let rough = alpha >= BSDF_ALPHA_MIN && eta != 1.0;
     var iface = DIELECTRIC_SMOOTH;
-    if thin_walled {
+    if thin_walled && rough {
+        iface = DIELECTRIC_ROUGH_THIN;
+    } else if thin_walled {
         iface = DIELECTRIC_THIN;
-    } else if alpha >= BSDF_ALPHA_MIN && eta != 1.0 {
+    } else if rough {
         iface = DIELECTRIC_ROUGH;
     }
     let a = brdf_sanitize(alpha, BSDF_ALPHA_MIN, 1.0, 1.0);
@@ -211,8 +215,113 @@ fn dielectric_microfacet(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> Microfa
     return Microfacet(h, cos_oh, cos_ih, eta_it, reflect, true);
 }
 
+// `!Dielectric::is_delta`: a rough interface or a rough sheet.
+fn dielectric_is_rough(d: Dielectric) -> bool {
+    return d.iface == DIELECTRIC_ROUGH || d.iface == DIELECTRIC_ROUGH_THIN;
+}
+
+// `Dielectric::sheet_microfacet`: the half vector of wo and wi mirrored to wo's side, turned up
+// (xyz), and wo·h (w); w = 0 where the BSDF is 0. `transmitted`: wi is on the other side.
+fn dielectric_sheet_microfacet(wo: vec3<f32>, wi: vec3<f32>) -> vec4<f32> {
+    let zo = wo.z;
+    let zi = wi.z;
+    if zo == 0.0 || zi == 0.0 || !brdf_is_finite(zo) || !brdf_is_finite(zi) {
+        return vec4<f32>(0.0);
+    }
+    var wr = wi;
+    if (zo > 0.0) != (zi > 0.0) {
+        wr = vec3<f32>(wi.x, wi.y, -wi.z);
+    }
+    var h = brdf_normalize_or(wo + wr, vec3<f32>(0.0));
+    if all(h == vec3<f32>(0.0)) {
+        return vec4<f32>(0.0);
+    }
+    if h.z < 0.0 {
+        h = -h;
+    }
+    let cos_oh = brdf_dot(wo, h);
+    if !(cos_oh * zo > 0.0 && brdf_dot(wr, h) * zo > 0.0) {
+        return vec4<f32>(0.0);
+    }
+    return vec4<f32>(h, cos_oh);
+}
+
+// `Dielectric::eval` of a rough sheet: the GGX reflection weighted R′, its mirror image T′·tint.
+fn dielectric_sheet_eval(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let m = dielectric_sheet_microfacet(wo, wi);
+    if m.w == 0.0 {
+        return vec3<f32>(0.0);
+    }
+    let rgb = dielectric_thin_reflectance(d, m.w);
+    let f = brdf_ggx_d(brdf_ggx_isotropic(d.alpha), m.xyz) * dielectric_g2_over_cos_o(d, wo, wi) * 0.25;
+    if (wo.z > 0.0) != (wi.z > 0.0) {
+        return d.tint * ((1.0 - brdf_max_element(rgb)) * f);
+    }
+    return rgb * f;
+}
+
+// `Dielectric::pdf` of a rough sheet: visible normals of wo's side over 4|wo·h|, times the choice.
+fn dielectric_sheet_pdf(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let m = dielectric_sheet_microfacet(wo, wi);
+    if m.w == 0.0 {
+        return 0.0;
+    }
+    let p = brdf_max_element(dielectric_thin_reflectance(d, m.w));
+    var pdf = 2.0 / (abs(wo.z) + brdf_ggx_a(brdf_ggx_isotropic(d.alpha), wo)) * brdf_ggx_d(brdf_ggx_isotropic(d.alpha), m.xyz) * 0.25;
+    if (wo.z > 0.0) != (wi.z > 0.0) {
+        pdf *= 1.0 - p;
+    } else {
+        pdf *= p;
+    }
+    if brdf_is_finite(pdf) {
+        return pdf;
+    }
+    return 0.0;
+}
+
+// `Dielectric::sample` of a rough sheet: a visible normal of wo's side, then reflection or its
+// mirror image through the sheet by R′ there.
+fn dielectric_sheet_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> ScatterSample {
+    let flip = select(-1.0, 1.0, wo.z > 0.0);
+    let h = brdf_ggx_sample_vndf_caps(brdf_ggx_isotropic(d.alpha), wo * flip, u) * flip;
+    let cos_oh = brdf_dot(wo, h);
+    let r = brdf_reflect(wo, h);
+    if !(cos_oh > 0.0) || !(r.z * flip > 0.0) {
+        return scatter_none();
+    }
+    let rgb = dielectric_thin_reflectance(d, cos_oh);
+    let p = brdf_max_element(rgb);
+    let transmitted = !(uc < p);
+    var wi = r;
+    if transmitted {
+        wi = vec3<f32>(r.x, r.y, -r.z);
+    }
+    wi = brdf_normalize_or(wi, vec3<f32>(0.0));
+    let pdf = dielectric_sheet_pdf(d, wo, wi);
+    if !(pdf > 0.0) {
+        return scatter_none();
+    }
+    let g1o = brdf_ggx_g1(brdf_ggx_isotropic(d.alpha), wo);
+    let g = dielectric_g2_over_cos_o(d, wo, wi) * abs(wo.z);
+    var weight = 0.0;
+    if g1o > 0.0 {
+        weight = g / g1o;
+    }
+    var w = vec3<f32>(weight);
+    if transmitted {
+        w = d.tint * weight;
+    }
+    // #if IRIDESCENCE
+    if !transmitted && d.film_factor > 0.0 { w = rgb * (weight / p); }
+    // #endif
+    return ScatterSample(wi, pdf, w, dielectric_rescale(uc, p, !transmitted), false, transmitted, true);
+}
+
 // `Dielectric::eval`: BSDF × |cos θi| (0 for delta interfaces).
 fn dielectric_eval(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    if d.iface == DIELECTRIC_ROUGH_THIN {
+        return dielectric_sheet_eval(d, wo, wi);
+    }
     if d.iface != DIELECTRIC_ROUGH {
         return vec3<f32>(0.0);
     }
@@ -237,6 +346,9 @@ fn dielectric_eval(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
 
 // `Dielectric::pdf`.
 fn dielectric_pdf(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    if d.iface == DIELECTRIC_ROUGH_THIN {
+        return dielectric_sheet_pdf(d, wo, wi);
+    }
     if d.iface != DIELECTRIC_ROUGH {
         return 0.0;
     }
@@ -293,6 +405,9 @@ fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
                                  dielectric_rescale(uc, r, true), true, false, true);
         }
         return ScatterSample(-wo, 1.0 - r, d.tint, dielectric_rescale(uc, r, false), true, true, true);
+    }
+    if d.iface == DIELECTRIC_ROUGH_THIN {
+        return dielectric_sheet_sample(d, wo, uc, u);
     }
     let flip = select(-1.0, 1.0, wo.z > 0.0);
     let h = brdf_ggx_sample_vndf_caps(brdf_ggx_isotropic(d.alpha), wo * flip, u);
@@ -359,12 +474,12 @@ struct Transmissive {
 }
 
 fn transmissive_is_delta(t: Transmissive) -> bool {
-    return t.weight >= 1.0 && t.d.iface != DIELECTRIC_ROUGH;
+    return t.weight >= 1.0 && !dielectric_is_rough(t.d);
 }
 
 fn transmissive_eval(t: Transmissive, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
     var f = vec3<f32>(0.0);
-    if t.d.iface == DIELECTRIC_ROUGH {
+    if dielectric_is_rough(t.d) {
         f += t.weight * dielectric_eval(t.d, wo, wi);
     }
     if t.weight < 1.0 {
@@ -375,7 +490,7 @@ fn transmissive_eval(t: Transmissive, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32>
 
 fn transmissive_pdf(t: Transmissive, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
     var p = 0.0;
-    if t.d.iface == DIELECTRIC_ROUGH {
+    if dielectric_is_rough(t.d) {
         p += t.weight * dielectric_pdf(t.d, wo, wi);
     }
     if t.weight < 1.0 {

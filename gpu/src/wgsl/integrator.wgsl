@@ -403,7 +403,8 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
     let leave = offset_ray_origin_scaled(surface.position, surface.geometric, params.offset_scale);
     // #if TRANSMISSION
     let behind = offset_ray_origin_scaled(surface.position, -surface.geometric, params.offset_scale);
-    bsdf.two_sided = volume && bsdf.t.d.iface == DIELECTRIC_ROUGH;
+    // HitBsdf::transmits_light_samples: a rough solid interface or a rough sheet.
+    bsdf.two_sided = (volume && bsdf.t.d.iface == DIELECTRIC_ROUGH) || bsdf.t.d.iface == DIELECTRIC_ROUGH_THIN;
     // #if DIFFUSE_TRANSMISSION
     // HitBsdf::transmits_light_samples: diffuse transmission is lit from behind too.
     bsdf.two_sided = bsdf.two_sided || any(bsdf.dt != vec3<f32>(0.0));

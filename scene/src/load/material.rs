@@ -126,12 +126,6 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
     let transmissive = transmission.factor > 0.0;
     // Light passes through either way: KHR_materials_volume makes the surface a solid's.
     let passes_light = transmissive || diffuse_transmission.is_some();
-    if transmissive && !transmission.volume && roughness_factor > 0.0 {
-        ctx.warn(
-            format!("{p}.extensions.KHR_materials_transmission"),
-            "rough thin-walled transmission is not supported: the sheet is rendered smooth",
-        );
-    }
     let material = Material {
         name: m.name().map(str::to_string),
         base_color_factor: pbr.base_color_factor,

@@ -7,7 +7,7 @@
 //!   and relative 1e-1…1e-7 of the critical angle, for η ∈ {1, 1 ± 1e-6, 1.33, 1.5, 1/1.5, 2.4,
 //!   ETA_MIN, ETA_MAX}; the same records run smooth, thin and rough (α 0.3) interfaces with
 //!   `wo.z` = that cosine, so Fresnel's edges are also sampled through.
-//! * `dielectric_new` against `Dielectric::new`: η, α, the interface kind (`iface` 0/1/2 =
+//! * `dielectric_new` against `Dielectric::new`: η, α, the interface kind (`iface` 0/1/2/3 =
 //!   Smooth/Rough/ThinWalled), the masking form and the tint, bit for bit, including NaN,
 //!   ±∞, negative, zero and out-of-range η, α and tint, α at ALPHA_MIN ± 1 ulp and η = 1 (smooth
 //!   whatever α).
@@ -288,7 +288,8 @@ impl Model {
     /// Whether some part samples directions that rounding can decide (a rough dielectric or
     /// the opaque part).
     fn has_rough_part(&self) -> bool {
-        self.dielectric().interface == Interface::Rough || self.opaque().is_some()
+        matches!(self.dielectric().interface, Interface::Rough | Interface::RoughThinWalled)
+            || self.opaque().is_some()
     }
 }
 
@@ -298,6 +299,7 @@ fn interface_code(i: Interface) -> u32 {
         Interface::Smooth => 0,
         Interface::Rough => 1,
         Interface::ThinWalled => 2,
+        Interface::RoughThinWalled => 3,
     }
 }
 
@@ -572,19 +574,20 @@ fn cases() -> (Vec<Case>, Vec<String>) {
         });
     }
 
-    // 3. Rough interfaces: α × η × masking.
-    for alpha in [1e-4f32, 0.01, 0.1, 0.3, 1.0] {
+    // 3. Rough interfaces and rough sheets: α × η × masking.
+    for (alpha, thin) in [1e-4f32, 0.01, 0.1, 0.3, 1.0].into_iter().flat_map(|a| [(a, false), (a, true)]) {
         for eta in [1.5f32, 1.0 / 1.5, 1.33] {
             for masking in [Masking::Separable, Masking::HeightCorrelated] {
                 let m = if masking == Masking::Separable { "sep" } else { "hc" };
-                let g = group(format!("rough α={alpha} η={eta:.4} {m}"));
-                for _ in 0..ROUGH_RECORDS {
+                let kind = if thin { "rough sheet" } else { "rough" };
+                let g = group(format!("{kind} α={alpha} η={eta:.4} {m}"));
+                for _ in 0..ROUGH_RECORDS / if thin { 2 } else { 1 } {
                     let wo = dir(signed_cos(&mut rng), TAU * rng.f64());
                     cases.push(Case {
                         group: g,
                         eta,
                         alpha,
-                        thin: false,
+                        thin,
                         masking,
                         tint: random_tint(&mut rng),
                         opaque: None,
@@ -600,12 +603,13 @@ fn cases() -> (Vec<Case>, Vec<String>) {
         }
     }
 
-    // 4. Smooth (α below ALPHA_MIN, or any α at η = 1) and thin-walled interfaces.
+    // 4. Smooth (α below ALPHA_MIN, or any α at η = 1) and thin-walled interfaces (smooth ones:
+    // α below ALPHA_MIN, or any α at η = 1; rough sheets are in 3).
     for eta in [1.5f32, 1.0 / 1.5, 1.33, 2.4, 1.0] {
         for thin in [false, true] {
             let g = group(format!("{} η={eta:.4}", if thin { "thin" } else { "smooth" }));
             for _ in 0..DELTA_RECORDS {
-                let alpha = if thin || eta == 1.0 {
+                let alpha = if eta == 1.0 {
                     rng.pick(&[0.0, 0.01, 0.5, 1.0])
                 } else {
                     rng.pick(&[0.0, 1e-5, ALPHA_MIN.next_down(), f32::NAN])
@@ -633,14 +637,13 @@ fn cases() -> (Vec<Case>, Vec<String>) {
     // 5. The transmissive mixture: g × interface kind, the opaque part's options all 12.
     let options = all_options();
     for weight in [0.3f32, 0.7, 1.0] {
-        for kind in ["smooth", "rough", "thin"] {
+        for kind in ["smooth", "rough", "thin", "rough sheet"] {
             let g = group(format!("transmissive g={weight} {kind}"));
             for _ in 0..TRANSMISSIVE_RECORDS {
                 let eta = rng.pick(&[1.5f32, 1.33, 1.0 / 1.5]);
                 let alpha = match kind {
-                    "rough" => rng.pick(&[0.01f32, 0.1, 0.3, 1.0]),
-                    "smooth" => 0.0,
-                    _ => rng.f32(),
+                    "rough" | "rough sheet" => rng.pick(&[0.01f32, 0.1, 0.3, 1.0]),
+                    _ => 0.0,
                 };
                 let wo = dir(signed_cos(&mut rng), TAU * rng.f64());
                 let params = random_params(&mut rng);
@@ -650,7 +653,7 @@ fn cases() -> (Vec<Case>, Vec<String>) {
                     group: g,
                     eta,
                     alpha,
-                    thin: kind == "thin",
+                    thin: kind == "thin" || kind == "rough sheet",
                     masking: if rng.chance(0.5) { Masking::Separable } else { Masking::HeightCorrelated },
                     tint: random_tint(&mut rng),
                     opaque: Some(Opaque { params, options: opts, weight }),
@@ -670,9 +673,10 @@ fn cases() -> (Vec<Case>, Vec<String>) {
     let g = group("uc at a threshold".into());
     for k in 0..THRESHOLD_RECORDS {
         let eta = rng.pick(&[1.5f32, 1.33, 1.0 / 1.5, 2.4]);
-        let (thin, alpha) = match k % 4 {
+        let (thin, alpha) = match k % 5 {
             0 => (false, 0.0),
             1 => (true, 0.0),
+            2 => (true, rng.pick(&[0.01f32, 0.1, 0.3, 1.0])),
             _ => (false, rng.pick(&[1e-4f32, 0.01, 0.1, 0.3, 1.0])),
         };
         let opaque = rng.chance(0.4).then(|| Opaque {
@@ -817,6 +821,10 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
         p_d = fresnel_dielectric(wo.z, d.eta).reflectance;
     } else if d.iface == DIELECTRIC_THIN {
         p_d = thin_reflectance(wo.z, d.eta);
+    } else if d.iface == DIELECTRIC_ROUGH_THIN {
+        let flip = select(-1.0, 1.0, wo.z > 0.0);
+        let h = brdf_ggx_sample_vndf_caps(brdf_ggx_isotropic(d.alpha), wo * flip, u) * flip;
+        p_d = thin_reflectance(brdf_dot(wo, h), d.eta);
     } else {
         let flip = select(-1.0, 1.0, wo.z > 0.0);
         let h = brdf_ggx_sample_vndf_caps(brdf_ggx_isotropic(d.alpha), wo * flip, u);
@@ -985,6 +993,11 @@ fn reflection_probability(d: &Dielectric, wo: Vec3, u: Vec2) -> f32 {
             let flip = if wo.z > 0.0 { 1.0 } else { -1.0 };
             let h = d.ggx.sample_wm(wo * flip, u, SpecularSampling::SphericalCaps);
             fresnel_dielectric(wo.dot(h), d.eta).reflectance
+        }
+        Interface::RoughThinWalled => {
+            let flip = if wo.z > 0.0 { 1.0 } else { -1.0 };
+            let h = d.ggx.sample_wm(wo * flip, u, SpecularSampling::SphericalCaps) * flip;
+            thin_reflectance(wo.dot(h), d.eta)
         }
     }
 }
@@ -1563,6 +1576,7 @@ fn constants_match_rust() {
         ("DIELECTRIC_SMOOTH", Interface::Smooth),
         ("DIELECTRIC_ROUGH", Interface::Rough),
         ("DIELECTRIC_THIN", Interface::ThinWalled),
+        ("DIELECTRIC_ROUGH_THIN", Interface::RoughThinWalled),
     ] {
         assert_eq!(constant(name), naga::Literal::U32(interface_code(i)), "{name}");
     }
