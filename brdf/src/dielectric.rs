@@ -364,9 +364,7 @@ impl Dielectric {
                 }
                 // eval/pdf: G2/G1(wo), tinted when transmitted; under a film the colour over
                 // the probability max(R′).
-                let g1o = self.ggx.g1(wo);
-                let g = self.g2_over_cos_o(wo, wi) * wo.z.abs();
-                let w = if g1o > 0.0 { g / g1o } else { 0.0 };
+                let w = self.g2_over_g1(wo, wi);
                 let weight = if transmitted {
                     self.tint * w
                 } else if self.film.is_some() {
@@ -400,9 +398,7 @@ impl Dielectric {
                     return None;
                 }
                 // eval/pdf in closed form: G2/G1(wo), times η_ti² and the tint when refracted.
-                let g1o = self.ggx.g1(wo);
-                let g = self.g2_over_cos_o(wo, wi) * wo.z.abs();
-                let mut weight = if g1o > 0.0 { g / g1o } else { 0.0 };
+                let mut weight = self.g2_over_g1(wo, wi);
                 if transmitted {
                     let eta_ti = if wo.z > 0.0 { 1.0 / self.eta } else { self.eta };
                     weight *= eta_ti * eta_ti;
@@ -446,6 +442,15 @@ impl Dielectric {
     fn ggx_a(&self, w: Vec3) -> f32 {
         let a2 = self.ggx.alpha() * self.ggx.alpha();
         (w.z * w.z + a2 * (w.x * w.x + w.y * w.y)).sqrt()
+    }
+
+    /// `G2(wo, wi)/G1(wo)`: the weight of a visible-normal sample before its Fresnel and tint
+    /// (0 where G1 is).
+    #[inline]
+    fn g2_over_g1(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let g1o = self.ggx.g1(wo);
+        let g = self.g2_over_cos_o(wo, wi) * wo.z.abs();
+        if g1o > 0.0 { g / g1o } else { 0.0 }
     }
 
     /// `G2(wo, wi)/|cos θo|` of the chosen masking form, with no 1/cos singularity:

@@ -47,6 +47,20 @@ fn invocation_index(gid: vec3<u32>, groups: vec3<u32>) -> u32 {
 }
 "#;
 
+/// A kernel over the WGSL BSDFs: [`PREAMBLE`], the sampling module, the brdf module's generated
+/// declarations and the module itself with every feature composed (the isotropic and the
+/// anisotropic GGX, the thin film), then `body`.
+pub fn brdf_kernel(body: &str) -> String {
+    use furnace_gpu::wgsl;
+    wgsl::compose(&[
+        PREAMBLE,
+        wgsl::SAMPLING,
+        &furnace_gpu::brdf::declarations(),
+        &wgsl::select(wgsl::BRDF, |_| true),
+        body,
+    ])
+}
+
 /// Workgroups along x per row of a 2-D dispatch (WebGPU guarantees 65535).
 const ROW: u32 = 65_535;
 

@@ -182,13 +182,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     output[o + 11u] = s.lobe;
 }
 "#;
-    wgsl::compose(&[
-        kernel::PREAMBLE,
-        wgsl::SAMPLING,
-        &brdf::declarations(),
-        &wgsl::select(wgsl::BRDF, |_| true),
-        body,
-    ])
+    kernel::brdf_kernel(body)
 }
 
 fn words<T: bytemuck::Pod>(v: &[T]) -> Vec<u32> {
@@ -872,13 +866,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     }
 }
 "#;
-    let src = wgsl::compose(&[
-        kernel::PREAMBLE,
-        wgsl::SAMPLING,
-        &brdf::declarations(),
-        &wgsl::select(wgsl::BRDF, |_| true),
-        body,
-    ]);
+    let src = kernel::brdf_kernel(body);
     let table = brdf::turquin_table();
     let out = kernel::run_with(&ctx, &src, &input, &[&words(&table)], cases.len() * OUT, cases.len() as u32)
         .unwrap();
@@ -956,13 +944,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     output[i] = bitcast<u32>(e);
 }
 "#;
-    let src = wgsl::compose(&[
-        kernel::PREAMBLE,
-        wgsl::SAMPLING,
-        &brdf::declarations(),
-        &wgsl::select(wgsl::BRDF, |_| true),
-        body,
-    ]);
+    let src = kernel::brdf_kernel(body);
     let table = brdf::turquin_table();
     let out =
         kernel::run_with(&ctx, &src, &input, &[&words(&table)], cases.len(), cases.len() as u32).unwrap();

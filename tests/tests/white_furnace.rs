@@ -34,7 +34,6 @@
 
 use furnace_brdf::{Bsdf, MetallicRoughness, SpecularOptions, SpecularSampling};
 use furnace_gpu::brdf::{self, BsdfParams};
-use furnace_gpu::wgsl;
 use furnace_tests::gpu::{self as kernel, test_context};
 use furnace_tests::lobes::{LOBES, WhiteConfig};
 use glam::{Vec2, Vec3};
@@ -73,13 +72,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
     output[i] = bitcast<u32>(w);
 }
 "#;
-    wgsl::compose(&[
-        kernel::PREAMBLE,
-        wgsl::SAMPLING,
-        &brdf::declarations(),
-        &wgsl::select(wgsl::BRDF, |_| true),
-        body,
-    ])
+    kernel::brdf_kernel(body)
 }
 
 /// The bound of the grid's own integration error, |grid mean − analytic| (see the module

@@ -174,6 +174,16 @@ fn dielectric_g2_over_cos_o(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 
     return 0.0;
 }
 
+// `Dielectric::g2_over_g1`: G2(wo, wi)/G1(wo), 0 where G1 is.
+fn dielectric_g2_over_g1(d: Dielectric, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let g1o = brdf_ggx_g1(brdf_ggx_isotropic(d.alpha), wo);
+    let g = dielectric_g2_over_cos_o(d, wo, wi) * abs(wo.z);
+    if g1o > 0.0 {
+        return g / g1o;
+    }
+    return 0.0;
+}
+
 // `Dielectric::microfacet`: h (xyz) and validity; the cosines and the lobe are recomputed.
 struct Microfacet {
     h: vec3<f32>,
@@ -301,12 +311,7 @@ fn dielectric_sheet_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) 
     if !(pdf > 0.0) {
         return scatter_none();
     }
-    let g1o = brdf_ggx_g1(brdf_ggx_isotropic(d.alpha), wo);
-    let g = dielectric_g2_over_cos_o(d, wo, wi) * abs(wo.z);
-    var weight = 0.0;
-    if g1o > 0.0 {
-        weight = g / g1o;
-    }
+    let weight = dielectric_g2_over_g1(d, wo, wi);
     var w = vec3<f32>(weight);
     if transmitted {
         w = d.tint * weight;
@@ -430,12 +435,7 @@ fn dielectric_sample(d: Dielectric, wo: vec3<f32>, uc: f32, u: vec2<f32>) -> Sca
     if !(pdf > 0.0) {
         return scatter_none();
     }
-    let g1o = brdf_ggx_g1(brdf_ggx_isotropic(d.alpha), wo);
-    let g = dielectric_g2_over_cos_o(d, wo, wi) * abs(wo.z);
-    var weight = 0.0;
-    if g1o > 0.0 {
-        weight = g / g1o;
-    }
+    let weight = dielectric_g2_over_g1(d, wo, wi);
     var w = vec3<f32>(weight);
     if transmitted {
         var eta_ti = d.eta;
