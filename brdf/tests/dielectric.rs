@@ -1472,13 +1472,13 @@ fn no_nan_inf_or_negative_for_degenerate_inputs() {
                         d.interface, d.eta
                     );
                     let expected_eta = if eta.is_nan() { 1.5 } else { eta.clamp(ETA_MIN, ETA_MAX) };
-                    let expected_interface = if thin {
-                        Interface::ThinWalled
-                    } else if alpha >= ALPHA_MIN && expected_eta != 1.0 {
-                        // η = 1 is invisible whatever α: smooth.
-                        Interface::Rough
-                    } else {
-                        Interface::Smooth
+                    // η = 1 is invisible whatever α: smooth (a smooth sheet when thin).
+                    let rough = alpha >= ALPHA_MIN && expected_eta != 1.0;
+                    let expected_interface = match (thin, rough) {
+                        (true, true) => Interface::RoughThinWalled,
+                        (true, false) => Interface::ThinWalled,
+                        (false, true) => Interface::Rough,
+                        (false, false) => Interface::Smooth,
                     };
                     if d.eta != expected_eta || d.interface != expected_interface {
                         failures.push(format!("{name}: clamped to eta {} and {:?}", d.eta, d.interface));
