@@ -312,15 +312,7 @@ fn white_furnace() {
             let layered = cc > 0.0 || sheen > 0.0;
             for theta in [0.0f32, 45.0, 75.0, 89.0] {
                 let wo = dir(theta, 0.0);
-                let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-                for _ in 0..SAMPLES {
-                    let (u, uc) = (Vec2::new(rng.f32(), rng.f32()), rng.f32());
-                    let w = bsdf.sample(wo, u, || uc).map_or(0.0, |s| f64::from(s.weight.max_element()));
-                    sum += w;
-                    sum2 += w * w;
-                }
-                let mean = sum / SAMPLES as f64;
-                let sigma = ((sum2 / SAMPLES as f64 - mean * mean).max(0.0) / SAMPLES as f64).sqrt();
+                let (mean, sigma) = crate::common::sampled_albedo(&bsdf, wo, &mut rng, SAMPLES);
                 // Without layers the lobes are chosen in proportion to their albedos, so every
                 // sample weighs 1 up to f32 rounding (1e-6), except at dt = 1, where the empty
                 // core keeps its 5 % floor (weight 0) and the lobe weighs 1/0.95: 5σ two-sided

@@ -268,16 +268,7 @@ fn layered_energy_at_most_one() {
         let bsdf = HitBsdf::new(&params, SpecularOptions::default());
         for theta in [0.0f32, 45.0, 75.0, 85.0] {
             let wo = dir(theta, 0.0);
-            let (mut sum, mut sum2) = (0.0f64, 0.0f64);
-            for _ in 0..SAMPLES {
-                let u = glam::Vec2::new(rng.f32(), rng.f32());
-                let uc = rng.f32();
-                let w = bsdf.sample(wo, u, || uc).map_or(0.0, |s| s.weight.max_element() as f64);
-                sum += w;
-                sum2 += w * w;
-            }
-            let mean = sum / SAMPLES as f64;
-            let sigma = ((sum2 / SAMPLES as f64 - mean * mean).max(0.0) / SAMPLES as f64).sqrt();
+            let (mean, sigma) = crate::common::sampled_albedo(&bsdf, wo, &mut rng, SAMPLES);
             // 5σ (one-sided, 3e-7 per check over 36 checks) plus the sheen table's error (2e-3
             // of E, `sheen_table_interpolation`) plus the Turquin table's (0.13 %).
             let bound = 1.0 + 5.0 * sigma + 2e-3 + 1.3e-3;

@@ -89,3 +89,24 @@ pub fn eval_against_oracle(
     }
     (worst, report)
 }
+
+/// The directional albedo of `bsdf` at `wo` by `n` samples (the largest channel of each
+/// weight; a failed sample weighs 0) drawn from `rng` (u, then uc), and the standard error of
+/// that mean.
+pub fn sampled_albedo(
+    bsdf: &furnace_brdf::HitBsdf,
+    wo: glam::Vec3,
+    rng: &mut furnace_tests::Rng,
+    n: usize,
+) -> (f64, f64) {
+    let (mut sum, mut sum2) = (0.0f64, 0.0f64);
+    for _ in 0..n {
+        let u = glam::Vec2::new(rng.f32(), rng.f32());
+        let uc = rng.f32();
+        let w = bsdf.sample(wo, u, || uc).map_or(0.0, |s| f64::from(s.weight.max_element()));
+        sum += w;
+        sum2 += w * w;
+    }
+    let mean = sum / n as f64;
+    (mean, ((sum2 / n as f64 - mean * mean).max(0.0) / n as f64).sqrt())
+}
