@@ -18,6 +18,8 @@
 //!   material's specular lobe ([`MetallicRoughness::new_iridescent`]).
 //! * [`DiffuseTransmission`] — KHR_materials_diffuse_transmission's Lambertian transmission
 //!   lobe, the part of the diffuse base that leaves on the other side.
+//! * [`spectrum`] — KHR_materials_dispersion: the index per wavelength from the Abbe number,
+//!   and the wavelength (with its RGB weight) a path is traced at past a dispersive solid.
 //! * [`Clearcoat`] and [`Sheen`] — KHR_materials_clearcoat's white GGX coat and
 //!   KHR_materials_sheen's Charlie lobe, the layers above the material.
 //! * [`HitBsdf`] — the glTF material at a hit as one layered BSDF: the lobes above, their
@@ -76,6 +78,7 @@ mod lambert;
 pub mod layered;
 mod metallic_roughness;
 pub mod sheen;
+pub mod spectrum;
 mod specular;
 #[rustfmt::skip]
 mod tables;

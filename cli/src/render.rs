@@ -137,8 +137,11 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         crate::env::Applied::Rule(d) => Some(d.record()),
         _ => None,
     };
-    let samples_lights = scene.samples_lights();
-    let chooses_point_lights = args.settings.settings.point_lights.chooses(scene.point_lights().count());
+    let layout_uses = furnace_render::resume::LayoutUse {
+        samples_lights: scene.samples_lights(),
+        chooses_point_lights: args.settings.settings.point_lights.chooses(scene.point_lights().count()),
+        samples_wavelengths: scene.disperses(),
+    };
     let scene_hash = scene.content_hash();
     let (camera, view) = select_camera(&scene, &args)?;
     let (width, height) = image_size(&view, args.width, args.height)?;
@@ -173,15 +176,9 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
             let path = a.resume.clone().unwrap_or_default();
             let recorded = resume::identity(&file.metadata, file.width, file.height);
             let now = resume::identity(&job.metadata(0, 0.0, 0), width, height);
-            resume::check_same(&path, &file.metadata, &recorded, &now, samples_lights, chooses_point_lights)
-                .map_err(|e| {
-                    resume::variant_hint(
-                        e,
-                        &file.metadata,
-                        a.load.variant.as_deref(),
-                        !scene.variants.is_empty(),
-                    )
-                })?;
+            resume::check_same(&path, &file.metadata, &recorded, &now, layout_uses).map_err(|e| {
+                resume::variant_hint(e, &file.metadata, a.load.variant.as_deref(), !scene.variants.is_empty())
+            })?;
             let saved = restore(&path, file)?;
             Some(saved)
         }

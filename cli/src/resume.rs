@@ -207,16 +207,11 @@ pub fn check_same(
     meta: &Metadata,
     recorded: &[(&'static str, Option<String>)],
     now: &[(&'static str, Option<String>)],
-    samples_lights: bool,
-    chooses_point_lights: bool,
+    uses: resume::LayoutUse,
 ) -> Result<(), String> {
-    resume::check_layout(
-        meta.extra.get(SAMPLER_LAYOUT).map(String::as_str),
-        samples_lights,
-        chooses_point_lights,
-    )
-    .and_then(|()| resume::check_same(recorded, now))
-    .map_err(|e| format!("{}: {e}", file.display()))
+    resume::check_layout(meta.extra.get(SAMPLER_LAYOUT).map(String::as_str), uses)
+        .and_then(|()| resume::check_same(recorded, now))
+        .map_err(|e| format!("{}: {e}", file.display()))
 }
 
 /// A refused resume's `message` with what the file says of `--variant`, where the scene's content

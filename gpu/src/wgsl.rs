@@ -31,6 +31,11 @@ pub const DIELECTRIC: &str = include_str!("wgsl/dielectric.wgsl");
 /// [`BRDF`]; composed for scenes with diffuse transmission only.
 pub const DIFFUSE_TRANSMISSION: &str = include_str!("wgsl/diffuse_transmission.wgsl");
 
+/// `furnace-brdf`'s spectrum module (KHR_materials_dispersion): the path's wavelength and the
+/// index at it. Needs [`DIELECTRIC`] and the tables of `furnace_brdf::spectrum::wgsl`;
+/// composed for scenes with a dispersive material only.
+pub const SPECTRUM: &str = include_str!("wgsl/spectrum.wgsl");
+
 /// `furnace-scene`'s per-hit code over the scene buffers of [`crate::scene`]: attribute
 /// interpolation (octahedral normals, UVs, tangents), bilinear RGBA8 texture lookups with wrap
 /// modes, sRGB decode and KHR_texture_transform, `Material::evaluate`, furnace-cpu's

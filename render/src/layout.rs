@@ -13,10 +13,12 @@
 //! | `L + 4 + 8k`, `L + 5 + 8k` | direction in the sun's disc ([`LIGHT_SUN_DISC`]) |
 //! | `L + 6 + 8k`, `L + 7 + 8k` | the environment map's light sample: row, then column ([`LIGHT_ENVIRONMENT`]) |
 //! | `P + k` | the point or spot light chosen at event `k` (`--point-lights one`; [`point_light`]) |
+//! | `W` | the path's wavelength, drawn at its first dispersive solid ([`wavelength`]) |
 //!
 //! where `L = 4·(bounces + 1)` ([`light_block`]) is the first group of four after every
 //! event's BSDF dimensions and `P = L + 8·bounces` ([`point_light_block`]) the first after the
-//! light block (light samples are taken at events `0 … bounces − 1`). The light dimensions come
+//! light block (light samples are taken at events `0 … bounces − 1`), and `W = P + bounces` the
+//! one after the point-light choices. The light dimensions come
 //! after the whole BSDF block, not interleaved with it, so that a scene that samples no light
 //! (no emitters, no sun disc) reads exactly the dimensions it read before they existed: its
 //! images are the same bits; the point-light choices come after both, for the same reason.
@@ -33,10 +35,10 @@
 
 /// The version of the layout below. Version 1 is the layout of every furnace before the version
 /// was recorded, so a saved render without a recorded version is of version 1. Version 2 added
-/// the light block, version 3 the point-light choices; neither changed a dimension of the
-/// versions before, so a render of an earlier version that reads none of the added dimensions
+/// the light block, version 3 the point-light choices, version 4 the wavelength; none changed a
+/// dimension of the versions before, so a render of an earlier version that reads none of the added dimensions
 /// is a render of this one too ([`crate::resume::check_layout`]).
-pub const SAMPLER_LAYOUT_VERSION: u32 = 3;
+pub const SAMPLER_LAYOUT_VERSION: u32 = 4;
 
 /// First of the two dimensions of the camera ray's position inside the pixel.
 pub const DIM_PIXEL: u32 = 0;
@@ -109,6 +111,14 @@ pub const fn point_light_block(bounces: u32) -> u32 {
 #[inline]
 pub const fn point_light(bounces: u32, event: u32) -> u32 {
     point_light_block(bounces).wrapping_add(event)
+}
+
+/// The dimension of the path's wavelength in a render of `bounces` scattering events (one per
+/// path, drawn where it first meets a dispersive solid): past the point-light choices. Wraps
+/// like the GPU's `u32`.
+#[inline]
+pub const fn wavelength(bounces: u32) -> u32 {
+    point_light_block(bounces).wrapping_add(bounces)
 }
 
 /// The layout as WGSL `const` declarations (`DIM_PIXEL`, `DIM_FIRST_BOUNCE`, `DIMS_PER_BOUNCE`,

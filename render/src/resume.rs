@@ -157,25 +157,34 @@ pub fn check_same(
     if differences.is_empty() { Ok(()) } else { Err(ResumeError::Different(differences)) }
 }
 
+/// What a render's paths read of the dimensions later layout versions added: a file of an
+/// earlier version is continued where the render reads none of them.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct LayoutUse {
+    /// The scene samples lights (emitters or a sun disc): the light block of version 2.
+    pub samples_lights: bool,
+    /// The render chooses one point or spot light per event: the choices of version 3.
+    pub chooses_point_lights: bool,
+    /// A material disperses (KHR_materials_dispersion): the path's wavelength of version 4.
+    pub samples_wavelengths: bool,
+}
+
 /// `Err` unless the recorded sampler layout (`None`: not recorded, which is layout 1, the layout
 /// before the version was recorded) traces the paths [`SAMPLER_LAYOUT_VERSION`] traces now: the
-/// same version; or layout 2 for a render that chooses no point light (`chooses_point_lights`
-/// false: `--point-lights all`, or no point lights), whose paths version 3 left unchanged; or
-/// layout 1 where, besides, the scene samples no light (`samples_lights` false: no emitters,
-/// no sun disc), whose paths version 2 left unchanged.
+/// same version, or an earlier one whose paths the later versions left unchanged for this
+/// render ([`LayoutUse`]: version 3 without a dispersive material, 2 besides without point-light
+/// choices, 1 besides without light samples).
 ///
 /// # Errors
 /// [`ResumeError::Layout`].
-pub fn check_layout(
-    recorded: Option<&str>,
-    samples_lights: bool,
-    chooses_point_lights: bool,
-) -> Result<(), ResumeError> {
+pub fn check_layout(recorded: Option<&str>, uses: LayoutUse) -> Result<(), ResumeError> {
     let recorded = recorded.unwrap_or("1");
+    let LayoutUse { samples_lights, chooses_point_lights, samples_wavelengths } = uses;
     match recorded.trim().parse::<u32>() {
         Ok(SAMPLER_LAYOUT_VERSION) => Ok(()),
-        Ok(2) if !chooses_point_lights => Ok(()),
-        Ok(1) if !samples_lights && !chooses_point_lights => Ok(()),
+        Ok(3) if !samples_wavelengths => Ok(()),
+        Ok(2) if !chooses_point_lights && !samples_wavelengths => Ok(()),
+        Ok(1) if !samples_lights && !chooses_point_lights && !samples_wavelengths => Ok(()),
         _ => Err(ResumeError::Layout { recorded: recorded.to_string(), now: SAMPLER_LAYOUT_VERSION }),
     }
 }
@@ -258,15 +267,37 @@ mod tests {
 
     #[test]
     fn another_layout_is_refused() {
-        assert!(check_layout(None, false, false).is_ok(), "files without a version are layout 1");
-        assert!(check_layout(None, true, false).is_err(), "layout 1 never sampled lights");
-        assert!(check_layout(None, false, true).is_err(), "layout 1 never chose point lights");
-        assert!(check_layout(Some("2"), true, false).is_ok(), "layout 3 added only the point-light choices");
-        assert!(check_layout(Some("2"), false, true).is_err(), "layout 2 never chose point lights");
-        assert!(check_layout(Some(&SAMPLER_LAYOUT_VERSION.to_string()), true, true).is_ok());
-        let e = check_layout(Some("4"), false, false).unwrap_err();
-        assert!(e.to_string().contains("layout 4"), "{e}");
-        assert!(check_layout(Some("two"), false, false).is_err());
+        let uses = |samples_lights, chooses_point_lights, samples_wavelengths| LayoutUse {
+            samples_lights,
+            chooses_point_lights,
+            samples_wavelengths,
+        };
+        let none = LayoutUse::default();
+        assert!(check_layout(None, none).is_ok(), "files without a version are layout 1");
+        assert!(check_layout(None, uses(true, false, false)).is_err(), "layout 1 never sampled lights");
+        assert!(check_layout(None, uses(false, true, false)).is_err(), "layout 1 never chose point lights");
+        assert!(
+            check_layout(Some("2"), uses(true, false, false)).is_ok(),
+            "layout 3 added only the point-light choices"
+        );
+        assert!(
+            check_layout(Some("2"), uses(false, true, false)).is_err(),
+            "layout 2 never chose point lights"
+        );
+        assert!(
+            check_layout(Some("3"), uses(true, true, false)).is_ok(),
+            "layout 4 added only the wavelength"
+        );
+        for v in ["1", "2", "3"] {
+            assert!(
+                check_layout(Some(v), uses(false, false, true)).is_err(),
+                "layout {v} never drew a wavelength"
+            );
+        }
+        assert!(check_layout(Some(&SAMPLER_LAYOUT_VERSION.to_string()), uses(true, true, true)).is_ok());
+        let e = check_layout(Some("5"), none).unwrap_err();
+        assert!(e.to_string().contains("layout 5"), "{e}");
+        assert!(check_layout(Some("two"), none).is_err());
     }
 
     #[test]

@@ -57,7 +57,7 @@ impl Scene {
         }
         // The small parts by their Debug text: every field, floats in round-trip precision.
         // A lit material's `unlit: false` (its last field), a material's empty layers, absent
-        // specular textures, absent iridescence, diffuse transmission and anisotropy are left out:
+        // specular textures, absent iridescence, diffuse transmission and anisotropy and a dispersion of 0 are left out:
         // files without them hash as they did before the fields existed.
         let no_layers = format!(", layers: {:?}", crate::MaterialLayers::default());
         let no_specular_textures = format!(", specular_textures: {:?}", crate::SpecularTextures::default());
@@ -67,6 +67,7 @@ impl Scene {
             .replace(", iridescence: None", "")
             .replace(", diffuse_transmission: None", "")
             .replace(", anisotropy: None", "")
+            .replace(", dispersion: 0.0", "")
             .replace(", unlit: false }", " }");
         let small = format!("{materials}|{:?}|{:?}|{}", self.textures, self.cameras, self.lights_debug());
         h.len(small.len());

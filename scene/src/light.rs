@@ -418,6 +418,12 @@ impl Scene {
         self.suns().any(Sun::is_disc) || self.environment().is_some() || crate::Emitters::new(self).is_some()
     }
 
+    /// Whether a material disperses (KHR_materials_dispersion): paths that meet it read the
+    /// sampler's wavelength dimension (`furnace_render::layout::wavelength`).
+    pub fn disperses(&self) -> bool {
+        self.materials.iter().any(|m| m.dispersion > 0.0)
+    }
+
     /// The environment map light, if any (the first: a scene has at most one).
     pub fn environment(&self) -> Option<&crate::Environment> {
         self.lights.iter().find_map(|l| match l {

@@ -89,6 +89,11 @@ pub struct Material {
     /// KHR_materials_anisotropy (an `anisotropyStrength` above 0). The content hash leaves it
     /// out where it is `None`.
     pub anisotropy: Option<Anisotropy>,
+    /// KHR_materials_dispersion's `dispersion` = 20/V_d (V_d the Abbe number): the index of a
+    /// transmissive solid varies with wavelength (`furnace_brdf::spectrum`). 0: none, and 0
+    /// wherever it could have no effect (no volume, no transmission, an index of 1). The
+    /// content hash leaves it out where it is 0.
+    pub dispersion: f32,
     /// KHR_materials_unlit: the surface shows its base colour (× texture × vertex colour) as
     /// is, to every ray and from either side, reflects nothing and is not a light source (the
     /// loader leaves it no emission, transmission or normal map). Kept last: the content hash
@@ -124,6 +129,7 @@ impl Default for Material {
             layers: MaterialLayers::default(),
             iridescence: None,
             anisotropy: None,
+            dispersion: 0.0,
             unlit: false,
         }
     }

@@ -160,6 +160,9 @@ fn absent_light_features_compose_no_code() {
         "frame_with_tangent",
         ".alpha_y",
         "GgxAlpha = vec2",
+        "SPECTRUM_",
+        "fn spectrum_",
+        "wavelength",
         "fn hit_material_estimate",
         "shadow_query",
         "fn absorption",
@@ -168,6 +171,14 @@ fn absent_light_features_compose_no_code() {
     ] {
         assert!(!bare.contains(absent), "{absent} in the shader of a scene without light samples");
     }
+    // Glass without dispersion: no wavelength, no spectrum tables; with it, both.
+    let glass = shader_source(FilmPrecision::F64, SceneFeatures { transmission: true, ..Default::default() });
+    assert!(!glass.contains("wavelength") && !glass.contains("SPECTRUM_"));
+    let prism = shader_source(
+        FilmPrecision::F64,
+        SceneFeatures { transmission: true, dispersion: true, ..Default::default() },
+    );
+    assert!(prism.contains("path.wavelength = s.lambda;") && prism.contains("const SPECTRUM_WEIGHT"));
     // A delta sun: its shadow ray, and nothing of the disc's samples.
     let sun = shader_source(FilmPrecision::F64, SceneFeatures { delta_sun: true, ..Default::default() });
     assert!(sun.contains("let to_sun") && !sun.contains("sample_sun_disc") && !sun.contains("ray_pdf"));
@@ -345,6 +356,7 @@ fn frame_params_layout_matches_wgsl() {
                 diffuse_transmission: light_bvh,
                 // Both ways: with and without textures (VERTEX_ATTRIBUTES).
                 anisotropy: true,
+                dispersion: !light_bvh,
                 one_point_light: !light_bvh,
             },
         ));
@@ -772,6 +784,23 @@ fn same_samples_give_the_same_image_with_rough_sheets() {
         assert!(!sheets.is_empty(), "the glass box has a sheet");
         for m in sheets {
             m.roughness_factor = roughness;
+        }
+        same_samples_with(&glass, glass_settings());
+    }
+}
+
+/// Same samples, same image with dispersive solids: the glass box's smooth and rough solids at
+/// dispersion 1 (V_d = 20) and 5 (the wavelength drawn at the first solid, its RGB weight, the
+/// index at it on every later crossing, red indices clamped at 1 where the interface vanishes).
+#[test]
+fn same_samples_give_the_same_image_with_dispersion() {
+    for dispersion in [1.0, 5.0] {
+        let mut glass =
+            furnace_scene::Scene::load(furnace_tests::data::reference("glass/glass_box.gltf")).unwrap();
+        let solids: Vec<_> = glass.materials.iter_mut().filter(|m| m.is_transmissive() && m.volume).collect();
+        assert!(solids.len() >= 2, "the glass box has a smooth and a rough solid");
+        for m in solids {
+            m.dispersion = dispersion;
         }
         same_samples_with(&glass, glass_settings());
     }

@@ -5,6 +5,7 @@
 use super::lights::Vertex;
 use super::{CpuRenderer, Shading, absorption, bsdf};
 use furnace_accel::offset_ray_origin_scaled;
+use furnace_brdf::spectrum::{dispersed_ior, sample_wavelength};
 use furnace_brdf::{Frame, HitBsdf};
 use furnace_render::AovSample;
 use furnace_render::layout::{self, BOUNCE_BSDF_DIRECTION, BOUNCE_BSDF_LOBE, BOUNCE_RUSSIAN_ROULETTE};
@@ -42,6 +43,9 @@ struct Path {
     passes: u32,
     /// The lobe number those passes left unused for the next choice.
     carried_uc: Option<f32>,
+    /// The wavelength (nm) the path is traced at since its first dispersive solid; `None`:
+    /// RGB.
+    wavelength: Option<f32>,
 }
 
 impl CpuRenderer {
@@ -69,6 +73,7 @@ impl CpuRenderer {
             left_from: origin,
             passes: 0,
             carried_uc: None,
+            wavelength: None,
         };
         loop {
             let Some(hit) = self.closest_hit(path.origin, path.direction) else {
@@ -125,6 +130,16 @@ impl CpuRenderer {
                     &evaluated
                 }
             };
+            let dispersed;
+            let bsdf = if material.dispersion > 0.0 {
+                // A dispersive solid: its index at the path's wavelength, drawn here if this is
+                // the first (the throughput takes the wavelength's RGB weight).
+                let lambda = self.wavelength(pixel, index, &mut path);
+                dispersed = bsdf.with_volume_eta(dispersed_ior(material.ior, material.dispersion, lambda));
+                &dispersed
+            } else {
+                bsdf
+            };
             // A sheet (or an η = 1 interface) can still be passed after the last event (the
             // pass is none).
             let last = path.event == self.settings.bounces;
@@ -140,6 +155,20 @@ impl CpuRenderer {
             }
         }
         path.radiance
+    }
+
+    /// The path's wavelength, drawn from the layout's wavelength dimension the first time (its
+    /// RGB weight multiplied into the throughput).
+    #[inline]
+    fn wavelength(&self, pixel: u32, index: u32, path: &mut Path) -> f32 {
+        if let Some(lambda) = path.wavelength {
+            return lambda;
+        }
+        let u = self.sampler.value(pixel, index, layout::wavelength(self.settings.bounces));
+        let s = sample_wavelength(u);
+        path.throughput *= s.weight;
+        path.wavelength = Some(s.lambda);
+        s.lambda
     }
 
     /// The ray leaves the scene: the absorption of the volume it is in, then the sky, the

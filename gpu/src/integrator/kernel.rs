@@ -254,6 +254,9 @@ pub struct SceneFeatures {
     /// Some material is anisotropic (KHR_materials_anisotropy; `scene_anisotropy` records, the
     /// stretched GGX in the brdf module, the BSDF frame along the direction).
     pub anisotropy: bool,
+    /// Some material disperses (KHR_materials_dispersion; with `transmission`): paths draw a
+    /// wavelength at their first dispersive solid (the spectrum module and its tables).
+    pub dispersion: bool,
     /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
     /// triangles per invocation, added to the ray counter at its end). Not a property of the
     /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
@@ -302,6 +305,7 @@ impl SceneFeatures {
             specular_textures: scene.materials.iter().any(|m| !m.specular_textures.is_empty()),
             diffuse_transmission: scene.materials.iter().any(|m| m.diffuse_transmission.is_some()),
             anisotropy: scene.materials.iter().any(|m| m.anisotropy.is_some()),
+            dispersion: scene.disperses(),
             trace_counters: false,
         }
     }
@@ -331,7 +335,7 @@ impl SceneFeatures {
     /// `SAMPLES_LIGHTS` (any light sample: the MIS weights), `LIGHT_BVH`, `SOLID_ANGLE_TRIANGLES`,
     /// `AOVS`, `ADAPTIVE`, `TRANSMISSION`, `THIN_WALLED`, `BLEND`, `UNLIT`, `SHADOW_FILTER` (shadow rays
     /// cross something: thin-walled sheets or blended surfaces), `TRACE_COUNTERS`, `VERTEX_ATTRIBUTES`, `UV_SETS`, `VERTEX_COLORS`, `CLEARCOAT`, `SHEEN`, `LAYERS` (either), `IRIDESCENCE`, `SPECULAR_TEXTURES`,
-    /// `DIFFUSE_TRANSMISSION` (with `TRANSMISSION`), `ANISOTROPY`, `LOBE_ESTIMATES` (the material's albedo
+    /// `DIFFUSE_TRANSMISSION` (with `TRANSMISSION`), `ANISOTROPY`, `DISPERSION` (with `TRANSMISSION`), `LOBE_ESTIMATES` (the material's albedo
     /// estimate: `LAYERS` or `DIFFUSE_TRANSMISSION`),
     /// `QUEUED_POINT_LIGHTS` and `ONE_POINT_LIGHT`
     /// (`ADAPTIVE_ON_GPU` is chosen by [`shader_source`]: adaptive with an `f64` film).
@@ -364,6 +368,7 @@ impl SceneFeatures {
             "SPECULAR_TEXTURES" => self.specular_textures,
             "DIFFUSE_TRANSMISSION" => self.transmission && self.diffuse_transmission,
             "ANISOTROPY" => self.anisotropy,
+            "DISPERSION" => self.transmission && self.dispersion,
             "LOBE_ESTIMATES" => self.enabled("LAYERS") || self.enabled("DIFFUSE_TRANSMISSION"),
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,
@@ -429,6 +434,11 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
             String::new()
         },
         if features.enabled("DIFFUSE_TRANSMISSION") { wgsl::DIFFUSE_TRANSMISSION } else { "" },
+        &if features.enabled("DISPERSION") {
+            furnace_brdf::spectrum::wgsl() + wgsl::SPECTRUM
+        } else {
+            String::new()
+        },
         &wgsl::select(wgsl::SCENE, |name| features.enabled(name)),
         &wgsl::select(wgsl::TRAVERSE, |name| features.enabled(name)),
         &light_bvh,

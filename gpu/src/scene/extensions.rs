@@ -25,8 +25,10 @@ crate::gpu_struct! {
         pub transmission_factor: f32 => WgslType::F32,
         /// [`TRANSMISSIVE`], [`VOLUME`].
         pub flags: u32 => WgslType::U32,
+        /// KHR_materials_dispersion's `dispersion` = 20/V_d (0: none).
+        pub dispersion: f32 => WgslType::F32,
         /// Rust-only zeros up to 80 bytes (WGSL pads by itself).
-        pub pad: [u32; 2] => WgslType::PAD,
+        pub pad: [u32; 1] => WgslType::PAD,
     }
 }
 
@@ -146,7 +148,8 @@ pub(super) fn transmission_record(
         ior: m.ior,
         transmission_factor: m.transmission_factor,
         flags: if m.is_transmissive() { TRANSMISSIVE } else { 0 } | if m.volume { VOLUME } else { 0 },
-        pad: [0; 2],
+        dispersion: m.dispersion,
+        pad: [0; 1],
     }
 }
 

@@ -61,6 +61,10 @@ struct Path {
     passes: u32,
     carried_uc: f32,
     // #endif
+    // #if DISPERSION
+    // The wavelength (nm) the path is traced at since its first dispersive solid (0: RGB).
+    wavelength: f32,
+    // #endif
 }
 
 // The camera stage: sample `index` of pixel (x, y) starts with a camera ray jittered inside the
@@ -86,6 +90,9 @@ fn start_path(path: ptr<function, Path>, x: u32, y: u32, pixel: u32, index: u32)
     path.left_from = ray.origin;
     path.passes = 0u;
     path.carried_uc = -1.0;
+    // #endif
+    // #if DISPERSION
+    path.wavelength = 0.0;
     // #endif
     // #if AOVS
     // AovSample::MISS: albedo 1, no normal, no depth.
@@ -359,6 +366,21 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
     let facing = select(surface.shading, -surface.shading, surface.back_face != 0u);
     let anisotropy = hit_anisotropy(material, hit.triangle, hit.u, hit.v, at, facing);
     bsdf = hit_with_anisotropy(bsdf, anisotropy.w);
+    // #endif
+    // #if DISPERSION
+    let dispersion = scene_transmission[material].dispersion;
+    if dispersion > 0.0 {
+        // A dispersive solid: its index at the path's wavelength, drawn here if this is the
+        // first (the throughput takes the wavelength's RGB weight).
+        if path.wavelength == 0.0 {
+            let dim = 4u * (params.bounces + 1u) + LIGHT_DIMS_PER_EVENT * params.bounces + params.bounces;
+            let s = spectrum_sample(sampler_value(params.sampler, pixel, index, dim));
+            path.throughput *= s.weight;
+            path.wavelength = s.lambda;
+        }
+        bsdf = hit_with_volume_eta(bsdf, spectrum_dispersed_ior(scene_transmission[material].ior, dispersion,
+                                                                path.wavelength));
+    }
     // #endif
     var shading = surface.shading;
     var delta = false;

@@ -126,6 +126,18 @@ fn hit_with_anisotropy(bsdf: HitBsdf, strength: f32) -> HitBsdf {
 }
 // #endif
 
+// #if DISPERSION
+// `HitBsdf::with_volume_eta`: a solid's interface at another index (a sheet, an opaque
+// material unchanged).
+fn hit_with_volume_eta(bsdf: HitBsdf, eta: f32) -> HitBsdf {
+    var b = bsdf;
+    if (b.kind & SCENE_VOLUME) != 0u {
+        b.t.d = dielectric_with_eta(b.t.d, eta);
+    }
+    return b;
+}
+// #endif
+
 // `HitBsdf::new`: the material's BSDF at a hit.
 fn hit_bsdf(material_sample: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
     // #if SPECULAR_TEXTURES

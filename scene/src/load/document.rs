@@ -21,6 +21,7 @@ pub const SUPPORTED_EXTENSIONS: &[&str] = &[
     "KHR_materials_iridescence",
     "KHR_materials_anisotropy",
     "KHR_materials_diffuse_transmission",
+    "KHR_materials_dispersion",
     super::variants::EXTENSION,
     "KHR_texture_transform",
     "KHR_mesh_quantization",

@@ -110,6 +110,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
     let mut iridescence = iridescence(ctx, m, &p, textures);
     let mut anisotropy = anisotropy(ctx, m, &p, textures);
     let mut diffuse_transmission = diffuse_transmission(ctx, m, &p, textures);
+    let mut dispersion = dispersion(ctx, m, &p, &transmission, ior);
     warn_ignored(ctx, m);
     let unlit = m.unlit();
     if unlit {
@@ -121,6 +122,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         iridescence = None;
         anisotropy = None;
         diffuse_transmission = None;
+        dispersion = 0.0;
     }
     let roughness_factor = pbr.roughness_factor;
     let transmissive = transmission.factor > 0.0;
@@ -153,6 +155,7 @@ fn read_material(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, textures: usize) -> 
         layers,
         iridescence,
         anisotropy,
+        dispersion,
         unlit,
     };
     (material, pbr.bake)
@@ -282,6 +285,42 @@ fn ior(ctx: &mut Ctx<'_>, m: &gltf::Material<'_>, p: &str) -> f32 {
         return 1.5;
     }
     ior.min(100.0)
+}
+
+/// KHR_materials_dispersion's `dispersion` (20/V_d, ≥ 0), or 0 where it can have no effect:
+/// it disperses the light refracted into a solid (KHR_materials_transmission with
+/// KHR_materials_volume), and an index of 1 is 1 at every wavelength.
+fn dispersion(
+    ctx: &mut Ctx<'_>,
+    m: &gltf::Material<'_>,
+    p: &str,
+    transmission: &TransmissionExt,
+    ior: f32,
+) -> f32 {
+    let Some(ext) = m.extension_value("KHR_materials_dispersion") else { return 0.0 };
+    let path = format!("{p}.extensions.KHR_materials_dispersion");
+    let d = match ext.get("dispersion") {
+        None => 0.0,
+        Some(v) => match v.as_f64() {
+            Some(x) if x >= 0.0 && x.is_finite() => x as f32,
+            _ => {
+                ctx.warn(
+                    format!("{path}.dispersion"),
+                    format!("{v} is not a number ≥ 0: 0 (no dispersion) used"),
+                );
+                0.0
+            }
+        },
+    };
+    if d > 0.0 && !(transmission.factor > 0.0 && transmission.volume) {
+        ctx.warn(
+            path,
+            "disperses light refracted into a solid: without KHR_materials_transmission and a \
+             KHR_materials_volume thickness it has no effect (ignored)",
+        );
+        return 0.0;
+    }
+    if ior == 1.0 { 0.0 } else { d }
 }
 
 /// What KHR_materials_transmission and KHR_materials_volume say.
