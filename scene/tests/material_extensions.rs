@@ -638,3 +638,45 @@ fn anisotropy_is_read() {
     .unwrap();
     assert_eq!(off.content_hash(), none.content_hash());
 }
+
+/// KHR_materials_dispersion read on a transmissive solid, also where required; 0 (no
+/// dispersion, the hash unchanged) where it could have no effect: a sheet (no volume, with a
+/// warning naming it), an index of 1, the default; a negative value a warning and 0.
+#[test]
+fn dispersion_is_read() {
+    const EXT: &str = "KHR_materials_dispersion";
+    let material = |volume: bool, ior: f32, dispersion: &str| {
+        let volume = if volume { r#","KHR_materials_volume":{"thicknessFactor":1}"# } else { "" };
+        format!(
+            r#"{{"extensions":{{"KHR_materials_transmission":{{"transmissionFactor":1}},
+"KHR_materials_ior":{{"ior":{ior}}}{volume},"{EXT}":{{{dispersion}}}}}}}"#
+        )
+    };
+    let load = |m: String| {
+        let text = String::from_utf8(gltf(&[m], &["\"material\":0"], "", "")).unwrap();
+        let text = text.replacen(
+            r#""extensionsUsed":["#,
+            &format!(r#""extensionsRequired":["{EXT}"],"extensionsUsed":["{EXT}""#),
+            1,
+        );
+        Scene::from_slice(text.as_bytes(), "prism.gltf").unwrap()
+    };
+    let prism = load(material(true, 1.5, r#""dispersion":0.36"#));
+    assert!(prism.warnings.is_empty(), "{:?}", prism.warnings);
+    assert_eq!(prism.materials[0].dispersion, 0.36);
+    assert!(prism.disperses());
+    let sheet = load(material(false, 1.5, r#""dispersion":0.36"#));
+    assert_eq!(sheet.materials[0].dispersion, 0.0, "a sheet has no volume to disperse in");
+    assert!(sheet.warnings.iter().any(|w| w.path == format!("materials[0].extensions.{EXT}")), "{:?}", sheet.warnings);
+    let air = load(material(true, 1.0, r#""dispersion":1"#));
+    assert_eq!(air.materials[0].dispersion, 0.0, "an index of 1 is 1 at every wavelength");
+    let negative = load(material(true, 1.5, r#""dispersion":-1"#));
+    assert_eq!(negative.materials[0].dispersion, 0.0);
+    assert!(negative.warnings.iter().any(|w| w.path.ends_with("dispersion")), "{:?}", negative.warnings);
+    let plain = load(material(true, 1.5, ""));
+    assert_eq!(plain.materials[0].dispersion, 0.0, "0 by default");
+    assert!(!plain.disperses());
+    let without = load(material(true, 1.5, r#""dispersion":0"#).replace(&format!(r#","{EXT}":{{"dispersion":0}}"#), ""));
+    assert_ne!(prism.content_hash(), without.content_hash(), "the hash sees a dispersion");
+    assert_eq!(plain.content_hash(), without.content_hash(), "a dispersion of 0 hashes as none");
+}

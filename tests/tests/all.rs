@@ -17,6 +17,8 @@ mod area_lights;
 mod backends;
 #[path = "brdf_parity.rs"]
 mod brdf_parity;
+#[path = "dispersion.rs"]
+mod dispersion;
 #[path = "display_parity.rs"]
 mod display_parity;
 #[path = "emission.rs"]
