@@ -26,7 +26,7 @@
 use crate::args::{EnvArgs, LookAt, RenderArgs};
 use clap::ValueEnum;
 use furnace_post::{Metadata, printable_excerpt};
-use furnace_render::resume::{self, Attributes, Identity, RecordError};
+use furnace_render::resume::{self, Attributes, Identity, LayoutUse, RecordError};
 use furnace_render::{MAX_BOUNCES, SampleRange};
 use std::path::{Path, PathBuf};
 
@@ -207,7 +207,7 @@ pub fn check_same(
     meta: &Metadata,
     recorded: &[(&'static str, Option<String>)],
     now: &[(&'static str, Option<String>)],
-    uses: resume::LayoutUse,
+    uses: LayoutUse,
 ) -> Result<(), String> {
     resume::check_layout(meta.extra.get(SAMPLER_LAYOUT).map(String::as_str), uses)
         .and_then(|()| resume::check_same(recorded, now))
@@ -404,8 +404,9 @@ mod tests {
         n.bounces = Some(2);
         n.extra.insert(CAMERA.into(), "1".into());
         let file = Path::new("dir/r.exr");
-        assert!(check_same(file, &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false, false).is_ok());
-        let e = check_same(file, &m, &identity(&m, 8, 8), &identity(&n, 8, 6), false, false).unwrap_err();
+        assert!(check_same(file, &m, &identity(&m, 8, 8), &identity(&m, 8, 8), LayoutUse::default()).is_ok());
+        let e =
+            check_same(file, &m, &identity(&m, 8, 8), &identity(&n, 8, 6), LayoutUse::default()).unwrap_err();
         assert_eq!(
             e,
             "dir/r.exr: cannot resume with different settings: camera is 0 in the file but 1 now; \
@@ -430,23 +431,37 @@ mod tests {
     #[test]
     fn another_sampler_layout_is_refused() {
         let mut m = Metadata { bounces: Some(4), ..Metadata::default() };
-        m.extra.insert(SAMPLER_LAYOUT.into(), "4".into());
-        let e = check_same(Path::new("old.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8), false, false)
-            .unwrap_err();
-        assert!(e.starts_with("old.exr: its samples were drawn with sampler dimension layout 4"), "{e}");
+        m.extra.insert(SAMPLER_LAYOUT.into(), "5".into());
+        let e = check_same(
+            Path::new("old.exr"),
+            &m,
+            &identity(&m, 8, 8),
+            &identity(&m, 8, 8),
+            LayoutUse::default(),
+        )
+        .unwrap_err();
+        assert!(e.starts_with("old.exr: its samples were drawn with sampler dimension layout 5"), "{e}");
         // Layout 1 (or none recorded) continues a scene that samples no light, not one that does.
         m.extra.insert(SAMPLER_LAYOUT.into(), "1".into());
-        let same = |m: &Metadata, lights: bool, one: bool| {
-            check_same(Path::new("v1.exr"), m, &identity(m, 8, 8), &identity(m, 8, 8), lights, one)
+        let same = |m: &Metadata, samples_lights: bool, chooses_point_lights: bool| {
+            let uses = LayoutUse { samples_lights, chooses_point_lights, samples_wavelengths: false };
+            check_same(Path::new("v1.exr"), m, &identity(m, 8, 8), &identity(m, 8, 8), uses)
         };
         assert!(same(&m, false, false).is_ok());
         let e = same(&m, true, false).unwrap_err();
-        assert!(e.contains("layout 1, this furnace traces layout 3"), "{e}");
+        assert!(e.contains("layout 1, this furnace traces layout 4"), "{e}");
         // Layout 2 continues any render that chooses no point light.
         m.extra.insert(SAMPLER_LAYOUT.into(), "2".into());
         assert!(same(&m, true, false).is_ok());
         let e = same(&m, false, true).unwrap_err();
-        assert!(e.contains("layout 2, this furnace traces layout 3"), "{e}");
+        assert!(e.contains("layout 2, this furnace traces layout 4"), "{e}");
+        // Layout 3 continues any render without a dispersive material.
+        m.extra.insert(SAMPLER_LAYOUT.into(), "3".into());
+        assert!(same(&m, true, true).is_ok());
+        let dispersive = LayoutUse { samples_wavelengths: true, ..LayoutUse::default() };
+        let e = check_same(Path::new("v3.exr"), &m, &identity(&m, 8, 8), &identity(&m, 8, 8), dispersive)
+            .unwrap_err();
+        assert!(e.contains("layout 3, this furnace traces layout 4"), "{e}");
     }
 
     #[test]
@@ -455,8 +470,14 @@ mod tests {
         m.extra.insert(TARGET_SPP.into(), "64".into());
         let mut n = m.clone();
         n.extra.insert(TARGET_SPP.into(), "128".into());
-        let e = check_same(Path::new("h.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4), false, false)
-            .unwrap_err();
+        let e = check_same(
+            Path::new("h.exr"),
+            &m,
+            &identity(&m, 4, 4),
+            &identity(&n, 4, 4),
+            LayoutUse::default(),
+        )
+        .unwrap_err();
         assert!(
             e.contains("sample count N of the fixed-N sampler (--spp) is 64 in the file but 128 now"),
             "{e}"
@@ -465,8 +486,14 @@ mod tests {
         m.sampler = Some("sobol".into());
         n.sampler = Some("sobol".into());
         assert!(
-            check_same(Path::new("s.exr"), &m, &identity(&m, 4, 4), &identity(&n, 4, 4), false, false)
-                .is_ok()
+            check_same(
+                Path::new("s.exr"),
+                &m,
+                &identity(&m, 4, 4),
+                &identity(&n, 4, 4),
+                LayoutUse::default()
+            )
+            .is_ok()
         );
     }
 
@@ -486,9 +513,12 @@ mod tests {
         let mut power = old.clone();
         power.extra.insert(key("light-selection").into(), "power".into());
         let file = Path::new("old.exr");
-        assert!(check_same(file, &old, &identity(&old, 2, 2), &identity(&power, 2, 2), false, false).is_ok());
-        let e =
-            check_same(file, &old, &identity(&old, 2, 2), &identity(&bvh, 2, 2), false, false).unwrap_err();
+        assert!(
+            check_same(file, &old, &identity(&old, 2, 2), &identity(&power, 2, 2), LayoutUse::default())
+                .is_ok()
+        );
+        let e = check_same(file, &old, &identity(&old, 2, 2), &identity(&bvh, 2, 2), LayoutUse::default())
+            .unwrap_err();
         assert!(e.ends_with("light selection is power in the file but bvh now"), "{e}");
     }
 }

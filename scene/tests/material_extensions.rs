@@ -667,7 +667,11 @@ fn dispersion_is_read() {
     assert!(prism.disperses());
     let sheet = load(material(false, 1.5, r#""dispersion":0.36"#));
     assert_eq!(sheet.materials[0].dispersion, 0.0, "a sheet has no volume to disperse in");
-    assert!(sheet.warnings.iter().any(|w| w.path == format!("materials[0].extensions.{EXT}")), "{:?}", sheet.warnings);
+    assert!(
+        sheet.warnings.iter().any(|w| w.path == format!("materials[0].extensions.{EXT}")),
+        "{:?}",
+        sheet.warnings
+    );
     let air = load(material(true, 1.0, r#""dispersion":1"#));
     assert_eq!(air.materials[0].dispersion, 0.0, "an index of 1 is 1 at every wavelength");
     let negative = load(material(true, 1.5, r#""dispersion":-1"#));
@@ -676,7 +680,9 @@ fn dispersion_is_read() {
     let plain = load(material(true, 1.5, ""));
     assert_eq!(plain.materials[0].dispersion, 0.0, "0 by default");
     assert!(!plain.disperses());
-    let without = load(material(true, 1.5, r#""dispersion":0"#).replace(&format!(r#","{EXT}":{{"dispersion":0}}"#), ""));
+    let without = load(
+        material(true, 1.5, r#""dispersion":0"#).replace(&format!(r#","{EXT}":{{"dispersion":0}}"#), ""),
+    );
     assert_ne!(prism.content_hash(), without.content_hash(), "the hash sees a dispersion");
     assert_eq!(plain.content_hash(), without.content_hash(), "a dispersion of 0 hashes as none");
 }
