@@ -196,22 +196,6 @@ impl Dielectric {
         self
     }
 
-    /// The interface at another relative index `eta` (sanitised as [`Dielectric::new`] does):
-    /// a dispersive solid's at the path's wavelength. At η = 1 it becomes invisible (smooth,
-    /// no film) whatever its roughness, as `new` makes it.
-    pub fn with_eta(mut self, eta: f32) -> Self {
-        self.eta = if eta.is_nan() { 1.5 } else { eta.clamp(ETA_MIN, ETA_MAX) };
-        if self.eta == 1.0 {
-            self.interface = match self.interface {
-                Interface::Rough => Interface::Smooth,
-                Interface::RoughThinWalled => Interface::ThinWalled,
-                other => other,
-            };
-            self.film = None;
-        }
-        self
-    }
-
     /// The reflectance per channel for the exact Fresnel record `fr` at `cos_i` (either side):
     /// `fr.reflectance` in every channel without a film; under one (1 − i)·R + i·film at the
     /// outside cosine, and 1 under total internal reflection.

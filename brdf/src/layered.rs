@@ -377,16 +377,6 @@ impl HitBsdf {
         self.layers.is_none() && self.diffuse_transmission.is_none() && self.core.is_delta()
     }
 
-    /// The BSDF with its solid's interface at relative index `eta` (a dispersive solid at the
-    /// path's wavelength, [`crate::spectrum`]); a sheet or an opaque material is unchanged.
-    #[inline]
-    pub fn with_volume_eta(mut self, eta: f32) -> Self {
-        if let Core::Transmissive(b, true) = &mut self.core {
-            b.dielectric = b.dielectric.with_eta(eta);
-        }
-        self
-    }
-
     /// A thin-walled sheet or an η = 1 interface: straight passes are no events.
     #[inline]
     pub fn is_straight(&self) -> bool {

@@ -86,18 +86,27 @@ pub struct CpuRenderer {
     cancel: CancelFlag,
 }
 
-/// A material's emission and BSDF, when they are the same everywhere on its surface.
+/// A material's parameters and BSDF, when they are the same everywhere on its surface.
 struct ConstantMaterial {
-    emission: Vec3,
+    params: MaterialSample,
     bsdf: HitBsdf,
-    /// The base colour: the albedo AOV.
-    base_color: Vec3,
 }
 
 /// The material at a hit: built once, or evaluated there.
 enum Shading<'a> {
     Constant(&'a ConstantMaterial),
     Evaluated(MaterialSample),
+}
+
+impl Shading<'_> {
+    /// The material's parameters at the hit.
+    #[inline]
+    fn params(&self) -> &MaterialSample {
+        match self {
+            Self::Constant(c) => &c.params,
+            Self::Evaluated(p) => p,
+        }
+    }
 }
 
 impl std::fmt::Debug for CpuRenderer {
@@ -136,11 +145,7 @@ impl CpuRenderer {
                 // Constant: no texture, and no vertex colour to multiply the base colour.
                 (!m.uses_textures() && g.colors.is_empty()).then(|| {
                     let params = m.evaluate(&VertexAttributes::default(), &scene.textures, &scene.images);
-                    ConstantMaterial {
-                        emission: params.emission,
-                        bsdf: bsdf(&params, m, settings.specular, Vec3::Z),
-                        base_color: params.base_color,
-                    }
+                    ConstantMaterial { bsdf: bsdf(&params, m, m.ior, settings.specular, Vec3::Z), params }
                 })
             })
             .collect();
@@ -464,7 +469,7 @@ impl CpuRenderer {
                 None => {
                     let at = scene.geometry.attributes(t as usize, b.x, b.y);
                     let p = material.evaluate(&at, &scene.textures, &scene.images);
-                    bsdf(&p, material, self.settings.specular, Vec3::Z)
+                    bsdf(&p, material, material.ior, self.settings.specular, Vec3::Z)
                         .sheet_transmittance(direction.dot(normal))
                 }
             };
@@ -549,12 +554,14 @@ fn absorption(sigma: Vec3, t: f32) -> Vec3 {
     Vec3::new(f(sigma.x), f(sigma.y), f(sigma.z))
 }
 
-/// The BSDF of a hit's evaluated material parameters ([`HitBsdf::new`]), its clear coat's
-/// normal `coat_normal` in the shading frame (`Vec3::Z`: the shading normal).
+/// The BSDF of a hit's evaluated material parameters ([`HitBsdf::new`]) with the index `ior`
+/// (the material's, or a dispersive solid's at the path's wavelength), its clear coat's normal
+/// `coat_normal` in the shading frame (`Vec3::Z`: the shading normal).
 #[inline]
 fn bsdf(
     params: &MaterialSample,
     material: &furnace_scene::Material,
+    ior: f32,
     specular: SpecularOptions,
     coat_normal: Vec3,
 ) -> HitBsdf {
@@ -566,7 +573,7 @@ fn bsdf(
             specular_factor: params.specular_factor,
             specular_color: params.specular_color,
             transmission: params.transmission,
-            ior: material.ior,
+            ior,
             volume: material.volume,
             clearcoat: params.clearcoat,
             clearcoat_roughness: params.clearcoat_roughness,

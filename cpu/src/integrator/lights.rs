@@ -388,7 +388,7 @@ impl CpuRenderer {
     /// The emitted radiance of `material` on triangle `t` at barycentrics `b`.
     fn emission_at(&self, material: usize, t: usize, b: Vec2) -> Vec3 {
         match &self.constant_materials[material] {
-            Some(c) => c.emission,
+            Some(c) => c.params.emission,
             None => {
                 let at = self.scene.geometry.attributes(t, b.x, b.y);
                 self.scene.materials[material]

@@ -110,35 +110,28 @@ impl CpuRenderer {
             }
             if material.unlit {
                 // KHR_materials_unlit: the colour as is, from either side; nothing reflected.
-                let color = match &shading {
-                    Shading::Constant(c) => c.base_color,
-                    Shading::Evaluated(params) => params.base_color,
-                };
-                path.radiance += path.throughput * color;
+                path.radiance += path.throughput * shading.params().base_color;
                 break;
             }
             self.add_emission(&mut path, &shading, surface, material_index, t, hit.t);
+            // A dispersive solid has its index at the path's wavelength, drawn here if this is the
+            // first (the throughput takes the wavelength's RGB weight).
+            let dispersed = (material.dispersion > 0.0).then(|| {
+                let lambda = self.wavelength(pixel, index, &mut path);
+                dispersed_ior(material.ior, material.dispersion, lambda)
+            });
             let evaluated;
-            let bsdf = match &shading {
-                Shading::Constant(c) => &c.bsdf,
-                Shading::Evaluated(params) => {
-                    let b = bsdf(params, material, self.settings.specular, Vec3::Z);
+            let bsdf = match (&shading, dispersed) {
+                (Shading::Constant(c), None) => &c.bsdf,
+                (shading, ior) => {
+                    let ior = ior.unwrap_or(material.ior);
+                    let b = bsdf(shading.params(), material, ior, self.settings.specular, Vec3::Z);
                     evaluated = match coat_normal(material, &b, surface) {
                         Some(n) => b.with_clearcoat_normal(n),
                         None => b,
                     };
                     &evaluated
                 }
-            };
-            let dispersed;
-            let bsdf = if material.dispersion > 0.0 {
-                // A dispersive solid: its index at the path's wavelength, drawn here if this is
-                // the first (the throughput takes the wavelength's RGB weight).
-                let lambda = self.wavelength(pixel, index, &mut path);
-                dispersed = bsdf.with_volume_eta(dispersed_ior(material.ior, material.dispersion, lambda));
-                &dispersed
-            } else {
-                bsdf
             };
             // A sheet (or an η = 1 interface) can still be passed after the last event (the
             // pass is none).
@@ -201,10 +194,7 @@ impl CpuRenderer {
         t: usize,
         distance: f32,
     ) {
-        let emission = match shading {
-            Shading::Constant(c) => c.emission,
-            Shading::Evaluated(params) => params.emission,
-        };
+        let emission = shading.params().emission;
         if !surface.back_face {
             if self.emitters.is_some() && emission != Vec3::ZERO {
                 let cos_light = -surface.geometric.dot(path.direction);
@@ -344,10 +334,7 @@ impl CpuRenderer {
 /// which is black) and the depth.
 #[inline]
 fn first_hit_aov(shading: &Shading<'_>, surface: Option<&SurfacePoint>, depth: f32) -> AovSample {
-    let (base_color, emission) = match shading {
-        Shading::Constant(c) => (c.base_color, c.emission),
-        Shading::Evaluated(params) => (params.base_color, params.emission),
-    };
+    let (base_color, emission) = (shading.params().base_color, shading.params().emission);
     let emits = emission != Vec3::ZERO && surface.is_some_and(|s| !s.back_face);
     AovSample {
         albedo: if emits { Vec3::ONE } else { base_color },

@@ -82,23 +82,6 @@ fn dielectric_new(eta_in: f32, alpha: f32, thin_walled: bool, height_correlated:
     return Dielectric(eta, a, iface, select(0u, 1u, height_correlated), brdf_clamp_rgb(tint, 1.0), 0.0, 0.0, 0.0);
 }
 
-// #if DISPERSION
-// `Dielectric::with_eta`: the interface at another index (invisible, smooth and filmless at 1).
-fn dielectric_with_eta(d: Dielectric, eta: f32) -> Dielectric {
-    var r = d;
-    r.eta = brdf_sanitize(eta, DIELECTRIC_ETA_MIN, DIELECTRIC_ETA_MAX, 1.5);
-    if r.eta == 1.0 {
-        if r.iface == DIELECTRIC_ROUGH {
-            r.iface = DIELECTRIC_SMOOTH;
-        } else if r.iface == DIELECTRIC_ROUGH_THIN {
-            r.iface = DIELECTRIC_THIN;
-        }
-        r.film_factor = 0.0;
-    }
-    return r;
-}
-// #endif
-
 // #if IRIDESCENCE
 // `Dielectric::with_film`.
 fn dielectric_with_film(d: Dielectric, factor: f32, ior: f32, thickness: f32) -> Dielectric {

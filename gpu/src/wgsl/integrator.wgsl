@@ -361,11 +361,10 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
         return false;
     }
     // #endif
-    var bsdf = hit_bsdf(ms, material, at);
-    // #if ANISOTROPY
-    let facing = select(surface.shading, -surface.shading, surface.back_face != 0u);
-    let anisotropy = hit_anisotropy(material, hit.triangle, hit.u, hit.v, at, facing);
-    bsdf = hit_with_anisotropy(bsdf, anisotropy.w);
+    // The index of a transmissive material's interface (read only with TRANSMISSION).
+    var ior = 1.5;
+    // #if TRANSMISSION
+    ior = scene_transmission[material].ior;
     // #endif
     // #if DISPERSION
     let dispersion = scene_transmission[material].dispersion;
@@ -378,9 +377,14 @@ fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> boo
             path.throughput *= s.weight;
             path.wavelength = s.lambda;
         }
-        bsdf = hit_with_volume_eta(bsdf, spectrum_dispersed_ior(scene_transmission[material].ior, dispersion,
-                                                                path.wavelength));
+        ior = spectrum_dispersed_ior(ior, dispersion, path.wavelength);
     }
+    // #endif
+    var bsdf = hit_bsdf(ms, material, at, ior);
+    // #if ANISOTROPY
+    let facing = select(surface.shading, -surface.shading, surface.back_face != 0u);
+    let anisotropy = hit_anisotropy(material, hit.triangle, hit.u, hit.v, at, facing);
+    bsdf = hit_with_anisotropy(bsdf, anisotropy.w);
     // #endif
     var shading = surface.shading;
     var delta = false;

@@ -126,20 +126,9 @@ fn hit_with_anisotropy(bsdf: HitBsdf, strength: f32) -> HitBsdf {
 }
 // #endif
 
-// #if DISPERSION
-// `HitBsdf::with_volume_eta`: a solid's interface at another index (a sheet, an opaque
-// material unchanged).
-fn hit_with_volume_eta(bsdf: HitBsdf, eta: f32) -> HitBsdf {
-    var b = bsdf;
-    if (b.kind & SCENE_VOLUME) != 0u {
-        b.t.d = dielectric_with_eta(b.t.d, eta);
-    }
-    return b;
-}
-// #endif
-
-// `HitBsdf::new`: the material's BSDF at a hit.
-fn hit_bsdf(material_sample: MaterialSample, material: u32, at: SceneAttributes) -> HitBsdf {
+// `HitBsdf::new`: the material's BSDF at a hit, a transmissive material's interface of index
+// `ior` (the material's, or a dispersive solid's index for the path: spectrum.wgsl).
+fn hit_bsdf(material_sample: MaterialSample, material: u32, at: SceneAttributes, ior: f32) -> HitBsdf {
     // #if SPECULAR_TEXTURES
     let ms = hit_specular(material, at, material_sample);
     // #else
@@ -182,7 +171,7 @@ fn hit_bsdf(material_sample: MaterialSample, material: u32, at: SceneAttributes)
     // #endif
     if g > 0.0 {
         let rough = brdf_clamp(ms.roughness, 0.0, 1.0);
-        var d = dielectric_new(tr.ior, rough * rough, (tr.flags & SCENE_VOLUME) == 0u,
+        var d = dielectric_new(ior, rough * rough, (tr.flags & SCENE_VOLUME) == 0u,
                                brdf_height_correlated(b.m), ms.base_color);
         // #if IRIDESCENCE
         d = dielectric_with_film(d, film.x, film.y, film.z);

@@ -57,7 +57,7 @@ fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {
         // Material::passes_shadow_rays: a sheet, or a solid of index 1.
         if (tr.flags & SCENE_TRANSMISSIVE) != 0u && ((tr.flags & SCENE_VOLUME) == 0u || tr.ior == 1.0) {
             let at = hit_attributes(material, triangle_id, u, v);
-            let b = hit_bsdf(hit_material(material, at), material, at);
+            let b = hit_bsdf(hit_material(material, at), material, at, tr.ior);
             // CpuRenderer::transmittance: T′ at the angle to the sheet's shading normal.
             var n = scene_shading_normal(triangle_id, u, v);
             let cos = scene_dot(shadow_direction, n);
