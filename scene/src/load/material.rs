@@ -299,19 +299,7 @@ fn dispersion(
 ) -> f32 {
     let Some(ext) = m.extension_value("KHR_materials_dispersion") else { return 0.0 };
     let path = format!("{p}.extensions.KHR_materials_dispersion");
-    let d = match ext.get("dispersion") {
-        None => 0.0,
-        Some(v) => match v.as_f64() {
-            Some(x) if x >= 0.0 && x.is_finite() => x as f32,
-            _ => {
-                ctx.warn(
-                    format!("{path}.dispersion"),
-                    format!("{v} is not a number ≥ 0: 0 (no dispersion) used"),
-                );
-                0.0
-            }
-        },
-    };
+    let d = number_at_least(ctx, ext, "dispersion", 0.0, 0.0, &path);
     if d > 0.0 && !(transmission.factor > 0.0 && transmission.volume) {
         ctx.warn(
             path,
