@@ -263,6 +263,24 @@ impl Bvh {
         }
     }
 
+    /// The bounds of the triangles in the tree (`None` when it holds none).
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut it = self.triangles.iter().flat_map(|t| t.vertices());
+        let first = it.next()?;
+        Some(it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v))))
+    }
+
+    /// Bytes held for the queries: nodes (as built, and decoded for the CPU traversal where
+    /// they are), triangles in leaf order with their ids, and the CPU's leaf blocks.
+    pub fn bytes(&self) -> usize {
+        let nodes = match &self.tree {
+            Tree::Empty => 0,
+            Tree::Cwbvh(b, wide) => b.nodes.len() * 80 + wide.len() * size_of::<WideNode>(),
+            Tree::Bvh2(b) => b.nodes.len() * size_of::<obvhs::bvh2::node::Bvh2Node>(),
+        };
+        nodes + self.triangles.len() * 52 + self.blocks.len() * size_of::<Tri4>()
+    }
+
     /// Number of triangles given to the builder (including skipped ones).
     pub fn input_count(&self) -> usize {
         self.input_count

@@ -70,12 +70,14 @@
 
 mod bvh;
 mod gpu;
+mod instances;
 mod offset;
 mod traverse;
 mod triangle;
 
 pub use bvh::{BuildOptions, BuildQuality, Bvh, CULL_SLACK, Hit, Layout, MAX_BUILD_COORDINATE};
 pub use gpu::{GpuCwbvhNode, GpuTriangle};
+pub use instances::{InstanceHit, TlasNode, TwoLevel};
 pub use offset::{
     FLOAT_SCALE, INT_SCALE, ORIGIN, offset_ray_origin, offset_ray_origin_scaled, offset_scale,
     offset_scale_of_bounds,

@@ -11,6 +11,8 @@ mod deep_trees;
 mod degenerate;
 #[path = "determinism.rs"]
 mod determinism;
+#[path = "instances.rs"]
+mod instances;
 #[path = "queries.rs"]
 mod queries;
 #[path = "self_intersection.rs"]

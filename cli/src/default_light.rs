@@ -17,7 +17,9 @@
 //! third as well as the studio; a rule on the lights' level ranks them the wrong way round
 //! (docs/environment.md, "The default light", tabulates both).
 
-use furnace_accel::{BuildOptions, BuildQuality, Bvh, offset_ray_origin_scaled, offset_scale_of_bounds};
+use furnace_accel::{
+    BuildOptions, BuildQuality, Bvh, InstanceHit, TwoLevel, offset_ray_origin_scaled, offset_scale_of_bounds,
+};
 use furnace_scene::{Projection, Scene};
 use glam::{Vec2, Vec3};
 
@@ -120,8 +122,25 @@ pub fn openness(scene: &Scene) -> f32 {
     let g = &scene.geometry;
     // The fastest build: the probe traces a hundred thousand rays, the tree is dropped after.
     let options = BuildOptions { quality: Some(BuildQuality::Fastest), ..BuildOptions::default() };
-    let bvh = Bvh::from_indexed(&g.positions, &g.triangles, options);
-    let (lo, hi) = g.bounds();
+    let inst = &scene.instancing;
+    let (bvh, two) = if inst.is_empty() {
+        (Some(Bvh::from_indexed(&g.positions, &g.triangles, options)), None)
+    } else {
+        let placements: Vec<_> = inst.instances.iter().map(|i| (i.mesh, i.world_from_object)).collect();
+        let world = 0..inst.world_triangles;
+        (None, Some(TwoLevel::build(&g.positions, &g.triangles, world, &inst.meshes, &placements)))
+    };
+    let closest = |o: Vec3, d: Vec3| match (&bvh, &two) {
+        (Some(b), _) => b.closest_hit(o, d, f32::INFINITY).map(|hit| InstanceHit { hit, instance: None }),
+        (None, Some(t)) => t.closest_hit(o, d, f32::INFINITY),
+        (None, None) => None,
+    };
+    let occluded = |o: Vec3, d: Vec3| match (&bvh, &two) {
+        (Some(b), _) => b.occluded(o, d, f32::INFINITY),
+        (None, Some(t)) => t.occluded(o, d, f32::INFINITY),
+        (None, None) => false,
+    };
+    let (lo, hi) = scene.bounds();
     let scale = offset_scale_of_bounds(lo, hi);
     let camera = scene.default_camera();
     let aspect = match camera.projection {
@@ -136,8 +155,12 @@ pub fn openness(scene: &Scene) -> f32 {
     for y in 0..height {
         for x in 0..width {
             let ray = rays.generate(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-            let Some(hit) = bvh.closest_hit(ray.origin, ray.direction, f32::INFINITY) else { continue };
-            let Some([a, b, c]) = g.triangle(hit.triangle as usize) else { continue };
+            let Some(InstanceHit { hit, instance }) = closest(ray.origin, ray.direction) else { continue };
+            let Some(mut vertices) = g.triangle(hit.triangle as usize) else { continue };
+            if let Some(i) = instance.and_then(|i| inst.instances.get(i as usize)) {
+                vertices = vertices.map(|v| i.point(v));
+            }
+            let [a, b, c] = vertices;
             let mut n = (b - a).cross(c - a).normalize_or_zero();
             if n == Vec3::ZERO {
                 continue;
@@ -157,7 +180,7 @@ pub fn openness(scene: &Scene) -> f32 {
                 let u2 = (i.reverse_bits() as f32 / 4_294_967_296.0 + turn).fract();
                 let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
                 let d = t1 * (r * phi.cos()) + t2 * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
-                if !bvh.occluded(origin, d, f32::INFINITY) {
+                if !occluded(origin, d) {
                     escaped += 1;
                 }
             }

@@ -144,7 +144,39 @@ fn describe(scene: &Scene) -> String {
     let mut out = String::new();
     let mut line = |k: &str, v: String| out.push_str(&format!("{k:<16}{v}\n"));
     line("scene", scene.name.clone());
-    line("triangles", s.triangles.to_string());
+    if s.instances == 0 {
+        line("triangles", s.triangles.to_string());
+    } else {
+        line(
+            "triangles",
+            format!("{} stored, {} in the image (the instances counted)", s.triangles, s.instanced_triangles),
+        );
+        let world = scene.instancing.world_triangles;
+        line(
+            "instancing",
+            format!(
+                "{} meshes stored once ({} triangles), placed by {} instances ({} bytes); {world} triangles in world space",
+                s.meshes,
+                s.triangles - world as usize,
+                s.instances,
+                s.instance_bytes
+            ),
+        );
+        line(
+            "memory",
+            format!(
+                "cpu: {} bytes of geometry, a BVH per mesh under a TLAS of the instances; gpu: the instances \
+                 copied into world space, {} triangles{}",
+                s.geometry_bytes + s.instance_bytes,
+                s.instanced_triangles,
+                if s.instanced_triangles > furnace_scene::MAX_TRIANGLES {
+                    format!(": more than the {} it holds, the CPU renders it", furnace_scene::MAX_TRIANGLES)
+                } else {
+                    String::new()
+                }
+            ),
+        );
+    }
     line("vertices", s.vertices.to_string());
     line("dropped", format!("{} zero-area triangles (they cannot be hit)", s.dropped_triangles));
     line("materials", format!("{} (including glTF's default material)", s.materials));

@@ -1,6 +1,6 @@
 //! [`CpuRenderer`]: the path tracer.
 
-use furnace_accel::{BuildOptions, Bvh, Hit, offset_scale_of_bounds};
+use furnace_accel::{InstanceHit, offset_scale_of_bounds};
 use furnace_brdf::iridescence::ThinFilm;
 use furnace_brdf::{HitBsdf, LayeredParams, SpecularOptions};
 use furnace_render::layout::DIM_PIXEL;
@@ -18,9 +18,11 @@ use glam::{Vec2, Vec3};
 use rayon::prelude::*;
 use std::sync::Arc;
 
+mod accel;
 mod lights;
 mod path;
 
+use accel::{Accel, WORLD};
 use lights::SunDisc;
 
 /// A scene prepared for rendering through one camera: its BVH, per-triangle material indices,
@@ -32,7 +34,7 @@ pub struct CpuRenderer {
     scene: Arc<Scene>,
     settings: RenderSettings,
     film: Film,
-    bvh: Bvh,
+    accel: Accel,
     sampler: AnySampler,
     camera: Camera,
     /// The camera's rays for the settings' image size.
@@ -133,7 +135,7 @@ impl CpuRenderer {
         let scene = scene.into();
         let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
         let g = &scene.geometry;
-        let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
+        let accel = Accel::new(&scene);
         let triangle_materials = (0..g.triangle_count()).map(|t| scene.triangle_material(t) as u32).collect();
         let any_alpha = scene.materials.iter().any(|m| m.alpha_mode != AlphaMode::Opaque);
         let any_blended = scene.materials.iter().any(|m| m.alpha_mode == AlphaMode::Blend);
@@ -150,7 +152,7 @@ impl CpuRenderer {
             })
             .collect();
         let normals = g.normals.iter().map(|&e| oct_decode(e)).collect();
-        let (lo, hi) = g.bounds();
+        let (lo, hi) = scene.bounds();
         let offset_scale = offset_scale_of_bounds(lo, hi);
         let emitters = Emitters::new(&scene);
         let light_bvh = emitters
@@ -183,7 +185,7 @@ impl CpuRenderer {
             film: Film::for_settings(&settings),
             scene,
             settings,
-            bvh,
+            accel,
             sampler,
             camera: *camera,
             rays,
@@ -195,6 +197,12 @@ impl CpuRenderer {
             any_crossable,
             offset_scale,
         })
+    }
+
+    /// Bytes of the acceleration structure the renderer traces against (trees and triangles
+    /// in leaf order: one BVH, or one per shared mesh under a TLAS of the instances).
+    pub fn accel_bytes(&self) -> usize {
+        self.accel.bytes()
     }
 
     /// [`CpuRenderer::new`] through the scene's [`Scene::default_camera`] (its first camera, or a
@@ -391,12 +399,24 @@ impl CpuRenderer {
         self.trace(pixel, index, ray.origin, ray.direction, aov)
     }
 
-    /// `Geometry::shading_normal` over the pre-decoded normals (same arithmetic, same bits).
+    /// `Geometry::shading_normal` over the pre-decoded normals (same arithmetic, same bits),
+    /// carried to world space by `instance` (an index into the scene's instances, [`WORLD`] for
+    /// a world-space triangle).
     #[inline]
-    fn shading_normal(&self, t: usize, b1: f32, b2: f32) -> Option<Vec3> {
+    fn shading_normal(&self, instance: u32, t: usize, b1: f32, b2: f32) -> Option<Vec3> {
         let [a, b, c] = *self.scene.geometry.triangles.get(t)?;
         let n = |i: u32| self.normals.get(i as usize).copied();
-        Some(((1.0 - b1 - b2) * n(a)? + b1 * n(b)? + b2 * n(c)?).normalize_or_zero())
+        let n = ((1.0 - b1 - b2) * n(a)? + b1 * n(b)? + b2 * n(c)?).normalize_or_zero();
+        Some(match self.instance(instance) {
+            Some(i) => i.normal(n),
+            None => n,
+        })
+    }
+
+    /// Instance `instance` of the scene (`None` for [`WORLD`]).
+    #[inline]
+    fn instance(&self, instance: u32) -> Option<&furnace_scene::Instance> {
+        if instance == WORLD { None } else { self.scene.instancing.instances.get(instance as usize) }
     }
 
     fn alpha_passes(&self, triangle: u32, barycentrics: Vec2) -> bool {
@@ -415,24 +435,28 @@ impl CpuRenderer {
 
     /// Whether a path ray of blend seed `seed` stops at a hit: not at a mask's cut-out, and at
     /// a blended surface with probability equal to its coverage.
-    fn stops(&self, seed: u32, triangle: u32, barycentrics: Vec2) -> bool {
+    fn stops(&self, seed: u32, instance: u32, triangle: u32, barycentrics: Vec2) -> bool {
         let material = &self.scene.materials[self.triangle_materials[triangle as usize] as usize];
         let b = (barycentrics.x, barycentrics.y);
         match material.alpha_mode {
             AlphaMode::Opaque => true,
             AlphaMode::Mask { .. } => self.scene.alpha_passes(triangle as usize, b, material),
             AlphaMode::Blend => {
+                // Each instance of a triangle decides on its own: one ray crossing two copies
+                // keeps each with its coverage, not both or neither.
+                let seed = if instance == WORLD { seed } else { seed ^ instance.wrapping_mul(0x9e37_79b9) };
                 blend_keeps(seed, triangle, self.scene.coverage(triangle as usize, b, material))
             }
         }
     }
 
-    fn closest_hit(&self, origin: Vec3, direction: Vec3) -> Option<Hit> {
+    fn closest_hit(&self, origin: Vec3, direction: Vec3) -> Option<InstanceHit> {
         if self.any_alpha {
             let seed = if self.any_blended { blend_seed(origin, direction) } else { 0 };
-            self.bvh.closest_hit_masked(origin, direction, f32::INFINITY, |t, b| self.stops(seed, t, b))
+            self.accel
+                .closest_hit_masked(origin, direction, f32::INFINITY, |i, t, b| self.stops(seed, i, t, b))
         } else {
-            self.bvh.closest_hit(origin, direction, f32::INFINITY)
+            self.accel.closest_hit(origin, direction, f32::INFINITY)
         }
     }
 
@@ -446,7 +470,7 @@ impl CpuRenderer {
             return if self.occluded_within(origin, direction, t_max) { Vec3::ZERO } else { carried };
         }
         let scene = &self.scene;
-        let blocked = self.bvh.occluded_masked(origin, direction, t_max, |t, b| {
+        let blocked = self.accel.occluded_masked(origin, direction, t_max, |instance, t, b| {
             let material_index = self.triangle_materials[t as usize] as usize;
             let material = &scene.materials[material_index];
             let coverage = match material.alpha_mode {
@@ -463,7 +487,7 @@ impl CpuRenderer {
                 return carried == Vec3::ZERO;
             }
             // A sheet (or an η = 1 solid): T′ at the angle to its shading normal, times its tint.
-            let normal = self.shading_normal(t as usize, b.x, b.y).unwrap_or(Vec3::Z);
+            let normal = self.shading_normal(instance, t as usize, b.x, b.y).unwrap_or(Vec3::Z);
             let params = match &self.constant_materials[material_index] {
                 Some(c) => c.bsdf.sheet_transmittance(direction.dot(normal)),
                 None => {
@@ -483,9 +507,9 @@ impl CpuRenderer {
     fn occluded_within(&self, origin: Vec3, direction: Vec3, t_max: f32) -> bool {
         // Without crossable materials there are no blended ones: only masks filter hits here.
         if self.any_alpha {
-            self.bvh.occluded_masked(origin, direction, t_max, |t, b| self.alpha_passes(t, b))
+            self.accel.occluded_masked(origin, direction, t_max, |_, t, b| self.alpha_passes(t, b))
         } else {
-            self.bvh.occluded(origin, direction, t_max)
+            self.accel.occluded(origin, direction, t_max)
         }
     }
 }

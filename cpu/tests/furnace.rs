@@ -271,6 +271,7 @@ fn sunlit_lambert_floor() {
     let scene = Scene {
         name: "floor".into(),
         geometry: g,
+        instancing: Default::default(),
         materials: vec![builtin::lambert(albedo), Material::default()],
         textures: Vec::new(),
         images: Vec::new(),

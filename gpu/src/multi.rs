@@ -209,6 +209,14 @@ impl MultiGpuRenderer {
         if contexts.is_empty() {
             return Err(GpuError::Unsupported("no GPU to render on".into()));
         }
+        let flat;
+        let scene = match crate::flatten_instances(scene)? {
+            Some(f) => {
+                flat = f;
+                &flat
+            }
+            None => scene,
+        };
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         // Packed once, within the largest device's limits (a smaller one that it exceeds is

@@ -26,6 +26,7 @@ pub fn furnace_sphere(material: Material, n: u32) -> Scene {
     Scene {
         name: "<built-in furnace>".into(),
         geometry: g,
+        instancing: Default::default(),
         materials: vec![material, Material::default()],
         textures: Vec::new(),
         images: Vec::new(),
@@ -181,6 +182,7 @@ pub fn sunlit_interior(target_triangles: u32) -> Scene {
     Scene {
         name: format!("<built-in sunlit interior, {} triangles>", g.triangles.len()),
         geometry: g,
+        instancing: Default::default(),
         materials,
         textures: Vec::new(),
         images: Vec::new(),

@@ -232,6 +232,20 @@ impl Geometry {
         Some(xyz.extend(if ta.w < 0.0 { -1.0 } else { 1.0 }))
     }
 
+    /// Appends `other`'s vertices and triangles after this geometry's (its vertex indices moved
+    /// past this one's vertices). Both must store the same attributes: the same UV sets, and
+    /// colours and tangents in both or neither (one loader's output).
+    pub fn append(&mut self, other: Geometry) {
+        let base = self.positions.len() as u32;
+        self.positions.extend(other.positions);
+        self.normals.extend(other.normals);
+        self.uvs.extend(other.uvs);
+        self.colors.extend(other.colors);
+        self.tangents.extend(other.tangents);
+        self.triangles.extend(other.triangles.into_iter().map(|t| t.map(|v| v + base)));
+        self.triangle_materials.extend(other.triangle_materials);
+    }
+
     /// Bytes held by the geometry arrays (lengths, not capacities).
     pub fn bytes(&self) -> usize {
         self.positions.len() * 12

@@ -40,6 +40,18 @@ impl Scene {
         g.triangles.iter().flatten().for_each(|&i| h.word(i));
         h.len(g.triangle_materials.len());
         g.triangle_materials.iter().for_each(|&m| h.word(m));
+        // Instancing only where there is some, so that flat scenes keep their recorded hashes.
+        let inst = &self.instancing;
+        if !inst.is_empty() {
+            h.word(inst.world_triangles);
+            h.len(inst.meshes.len());
+            inst.meshes.iter().for_each(|r| [r.start, r.end].into_iter().for_each(|w| h.word(w)));
+            h.len(inst.instances.len());
+            for i in &inst.instances {
+                h.word(i.mesh);
+                i.world_from_object.to_cols_array().iter().for_each(|c| h.word(c.to_bits()));
+            }
+        }
         for image in &self.images {
             h.word(image.width);
             h.word(image.height);

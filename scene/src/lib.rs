@@ -71,6 +71,7 @@ mod error;
 mod file;
 mod geometry;
 mod hash;
+mod instancing;
 mod light;
 mod light_bvh;
 mod load;
@@ -89,9 +90,12 @@ pub use geometry::{
     Geometry, MAX_UV_SETS, VertexAttributes, decode_color, decode_tangent, encode_color, encode_tangent,
     generate_tangents, oct_decode, oct_encode,
 };
+pub use instancing::{Instance, Instancing};
 pub use light::{Light, PointLight, PointLightDistribution, Sky, SpotCone, Sun};
 pub use light_bvh::{LEAF as LIGHT_BVH_LEAF, LightBounds, LightBvh, LightBvhNode};
-pub use load::{ExtensionUse, MAX_COORDINATE, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS};
+pub use load::{
+    ExtensionUse, MAX_COORDINATE, MAX_INSTANCES, MAX_TRIANGLES, MIN_COORDINATE, SUPPORTED_EXTENSIONS,
+};
 pub use material::{
     AlphaMode, Anisotropy, ClearcoatLayer, DiffuseTransmissionFactors, Iridescence, Material, MaterialLayers,
     MaterialSample, SheenLayer, SpecularTextures,
@@ -118,6 +122,9 @@ pub struct Scene {
     pub name: String,
     /// The triangles.
     pub geometry: Geometry,
+    /// Which of them are meshes placed by instances, in object space (empty: all are in world
+    /// space).
+    pub instancing: Instancing,
     /// Materials; the last one is glTF's default material, used by primitives without one.
     pub materials: Vec<Material>,
     /// Textures (glTF `textures`, same indices).
@@ -204,6 +211,14 @@ pub struct SceneStats {
     pub bytes_per_triangle: f64,
     /// Degenerate (zero-area) triangles dropped.
     pub dropped_triangles: usize,
+    /// Meshes stored once and placed by instances ([`Instancing::meshes`]).
+    pub meshes: usize,
+    /// Their placements.
+    pub instances: usize,
+    /// The triangles the image shows: the world-space ones plus each instance's mesh.
+    pub instanced_triangles: u64,
+    /// Bytes of the instances (transform, inverse, normal matrix, mesh).
+    pub instance_bytes: usize,
 }
 
 impl Scene {
@@ -253,7 +268,7 @@ impl Scene {
     /// The first camera, or without one [`Camera::frame_bounds`] of the geometry.
     pub fn default_camera(&self) -> Camera {
         self.camera(0).unwrap_or_else(|| {
-            let (lo, hi) = self.geometry.bounds();
+            let (lo, hi) = self.bounds();
             Camera::frame_bounds(lo, hi)
         })
     }
@@ -269,6 +284,12 @@ impl Scene {
         assert!(s.is_finite() && s > 0.0, "scale_lengths: the factor must be finite and > 0, got {s}");
         for p in &mut self.geometry.positions {
             *p *= s;
+        }
+        // M·(s·p) = s·(M·p) for the linear part: only the translations scale.
+        for i in &mut self.instancing.instances {
+            let mut world = i.world_from_object;
+            world.translation *= s;
+            *i = Instance::new(i.mesh, world.into()).unwrap_or(*i);
         }
         for c in &mut self.cameras {
             c.world_from_camera.translation *= s;
@@ -292,6 +313,14 @@ impl Scene {
             texture_bytes: self.images.iter().map(|i| i.texels.len() * 4).sum(),
             bytes_per_triangle: geometry_bytes as f64 / g.triangle_count().max(1) as f64,
             dropped_triangles: self.dropped_triangles,
+            meshes: self.instancing.meshes.len(),
+            instances: self.instancing.instances.len(),
+            instanced_triangles: if self.instancing.is_empty() {
+                g.triangle_count() as u64
+            } else {
+                u64::from(self.instancing.world_triangles) + self.instancing.instanced_triangles()
+            },
+            instance_bytes: self.instancing.instances.len() * size_of::<Instance>(),
         }
     }
 }

@@ -4,7 +4,7 @@
 //! [`blend_keeps`]). The CPU integrator calls these; `furnace-gpu`'s `scene.wgsl` is
 //! their twin.
 
-use crate::{AlphaMode, Material, Scene, VertexAttributes};
+use crate::{AlphaMode, Instance, Material, Scene, VertexAttributes};
 use furnace_sampling::hash::{hash2, hash3};
 use glam::Vec3;
 
@@ -91,9 +91,12 @@ impl Scene {
     /// normal where it is `None` or zero) with `material`'s glTF normal map applied at `at`
     /// through the vertex tangents — both turned towards the incoming ray for a double-sided
     /// material. `None` on the back of a single-sided material (black, like a one-sided BSDF)
-    /// or for a triangle out of range.
+    /// or for a triangle out of range. A triangle of a shared mesh is placed by its `instance`
+    /// (`interpolated` is then already in world space); `None` for a world-space one.
+    #[allow(clippy::too_many_arguments)]
     pub fn surface_point(
         &self,
+        instance: Option<&Instance>,
         t: usize,
         (b1, b2): (f32, f32),
         material: &Material,
@@ -102,11 +105,20 @@ impl Scene {
         interpolated: Option<Vec3>,
     ) -> Option<SurfacePoint> {
         let g = &self.geometry;
-        let [v0, v1, v2] = g.triangle(t)?;
+        let mut vertices = g.triangle(t)?;
+        if let Some(i) = instance {
+            vertices = vertices.map(|v| i.point(v));
+        }
+        let [v0, v1, v2] = vertices;
         let position = (1.0 - b1 - b2) * v0 + b1 * v1 + b2 * v2;
+        // A mirroring instance turns the winding: its front stays the mesh's front.
         let mut geometric = geometric_normal(v0, v1, v2);
+        if instance.is_some_and(Instance::mirrors) {
+            geometric = -geometric;
+        }
         let base = interpolated.filter(|n| *n != Vec3::ZERO).unwrap_or(geometric);
         let mut shading = self.normal_mapped(
+            instance,
             t,
             (b1, b2),
             base,
@@ -115,13 +127,17 @@ impl Scene {
             at,
         );
         let mut coat = match &material.layers.clearcoat {
-            Some(c) => self.normal_mapped(t, (b1, b2), base, c.normal_texture.as_ref(), c.normal_scale, at),
+            Some(c) => {
+                self.normal_mapped(instance, t, (b1, b2), base, c.normal_texture.as_ref(), c.normal_scale, at)
+            }
             None => shading,
         };
         // Before the flip: the back of a double-sided surface has the front's direction (the
         // same line on the surface; the lobe is symmetric about it).
-        let anisotropy =
-            material.anisotropy.as_ref().and_then(|a| self.anisotropy_direction(t, (b1, b2), shading, a, at));
+        let anisotropy = material
+            .anisotropy
+            .as_ref()
+            .and_then(|a| self.anisotropy_direction(instance, t, (b1, b2), shading, a, at));
         let mapped = shading != base;
         let back_face = geometric.dot(direction) > 0.0;
         if back_face {
@@ -143,13 +159,14 @@ impl Scene {
     /// shading `normal` and unit. `None` without tangents or where the direction vanishes.
     fn anisotropy_direction(
         &self,
+        instance: Option<&Instance>,
         t: usize,
         (b1, b2): (f32, f32),
         normal: Vec3,
         anisotropy: &crate::Anisotropy,
         at: &VertexAttributes,
     ) -> Option<Vec3> {
-        let tangent = self.geometry.tangent(t, b1, b2)?;
+        let tangent = self.world_tangent(instance, t, (b1, b2))?;
         let d = match &anisotropy.texture {
             Some(map) => {
                 let rg = map.sample(at, &self.textures, &self.images);
@@ -170,8 +187,10 @@ impl Scene {
     /// `normal` with a glTF normal map applied at `at` through the vertex tangents: the
     /// tangent-space normal (2·rgb − 1)·(scale, scale, 1) in the frame (T, B = w·N×T, N), with T
     /// made orthogonal to N. `normal` itself without a map or tangents.
+    #[allow(clippy::too_many_arguments)]
     fn normal_mapped(
         &self,
+        instance: Option<&Instance>,
         t: usize,
         (b1, b2): (f32, f32),
         normal: Vec3,
@@ -179,7 +198,9 @@ impl Scene {
         scale: f32,
         at: &VertexAttributes,
     ) -> Vec3 {
-        let (Some(map), Some(tangent)) = (map, self.geometry.tangent(t, b1, b2)) else { return normal };
+        let (Some(map), Some(tangent)) = (map, self.world_tangent(instance, t, (b1, b2))) else {
+            return normal;
+        };
         let m = map.sample(at, &self.textures, &self.images).truncate();
         let m = (2.0 * m - Vec3::ONE) * Vec3::new(scale, scale, 1.0);
         let tn = (tangent.truncate() - normal * normal.dot(tangent.truncate())).normalize_or_zero();
@@ -188,6 +209,18 @@ impl Scene {
         }
         let bn = tangent.w * normal.cross(tn);
         (m.x * tn + m.y * bn + m.z * normal).normalize_or(normal)
+    }
+
+    /// [`crate::Geometry::tangent`] in world space: carried by `instance` for a shared mesh's
+    /// triangle.
+    fn world_tangent(
+        &self,
+        instance: Option<&Instance>,
+        t: usize,
+        (b1, b2): (f32, f32),
+    ) -> Option<glam::Vec4> {
+        let tangent = self.geometry.tangent(t, b1, b2)?;
+        Some(instance.map_or(tangent, |i| i.tangent(tangent)))
     }
 
     /// The alpha test of a hit of triangle `t` (of `material`) at barycentrics `(b1, b2)`: true

@@ -214,7 +214,8 @@ fn main() {
             let t = hit.triangle as usize;
             let material = &scene.materials[scene.triangle_material(t)];
             let (b1, b2) = (hit.barycentrics.x, hit.barycentrics.y);
-            let s = scene.surface_point(t, (b1, b2), material, &Default::default(), ray.direction, None)?;
+            let s =
+                scene.surface_point(None, t, (b1, b2), material, &Default::default(), ray.direction, None)?;
             let leave = offset_ray_origin_scaled(s.position, s.geometric, offset_scale);
             Some(Point { leave, position: s.position, normal: s.geometric })
         })

@@ -25,6 +25,8 @@ mod display_parity;
 mod emission;
 #[path = "environment.rs"]
 mod environment;
+#[path = "instancing.rs"]
+mod instancing;
 #[path = "integrator.rs"]
 mod integrator;
 #[path = "kernel.rs"]

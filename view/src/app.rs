@@ -135,7 +135,7 @@ impl<'h> App<'h> {
             Integrator::set_film(&mut renderer, film)?;
             spp = *done;
         }
-        let (lo, hi) = scene.geometry.bounds();
+        let (lo, hi) = scene.bounds();
         let rig = CameraRig::new(config.camera, (lo, hi));
         let env_intensity = scene.environment().map(|e| e.intensity);
         let (script, script_stdin) = match &config.script {

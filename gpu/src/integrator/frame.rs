@@ -173,7 +173,7 @@ pub(super) fn frame_params_with(
         group_samples: 1,
         tile_width: 8,
         offset_scale: {
-            let (lo, hi) = scene.geometry.bounds();
+            let (lo, hi) = scene.bounds();
             offset_scale_of_bounds(lo, hi)
         },
         point_light_count: scene.point_lights().count() as u32,

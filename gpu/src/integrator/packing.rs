@@ -237,6 +237,12 @@ impl PackedScene {
     ) -> Result<Self, GpuError> {
         let sampler = renderable_sampler(scene, &settings)?;
         let g = &scene.geometry;
+        if !scene.instancing.is_empty() {
+            return Err(GpuError::Unsupported(
+                "a scene with instances: the GPU traverses world-space triangles (pass Scene::flattened())"
+                    .into(),
+            ));
+        }
         if bvh.input_count() != g.triangle_count() || bvh.layout() != furnace_accel::Layout::Cwbvh {
             return Err(GpuError::Unsupported(format!(
                 "a {:?} BVH over {} triangles for a scene of {} (the GPU traverses a CWBVH of the scene's triangles)",

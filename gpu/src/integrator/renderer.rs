@@ -91,6 +91,14 @@ impl GpuRenderer {
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
         renderable_sampler(scene, &settings)?;
+        let flat;
+        let scene = match crate::flatten_instances(scene)? {
+            Some(f) => {
+                flat = f;
+                &flat
+            }
+            None => scene,
+        };
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         Self::with_bvh(ctx, scene, &bvh, camera, settings)
@@ -98,7 +106,8 @@ impl GpuRenderer {
 
     /// [`GpuRenderer::new`] with the scene's BVH already built (`Bvh::from_indexed` over its
     /// positions and triangles with the default options): several devices rendering one scene
-    /// build it once ([`crate::MultiGpuRenderer`]).
+    /// build it once ([`crate::MultiGpuRenderer`]). The scene must have no instances
+    /// ([`Scene::flattened`]).
     ///
     /// # Errors
     /// As [`GpuRenderer::new`]; [`GpuError::Unsupported`] if `bvh` is not a CWBVH built over the

@@ -1,8 +1,13 @@
 //! `EXT_mesh_gpu_instancing`: a node that places its mesh once per instance, each instance's
 //! transform the node's world transform × a TRS read from the extension's `TRANSLATION`,
 //! `ROTATION` and `SCALE` accessors (each optional, identity without it; all of one count).
-//! Instances are flattened like nodes: each copies its mesh's triangles into the scene. The
-//! extension moves only the mesh: the node's camera, light and children are placed once.
+//! The extension moves only the mesh: the node's camera, light and children are placed once.
+//!
+//! Which meshes are stored once ([`shared_meshes`]): every mesh placed more than once (by
+//! nodes or by this extension's instances) unless a placement is skinned, the mesh has morph
+//! targets (its shape depends on the node's weights) or it may emit light (each emitting
+//! instance is a light of its own, kept in world space for the light list); the others are
+//! flattened into world-space triangles.
 
 use super::context::Ctx;
 use crate::accessor::read_floats;
@@ -127,6 +132,48 @@ pub(super) fn instances(
                 )));
             }
             Ok(placed)
+        })
+        .collect()
+}
+
+/// For each mesh of `doc`, whether `scene` stores it once and places it by instances (see the
+/// module's text): `emissive[m]` says material `m` may emit (the default material last).
+pub(super) fn shared_meshes(doc: &gltf::Document, scene: &gltf::Scene<'_>, emissive: &[bool]) -> Vec<bool> {
+    let meshes = doc.meshes().len();
+    let mut placements = vec![0u64; meshes];
+    let mut skinned = vec![false; meshes];
+    let mut visited = vec![false; doc.nodes().len()];
+    let mut stack: Vec<gltf::Node<'_>> = scene.nodes().collect();
+    while let Some(node) = stack.pop() {
+        if std::mem::replace(&mut visited[node.index()], true) {
+            continue;
+        }
+        stack.extend(node.children());
+        let Some(mesh) = node.mesh() else { continue };
+        placements[mesh.index()] += declared_count(doc, &node);
+        skinned[mesh.index()] |= node.skin().is_some();
+    }
+    let default_material = emissive.len().saturating_sub(1);
+    let emits = |i: usize| emissive.get(i).copied().unwrap_or(true);
+    doc.meshes()
+        .map(|mesh| {
+            let m = mesh.index();
+            placements[m] >= 2
+                && !skinned[m]
+                && mesh.primitives().all(|p| {
+                    let own = p.material().index().unwrap_or(default_material);
+                    // A variant may map the primitive to another material.
+                    let mapped = p
+                        .extension_value("KHR_materials_variants")
+                        .and_then(|v| v.get("mappings"))
+                        .and_then(Value::as_array)
+                        .into_iter()
+                        .flatten()
+                        .filter_map(|mapping| mapping.get("material")?.as_u64());
+                    p.morph_targets().len() == 0
+                        && !emits(own)
+                        && mapped.into_iter().all(|i| !emits(usize::try_from(i).unwrap_or(usize::MAX)))
+                })
         })
         .collect()
 }

@@ -30,7 +30,7 @@ pub use document::{ExtensionUse, SUPPORTED_EXTENSIONS};
 use crate::error::SceneError;
 use crate::geometry::Geometry;
 use crate::material::Material;
-use crate::{Light, Scene, Sky};
+use crate::{Instancing, Light, Scene, Sky};
 use context::Ctx;
 use glam::Vec3;
 use primitive::Meshes;
@@ -79,13 +79,26 @@ pub(crate) fn load(
     let scene = nodes::scene_to_render(&ctx, &doc)?;
     let sky = nodes::read_sky(&mut ctx, &scene);
     let environment = nodes::read_environment(&mut ctx, &scene)?;
-    let triangles = nodes::flattened_triangles(&doc, &scene);
-    if triangles > MAX_TRIANGLES {
+    let emissive: Vec<bool> = materials.iter().map(|m| m.emissive != Vec3::ZERO).collect();
+    let shared = instancing::shared_meshes(&doc, &scene, &emissive);
+    let declared = nodes::declared(&doc, &scene, &shared);
+    if declared.triangles > MAX_TRIANGLES {
+        let triangles = declared.triangles;
         return Err(ctx.invalid((
             format!("scenes[{}]", scene.index()),
             format!(
-                "its meshes, placed by its nodes, make {triangles} triangles: more than the {MAX_TRIANGLES} \
-                 (2²⁸) a scene may have"
+                "its meshes, placed by its nodes, make {triangles} triangles to store: more than the \
+                 {MAX_TRIANGLES} (2²⁸) a scene may have"
+            ),
+        )));
+    }
+    if declared.instances > MAX_INSTANCES {
+        let instances = declared.instances;
+        return Err(ctx.invalid((
+            format!("scenes[{}]", scene.index()),
+            format!(
+                "its nodes and EXT_mesh_gpu_instancing place shared meshes {instances} times: more than \
+                 the {MAX_INSTANCES} (2²⁴) instances a scene may have"
             ),
         )));
     }
@@ -99,8 +112,20 @@ pub(crate) fn load(
     let mut meshes =
         Meshes::new(&doc, &buffers, uv_sets, needs_tangent, needs_color, normal_sets, default_material);
     meshes.variant = variant.map(|v| (v, variant_names.len()));
-    let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes, &pose)?;
+    let flat = nodes::flatten(&mut ctx, &doc, &scene, meshes, &pose, shared)?;
     let (mut geo, dropped) = (flat.meshes.geo, flat.meshes.dropped);
+    let mut instancing = flat.instancing;
+    if instancing.is_empty() {
+        instancing = Instancing::default();
+    } else {
+        // The shared meshes after the world-space triangles.
+        let world = geo.triangle_count() as u32;
+        geo.append(flat.meshes.object);
+        instancing.world_triangles = world;
+        for r in &mut instancing.meshes {
+            *r = r.start + world..r.end + world;
+        }
+    }
     check_geometry(&mut ctx, &geo, dropped)?;
     if !needs_tangent {
         geo.tangents = Vec::new();
@@ -108,6 +133,7 @@ pub(crate) fn load(
     Ok(Scene {
         name: file.to_string(),
         geometry: geo,
+        instancing,
         materials,
         textures,
         images,
@@ -129,12 +155,17 @@ pub(crate) fn load(
     })
 }
 
-/// The most triangles a scene may flatten to: 2²⁸. A mesh is copied once per node that places
-/// it, so a file of a few megabytes can name billions of triangles; the count is taken from the
+/// The most triangles a scene may store: 2²⁸. A mesh placed once, skinned, morphed or emissive
+/// is copied once per node that places it (a shared one is stored once), so a file of a few
+/// megabytes can name billions of triangles; the count is taken from the
 /// accessors' counts before any is read, and a scene above it is refused instead of filling
 /// memory (at about 64 bytes a triangle with its vertices, 2²⁸ is some 16 GiB, past what the
 /// GPU integrator can bind).
 pub const MAX_TRIANGLES: u64 = 1 << 28;
+
+/// The most instances of shared meshes a scene may have: 2²⁴ (each takes some 150 bytes on the
+/// host; the count is taken from the accessors before any is read).
+pub const MAX_INSTANCES: u64 = 1 << 24;
 
 /// Refuses a scene without triangles; warns about dropped triangles and about coordinates
 /// outside the range the renderer handles.

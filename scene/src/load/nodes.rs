@@ -28,6 +28,12 @@ pub(super) struct Flattened<'b> {
     worlds: Vec<Option<Mat4>>,
     /// Each skin's joint matrices, computed when a node first uses it.
     skins: Vec<Option<JointMatrices>>,
+    /// Per glTF mesh: stored once and placed by instances ([`super::instancing::shared_meshes`]).
+    shared: Vec<bool>,
+    /// Per glTF mesh: its index in `instancing.meshes` once stored.
+    slots: Vec<Option<u32>>,
+    /// The shared meshes (triangle ranges of `meshes.object`) and their placements.
+    pub(super) instancing: crate::Instancing,
 }
 
 /// The file's default scene, else its first.
@@ -117,25 +123,43 @@ pub(super) fn read_environment(
     Ok(Some(crate::Environment { intensity, ..crate::Environment::new(std::sync::Arc::new(map)) }))
 }
 
-/// How many triangles `scene` would flatten to, from the accessors' counts alone (nothing is
-/// read): each node once, as [`flatten`] visits them, each triangle primitive's triangles (a
-/// list's index count, or vertex count, / 3; a strip's or fan's count − 2) per node that places
-/// its mesh, times its instances (`EXT_mesh_gpu_instancing`). An upper bound: `flatten` may
-/// still skip subtrees and drop triangles.
-pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>) -> u64 {
+/// What `scene` will store, from the accessors' counts alone (nothing is read): the triangles
+/// (each node once, as [`flatten`] visits them; each triangle primitive's triangles — a list's
+/// index count, or vertex count, / 3; a strip's or fan's count − 2 — per node that places its
+/// mesh, times its instances (`EXT_mesh_gpu_instancing`), or once for a mesh `shared` marks)
+/// and the instances of shared meshes. Upper bounds: `flatten` may still skip subtrees and drop
+/// triangles.
+pub(super) struct Declared {
+    /// Triangles stored.
+    pub(super) triangles: u64,
+    /// Placements of shared meshes.
+    pub(super) instances: u64,
+}
+
+/// [`Declared`] for `scene`, `shared[m]` saying whether mesh `m` is stored once.
+pub(super) fn declared(doc: &gltf::Document, scene: &gltf::Scene<'_>, shared: &[bool]) -> Declared {
     let json = doc.as_json();
     let count =
         |i: gltf::json::Index<gltf::json::Accessor>| json.accessors.get(i.value()).map_or(0, |a| a.count.0);
     let mut visited = vec![false; json.nodes.len()];
+    let mut stored = vec![false; json.meshes.len()];
     let mut stack: Vec<gltf::Node<'_>> = scene.nodes().collect();
-    let mut total = 0u64;
+    let mut out = Declared { triangles: 0, instances: 0 };
     while let Some(node) = stack.pop() {
         if std::mem::replace(&mut visited[node.index()], true) {
             continue;
         }
         stack.extend(node.children());
         let Some(mesh) = node.mesh().and_then(|m| json.meshes.get(m.index())) else { continue };
-        let copies = super::instancing::declared_count(doc, &node);
+        let m = node.mesh().map_or(0, |m| m.index());
+        let mut copies = super::instancing::declared_count(doc, &node);
+        if shared.get(m).copied().unwrap_or(false) && node.skin().is_none() {
+            out.instances = out.instances.saturating_add(copies);
+            if std::mem::replace(&mut stored[m], true) {
+                continue;
+            }
+            copies = 1;
+        }
         for p in &mesh.primitives {
             use gltf::mesh::Mode;
             let mode = match p.mode {
@@ -155,10 +179,10 @@ pub(super) fn flattened_triangles(doc: &gltf::Document, scene: &gltf::Scene<'_>)
                 Some(Mode::TriangleStrip | Mode::TriangleFan) => vertices.saturating_sub(2),
                 _ => 0,
             };
-            total = total.saturating_add(triangles.saturating_mul(copies));
+            out.triangles = out.triangles.saturating_add(triangles.saturating_mul(copies));
         }
     }
-    total
+    out
 }
 
 /// Walks `scene`'s nodes depth-first (children in file order), each once, at `pose`, adding
@@ -170,14 +194,26 @@ pub(super) fn flatten<'b>(
     scene: &gltf::Scene<'_>,
     meshes: Meshes<'b>,
     pose: &'b Pose,
+    shared: Vec<bool>,
 ) -> Result<Flattened<'b>, SceneError> {
     let worlds = match doc.skins().len() {
         0 => Vec::new(),
         _ => super::skin::world_transforms(ctx, doc, pose),
     };
     let skins = vec![None; doc.skins().len()];
-    let mut out =
-        Flattened { meshes, cameras: Vec::new(), sun: None, lights: Vec::new(), pose, worlds, skins };
+    let slots = vec![None; shared.len()];
+    let mut out = Flattened {
+        meshes,
+        cameras: Vec::new(),
+        sun: None,
+        lights: Vec::new(),
+        pose,
+        worlds,
+        skins,
+        shared,
+        slots,
+        instancing: crate::Instancing::default(),
+    };
     let mut visited = vec![false; doc.nodes().len()];
     let mut stack: Vec<(gltf::Node<'_>, Mat4)> = scene.nodes().map(|n| (n, Mat4::IDENTITY)).collect();
     stack.reverse();
@@ -240,6 +276,14 @@ impl Flattened<'_> {
                 skin: skin.as_ref(),
                 node_world: world,
             };
+            if self.shared.get(mesh.index()).copied().unwrap_or(false) && skin.is_none() {
+                let slot = self.shared_mesh(ctx, &mesh, npath, &posing)?;
+                // A transform that collapses the mesh (a zero scale) places nothing.
+                self.instancing
+                    .instances
+                    .extend(worlds.iter().filter_map(|&w| crate::Instance::new(slot, w)));
+                return Ok(());
+            }
             for prim in mesh.primitives() {
                 let ppath = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
                 self.meshes.add_primitive(ctx, &prim, (&ppath, npath), &worlds, &posing)?;
@@ -251,6 +295,37 @@ impl Flattened<'_> {
             );
         }
         Ok(())
+    }
+
+    /// The index in `instancing.meshes` of shared `mesh`, its primitives read into the object
+    /// store (in object space) the first time a node places it.
+    fn shared_mesh(
+        &mut self,
+        ctx: &mut Ctx<'_>,
+        mesh: &gltf::Mesh<'_>,
+        npath: &str,
+        posing: &Posing<'_>,
+    ) -> Result<u32, SceneError> {
+        if let Some(slot) = self.slots[mesh.index()] {
+            return Ok(slot);
+        }
+        std::mem::swap(&mut self.meshes.geo, &mut self.meshes.object);
+        let start = self.meshes.geo.triangle_count() as u32;
+        let mut added = Ok(());
+        for prim in mesh.primitives() {
+            let ppath = format!("meshes[{}].primitives[{}]", mesh.index(), prim.index());
+            added = self.meshes.add_primitive(ctx, &prim, (&ppath, npath), &[Mat4::IDENTITY], posing);
+            if added.is_err() {
+                break;
+            }
+        }
+        let end = self.meshes.geo.triangle_count() as u32;
+        std::mem::swap(&mut self.meshes.geo, &mut self.meshes.object);
+        added?;
+        let slot = self.instancing.meshes.len() as u32;
+        self.instancing.meshes.push(start..end);
+        self.slots[mesh.index()] = Some(slot);
+        Ok(slot)
     }
 
     /// `skin`'s joint matrices at the pose (computed once per skin).

@@ -31,6 +31,9 @@ pub(super) struct Meshes<'b> {
     /// every primitive's own material).
     pub(super) variant: Option<(usize, usize)>,
     pub(super) geo: Geometry,
+    /// The meshes stored once, in object space (placed by instances), while `geo` holds the
+    /// world-space triangles.
+    pub(super) object: Geometry,
     /// Zero-area triangles dropped.
     pub(super) dropped: usize,
 }
@@ -118,6 +121,7 @@ impl<'b> Meshes<'b> {
             default_material,
             variant: None,
             geo: Geometry::default(),
+            object: Geometry::default(),
             dropped: 0,
         }
     }

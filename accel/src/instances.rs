@@ -1,0 +1,387 @@
+//! Two-level acceleration: one BVH per mesh (a BLAS, in the mesh's object space), a binary BVH
+//! over the instances' world-space boxes (the TLAS), and rays carried into each instance they
+//! may hit by its inverse transform.
+//!
+//! A ray `o + t·d` transformed by an affine map keeps its parameter: `A⁻¹(o + t·d) =
+//! A⁻¹o + t·(A⁻¹d)` with the direction left unnormalised, so a hit's `t` in an instance is its
+//! world `t`, and the closest hit so far bounds the next instance's query directly.
+//!
+//! Self-intersection across the transform: the integrators offset a ray's origin in world space
+//! (`offset_ray_origin_scaled`: 256 ULPs of the world coordinate, or a fixed step scaled to the
+//! scene), and the offset origin is then carried into the object by `A⁻¹`. Rounding in that
+//! product moves it by a few ULPs of the world coordinate, magnified by at most the transform's
+//! condition number (the ratio of its largest to smallest scale), so the offset's 256 ULPs stay
+//! ahead of it for transforms whose scales differ by less than ~50×
+//! (`tests/instances.rs` measures it, in `docs/stability.md`).
+
+use glam::{Affine3A, Vec2, Vec3, Vec3A};
+use obvhs::{aabb::Aabb, ploc::PlocBuilder};
+use rayon::prelude::*;
+use std::ops::Range;
+
+use crate::{BuildOptions, Bvh, Hit};
+
+/// A node of the TLAS, 32 bytes: its box, and either its two children (`count` 0, the first at
+/// `first`, the second after it) or its instances (`count` > 0, slots `first..first + count` of
+/// the instance order).
+#[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
+pub struct TlasNode {
+    /// Box minimum.
+    pub min: [f32; 3],
+    /// 0 for an inner node, else its instances.
+    pub count: u32,
+    /// Box maximum.
+    pub max: [f32; 3],
+    /// First child or first instance slot.
+    pub first: u32,
+}
+
+const _: () = assert!(size_of::<TlasNode>() == 32);
+
+/// A closest hit of a [`TwoLevel`] query: the triangle (its id in the caller's numbering), and
+/// the instance that placed it (`None` for a world-space triangle).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct InstanceHit {
+    /// The triangle, distance and barycentrics (as the mesh's own [`Bvh`] reports them).
+    pub hit: Hit,
+    /// The instance, an index into the instances given to [`TwoLevel::build`].
+    pub instance: Option<u32>,
+}
+
+/// One placement: the mesh and the transform a ray is carried into it by.
+#[derive(Clone, Copy, Debug)]
+struct Placement {
+    mesh: u32,
+    object_from_world: Affine3A,
+}
+
+/// World-space triangles in one BVH, and meshes placed by instances under a TLAS.
+///
+/// Triangle ids are the caller's: the world triangles' ids are the indices given to
+/// [`TwoLevel::build`] (`world` range), a mesh's are its range's.
+pub struct TwoLevel {
+    world: Option<Bvh>,
+    /// One BVH per mesh, with the id of its first triangle.
+    meshes: Vec<(Bvh, u32)>,
+    placements: Vec<Placement>,
+    nodes: Vec<TlasNode>,
+    /// Leaf slots → instance index.
+    order: Vec<u32>,
+    unique_triangles: usize,
+}
+
+/// The box padding: a fraction of the box's extent plus of its largest coordinate, so that the
+/// transformed corners' rounding (a few ULPs) cannot cut a triangle off.
+const PAD: f32 = 1e-5;
+
+impl TwoLevel {
+    /// Builds the world BVH over `triangles[world]` and one BVH per `meshes` range (all in
+    /// parallel, each with the preset its size picks), then the TLAS over `instances`
+    /// (`(mesh, world_from_object)`). `positions` and `triangles` are one indexed store; an
+    /// instance's mesh index must be in range.
+    ///
+    /// # Panics
+    /// If an instance names a mesh out of range.
+    pub fn build(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        world: Range<u32>,
+        meshes: &[Range<u32>],
+        instances: &[(u32, Affine3A)],
+    ) -> Self {
+        let build = |r: &Range<u32>| {
+            Bvh::from_indexed(
+                positions,
+                &triangles[r.start as usize..r.end as usize],
+                BuildOptions::default(),
+            )
+        };
+        let (world_bvh, blas) = rayon::join(
+            || (!world.is_empty()).then(|| build(&world)),
+            || meshes.par_iter().map(|r| (build(r), r.start)).collect::<Vec<_>>(),
+        );
+        let unique_triangles = world.len() + meshes.iter().map(ExactSizeIterator::len).sum::<usize>();
+        let bounds: Vec<Option<(Vec3, Vec3)>> = blas.iter().map(|(b, _)| b.bounds()).collect();
+        let mut aabbs = Vec::with_capacity(instances.len());
+        let mut kept = Vec::with_capacity(instances.len());
+        let mut placements = Vec::with_capacity(instances.len());
+        for (index, &(mesh, world_from_object)) in instances.iter().enumerate() {
+            assert!((mesh as usize) < meshes.len(), "instance {index}: mesh {mesh} of {}", meshes.len());
+            placements.push(Placement { mesh, object_from_world: world_from_object.inverse() });
+            let Some((lo, hi)) = bounds[mesh as usize] else { continue };
+            let (mut wlo, mut whi) = (Vec3A::INFINITY, Vec3A::NEG_INFINITY);
+            for k in 0..8 {
+                let corner = Vec3::new(
+                    if k & 1 == 0 { lo.x } else { hi.x },
+                    if k & 2 == 0 { lo.y } else { hi.y },
+                    if k & 4 == 0 { lo.z } else { hi.z },
+                );
+                let p = Vec3A::from(world_from_object.transform_point3(corner));
+                wlo = wlo.min(p);
+                whi = whi.max(p);
+            }
+            if !(wlo.is_finite() && whi.is_finite()) {
+                continue;
+            }
+            let pad = (whi - wlo) * PAD + Vec3A::splat(wlo.abs().max(whi.abs()).max_element() * PAD);
+            aabbs.push(Aabb { min: wlo - pad, max: whi + pad });
+            kept.push(index as u32);
+        }
+        let (nodes, order) = tlas(&aabbs, &kept);
+        Self { world: world_bvh, meshes: blas, placements, nodes, order, unique_triangles }
+    }
+
+    /// The TLAS nodes, root first (none without instances).
+    pub fn tlas_nodes(&self) -> &[TlasNode] {
+        &self.nodes
+    }
+
+    /// The instance of each TLAS leaf slot.
+    pub fn tlas_order(&self) -> &[u32] {
+        &self.order
+    }
+
+    /// The world-space triangles' BVH, if there are any.
+    pub fn world(&self) -> Option<&Bvh> {
+        self.world.as_ref()
+    }
+
+    /// Each mesh's BVH with the id of its first triangle.
+    pub fn meshes(&self) -> &[(Bvh, u32)] {
+        &self.meshes
+    }
+
+    /// Triangles stored: the world ones and each mesh's once.
+    pub fn unique_triangles(&self) -> usize {
+        self.unique_triangles
+    }
+
+    /// Bytes of the trees and triangles held for the CPU queries (the meshes' BVHs, their
+    /// triangles in leaf order, the TLAS and the instances).
+    pub fn bytes(&self) -> usize {
+        let bvh = self.world.iter().chain(self.meshes.iter().map(|(b, _)| b)).map(Bvh::bytes).sum::<usize>();
+        bvh + self.nodes.len() * size_of::<TlasNode>()
+            + self.order.len() * 4
+            + self.placements.len() * size_of::<Placement>()
+    }
+
+    /// The closest hit of `origin + t·dir`, `0 < t < t_max`, over the world triangles and every
+    /// instance; `mask(instance, triangle, barycentrics)` filters candidates as
+    /// [`Bvh::closest_hit_masked`]'s mask does (`instance` is `u32::MAX` for a world triangle).
+    pub fn closest_hit_masked(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_max: f32,
+        mut mask: impl FnMut(u32, u32, Vec2) -> bool,
+    ) -> Option<InstanceHit> {
+        let mut best = self
+            .world
+            .as_ref()
+            .and_then(|w| w.closest_hit_masked(origin, dir, t_max, |t, b| mask(u32::MAX, t, b)))
+            .map(|hit| InstanceHit { hit, instance: None });
+        let current = std::cell::Cell::new(best.map_or(t_max, |b| b.hit.t));
+        self.instances_along(
+            origin,
+            dir,
+            || current.get(),
+            |instance, o, d| {
+                let (bvh, first) = &self.meshes[self.placements[instance as usize].mesh as usize];
+                let hit = bvh.closest_hit_masked(o, d, current.get(), |t, b| mask(instance, t + first, b));
+                if let Some(mut hit) = hit {
+                    hit.triangle += first;
+                    current.set(hit.t);
+                    best = Some(InstanceHit { hit, instance: Some(instance) });
+                }
+                false
+            },
+        );
+        best
+    }
+
+    /// [`closest_hit_masked`](Self::closest_hit_masked) with every candidate accepted.
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<InstanceHit> {
+        self.closest_hit_masked(origin, dir, t_max, |_, _, _| true)
+    }
+
+    /// Whether any triangle `mask` accepts lies along `origin + t·dir`, `0 < t < t_max`.
+    pub fn occluded_masked(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t_max: f32,
+        mut mask: impl FnMut(u32, u32, Vec2) -> bool,
+    ) -> bool {
+        if let Some(w) = &self.world
+            && w.occluded_masked(origin, dir, t_max, |t, b| mask(u32::MAX, t, b))
+        {
+            return true;
+        }
+        self.instances_along(
+            origin,
+            dir,
+            || t_max,
+            |instance, o, d| {
+                let (bvh, first) = &self.meshes[self.placements[instance as usize].mesh as usize];
+                bvh.occluded_masked(o, d, t_max, |t, b| mask(instance, t + first, b))
+            },
+        )
+    }
+
+    /// [`occluded_masked`](Self::occluded_masked) with every candidate accepted.
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        self.occluded_masked(origin, dir, t_max, |_, _, _| true)
+    }
+
+    /// Visits the instances whose boxes the ray enters before `t_max()`, nearer boxes first,
+    /// calling `visit(instance, origin, direction)` with the ray in the instance's object
+    /// space; stops when `visit` returns true, and then returns true.
+    #[inline]
+    fn instances_along(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        mut t_max: impl FnMut() -> f32,
+        mut visit: impl FnMut(u32, Vec3, Vec3) -> bool,
+    ) -> bool {
+        if self.nodes.is_empty() || !(origin.is_finite() && dir.is_finite()) || dir == Vec3::ZERO {
+            return false;
+        }
+        let inv = dir.map(safe_recip);
+        let mut stack = [0u32; 64];
+        let mut top = 0usize;
+        let mut node = 0u32;
+        loop {
+            let n = &self.nodes[node as usize];
+            if n.count > 0 {
+                for slot in n.first..n.first + n.count {
+                    let instance = self.order[slot as usize];
+                    let a = &self.placements[instance as usize].object_from_world;
+                    if visit(instance, a.transform_point3(origin), a.transform_vector3(dir)) {
+                        return true;
+                    }
+                }
+            } else {
+                let limit = t_max();
+                let (a, b) = (n.first, n.first + 1);
+                let ta = enter(&self.nodes[a as usize], origin, inv, limit);
+                let tb = enter(&self.nodes[b as usize], origin, inv, limit);
+                match (ta, tb) {
+                    (Some(ta), Some(tb)) => {
+                        let (near, far) = if ta <= tb { (a, b) } else { (b, a) };
+                        if top < stack.len() {
+                            stack[top] = far;
+                            top += 1;
+                            node = near;
+                            continue;
+                        }
+                        // A TLAS deeper than the stack (never built: PLOC's trees over 2²⁴
+                        // instances stay far shallower) visits the far child's subtree later
+                        // by recursion instead of losing it.
+                        if self.subtree(far, origin, dir, inv, &mut t_max, &mut visit) {
+                            return true;
+                        }
+                        node = near;
+                        continue;
+                    }
+                    (Some(_), None) => {
+                        node = a;
+                        continue;
+                    }
+                    (None, Some(_)) => {
+                        node = b;
+                        continue;
+                    }
+                    (None, None) => {}
+                }
+            }
+            // Pop the next subtree still entered before the closest hit.
+            loop {
+                if top == 0 {
+                    return false;
+                }
+                top -= 1;
+                node = stack[top];
+                if enter(&self.nodes[node as usize], origin, inv, t_max()).is_some() {
+                    break;
+                }
+            }
+        }
+    }
+
+    /// The subtree under `node`, recursively (the deep-tree fallback of `instances_along`).
+    fn subtree(
+        &self,
+        node: u32,
+        origin: Vec3,
+        dir: Vec3,
+        inv: Vec3,
+        t_max: &mut impl FnMut() -> f32,
+        visit: &mut impl FnMut(u32, Vec3, Vec3) -> bool,
+    ) -> bool {
+        let n = &self.nodes[node as usize];
+        if enter(n, origin, inv, t_max()).is_none() {
+            return false;
+        }
+        if n.count > 0 {
+            return (n.first..n.first + n.count).any(|slot| {
+                let instance = self.order[slot as usize];
+                let a = &self.placements[instance as usize].object_from_world;
+                visit(instance, a.transform_point3(origin), a.transform_vector3(dir))
+            });
+        }
+        self.subtree(n.first, origin, dir, inv, t_max, visit)
+            || self.subtree(n.first + 1, origin, dir, inv, t_max, visit)
+    }
+}
+
+/// The ray's entry distance into `node`'s box if it enters before `t_max` (slab test; the
+/// exit distance widened by 2γ₃ as Ize's robust traversal does, so that rounding cannot turn a
+/// grazing hit into a miss).
+#[inline(always)]
+fn enter(node: &TlasNode, origin: Vec3, inv: Vec3, t_max: f32) -> Option<f32> {
+    let t0 = (Vec3::from(node.min) - origin) * inv;
+    let t1 = (Vec3::from(node.max) - origin) * inv;
+    let near = t0.min(t1).max_element().max(0.0);
+    let far = t0.max(t1).min_element() * (1.0 + 2.0 * GAMMA3);
+    (near <= far && near < t_max).then_some(near)
+}
+
+/// γ₃ = 3ε/(1 − 3ε), ε = 2⁻²⁴ (pbrt's `gamma(3)`).
+const GAMMA3: f32 = 3.0 * 5.960_464_5e-8 / (1.0 - 3.0 * 5.960_464_5e-8);
+
+/// 1/x, with ±0 mapped to a large finite value of its sign (so that `0 · (1/x)` stays 0, not
+/// NaN, in the slab test).
+#[inline(always)]
+fn safe_recip(x: f32) -> f32 {
+    if x == 0.0 { 1.267_650_6e30_f32.copysign(x) } else { 1.0 / x }
+}
+
+/// The TLAS over `aabbs` (the boxes of instances `ids`): obvhs's PLOC builder, one instance a
+/// leaf, as 32-byte nodes.
+fn tlas(aabbs: &[Aabb], ids: &[u32]) -> (Vec<TlasNode>, Vec<u32>) {
+    if aabbs.is_empty() {
+        return (Vec::new(), Vec::new());
+    }
+    let params = obvhs::BvhBuildParams::medium_build();
+    let bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
+        params.ploc_search_distance,
+        aabbs,
+        (0..aabbs.len() as u32).collect(),
+        params.sort_precision,
+        params.search_depth_threshold,
+    );
+    let nodes = bvh2
+        .nodes
+        .iter()
+        .map(|n| TlasNode {
+            min: n.aabb.min.to_array(),
+            count: n.prim_count,
+            max: n.aabb.max.to_array(),
+            first: n.first_index,
+        })
+        .collect();
+    let order = bvh2.primitive_indices.iter().map(|&k| ids[k as usize]).collect();
+    (nodes, order)
+}
