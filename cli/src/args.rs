@@ -97,7 +97,8 @@ impl LoadArgs {
 #[derive(Debug, Clone, Args)]
 pub struct RenderArgs {
     /// The .gltf or .glb scene, or interior:N (the procedural sunlit interior of about N
-    /// triangles, e.g. interior:1e7, for stress tests); without it, the built-in reference
+    /// triangles, e.g. interior:1e7, for stress tests), or forest:N[:SEED] (N instanced plants
+    /// of 10⁴–10⁵ triangles on terrain, e.g. forest:1e5); without it, the built-in reference
     /// Cornell box (with --resume: the scene the file was rendered from).
     pub scene: Option<PathBuf>,
     #[command(flatten)]
@@ -429,7 +430,8 @@ pub struct BenchArgs {
     #[arg(long, value_name = "all|LIST", conflicts_with_all = ["adapter", "group_samples"])]
     pub gpus: Option<furnace_cli::backend::GpuSet>,
     /// The scene: cbox (the built-in reference Cornell box), interior:N (the procedural sunlit
-    /// interior of about N triangles, e.g. interior:1e6), or a .gltf/.glb path.
+    /// interior of about N triangles, e.g. interior:1e6), forest:N[:SEED] (N instanced plants
+    /// on terrain, e.g. forest:1e5), or a .gltf/.glb path.
     #[arg(long, default_value = "cbox", value_parser = parse_scene)]
     pub scene: SceneArg,
     #[command(flatten)]
@@ -484,6 +486,8 @@ pub enum SceneArg {
     Cbox,
     /// `furnace_scene::builtin::sunlit_interior` of about this many triangles.
     Interior(u32),
+    /// `furnace_scene::builtin::forest` of this many instances, with this seed.
+    Forest(u32, u64),
     /// A glTF/GLB file.
     File(PathBuf),
 }
@@ -491,18 +495,39 @@ pub enum SceneArg {
 /// The most triangles `--scene interior:N` accepts.
 pub const MAX_INTERIOR_TRIANGLES: u32 = 20_000_000;
 
+/// A whole number written plainly or in scientific notation (`1000000`, `1e6`, `1_000_000`).
+fn whole_number(n: &str) -> Option<u64> {
+    let t = n.trim().replace('_', "");
+    t.parse::<u64>().ok().or_else(|| {
+        t.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite() && *x >= 0.0 && x.fract() == 0.0 && *x < 1e19)
+            .map(|x| x as u64)
+    })
+}
+
+/// Whether `s` names a built-in scene with a parameter (`interior:N`, `forest:N`).
+pub(crate) fn is_builtin_scene(s: &str) -> bool {
+    s.starts_with("interior:") || s.starts_with("forest:")
+}
+
 pub(crate) fn parse_scene(s: &str) -> Result<SceneArg, String> {
     if s == "cbox" {
         return Ok(SceneArg::Cbox);
     }
+    if let Some(rest) = s.strip_prefix("forest:") {
+        let (n, seed) = rest.split_once(':').unwrap_or((rest, "0"));
+        let max = furnace_scene::MAX_INSTANCES;
+        return match (whole_number(n), whole_number(seed)) {
+            (Some(v), Some(seed)) if (1..=max).contains(&v) => Ok(SceneArg::Forest(v as u32, seed)),
+            (Some(v), Some(_)) => Err(format!("forest:{v}: the instance count must be from 1 to {max}")),
+            _ => Err(format!(
+                "'{s}': forest:N[:SEED] needs a whole number of instances and of seed (e.g. forest:1e5 or forest:1000:7)"
+            )),
+        };
+    }
     if let Some(n) = s.strip_prefix("interior:") {
-        let t = n.trim().replace('_', "");
-        let value = t.parse::<u64>().ok().or_else(|| {
-            t.parse::<f64>()
-                .ok()
-                .filter(|x| x.is_finite() && *x >= 0.0 && x.fract() == 0.0 && *x < 1e19)
-                .map(|x| x as u64)
-        });
+        let value = whole_number(n);
         return match value {
             Some(v) if (1..=u64::from(MAX_INTERIOR_TRIANGLES)).contains(&v) => {
                 Ok(SceneArg::Interior(v as u32))
@@ -519,7 +544,10 @@ pub(crate) fn parse_scene(s: &str) -> Result<SceneArg, String> {
     if lower.ends_with(".gltf") || lower.ends_with(".glb") {
         return Ok(SceneArg::File(PathBuf::from(s)));
     }
-    Err(format!("unknown scene '{s}': expected cbox, interior:N (about N triangles) or a .gltf/.glb path"))
+    Err(format!(
+        "unknown scene '{s}': expected cbox, interior:N (about N triangles), forest:N (N instanced plants) or a \
+         .gltf/.glb path"
+    ))
 }
 
 /// The largest image side accepted: the largest image furnace reads back

@@ -319,6 +319,7 @@ fn load(scene: &SceneArg, options: &furnace_scene::LoadOptions) -> Result<Scene,
     match scene {
         SceneArg::Cbox => builtin::cornell_box().map_err(|e| e.to_string()),
         SceneArg::Interior(n) => Ok(builtin::sunlit_interior(*n)),
+        SceneArg::Forest(n, seed) => Ok(builtin::forest(*n, *seed)),
         SceneArg::File(p) => Scene::load_with(p, options).map_err(|e| e.to_string()),
     }
 }
@@ -361,6 +362,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     let scene_name = match &a.scene {
         SceneArg::Cbox => "cbox".to_string(),
         SceneArg::Interior(n) => format!("interior:{n}"),
+        SceneArg::Forest(n, seed) => format!("forest:{n}:{seed}"),
         SceneArg::File(p) => p.display().to_string(),
     };
     let scene = Arc::new(scene);

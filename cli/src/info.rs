@@ -14,7 +14,7 @@ pub fn run(a: &InfoArgs) -> Result<(), String> {
         crate::env::check_sampling(settings.env_sampling, settings.light_sampling)?;
     }
     let options = a.load.options();
-    let scene = Scene::load_with(&a.scene, &options).map_err(|e| e.to_string())?;
+    let scene = crate::render::load_scene(Some(&a.scene), &options)?;
     print!("{}", describe(&scene));
     print!("{}", describe_extensions(&scene.extensions));
     print!("{}", describe_variants(&scene, a.load.variant.as_deref()));

@@ -590,17 +590,17 @@ fn shell_quote(s: &str) -> String {
     }
 }
 
-fn load_scene(path: Option<&Path>, options: &LoadOptions) -> Result<Scene, String> {
-    let is_file = path.is_some_and(|p| !p.to_str().is_some_and(|s| s.starts_with("interior:")));
+pub(crate) fn load_scene(path: Option<&Path>, options: &LoadOptions) -> Result<Scene, String> {
+    let builtin = |p: &Path| p.to_str().is_some_and(crate::args::is_builtin_scene);
+    let is_file = path.is_some_and(|p| !builtin(p));
     crate::shared::check_builtin_options(options, is_file)?;
     match path {
-        // The procedural stress scene of `furnace bench --scene interior:N`.
-        Some(p) if p.to_str().is_some_and(|s| s.starts_with("interior:")) => {
-            match crate::args::parse_scene(p.to_str().unwrap_or_default())? {
-                crate::args::SceneArg::Interior(n) => Ok(builtin::sunlit_interior(n)),
-                _ => Err(format!("'{}': not a scene", p.display())),
-            }
-        }
+        // The procedural stress scenes of `furnace bench --scene interior:N` and `forest:N`.
+        Some(p) if builtin(p) => match crate::args::parse_scene(p.to_str().unwrap_or_default())? {
+            crate::args::SceneArg::Interior(n) => Ok(builtin::sunlit_interior(n)),
+            crate::args::SceneArg::Forest(n, seed) => Ok(builtin::forest(n, seed)),
+            _ => Err(format!("'{}': not a scene", p.display())),
+        },
         Some(p) => Scene::load_with(p, options).map_err(|e| e.to_string()),
         None => builtin::cornell_box().map_err(|e| e.to_string()),
     }

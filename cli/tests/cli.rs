@@ -201,7 +201,14 @@ fn info_lists_the_extensions_the_file_uses() {
     let o = furnace(&["info", &data("SimpleInstancing/glTF/SimpleInstancing.gltf")]);
     assert!(o.status.success(), "{}", stderr(&o));
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("triangles       1500\n"), "125 cubes of 12 triangles: {text}");
+    assert!(
+        text.contains("triangles       12 stored, 1500 in the image (the instances counted)\n"),
+        "125 cubes of 12 triangles: {text}"
+    );
+    assert!(
+        text.contains("instancing      1 meshes stored once (12 triangles), placed by 125 instances"),
+        "{text}"
+    );
     assert!(text.contains("extensions      1 "), "{text}");
     assert!(text.contains("  EXT_mesh_gpu_instancing           used, honoured\n"), "{text}");
     let o = furnace(&["info", &data("Box/glTF-Binary/Box.glb")]);

@@ -5,6 +5,8 @@ use crate::material::Material;
 use crate::{Camera, Scene, SceneError};
 use glam::{Vec3, Vec4};
 
+pub use crate::forest::forest;
+
 /// The reference Cornell box (the scene of the Mitsuba references in the repository's
 /// `tests/data/references/cbox/`; `assets/cbox-README.md` gives its conventions), embedded in
 /// the binary: the CLI's default scene.

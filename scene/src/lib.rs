@@ -69,6 +69,7 @@ mod emitter;
 mod environment;
 mod error;
 mod file;
+mod forest;
 mod geometry;
 mod hash;
 mod instancing;

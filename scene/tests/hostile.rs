@@ -308,18 +308,21 @@ fn fuzz_findings_are_one_error_or_a_warning() {
     assert_eq!(s.images[0].width, 256);
 }
 
-/// A 5-KiB file whose mesh of 2²⁰ triangles is placed by 300 nodes names 3·10⁸ triangles: it is
-/// refused from the accessors' counts, before anything is read, naming the scene and the count.
+/// A small file whose 300 meshes of 2²⁰ triangles (one accessor) are placed by 300 nodes names
+/// 3·10⁸ triangles to store: it is refused from the accessors' counts, before anything is read,
+/// naming the scene and the count.
 #[test]
 fn a_scene_of_too_many_instanced_triangles_is_refused() {
+    // 300 meshes on one accessor of 2²⁰ triangles, each placed once: stored 300 times.
     let nodes = 300;
     let list: Vec<String> = (0..nodes).map(|i| i.to_string()).collect();
     let json = format!(
         r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [{}]}}],
-        "nodes": [{}], "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+        "nodes": [{}], "meshes": [{}],
         "accessors": [{{"componentType": 5126, "count": {}, "type": "VEC3", "min": [0, 0, 0], "max": [0, 0, 0]}}]}}"#,
         list.join(","),
-        vec![r#"{"mesh": 0}"#; nodes].join(","),
+        (0..nodes).map(|i| format!(r#"{{"mesh": {i}}}"#)).collect::<Vec<_>>().join(","),
+        vec![r#"{"primitives": [{"attributes": {"POSITION": 0}}]}"#; nodes].join(","),
         3 << 20
     );
     let t = std::time::Instant::now();
@@ -330,4 +333,20 @@ fn a_scene_of_too_many_instanced_triangles_is_refused() {
     );
     // From the counts alone: milliseconds; reading 300 meshes of 2²⁰ triangles takes seconds.
     assert!(t.elapsed() < Duration::from_secs(1), "{:?}", t.elapsed());
+}
+
+/// A shared mesh placed by more instances than a scene may have (2²⁴) is refused from the
+/// accessor's count, before the instances are read.
+#[test]
+fn a_scene_of_too_many_instances_is_refused() {
+    let json = format!(
+        r#"{{"asset": {{"version": "2.0"}}, "scene": 0, "scenes": [{{"nodes": [0]}}],
+        "nodes": [{{"mesh": 0, "extensions": {{"EXT_mesh_gpu_instancing": {{"attributes": {{"TRANSLATION": 1}}}}}}}}],
+        "meshes": [{{"primitives": [{{"attributes": {{"POSITION": 0}}}}]}}],
+        "accessors": [{{"componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [0, 0, 0]}},
+                      {{"componentType": 5126, "count": {}, "type": "VEC3"}}]}}"#,
+        (1u64 << 24) + 1
+    );
+    let e = Scene::from_slice(json.as_bytes(), "forest.gltf").unwrap_err().to_string();
+    assert!(e.contains("forest.gltf") && e.contains("scenes[0]") && e.contains("16777217"), "{e}");
 }

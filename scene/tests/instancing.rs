@@ -94,13 +94,18 @@ fn accessor_floats(gltf_path: &std::path::Path, index: usize) -> Vec<f32> {
     bin[start..start + 4 * n].chunks_exact(4).map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]])).collect()
 }
 
-/// The 125 cubes: 125 × one cube's triangles, each instance's vertices its cube's, placed by its
-/// TRANSLATION, ROTATION and SCALE: the cube's corner at the origin lands on the translation.
+/// The 125 cubes: one cube stored once and placed 125 times; copied into world space
+/// ([`Scene::flattened`]), 125 × its triangles, each instance's vertices its cube's, placed by
+/// its TRANSLATION, ROTATION and SCALE: the cube's corner at the origin lands on the
+/// translation.
 #[test]
 fn simple_instancing_places_125_cubes() {
     let path = furnace_tests::data::scene("SimpleInstancing/glTF/SimpleInstancing.gltf");
-    let scene = Scene::load(&path).unwrap();
-    assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
+    let loaded = Scene::load(&path).unwrap();
+    assert!(loaded.warnings.is_empty(), "{:?}", loaded.warnings);
+    assert_eq!((loaded.instancing.meshes.len(), loaded.instancing.instances.len()), (1, 125));
+    assert_eq!(loaded.geometry.triangles.len(), 12);
+    let scene = loaded.flattened();
     // The cube: 36 indices (accessor 0) into 24 vertices (accessor 1) with normals, so each
     // instance copies its 24 vertices in order.
     let cube: Vec<Vec3> = accessor_floats(&path, 1).chunks_exact(3).map(Vec3::from_slice).collect();
@@ -129,11 +134,11 @@ fn simple_instancing_places_125_cubes() {
         }
     }
     assert_eq!(
-        scene.extensions,
+        loaded.extensions,
         [furnace_scene::ExtensionUse { name: EXT.into(), required: false }],
         "the file lists the extension as used"
     );
-    assert!(scene.extensions[0].honoured());
+    assert!(loaded.extensions[0].honoured());
 }
 
 /// An instance places the mesh as a node of the same TRS does: the same positions (within
@@ -179,7 +184,9 @@ fn instances_compose_with_the_node_and_read_quantised_rotations() {
     let node = format!(
         r#"{{"mesh":0,"translation":[0,0,5],"extensions":{{"{EXT}":{{"attributes":{{"TRANSLATION":1,"ROTATION":2}}}}}}}}"#
     );
-    let scene = load(&gltf(&node, &[translations, two])).unwrap();
+    let loaded = load(&gltf(&node, &[translations, two])).unwrap();
+    assert_eq!(loaded.instancing.instances.len(), 2, "one mesh placed twice");
+    let scene = loaded.flattened();
     let p = &scene.geometry.positions;
     assert_eq!(p.len(), 6, "two flat triangles");
     // (1, 0, 0) turned a quarter about z is (0, 1, 0); then the instance's and the node's
@@ -191,15 +198,15 @@ fn instances_compose_with_the_node_and_read_quantised_rotations() {
     }
 }
 
-/// A small file naming a billion instances is refused by the triangle budget before anything
-/// is read or allocated for them.
+/// A small file naming a billion instances is refused by the instance budget (2²⁴) before
+/// anything is read or allocated for them.
 #[test]
-fn the_triangle_budget_counts_instances() {
+fn the_instance_budget_is_checked_before_reading() {
     let billion = Acc { component: 5126, kind: "VEC3", normalized: false, count: 1_000_000_000, bytes: None };
     let bytes = gltf(&instanced(r#""TRANSLATION":1"#), &[billion]);
     assert!(bytes.len() < 2000, "a small file");
-    let msg = load(&bytes).expect_err("a billion triangles load").to_string();
-    for part in ["inst.gltf", "scenes[0]", "1000000000 triangles", "2²⁸"] {
+    let msg = load(&bytes).expect_err("a billion instances load").to_string();
+    for part in ["inst.gltf", "scenes[0]", "1000000000 times", "2²⁴"] {
         assert!(msg.contains(part), "{msg:?} does not say {part:?}");
     }
 }
@@ -260,4 +267,27 @@ fn malformed_attributes_are_errors_naming_the_path() {
     let no_attributes = format!(r#"{{"mesh":0,"extensions":{{"{EXT}":{{}}}}}}"#);
     let msg = load(&gltf(&no_attributes, &[])).expect_err("no attributes").to_string();
     assert!(msg.contains(&path("")) && msg.contains("missing"), "{msg}");
+}
+
+/// The built-in forest (`forest:N`): the same seed builds the same scene, another seed another;
+/// three plant meshes stored once (about 2·10⁴, 10⁵ and 10⁴ triangles) placed by N instances
+/// over world-space terrain, every instance within the scene's bounds.
+#[test]
+fn the_forest_is_seeded_and_instanced() {
+    use furnace_scene::builtin::forest;
+    let a = forest(40, 7);
+    assert_eq!(a.content_hash(), forest(40, 7).content_hash());
+    assert_ne!(a.content_hash(), forest(40, 8).content_hash());
+    let inst = &a.instancing;
+    assert_eq!((inst.meshes.len(), inst.instances.len(), inst.world_triangles), (3, 40, 131_072));
+    let sizes: Vec<usize> = inst.meshes.iter().map(|r| r.len()).collect();
+    assert_eq!(sizes, [19_392, 100_048, 10_000]);
+    let (lo, hi) = a.bounds();
+    let half = 0.5 * (40.0f32 * 36.0).sqrt().max(20.0);
+    assert!(lo.x >= -half - 4.0 && hi.x <= half + 4.0 && hi.y < 30.0, "{lo} {hi}");
+    // Every plant stands on the terrain: its instance's origin within the terrain's square.
+    for i in &inst.instances {
+        let t = i.world_from_object.translation;
+        assert!(t.x.abs() <= half && t.z.abs() <= half, "{t}");
+    }
 }

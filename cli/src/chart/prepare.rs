@@ -16,6 +16,7 @@ fn load_scene(scene: &SceneArg) -> Result<(Scene, String), String> {
     Ok(match scene {
         SceneArg::Cbox => (builtin::cornell_box().map_err(|e| e.to_string())?, "cbox".to_string()),
         SceneArg::Interior(n) => (builtin::sunlit_interior(*n), format!("interior:{n}")),
+        SceneArg::Forest(n, seed) => (builtin::forest(*n, *seed), format!("forest:{n}:{seed}")),
         SceneArg::File(p) => (Scene::load(p).map_err(|e| e.to_string())?, p.display().to_string()),
     })
 }
