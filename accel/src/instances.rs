@@ -22,18 +22,17 @@ use std::ops::Range;
 use crate::{BuildOptions, Bvh, Hit};
 
 /// A node of the TLAS, 32 bytes: its box, and either its two children (`count` 0, the first at
-/// `first`, the second after it) or its instances (`count` > 0, slots `first..first + count` of
-/// the instance order).
+/// `first`, the second after it) or one instance (`count` 1, `first` the instance's index).
 #[derive(Clone, Copy, Debug, Default, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
 #[repr(C)]
 pub struct TlasNode {
     /// Box minimum.
     pub min: [f32; 3],
-    /// 0 for an inner node, else its instances.
+    /// 0 for an inner node, 1 for a leaf.
     pub count: u32,
     /// Box maximum.
     pub max: [f32; 3],
-    /// First child or first instance slot.
+    /// First child, or the leaf's instance.
     pub first: u32,
 }
 
@@ -66,8 +65,6 @@ pub struct TwoLevel {
     meshes: Vec<(Bvh, u32)>,
     placements: Vec<Placement>,
     nodes: Vec<TlasNode>,
-    /// Leaf slots → instance index.
-    order: Vec<u32>,
     unique_triangles: usize,
 }
 
@@ -128,8 +125,8 @@ impl TwoLevel {
             aabbs.push(Aabb { min: wlo - pad, max: whi + pad });
             kept.push(index as u32);
         }
-        let (nodes, order) = tlas(&aabbs, &kept);
-        Self { world: world_bvh, meshes: blas, placements, nodes, order, unique_triangles }
+        let nodes = tlas(&aabbs, &kept);
+        Self { world: world_bvh, meshes: blas, placements, nodes, unique_triangles }
     }
 
     /// The TLAS nodes, root first (none without instances).
@@ -137,9 +134,10 @@ impl TwoLevel {
         &self.nodes
     }
 
-    /// The instance of each TLAS leaf slot.
-    pub fn tlas_order(&self) -> &[u32] {
-        &self.order
+    /// Each instance's mesh and world-to-object transform, in the order given to
+    /// [`TwoLevel::build`].
+    pub fn placements(&self) -> impl ExactSizeIterator<Item = (u32, Affine3A)> + '_ {
+        self.placements.iter().map(|p| (p.mesh, p.object_from_world))
     }
 
     /// The world-space triangles' BVH, if there are any.
@@ -162,7 +160,6 @@ impl TwoLevel {
     pub fn bytes(&self) -> usize {
         let bvh = self.world.iter().chain(self.meshes.iter().map(|(b, _)| b)).map(Bvh::bytes).sum::<usize>();
         bvh + self.nodes.len() * size_of::<TlasNode>()
-            + self.order.len() * 4
             + self.placements.len() * size_of::<Placement>()
     }
 
@@ -255,12 +252,9 @@ impl TwoLevel {
         loop {
             let n = &self.nodes[node as usize];
             if n.count > 0 {
-                for slot in n.first..n.first + n.count {
-                    let instance = self.order[slot as usize];
-                    let a = &self.placements[instance as usize].object_from_world;
-                    if visit(instance, a.transform_point3(origin), a.transform_vector3(dir)) {
-                        return true;
-                    }
+                let a = &self.placements[n.first as usize].object_from_world;
+                if visit(n.first, a.transform_point3(origin), a.transform_vector3(dir)) {
+                    return true;
                 }
             } else {
                 let limit = t_max();
@@ -325,11 +319,8 @@ impl TwoLevel {
             return false;
         }
         if n.count > 0 {
-            return (n.first..n.first + n.count).any(|slot| {
-                let instance = self.order[slot as usize];
-                let a = &self.placements[instance as usize].object_from_world;
-                visit(instance, a.transform_point3(origin), a.transform_vector3(dir))
-            });
+            let a = &self.placements[n.first as usize].object_from_world;
+            return visit(n.first, a.transform_point3(origin), a.transform_vector3(dir));
         }
         self.subtree(n.first, origin, dir, inv, t_max, visit)
             || self.subtree(n.first + 1, origin, dir, inv, t_max, visit)
@@ -358,11 +349,11 @@ fn safe_recip(x: f32) -> f32 {
     if x == 0.0 { 1.267_650_6e30_f32.copysign(x) } else { 1.0 / x }
 }
 
-/// The TLAS over `aabbs` (the boxes of instances `ids`): obvhs's PLOC builder, one instance a
-/// leaf, as 32-byte nodes.
-fn tlas(aabbs: &[Aabb], ids: &[u32]) -> (Vec<TlasNode>, Vec<u32>) {
+/// The TLAS over `aabbs` (the boxes of instances `ids`): obvhs's PLOC builder, as 32-byte
+/// nodes whose leaves name their instance.
+fn tlas(aabbs: &[Aabb], ids: &[u32]) -> Vec<TlasNode> {
     if aabbs.is_empty() {
-        return (Vec::new(), Vec::new());
+        return Vec::new();
     }
     let params = obvhs::BvhBuildParams::medium_build();
     let bvh2 = PlocBuilder::with_capacity(aabbs.len()).build(
@@ -372,16 +363,16 @@ fn tlas(aabbs: &[Aabb], ids: &[u32]) -> (Vec<TlasNode>, Vec<u32>) {
         params.sort_precision,
         params.search_depth_threshold,
     );
-    let nodes = bvh2
-        .nodes
+    // PLOC makes one leaf per box and no leaf of several (no collapsing pass runs here).
+    bvh2.nodes
         .iter()
-        .map(|n| TlasNode {
-            min: n.aabb.min.to_array(),
-            count: n.prim_count,
-            max: n.aabb.max.to_array(),
-            first: n.first_index,
+        .map(|n| {
+            assert!(n.prim_count <= 1, "a TLAS leaf of {} instances", n.prim_count);
+            let first = match n.prim_count {
+                0 => n.first_index,
+                _ => ids[bvh2.primitive_indices[n.first_index as usize] as usize],
+            };
+            TlasNode { min: n.aabb.min.to_array(), count: n.prim_count, max: n.aabb.max.to_array(), first }
         })
-        .collect();
-    let order = bvh2.primitive_indices.iter().map(|&k| ids[k as usize]).collect();
-    (nodes, order)
+        .collect()
 }
