@@ -247,10 +247,11 @@ impl GpuRenderer {
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<(), GpuError> {
-        if scene.geometry.triangles.len() != self.triangles {
+        // An instanced scene was uploaded flattened: its placed triangles are the count.
+        let placed = scene.stats().instanced_triangles;
+        if placed != self.triangles as u64 {
             return Err(GpuError::Unsupported(format!(
-                "reconfigure with a scene of {} triangles, the renderer holds {}: make a new renderer",
-                scene.geometry.triangles.len(),
+                "reconfigure with a scene of {placed} triangles, the renderer holds {}: make a new renderer",
                 self.triangles
             )));
         }
