@@ -159,8 +159,7 @@ impl TwoLevel {
     /// triangles in leaf order, the TLAS and the instances).
     pub fn bytes(&self) -> usize {
         let bvh = self.world.iter().chain(self.meshes.iter().map(|(b, _)| b)).map(Bvh::bytes).sum::<usize>();
-        bvh + self.nodes.len() * size_of::<TlasNode>()
-            + self.placements.len() * size_of::<Placement>()
+        bvh + self.nodes.len() * size_of::<TlasNode>() + self.placements.len() * size_of::<Placement>()
     }
 
     /// The closest hit of `origin + t·dir`, `0 < t < t_max`, over the world triangles and every

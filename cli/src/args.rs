@@ -97,7 +97,7 @@ impl LoadArgs {
 #[derive(Debug, Clone, Args)]
 pub struct RenderArgs {
     /// The .gltf or .glb scene, or interior:N (the procedural sunlit interior of about N
-    /// triangles, e.g. interior:1e7, for stress tests), or forest:N[:SEED] (N instanced plants
+    /// triangles, e.g. interior:1e7, for stress tests), or forest:N or forest:N:SEED (N instanced plants
     /// of 10⁴–10⁵ triangles on terrain, e.g. forest:1e5); without it, the built-in reference
     /// Cornell box (with --resume: the scene the file was rendered from).
     pub scene: Option<PathBuf>,
@@ -430,7 +430,7 @@ pub struct BenchArgs {
     #[arg(long, value_name = "all|LIST", conflicts_with_all = ["adapter", "group_samples"])]
     pub gpus: Option<furnace_cli::backend::GpuSet>,
     /// The scene: cbox (the built-in reference Cornell box), interior:N (the procedural sunlit
-    /// interior of about N triangles, e.g. interior:1e6), forest:N[:SEED] (N instanced plants
+    /// interior of about N triangles, e.g. interior:1e6), forest:N or forest:N:SEED (N instanced plants
     /// on terrain, e.g. forest:1e5), or a .gltf/.glb path.
     #[arg(long, default_value = "cbox", value_parser = parse_scene)]
     pub scene: SceneArg,

@@ -51,28 +51,3 @@ pub mod wgsl;
 pub use context::{AdapterChoice, GpuContext, GpuError, pci_address};
 pub use integrator::GpuRenderer;
 pub use multi::MultiGpuRenderer;
-
-/// The GPU integrator traverses one BVH over world-space triangles: a scene with instances is
-/// copied into world space first ([`furnace_scene::Scene::flattened`]); `None` for a scene
-/// without. A scene whose instances would flatten to more than
-/// [`furnace_scene::MAX_TRIANGLES`] is refused before any copy is made.
-///
-/// # Errors
-/// [`GpuError::Unsupported`], naming the counts, for a scene too large to flatten.
-pub fn flatten_instances(scene: &furnace_scene::Scene) -> Result<Option<furnace_scene::Scene>, GpuError> {
-    if scene.instancing.is_empty() {
-        return Ok(None);
-    }
-    let stats = scene.stats();
-    if stats.instanced_triangles > furnace_scene::MAX_TRIANGLES {
-        return Err(GpuError::Unsupported(format!(
-            "{} instances of {} meshes place {} triangles: the GPU integrator copies instances into \
-             world space and holds at most {} (2²⁸); render this scene with --backend cpu",
-            stats.instances,
-            stats.meshes,
-            stats.instanced_triangles,
-            furnace_scene::MAX_TRIANGLES
-        )));
-    }
-    Ok(Some(scene.flattened()))
-}

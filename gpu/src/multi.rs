@@ -209,20 +209,16 @@ impl MultiGpuRenderer {
         if contexts.is_empty() {
             return Err(GpuError::Unsupported("no GPU to render on".into()));
         }
-        let flat;
-        let scene = match crate::flatten_instances(scene)? {
-            Some(f) => {
-                flat = f;
-                &flat
-            }
-            None => scene,
-        };
-        let g = &scene.geometry;
-        let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         // Packed once, within the largest device's limits (a smaller one that it exceeds is
         // retired), and uploaded by each; the BVH's own copy is dropped first.
-        let packed = PackedScene::new(scene, &bvh, camera, settings, PackedScene::limit_of(&contexts))?;
-        drop(bvh);
+        let limit = PackedScene::limit_of(&contexts);
+        let packed = if scene.instancing.is_empty() {
+            let g = &scene.geometry;
+            let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
+            PackedScene::new(scene, &bvh, camera, settings, limit)?
+        } else {
+            PackedScene::instanced(scene, camera, settings, limit)?
+        };
         let infos: Vec<wgpu::AdapterInfo> = contexts.iter().map(|c| c.info.clone()).collect();
         let opened = contexts.len();
         let results: Vec<(usize, String, Result<GpuRenderer, GpuError>)> = std::thread::scope(|s| {

@@ -26,7 +26,7 @@
 //! # Ok(()) }
 //! ```
 
-use furnace_accel::{Bvh, GpuCwbvhNode, GpuTriangle, Layout};
+use furnace_accel::{Bvh, GpuCwbvhNode, GpuTriangle, Layout, TlasNode, TwoLevel};
 
 use crate::GpuError;
 use crate::shared::{Binding, BindingTable, GpuStruct, Member, WgslType, wgsl_struct};
@@ -145,6 +145,198 @@ impl GpuStruct for GpuTriangle {
             m("v2", WgslType::VEC3_F32, offset_of!(GpuTriangle, v2)),
             m("reserved2", WgslType::U32, offset_of!(GpuTriangle, reserved2)),
         ]
+    }
+}
+
+/// furnace-accel's TLAS node as the WGSL reads it (the same 32 bytes).
+impl GpuStruct for TlasNode {
+    const NAME: &'static str = "TlasNode";
+    fn members() -> Vec<Member> {
+        let m = Member::new;
+        vec![
+            m("min", WgslType::VEC3_F32, offset_of!(TlasNode, min)),
+            m("count", WgslType::U32, offset_of!(TlasNode, count)),
+            m("max", WgslType::VEC3_F32, offset_of!(TlasNode, max)),
+            m("first", WgslType::U32, offset_of!(TlasNode, first)),
+        ]
+    }
+}
+
+crate::gpu_struct! {
+    /// One instance as the traversal and the shading read it, 160 bytes: its transforms as
+    /// three rows each (`row · (p, 1)` is a coordinate), the normal matrix's rows, and where its
+    /// mesh's BVH lies in `bvh_nodes`.
+    pub struct GpuInstance as "Instance" {
+        /// World to object, row x.
+        pub object_x: [f32; 4] => WgslType::VEC4_F32,
+        /// World to object, row y.
+        pub object_y: [f32; 4] => WgslType::VEC4_F32,
+        /// World to object, row z.
+        pub object_z: [f32; 4] => WgslType::VEC4_F32,
+        /// Object to world, row x.
+        pub world_x: [f32; 4] => WgslType::VEC4_F32,
+        /// Object to world, row y.
+        pub world_y: [f32; 4] => WgslType::VEC4_F32,
+        /// Object to world, row z.
+        pub world_z: [f32; 4] => WgslType::VEC4_F32,
+        /// The normal matrix (inverse transpose of the linear part), row x (w 0).
+        pub normal_x: [f32; 4] => WgslType::VEC4_F32,
+        /// Row y.
+        pub normal_y: [f32; 4] => WgslType::VEC4_F32,
+        /// Row z.
+        pub normal_z: [f32; 4] => WgslType::VEC4_F32,
+        /// The mesh's root node.
+        pub root: u32 => WgslType::U32,
+        /// One past the mesh's last node.
+        pub node_end: u32 => WgslType::U32,
+        /// 1 if the transform mirrors (the front is the mesh's: the geometric normal turns).
+        pub mirrors: u32 => WgslType::U32,
+        /// Xored into a path ray's blend seed at this instance's triangles (0: none).
+        pub seed_mix: u32 => WgslType::U32,
+    }
+}
+
+const _: () = assert!(size_of::<GpuInstance>() == 160);
+
+/// The rows of an affine transform, `(m.x_axis.x, m.y_axis.x, m.z_axis.x, t.x)`, ….
+fn rows(a: &glam::Affine3A) -> [[f32; 4]; 3] {
+    let m = a.matrix3;
+    let t = a.translation;
+    [
+        [m.x_axis.x, m.y_axis.x, m.z_axis.x, t.x],
+        [m.x_axis.y, m.y_axis.y, m.z_axis.y, t.y],
+        [m.x_axis.z, m.y_axis.z, m.z_axis.z, t.z],
+    ]
+}
+
+impl GpuInstance {
+    /// The instance placing mesh `root..node_end` by `world_from_object` (`seed_mix` as the
+    /// CPU's blend seeds take it).
+    pub fn new(world_from_object: glam::Affine3A, root: u32, node_end: u32, seed_mix: u32) -> Self {
+        let inverse = world_from_object.inverse();
+        let normal = glam::Mat3::from(world_from_object.matrix3).inverse().transpose();
+        let [object_x, object_y, object_z] = rows(&inverse);
+        let [world_x, world_y, world_z] = rows(&world_from_object);
+        let n = |r: glam::Vec3| [r.x, r.y, r.z, 0.0];
+        let (nx, ny, nz) = (normal.row(0), normal.row(1), normal.row(2));
+        Self {
+            object_x,
+            object_y,
+            object_z,
+            world_x,
+            world_y,
+            world_z,
+            normal_x: n(nx),
+            normal_y: n(ny),
+            normal_z: n(nz),
+            root,
+            node_end,
+            mirrors: u32::from(world_from_object.matrix3.determinant() < 0.0),
+            seed_mix,
+        }
+    }
+}
+
+/// The two-level traversal's extra read-only bindings: `tlas_nodes`, `instances`.
+pub fn instance_binding_list() -> Vec<Binding> {
+    vec![Binding::read("tlas_nodes", "array<TlasNode>"), Binding::read("instances", "array<Instance>")]
+}
+
+/// The declarations of the two-level traversal's structs (`TlasNode`, `Instance`).
+pub fn instance_declarations() -> String {
+    wgsl_struct::<TlasNode>(false) + &wgsl_struct::<GpuInstance>(false)
+}
+
+/// A scene's meshes and instances as the words of the WGSL two-level traversal: every mesh's
+/// CWBVH in one node buffer and one triangle buffer (nodes and triangle slots renumbered, ids
+/// the caller's), the TLAS and the instances.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InstanceBuffers {
+    /// The meshes' BVHs, as [`BvhBuffers`].
+    pub bvh: BvhBuffers,
+    /// `tlas_nodes`: 8 words per node, root first.
+    pub tlas: Vec<u32>,
+    /// `instances`: [`GpuInstance`]s.
+    pub instances: Vec<GpuInstance>,
+    /// The deepest mesh BVH ([`Bvh::depth`]).
+    pub depth: usize,
+}
+
+impl InstanceBuffers {
+    /// Packs `two` (built over meshes only: its world part, if any, must be placed as an instance
+    /// of its own) with each instance's `world_from_object` and blend-seed mix, checking each
+    /// buffer against `max_binding` bytes.
+    ///
+    /// # Errors
+    /// [`GpuError::TooLarge`] for a buffer beyond `max_binding`.
+    ///
+    /// # Panics
+    /// If `two` has world triangles outside its meshes, or the instance lists differ in length.
+    pub fn new(
+        two: &TwoLevel,
+        placements: &[(glam::Affine3A, u32)],
+        max_binding: u64,
+    ) -> Result<Self, GpuError> {
+        assert!(two.world().is_none(), "place the world triangles as an instance of their own");
+        let mut nodes: Vec<GpuCwbvhNode> = Vec::new();
+        let mut tris: Vec<GpuTriangle> = Vec::new();
+        let mut ranges = Vec::new();
+        let mut depth = 0;
+        for (bvh, first) in two.meshes() {
+            let (node_base, tri_base) = (nodes.len() as u32, tris.len() as u32);
+            nodes.extend(bvh.gpu_nodes().iter().map(|n| GpuCwbvhNode {
+                child_base_idx: n.child_base_idx + node_base,
+                primitive_base_idx: n.primitive_base_idx + tri_base,
+                ..*n
+            }));
+            tris.extend(bvh.gpu_triangles().iter().map(|t| GpuTriangle { id: t.id + first, ..*t }));
+            ranges.push((node_base, nodes.len() as u32));
+            depth = depth.max(bvh.depth());
+        }
+        let placed: Vec<(u32, glam::Affine3A)> = two.placements().collect();
+        assert_eq!(placed.len(), placements.len(), "one transform per instance");
+        let instances: Vec<GpuInstance> = placed
+            .iter()
+            .zip(placements)
+            .map(|(&(mesh, _), &(world, seed_mix))| {
+                let (root, end) = ranges[mesh as usize];
+                GpuInstance::new(world, root, end, seed_mix)
+            })
+            .collect();
+        let check = |what: String, bytes: usize| {
+            if bytes as u64 > max_binding {
+                Err(GpuError::TooLarge { what, bytes: bytes as u64, limit: max_binding })
+            } else {
+                Ok(())
+            }
+        };
+        check(format!("the BVH node buffer ({} nodes)", nodes.len()), size_of_val(nodes.as_slice()))?;
+        check(
+            format!("the BVH triangle buffer ({} triangle slots)", tris.len()),
+            size_of_val(tris.as_slice()),
+        )?;
+        check(
+            format!("the instance buffer ({} instances)", instances.len()),
+            size_of_val(instances.as_slice()),
+        )?;
+        let tlas: Vec<u32> = if two.tlas_nodes().is_empty() {
+            // No instance has a box: a root leaf of instance 0 (a zero instance when there is
+            // none, whose zero direction no traversal takes).
+            bytemuck::cast_slice(&[TlasNode { min: [0.0; 3], count: 1, max: [0.0; 3], first: 0 }]).to_vec()
+        } else {
+            bytemuck::cast_slice(two.tlas_nodes()).to_vec()
+        };
+        let nodes: Vec<u32> =
+            if nodes.is_empty() { vec![0; NODE_WORDS] } else { bytemuck::cast_slice(&nodes).to_vec() };
+        let triangles: Vec<u32> =
+            if tris.is_empty() { vec![0; TRIANGLE_WORDS] } else { bytemuck::cast_slice(&tris).to_vec() };
+        let instances = if instances.is_empty() { vec![bytemuck::Zeroable::zeroed()] } else { instances };
+        Ok(Self { bvh: BvhBuffers { nodes, triangles }, tlas, instances, depth })
+    }
+
+    /// The two extra buffers in binding order (TLAS nodes, instances).
+    pub fn extra(&self) -> [&[u32]; 2] {
+        [&self.tlas, bytemuck::cast_slice(&self.instances)]
     }
 }
 

@@ -179,6 +179,21 @@ fn absent_light_features_compose_no_code() {
         SceneFeatures { transmission: true, dispersion: true, ..Default::default() },
     );
     assert!(prism.contains("path.wavelength = s.lambda;") && prism.contains("const SPECTRUM_WEIGHT"));
+    // Without instances: one traversal, no TLAS, no instance bindings or placing; with them all.
+    for absent in
+        ["tlas_nodes", "var<storage, read> instances", "trv_instance", "scene_place_point", "struct Instance"]
+    {
+        assert!(!glass.contains(absent), "{absent} in the shader of a scene without instances");
+    }
+    let forest = shader_source(FilmPrecision::F64, SceneFeatures { instances: true, ..Default::default() });
+    for present in [
+        "var<storage, read> tlas_nodes",
+        "fn trv_traverse_instances",
+        "fn scene_place_point",
+        "struct Instance",
+    ] {
+        assert!(forest.contains(present), "{present} missing from the shader of a scene with instances");
+    }
     // A delta sun: its shadow ray, and nothing of the disc's samples.
     let sun = shader_source(FilmPrecision::F64, SceneFeatures { delta_sun: true, ..Default::default() });
     assert!(sun.contains("let to_sun") && !sun.contains("sample_sun_disc") && !sun.contains("ray_pdf"));
@@ -358,6 +373,8 @@ fn frame_params_layout_matches_wgsl() {
                 anisotropy: true,
                 dispersion: !light_bvh,
                 one_point_light: !light_bvh,
+                // The two-level traversal, with every feature and with them all but a few.
+                instances: true,
             },
         ));
     }
@@ -1050,3 +1067,20 @@ fn gpu_parts_add_up_to_one_run() {
 mod dielectric_parity;
 #[path = "glass_cases/closed_forms.rs"]
 mod glass;
+
+/// Same samples, same image with instances: NegativeScaleTest (mirroring instances, textures
+/// and normal maps whose frames the instance carries) under a white sky, and the built-in forest
+/// of 12 instances (three shared meshes, a sun and a sky), through both two-level traversals.
+#[test]
+fn same_samples_give_the_same_image_with_instances() {
+    use furnace_scene::{Light, Sky};
+    let mut negative = furnace_scene::Scene::load(furnace_tests::data::scene(
+        "NegativeScaleTest/glTF/NegativeScaleTest.gltf",
+    ))
+    .unwrap();
+    negative.lights.push(Light::Sky(Sky { radiance: glam::Vec3::ONE }));
+    assert!(!negative.instancing.is_empty());
+    let s = RenderSettings { width: 32, height: 32, ..settings(SamplerKind::Sobol, 5) };
+    same_samples_with(&negative, s);
+    same_samples_with(&builtin::forest(12, 3), s);
+}

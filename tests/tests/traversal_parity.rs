@@ -899,3 +899,176 @@ fn wgsl_structs_match_accel_layout() {
     furnace_tests::layout::assert_gpu_struct::<GpuCwbvhNode>(&src);
     furnace_tests::layout::assert_gpu_struct::<GpuTriangle>(&src);
 }
+
+/// The two-level traversal's kernel: [`KERNEL_MAIN`] with the hit's instance in word 5 (the
+/// node counts are not composed).
+const KERNEL_MAIN_INSTANCED: &str = r#"
+@compute @workgroup_size(64)
+fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
+    let i = invocation_index(gid, groups);
+    if i >= params.x { return; }
+    let b = 8u * i;
+    let o = vec3<f32>(bitcast<f32>(input[b]), bitcast<f32>(input[b + 1u]), bitcast<f32>(input[b + 2u]));
+    let d = vec3<f32>(bitcast<f32>(input[b + 3u]), bitcast<f32>(input[b + 4u]), bitcast<f32>(input[b + 5u]));
+    let h = trace_closest(o, d, bitcast<f32>(input[b + 6u]));
+    let occluded = trace_any(o, d, bitcast<f32>(input[b + 7u]));
+    output[b] = bitcast<u32>(h.t);
+    output[b + 1u] = bitcast<u32>(h.u);
+    output[b + 2u] = bitcast<u32>(h.v);
+    output[b + 3u] = h.triangle;
+    output[b + 4u] = select(0u, 1u, h.hit) | select(0u, 2u, occluded);
+    output[b + 5u] = h.instance;
+    output[b + 6u] = 0u;
+    output[b + 7u] = 0u;
+}
+"#;
+
+/// The two-level traversal (`traverse.wgsl` under `INSTANCES`) against furnace-accel's
+/// `TwoLevel` on the same structure, as `furnace-gpu` packs it (the world triangles an instance
+/// of their own, placed by the identity): every ray set of [`ray_sets`] agrees as the one-level
+/// traversal does (the same instance and triangle, t within the bounds; ties and edge rays
+/// counted and bounded). Scenes: 60 placements of three meshes (rotated, scaled 1–6× per axis,
+/// a quarter mirrored) among 300 world triangles; the Khronos NegativeScaleTest (mirroring
+/// instances).
+#[test]
+fn instanced_traversal_matches_the_cpu() {
+    use furnace_accel::TwoLevel;
+    use furnace_gpu::traverse::InstanceBuffers;
+    use glam::{Affine3A, Quat};
+    let Some(ctx) = test_context() else { return };
+    // (positions, triangles, mesh ranges (the world's first), instances (mesh, transform)).
+    type Parts = (Vec<Vec3>, Vec<[u32; 3]>, Vec<std::ops::Range<u32>>, Vec<(u32, Affine3A)>);
+    let synthetic = || -> Parts {
+        let mut rng = furnace_tests::Rng::new(0x7a5);
+        let mut positions = Vec::new();
+        let mut triangles = Vec::new();
+        let mut ranges = Vec::new();
+        let meshes = [
+            soup(300, 3).iter().map(|t| t.map(|v| v * 30.0 - 15.0)).collect::<Vec<_>>(),
+            soup(200, 5),
+            soup(120, 9),
+        ];
+        for m in &meshes {
+            let start = triangles.len() as u32;
+            for t in m {
+                let base = positions.len() as u32;
+                positions.extend_from_slice(t);
+                triangles.push([base, base + 1, base + 2]);
+            }
+            ranges.push(start..triangles.len() as u32);
+        }
+        let mut instances = vec![(0, Affine3A::IDENTITY)];
+        for _ in 0..60 {
+            let rotation = Quat::from_axis_angle(rng.unit_vector(), rng.range(0.0, std::f32::consts::TAU));
+            let mut scale = Vec3::new(rng.range(1.0, 6.0), rng.range(1.0, 6.0), rng.range(1.0, 6.0));
+            if rng.chance(0.25) {
+                scale.x = -scale.x;
+            }
+            let translation = rng.vec3(Vec3::splat(-12.0), Vec3::splat(12.0));
+            let mesh = 1 + rng.below(2);
+            instances.push((mesh, Affine3A::from_scale_rotation_translation(scale, rotation, translation)));
+        }
+        (positions, triangles, ranges, instances)
+    };
+    let negative_scale = || -> Parts {
+        let scene = furnace_scene::Scene::load(furnace_tests::data::scene(
+            "NegativeScaleTest/glTF/NegativeScaleTest.gltf",
+        ))
+        .unwrap();
+        let inst = &scene.instancing;
+        let ranges: Vec<_> =
+            std::iter::once(0..inst.world_triangles).chain(inst.meshes.iter().cloned()).collect();
+        let instances: Vec<_> = std::iter::once((0, Affine3A::IDENTITY))
+            .chain(inst.instances.iter().map(|i| (i.mesh + 1, i.world_from_object)))
+            .collect();
+        (scene.geometry.positions.clone(), scene.geometry.triangles.clone(), ranges, instances)
+    };
+    print_header();
+    for (name, parts) in [("instanced soups", synthetic()), ("NegativeScaleTest", negative_scale())] {
+        let (positions, triangles, ranges, instances) = parts;
+        let two = TwoLevel::build(&positions, &triangles, 0..0, &ranges, &instances);
+        let transforms: Vec<(Affine3A, u32)> = instances.iter().map(|&(_, a)| (a, 0)).collect();
+        let buffers = InstanceBuffers::new(&two, &transforms, ctx.max_storage_binding()).unwrap();
+        // Every instance's triangles in world space, in instance order: the reference's ids.
+        let mut flat: Vec<[Vec3; 3]> = Vec::new();
+        let mut offsets = Vec::new();
+        for &(mesh, a) in &instances {
+            offsets.push(flat.len() as u32);
+            for t in ranges[mesh as usize].clone() {
+                flat.push(triangles[t as usize].map(|v| a.transform_point3(positions[v as usize])));
+            }
+        }
+        let flat_id = |instance: u32, triangle: u32| {
+            offsets[instance as usize] + triangle - ranges[instances[instance as usize].0 as usize].start
+        };
+        let flat_bvh = Bvh::build(&flat);
+        let (lo, hi) = flat.iter().flatten().fold((Vec3::MAX, Vec3::MIN), |(l, h), v| (l.min(*v), h.max(*v)));
+        let camera = furnace_scene::Camera::frame_bounds(lo, hi);
+        let sets = ray_sets(&flat, &flat_bvh, &camera, 77);
+        let all: Vec<TestRay> = sets.iter().flat_map(|s| s.1.iter().copied()).collect();
+        let mut input = Vec::with_capacity(all.len() * IN_WORDS);
+        for r in &all {
+            input.extend(r.o.to_array().map(f32::to_bits));
+            input.extend(r.d.to_array().map(f32::to_bits));
+            input.push(r.t_max.to_bits());
+            input.push(r.t_any.to_bits());
+        }
+        let module = wgsl::select(wgsl::TRAVERSE, |n| n == "INSTANCES");
+        let source = wgsl::compose(&[
+            kernel::PREAMBLE,
+            &traverse::bindings(0, 3),
+            &traverse::instance_declarations(),
+            &furnace_gpu::shared::BindingTable::new(0, 5, traverse::instance_binding_list()).wgsl(),
+            &module,
+            Filter::All.wgsl(),
+            KERNEL_MAIN_INSTANCED,
+        ]);
+        let [nodes, tris] = buffers.bvh.extra();
+        let [tlas, inst] = buffers.extra();
+        let out = kernel::run_with(
+            &ctx,
+            &source,
+            &input,
+            &[nodes, tris, tlas, inst],
+            all.len() * OUT_WORDS,
+            all.len() as u32,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        let gpu: Vec<GpuResult> = out
+            .chunks_exact(OUT_WORDS)
+            .map(|w| GpuResult {
+                hit: (w[4] & 1 == 1).then(|| {
+                    (
+                        flat_id(w[5], w[3]),
+                        f32::from_bits(w[0]),
+                        Vec2::new(f32::from_bits(w[1]), f32::from_bits(w[2])),
+                    )
+                }),
+                occluded: w[4] & 2 == 2,
+                nodes_closest: 0,
+                nodes_any: 0,
+                fallbacks: 0,
+                max_depth: 0,
+            })
+            .collect();
+        let mut start = 0;
+        for (set, rays) in &sets {
+            let g = &gpu[start..start + rays.len()];
+            start += rays.len();
+            let t = compare(
+                &flat,
+                Filter::All,
+                rays,
+                g,
+                |r| {
+                    two.closest_hit(r.o, r.d, r.t_max).map(|h| {
+                        (flat_id(h.instance.unwrap_or(0), h.hit.triangle), h.hit.t, h.hit.barycentrics)
+                    })
+                },
+                |r| two.occluded(r.o, r.d, r.t_any),
+            );
+            print_row(&format!("{name} / {set}"), Filter::All, &t);
+            assert_tally(&format!("{name} / {set}"), Filter::All, &t);
+        }
+    }
+}

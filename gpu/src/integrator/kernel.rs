@@ -133,6 +133,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     let mut bindings = vec![params];
     bindings.extend(precision.binding_list());
     bindings.extend(traverse::binding_list());
+    if features.instances {
+        bindings.extend(traverse::instance_binding_list());
+    }
     bindings.extend(scene::binding_list());
     bindings.push(Binding::read("turquin_table", "array<f32>"));
     bindings.push(Binding::read("point_lights", "array<PointLight>"));
@@ -257,6 +260,9 @@ pub struct SceneFeatures {
     /// Some material disperses (KHR_materials_dispersion; with `transmission`): paths draw a
     /// wavelength at their first dispersive solid (the spectrum module and its tables).
     pub dispersion: bool,
+    /// Shared meshes placed by instances (the two-level traversal: the TLAS and the instances
+    /// bound, hits carried to world space by their instance).
+    pub instances: bool,
     /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
     /// triangles per invocation, added to the ray counter at its end). Not a property of the
     /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
@@ -306,6 +312,7 @@ impl SceneFeatures {
             diffuse_transmission: scene.materials.iter().any(|m| m.diffuse_transmission.is_some()),
             anisotropy: scene.materials.iter().any(|m| m.anisotropy.is_some()),
             dispersion: scene.disperses(),
+            instances: !scene.instancing.is_empty(),
             trace_counters: false,
         }
     }
@@ -369,6 +376,7 @@ impl SceneFeatures {
             "DIFFUSE_TRANSMISSION" => self.transmission && self.diffuse_transmission,
             "ANISOTROPY" => self.anisotropy,
             "DISPERSION" => self.transmission && self.dispersion,
+            "INSTANCES" => self.instances,
             "LOBE_ESTIMATES" => self.enabled("LAYERS") || self.enabled("DIFFUSE_TRANSMISSION"),
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,
@@ -390,6 +398,7 @@ pub fn shader_source(precision: FilmPrecision, features: SceneFeatures) -> Strin
         brdf::declarations(),
         scene::declarations(),
         traverse::declarations(),
+        if features.instances { traverse::instance_declarations() } else { String::new() },
         point_light_flags_wgsl(),
         wgsl_struct::<GpuPointLight>(false),
         format!("const SHADOW_EPSILON: f32 = {:?};\n", furnace_render::SHADOW_EPSILON),

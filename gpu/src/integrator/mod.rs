@@ -103,7 +103,9 @@ pub struct GpuRenderer {
     converged: Option<u64>,
     film: GpuFilm,
     scene: GpuScene,
-    bvh: [wgpu::Buffer; 2],
+    /// The traversal's buffers: nodes and triangles, then (with instances) the TLAS and the
+    /// instances.
+    bvh: Vec<wgpu::Buffer>,
     turquin: wgpu::Buffer,
     point_lights: wgpu::Buffer,
     emitters: Option<wgpu::Buffer>,

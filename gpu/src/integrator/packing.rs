@@ -215,6 +215,8 @@ pub(crate) struct PackedScene {
     pub(super) bvh_depth: usize,
     pub(super) triangles: usize,
     pub(super) bvh_words: BvhBuffers,
+    /// With instances: the TLAS and the instances (`bvh_words` then holds every mesh's BVH).
+    pub(super) instance_words: Option<crate::traverse::InstanceBuffers>,
     pub(super) scene_words: SceneBuffers,
     pub(super) point_lights: Vec<GpuPointLight>,
     pub(super) emitter_words: Option<Vec<u32>>,
@@ -239,8 +241,7 @@ impl PackedScene {
         let g = &scene.geometry;
         if !scene.instancing.is_empty() {
             return Err(GpuError::Unsupported(
-                "a scene with instances: the GPU traverses world-space triangles (pass Scene::flattened())"
-                    .into(),
+                "a scene with instances: pack it with PackedScene::instanced (GpuRenderer::new does)".into(),
             ));
         }
         if bvh.input_count() != g.triangle_count() || bvh.layout() != furnace_accel::Layout::Cwbvh {
@@ -262,10 +263,67 @@ impl PackedScene {
             bvh_depth: bvh.depth(),
             triangles: g.triangles.len(),
             bvh_words: BvhBuffers::new(bvh, limit)?,
+            instance_words: None,
             scene_words: SceneBuffers::new(scene, limit)?,
             point_lights: point_light_records(scene),
             emitter_words: emitter_buffer_words(scene, scene_emitters.as_ref(), features),
             environment: environment_buffer_words(scene, &settings, limit)?,
+        })
+    }
+
+    /// Packs `scene`, which has instances, for the two-level traversal: furnace-accel's
+    /// [`furnace_accel::TwoLevel`] with the world triangles as an instance of their own (placed by
+    /// the identity, which changes no bit of them), every mesh's CWBVH in the node and triangle
+    /// buffers, the TLAS and the instances.
+    ///
+    /// # Errors
+    /// As [`PackedScene::new`].
+    pub(crate) fn instanced(
+        scene: &Scene,
+        camera: &Camera,
+        settings: RenderSettings,
+        limit: u64,
+    ) -> Result<Self, GpuError> {
+        let sampler = renderable_sampler(scene, &settings)?;
+        let g = &scene.geometry;
+        let inst = &scene.instancing;
+        let world = inst.world_triangles;
+        let with_world = world > 0;
+        let meshes: Vec<std::ops::Range<u32>> =
+            with_world.then_some(0..world).into_iter().chain(inst.meshes.iter().cloned()).collect();
+        let shift = u32::from(with_world);
+        let mut placements: Vec<(u32, glam::Affine3A)> = Vec::with_capacity(inst.instances.len() + 1);
+        let mut transforms: Vec<(glam::Affine3A, u32)> = Vec::with_capacity(inst.instances.len() + 1);
+        if with_world {
+            placements.push((0, glam::Affine3A::IDENTITY));
+            transforms.push((glam::Affine3A::IDENTITY, 0));
+        }
+        for (k, i) in inst.instances.iter().enumerate() {
+            placements.push((i.mesh + shift, i.world_from_object));
+            // CpuRenderer::stops: an instance's blend seeds are mixed by its index.
+            transforms.push((i.world_from_object, (k as u32).wrapping_mul(0x9e37_79b9)));
+        }
+        let two = furnace_accel::TwoLevel::build(&g.positions, &g.triangles, 0..0, &meshes, &placements);
+        let mut words = crate::traverse::InstanceBuffers::new(&two, &transforms, limit)?;
+        drop(two);
+        let bvh_words =
+            std::mem::replace(&mut words.bvh, BvhBuffers { nodes: Vec::new(), triangles: Vec::new() });
+        let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
+        let scene_emitters = Emitters::new(scene);
+        let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
+        Ok(Self {
+            settings,
+            sampler,
+            base: frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref()),
+            features,
+            bvh_depth: words.depth,
+            triangles: g.triangles.len(),
+            bvh_words,
+            scene_words: SceneBuffers::new(scene, limit)?,
+            point_lights: point_light_records(scene),
+            emitter_words: emitter_buffer_words(scene, scene_emitters.as_ref(), features),
+            environment: environment_buffer_words(scene, &settings, limit)?,
+            instance_words: Some(words),
         })
     }
 
@@ -280,6 +338,11 @@ impl PackedScene {
     pub(super) fn check_limit(&self, limit: u64) -> Result<(), GpuError> {
         let [nodes, tris] = self.bvh_words.extra();
         let mut buffers: Vec<(&str, &[u32])> = vec![("BVH node", nodes), ("BVH triangle", tris)];
+        if let Some(inst) = &self.instance_words {
+            let [tlas, instances] = inst.extra();
+            buffers.push(("TLAS node", tlas));
+            buffers.push(("instance", instances));
+        }
         buffers.extend(SceneBuffers::EXTRA_NAMES.into_iter().zip(self.scene_words.extra()));
         buffers.push(("scene transmission", bytemuck::cast_slice(&self.scene_words.transmission)));
         buffers.push(("scene layers", bytemuck::cast_slice(&self.scene_words.layers)));

@@ -91,14 +91,10 @@ impl GpuRenderer {
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
         renderable_sampler(scene, &settings)?;
-        let flat;
-        let scene = match crate::flatten_instances(scene)? {
-            Some(f) => {
-                flat = f;
-                &flat
-            }
-            None => scene,
-        };
+        if !scene.instancing.is_empty() {
+            let packed = PackedScene::instanced(scene, camera, settings, ctx.upload_limit())?;
+            return Self::with_packed(ctx, &packed);
+        }
         let g = &scene.geometry;
         let bvh = Bvh::from_indexed(&g.positions, &g.triangles, BuildOptions::default());
         Self::with_bvh(ctx, scene, &bvh, camera, settings)
@@ -132,7 +128,13 @@ impl GpuRenderer {
         packed.check_limit(ctx.upload_limit())?;
         let PackedScene { settings, sampler, base, features, bvh_depth, triangles, .. } = *packed;
         let [nodes, tris] = packed.bvh_words.extra();
-        let bvh = [storage_buffer(&ctx, "bvh nodes", nodes)?, storage_buffer(&ctx, "bvh triangles", tris)?];
+        let mut bvh =
+            vec![storage_buffer(&ctx, "bvh nodes", nodes)?, storage_buffer(&ctx, "bvh triangles", tris)?];
+        if let Some(inst) = &packed.instance_words {
+            let [tlas, instances] = inst.extra();
+            bvh.push(storage_buffer(&ctx, "tlas nodes", tlas)?);
+            bvh.push(storage_buffer(&ctx, "instances", instances)?);
+        }
         let bvh_bytes = bvh.iter().map(wgpu::Buffer::size).sum();
         let gpu_scene = GpuScene::upload_buffers(&ctx, &packed.scene_words)?;
         let ray_counter = ctx.buffer_init(
@@ -247,11 +249,10 @@ impl GpuRenderer {
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<(), GpuError> {
-        // An instanced scene was uploaded flattened: its placed triangles are the count.
-        let placed = scene.stats().instanced_triangles;
-        if placed != self.triangles as u64 {
+        if scene.geometry.triangles.len() != self.triangles {
             return Err(GpuError::Unsupported(format!(
-                "reconfigure with a scene of {placed} triangles, the renderer holds {}: make a new renderer",
+                "reconfigure with a scene of {} triangles, the renderer holds {}: make a new renderer",
+                scene.geometry.triangles.len(),
                 self.triangles
             )));
         }

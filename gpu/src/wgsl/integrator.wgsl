@@ -325,6 +325,9 @@ fn scatter_transmissive(path: ptr<function, Path>, pixel: u32, index: u32, bsdf:
 // where the path may go on, its BSDF, the light samples (`sample_lights`) and the BSDF sample
 // that continues the path (`scatter`). Returns whether the path goes on.
 fn shade_hit(path: ptr<function, Path>, hit: Hit, pixel: u32, index: u32) -> bool {
+    // #if INSTANCES
+    trv_instance = hit.instance;
+    // #endif
     let material = scene_triangle_material(hit.triangle);
     let at = hit_attributes(material, hit.triangle, hit.u, hit.v);
     let ms = hit_material(material, at);

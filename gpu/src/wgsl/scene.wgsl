@@ -163,11 +163,39 @@ fn scene_triangle_material(triangle: u32) -> u32 {
     return scene_triangles[triangle].material;
 }
 
+// #if INSTANCES
+// furnace_scene::Instance: a shared mesh's point, normal and tangent carried to world space by
+// the instance of the hit being shaded (`trv_instance`, set by the traversal; the world
+// triangles are an instance of their own, placed by the identity, which changes no bit).
+fn scene_place_point(p: vec3<f32>) -> vec3<f32> {
+    let i = instances[trv_instance];
+    let p1 = vec4<f32>(p, 1.0);
+    return vec3<f32>(dot(i.world_x, p1), dot(i.world_y, p1), dot(i.world_z, p1));
+}
+
+fn scene_place_normal(n: vec3<f32>) -> vec3<f32> {
+    let i = instances[trv_instance];
+    return scene_normalize_or_zero(vec3<f32>(dot(i.normal_x.xyz, n), dot(i.normal_y.xyz, n), dot(i.normal_z.xyz, n)));
+}
+
+fn scene_place_tangent(t: vec4<f32>) -> vec4<f32> {
+    let i = instances[trv_instance];
+    let d = vec4<f32>(t.xyz, 0.0);
+    let xyz = scene_normalize_or_zero(vec3<f32>(dot(i.world_x, d), dot(i.world_y, d), dot(i.world_z, d)));
+    return vec4<f32>(xyz, select(t.w, -t.w, i.mirrors != 0u));
+}
+// #endif
+
 // The point at barycentrics (b1, b2) of a triangle.
 fn scene_position(triangle: u32, b1: f32, b2: f32) -> vec3<f32> {
     let t = scene_triangles[triangle];
+    // #if INSTANCES
+    return scene_interpolate3(scene_place_point(scene_vertices[t.i0].position),
+        scene_place_point(scene_vertices[t.i1].position), scene_place_point(scene_vertices[t.i2].position), b1, b2);
+    // #else
     return scene_interpolate3(scene_vertices[t.i0].position, scene_vertices[t.i1].position,
         scene_vertices[t.i2].position, b1, b2);
+    // #endif
 }
 
 // Geometry::shading_normal: interpolated vertex normals, normalised (zero if they cancel).
@@ -175,7 +203,11 @@ fn scene_shading_normal(triangle: u32, b1: f32, b2: f32) -> vec3<f32> {
     let t = scene_triangles[triangle];
     let n = scene_interpolate3(scene_oct_decode(scene_vertices[t.i0].normal),
         scene_oct_decode(scene_vertices[t.i1].normal), scene_oct_decode(scene_vertices[t.i2].normal), b1, b2);
+    // #if INSTANCES
+    return scene_place_normal(scene_normalize_or_zero(n));
+    // #else
     return scene_normalize_or_zero(n);
+    // #endif
 }
 
 // VertexAttributes: the UV sets (those a material does not sample: (0, 0)) and COLOR_0
@@ -256,7 +288,11 @@ fn scene_tangent(triangle: u32, b1: f32, b2: f32) -> vec4<f32> {
     let tb = scene_decode_tangent(scene_tangents[t.i1]);
     let tc = scene_decode_tangent(scene_tangents[t.i2]);
     let xyz = scene_normalize_or_zero(scene_interpolate3(ta.xyz, tb.xyz, tc.xyz, b1, b2));
+    // #if INSTANCES
+    return scene_place_tangent(vec4<f32>(xyz, select(1.0, -1.0, ta.w < 0.0)));
+    // #else
     return vec4<f32>(xyz, select(1.0, -1.0, ta.w < 0.0));
+    // #endif
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -474,11 +510,23 @@ fn scene_valid_reflection_normal(ng: vec3<f32>, wo: vec3<f32>, n: vec3<f32>) -> 
 // barycentrics (b1, b2); `at` is the hit's attributes (used by a normal map only).
 fn scene_surface_point(triangle: u32, b1: f32, b2: f32, at: SceneAttributes, direction: vec3<f32>) -> SceneSurfacePoint {
     let t = scene_triangles[triangle];
+    // #if INSTANCES
+    let v0 = scene_place_point(scene_vertices[t.i0].position);
+    let v1 = scene_place_point(scene_vertices[t.i1].position);
+    let v2 = scene_place_point(scene_vertices[t.i2].position);
+    // #else
     let v0 = scene_vertices[t.i0].position;
     let v1 = scene_vertices[t.i1].position;
     let v2 = scene_vertices[t.i2].position;
+    // #endif
     let position = scene_interpolate3(v0, v1, v2, b1, b2);
     var geometric = scene_geometric_normal(v0, v1, v2);
+    // #if INSTANCES
+    // A mirroring instance turns the winding: its front stays the mesh's front.
+    if instances[trv_instance].mirrors != 0u {
+        geometric = -geometric;
+    }
+    // #endif
     var shading = scene_shading_normal(triangle, b1, b2);
     if all(shading == vec3<f32>(0.0)) {
         shading = geometric;

@@ -46,7 +46,12 @@ fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool {
     if (scene_materials[mi].flags & SCENE_ALPHA_MODE_BITS) == SCENE_ALPHA_BLEND {
         coverage = scene_blend_coverage(mi, triangle_id, u, v);
         if !shadow_query {
+            // #if INSTANCES
+            // Each instance of a triangle decides on its own (CpuRenderer::stops).
+            return blend_keeps(blend_seed ^ instances[trv_instance].seed_mix, triangle_id, coverage);
+            // #else
             return blend_keeps(blend_seed, triangle_id, coverage);
+            // #endif
         }
     }
     // #endif

@@ -63,6 +63,8 @@ struct Hit {
     triangle: u32,
     /// Whether a triangle was hit.
     hit: bool,
+    /// The instance that placed the triangle (an index of `instances`; 0 without instancing).
+    instance: u32,
 }
 
 /// Counters of the traces run so far by this invocation (private memory: zero at the start of
@@ -281,6 +283,13 @@ fn trv_intersect_node(node: CwbvhNode, r: TrvRay, t_cull: f32, leaves_only: bool
 
 /// Traversal state shared by the closest-hit and any-hit loops.
 struct TrvState {
+    /// The nodes of the tree being traversed: its root and one past its last node (the sweep's
+    /// range).
+    node_first: u32,
+    node_end: u32,
+    /// The instance being traversed, and the one of the closest accepted hit.
+    instance: u32,
+    best_instance: u32,
     /// Closest accepted hit so far (t < 0: none).
     best: TrvTriHit,
     best_id: u32,
@@ -301,9 +310,14 @@ fn trv_leaf(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>, slot: u32) 
     // #endif
     let tri = bvh_triangles[slot];
     let h = trv_intersect_triangle(o, d, tri.v0, tri.v1, tri.v2, (*st).t_tri);
+    // #if INSTANCES
+    // The hit filter's shading (a sheet's normal) is the instance's.
+    trv_instance = (*st).instance;
+    // #endif
     if h.t > 0.0 && hit_filter(tri.id, h.u, h.v) {
         (*st).best = h;
         (*st).best_id = tri.id;
+        (*st).best_instance = (*st).instance;
         if (*st).any {
             (*st).done = true;
         } else {
@@ -332,8 +346,7 @@ fn trv_sweep(st: ptr<function, TrvState>, r: TrvRay, o: vec3<f32>, d: vec3<f32>)
     // #if TRACE_COUNTERS
     trace_stats.fallbacks += 1u;
     // #endif
-    let n = arrayLength(&bvh_nodes);
-    for (var i = 0u; i < n; i++) {
+    for (var i = (*st).node_first; i < (*st).node_end; i++) {
         let node = bvh_nodes[i];
         let hits = trv_intersect_node(node, r, (*st).t_cull, true);
         trv_leaves(st, o, d, node.primitive_base_idx, hits);
@@ -353,7 +366,7 @@ fn trv_traverse(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>) {
     var stack: array<vec2<u32>, TRV_STACK_SIZE>;
     var depth = 0u;
     var dropped = false;
-    var current = vec2<u32>(0u, 0x80000000u);
+    var current = vec2<u32>((*st).node_first, 0x80000000u);
     loop {
         if (current.y & 0xff000000u) != 0u {
             let hits_imask = current.y;
@@ -397,6 +410,127 @@ fn trv_traverse(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>) {
     }
 }
 
+// #if INSTANCES
+// Two levels (furnace_accel::TwoLevel, built for the GPU with the world triangles as an
+// instance of their own): a binary TLAS over the instances' boxes (`tlas_nodes`, a leaf names
+// its instance), each instance's mesh a CWBVH in `bvh_nodes` (its nodes `root..node_end`),
+// traversed with the ray carried into the instance by its inverse transform: t is unchanged
+// (the direction is not renormalised), so the state's closest hit bounds every instance.
+
+/// The instance of the hit being shaded, or of the candidate the hit filter judges.
+var<private> trv_instance: u32;
+
+/// TLAS nodes the stack holds; deeper trees finish with a sweep over the leaves (same hits).
+const TRV_TLAS_STACK: u32 = 32u;
+
+/// The ray's entry distance into a TLAS node's box, or −1 if it does not enter before `t_max`
+/// (accel's `enter`: the exit widened by 2γ₃).
+fn trv_tlas_enter(n: TlasNode, o: vec3<f32>, inv: vec3<f32>, t_max: f32) -> f32 {
+    let t0 = (n.min - o) * inv;
+    let t1 = (n.max - o) * inv;
+    let tmin = min(t0, t1);
+    let tmax = max(t0, t1);
+    let near = max(max(max(tmin.x, tmin.y), tmin.z), 0.0);
+    let far = min(min(tmax.x, tmax.y), tmax.z) * (1.0 + 2.0 * TRV_GAMMA3);
+    if near <= far && near < t_max {
+        return near;
+    }
+    return -1.0;
+}
+
+/// γ₃ = 3ε/(1 − 3ε), ε = 2⁻²⁴.
+const TRV_GAMMA3: f32 = 1.7881398e-7;
+
+/// Traverses instance `i`'s mesh with the ray carried into it.
+fn trv_visit_instance(st: ptr<function, TrvState>, i: u32, o: vec3<f32>, d: vec3<f32>) {
+    let inst = instances[i];
+    let o1 = vec4<f32>(o, 1.0);
+    let d0 = vec4<f32>(d, 0.0);
+    let oi = vec3<f32>(dot(inst.object_x, o1), dot(inst.object_y, o1), dot(inst.object_z, o1));
+    let di = vec3<f32>(dot(inst.object_x, d0), dot(inst.object_y, d0), dot(inst.object_z, d0));
+    if !trv_valid_ray(oi, di, (*st).t_tri) {
+        return;
+    }
+    (*st).instance = i;
+    (*st).node_first = inst.root;
+    (*st).node_end = inst.node_end;
+    trv_traverse(st, oi, di);
+}
+
+/// The TLAS loop: nearer child first, a stack of node indices (the far child), each leaf's
+/// instance visited as it is reached.
+fn trv_traverse_instances(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>) {
+    let inv = vec3<f32>(trv_safe_recip(d.x), trv_safe_recip(d.y), trv_safe_recip(d.z));
+    var stack: array<u32, TRV_TLAS_STACK>;
+    var depth = 0u;
+    var dropped = false;
+    var node = 0u;
+    var running = true;
+    while running {
+        let n = tlas_nodes[node];
+        var next = 0xffffffffu;
+        if n.count > 0u {
+            trv_visit_instance(st, n.first, o, d);
+            if (*st).done {
+                return;
+            }
+        } else {
+            let a = n.first;
+            let b = n.first + 1u;
+            let ta = trv_tlas_enter(tlas_nodes[a], o, inv, (*st).t_cull);
+            let tb = trv_tlas_enter(tlas_nodes[b], o, inv, (*st).t_cull);
+            if ta >= 0.0 && tb >= 0.0 {
+                var near = a;
+                var far = b;
+                if tb < ta {
+                    near = b;
+                    far = a;
+                }
+                if depth == TRV_TLAS_STACK {
+                    // Overflow: drop the bottom entry; the sweep below covers it.
+                    for (var k = 1u; k < TRV_TLAS_STACK; k++) {
+                        stack[k - 1u] = stack[k];
+                    }
+                    depth -= 1u;
+                    dropped = true;
+                }
+                stack[depth] = far;
+                depth += 1u;
+                next = near;
+            } else if ta >= 0.0 {
+                next = a;
+            } else if tb >= 0.0 {
+                next = b;
+            }
+        }
+        // Pop the next subtree still entered before the closest hit.
+        while next == 0xffffffffu {
+            if depth == 0u {
+                running = false;
+                break;
+            }
+            depth -= 1u;
+            if trv_tlas_enter(tlas_nodes[stack[depth]], o, inv, (*st).t_cull) >= 0.0 {
+                next = stack[depth];
+            }
+        }
+        node = next;
+    }
+    if dropped {
+        let count = arrayLength(&tlas_nodes);
+        for (var k = 0u; k < count; k++) {
+            let n = tlas_nodes[k];
+            if n.count > 0u && trv_tlas_enter(n, o, inv, (*st).t_cull) >= 0.0 {
+                trv_visit_instance(st, n.first, o, d);
+                if (*st).done {
+                    return;
+                }
+            }
+        }
+    }
+}
+// #endif
+
 fn trv_valid_ray(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
     return trv_is_finite3(o) && trv_is_finite3(d) && any(d != vec3<f32>(0.0)) && t_max > 0.0;
 }
@@ -406,15 +540,24 @@ fn trv_valid_ray(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> bool {
 /// true is [`trace_any`], the result's `hit` telling whether the ray is blocked (its t, u, v
 /// and triangle are then those of the first blocking hit found, not the closest).
 fn trace_query(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, any: bool) -> Hit {
-    var miss = Hit(t_max, 0.0, 0.0, 0xffffffffu, false);
+    var miss = Hit(t_max, 0.0, 0.0, 0xffffffffu, false, 0u);
     if !trv_valid_ray(origin, dir, t_max) {
         return miss;
     }
     let tm = min(t_max, TRV_F32_MAX);
-    var st = TrvState(TrvTriHit(-1.0, 0.0, 0.0), 0xffffffffu, tm, min(tm * TRV_CULL_SLACK, TRV_F32_MAX), any, false);
+    var st = TrvState(0u, arrayLength(&bvh_nodes), 0u, 0u, TrvTriHit(-1.0, 0.0, 0.0), 0xffffffffu, tm,
+        min(tm * TRV_CULL_SLACK, TRV_F32_MAX), any, false);
+    // #if INSTANCES
+    trv_traverse_instances(&st, origin, dir);
+    // #else
     trv_traverse(&st, origin, dir);
+    // #endif
     if st.best.t > 0.0 {
-        return Hit(st.best.t, st.best.u, st.best.v, st.best_id, true);
+        // #if INSTANCES
+        // What the shading of this hit reads (scene.wgsl's placing functions).
+        trv_instance = st.best_instance;
+        // #endif
+        return Hit(st.best.t, st.best.u, st.best.v, st.best_id, true, st.best_instance);
     }
     return miss;
 }
