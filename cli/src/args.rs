@@ -459,6 +459,10 @@ pub struct BenchArgs {
     /// Also write the results as JSON to PATH (`-`: JSON on stdout, the table on stderr).
     #[arg(long, value_name = "PATH")]
     pub json: Option<PathBuf>,
+    /// Copy the scene's instances into world space before rendering (one BVH over every placed
+    /// triangle): what instancing saves, or costs, measured on the same scene.
+    #[arg(long)]
+    pub flatten: bool,
     /// Do not count rays: on the GPU, no traversal counters (rays, nodes, triangles per ray);
     /// on the CPU, no estimate of rays per sample (it renders a small image on a GPU adapter,
     /// software included).

@@ -40,6 +40,11 @@ struct Report {
     adapter: String,
     scene: String,
     triangles: u64,
+    /// Triangles in the image (the instances counted) and the instances.
+    placed: u64,
+    instances: usize,
+    /// The process's peak resident memory at the end, in bytes (`None` where unknown).
+    host_peak_bytes: Option<u64>,
     width: u32,
     height: u32,
     bounces: u32,
@@ -231,6 +236,16 @@ impl Report {
             gpu,
         );
         let _ = writeln!(s, "\nrays: {}", self.rays_note());
+        let mib = |b: u64| b as f64 / 1048576.0;
+        let host = self.host_peak_bytes.map_or_else(|| "unknown".to_string(), |b| format!("{:.1} MiB", mib(b)));
+        let gpu = self.gpu.map_or_else(String::new, |g| {
+            format!("; GPU {:.1} MiB of scene and {:.1} MiB of BVH", mib(g.scene_bytes), mib(g.bvh_bytes))
+        });
+        let _ = writeln!(
+            s,
+            "memory: {} triangles stored, {} in the image, {} instances; host peak {host}{gpu}",
+            self.triangles, self.placed, self.instances
+        );
         let [scene, open, pass] = self.first_frame;
         let parts = if self.backend == "cpu" { "the BVH" } else { "BVH, upload, pipeline" };
         let _ = writeln!(
@@ -308,6 +323,9 @@ impl Report {
             "gpus_one_collection_seconds": finite(self.load.as_ref().map(|(_, c)| *c)),
         });
         value["gpus"] = serde_json::json!(devices);
+        value["placed_triangles"] = serde_json::json!(self.placed);
+        value["instances"] = serde_json::json!(self.instances);
+        value["host_peak_bytes"] = serde_json::json!(self.host_peak_bytes);
         let mut text = serde_json::to_string_pretty(&value).unwrap_or_default();
         text.push('\n');
         text
@@ -344,6 +362,16 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         eprintln!("warning: {}: {w}", scene.name);
     }
     crate::env::apply(&mut scene, &a.environment)?;
+    if a.flatten {
+        if scene.stats().instanced_triangles > furnace_scene::MAX_TRIANGLES {
+            return Err(format!(
+                "--flatten: {} placed triangles, more than the {} a scene may store",
+                scene.stats().instanced_triangles,
+                furnace_scene::MAX_TRIANGLES
+            ));
+        }
+        scene = scene.flattened();
+    }
     let camera = scene.default_camera();
     let (width, height) = match (a.width, a.height, &a.scene) {
         // The reference size for the Cornell box.
@@ -358,13 +386,14 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         ..*given
     };
     let triangles = scene.geometry.triangle_count() as u64;
+    let (placed, instances) = (scene.stats().instanced_triangles, scene.instancing.instances.len());
     let scene_point_lights = scene.point_lights().count();
     let scene_name = match &a.scene {
         SceneArg::Cbox => "cbox".to_string(),
         SceneArg::Interior(n) => format!("interior:{n}"),
         SceneArg::Forest(n, seed) => format!("forest:{n}:{seed}"),
         SceneArg::File(p) => p.display().to_string(),
-    };
+    } + if a.flatten { " (flattened)" } else { "" };
     let scene = Arc::new(scene);
     let opening = Instant::now();
     let mut engine = backend::open_chosen(
@@ -397,6 +426,9 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         adapter,
         scene: scene_name,
         triangles,
+        placed,
+        instances,
+        host_peak_bytes: host_peak_bytes(),
         width,
         height,
         bounces: settings.bounces,
@@ -559,6 +591,14 @@ fn results(
         Backend::Cpu(_) if a.no_rays => (Rays::None("--no-rays".to_string()), None, None, None),
         Backend::Cpu(_) => (estimate(), None, None, None),
     })
+}
+
+/// The process's peak resident set (`VmHWM` of `/proc/self/status`), where the system has it.
+fn host_peak_bytes() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kib * 1024)
 }
 
 /// The table on stdout, and the JSON to `json` (`-`: the JSON on stdout, the table on stderr).
