@@ -237,7 +237,8 @@ impl Report {
         );
         let _ = writeln!(s, "\nrays: {}", self.rays_note());
         let mib = |b: u64| b as f64 / 1048576.0;
-        let host = self.host_peak_bytes.map_or_else(|| "unknown".to_string(), |b| format!("{:.1} MiB", mib(b)));
+        let host =
+            self.host_peak_bytes.map_or_else(|| "unknown".to_string(), |b| format!("{:.1} MiB", mib(b)));
         let gpu = self.gpu.map_or_else(String::new, |g| {
             format!("; GPU {:.1} MiB of scene and {:.1} MiB of BVH", mib(g.scene_bytes), mib(g.bvh_bytes))
         });
