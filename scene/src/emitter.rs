@@ -40,7 +40,8 @@ pub struct Emitters {
 }
 
 impl Emitters {
-    /// The emitters of `scene`, or `None` when it has none (no triangle of positive weight).
+    /// The emitters of `scene` (its world-space triangles whose material emits), or `None` when
+    /// it has none (no triangle of positive weight).
     pub fn new(scene: &Scene) -> Option<Self> {
         let material_weights: Vec<f32> = scene.materials.iter().map(|m| material_weight(scene, m)).collect();
         if !material_weights.iter().any(|&w| w > 0.0) {
@@ -49,7 +50,14 @@ impl Emitters {
         let g = &scene.geometry;
         let mut triangles = Vec::new();
         let mut weights = Vec::new();
-        for t in 0..g.triangle_count() {
+        // World-space triangles only: the loader keeps emissive meshes there (a shared mesh's
+        // triangles are in its object space, and are not lights).
+        let world = if scene.instancing.is_empty() {
+            g.triangle_count()
+        } else {
+            scene.instancing.world_triangles as usize
+        };
+        for t in 0..world {
             let w = material_weights[scene.triangle_material(t)];
             if w > 0.0
                 && let Some([v0, v1, v2]) = g.triangle(t)
