@@ -17,7 +17,7 @@
 //! let buffers = traverse::BvhBuffers::new(&bvh, ctx.max_storage_binding())?;
 //! let src = wgsl::compose(&[
 //!     &traverse::bindings(0, 3),
-//!     wgsl::TRAVERSE,
+//!     &traverse::one_level(),
 //!     "fn hit_filter(id: u32, u: f32, v: f32) -> bool { return true; }",
 //!     "@compute @workgroup_size(64) fn main() { /* trace_closest(...) */ }",
 //! ]);
@@ -77,7 +77,13 @@ pub fn with_stack_size(source: &str, size: u32) -> String {
 /// # Panics
 /// If `size` is 0.
 pub fn module_with_stack_size(size: u32) -> String {
-    with_stack_size(crate::wgsl::TRAVERSE, size)
+    with_stack_size(&one_level(), size)
+}
+
+/// [`crate::wgsl::TRAVERSE`] as a shader without instances composes it: the one-level
+/// traversal (the trace counters' blocks kept, the two-level `INSTANCES` code left out).
+pub fn one_level() -> String {
+    crate::wgsl::select(crate::wgsl::TRAVERSE, |name| name != "INSTANCES")
 }
 
 /// The declarations of the two storage buffers the traversal reads, at `@group(group)`,

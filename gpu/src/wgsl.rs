@@ -41,7 +41,8 @@ pub const SPECTRUM: &str = include_str!("wgsl/spectrum.wgsl");
 /// modes, sRGB decode and KHR_texture_transform, `Material::evaluate`, furnace-cpu's
 /// `surface_point` (normal map, double-sided orientation) and alpha test. Needs the
 /// declarations of [`crate::scene::bindings`]. Compose it through [`select`]: `UV_SETS` and
-/// `VERTEX_COLORS` keep the reads of UV sets beyond UV0 and of vertex colours.
+/// `VERTEX_COLORS` keep the reads of UV sets beyond UV0 and of vertex colours, `INSTANCES` the
+/// placing of a hit by its instance (which needs the two-level traversal's bindings).
 pub const SCENE: &str = include_str!("wgsl/scene.wgsl");
 
 /// `furnace-scene`'s light BVH (`LightBounds::importance`, `LightBvh::sample` and `pmf`) over
@@ -56,6 +57,9 @@ pub const LIGHT_BVH: &str = include_str!("wgsl/light_bvh.wgsl");
 pub const ENVIRONMENT: &str = include_str!("wgsl/environment.wgsl");
 
 /// CWBVH traversal of `furnace-accel`'s GPU buffers: closest hit and any hit (shadow rays).
+/// Compose it through [`select`]: `INSTANCES` keeps the two-level traversal (TLAS and instance
+/// buffers), else the one-level one ([`crate::traverse::one_level`]); `TRACE_COUNTERS` keeps the
+/// counters' updates.
 pub const TRAVERSE: &str = include_str!("wgsl/traverse.wgsl");
 
 /// The integrator's per-path pieces with Rust twins: the camera ray (`furnace-scene`'s

@@ -936,7 +936,7 @@ fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) 
 /// Rust layout.
 /// The scene module with every feature composed (vertex colours and UV sets read).
 fn all_of_scene_wgsl() -> String {
-    wgsl::select(wgsl::SCENE, |_| true)
+    wgsl::select(wgsl::SCENE, |name| name != "INSTANCES")
 }
 
 #[test]

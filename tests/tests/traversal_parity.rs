@@ -153,6 +153,12 @@ impl Filter {
     }
 }
 
+/// The one-level traversal module as the tests compose it: the trace counters kept, the
+/// two-level (`INSTANCES`) code left out.
+fn one_level() -> String {
+    wgsl::select(wgsl::TRAVERSE, |name| name != "INSTANCES")
+}
+
 const KERNEL_MAIN: &str = r#"
 @compute @workgroup_size(64)
 fn main(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
@@ -532,7 +538,7 @@ fn scene_parity(name: &str, tris: &[[Vec3; 3]], camera: &furnace_scene::Camera, 
     print_header();
     for filter in [Filter::All, Filter::Pattern] {
         let t0 = Instant::now();
-        let gpu = trace_gpu(&ctx, &buffers, wgsl::TRAVERSE, filter, &all);
+        let gpu = trace_gpu(&ctx, &buffers, &one_level(), filter, &all);
         let gpu_time = t0.elapsed();
         let mut start = 0;
         let mut tallies = Vec::new();
@@ -767,7 +773,7 @@ fn deep_tree_overflows_the_default_stack_without_losing_hits() {
     };
     print_header();
     for filter in [Filter::All, Filter::Pattern] {
-        let gpu = trace_gpu(&ctx, &buffers, wgsl::TRAVERSE, filter, &rays);
+        let gpu = trace_gpu(&ctx, &buffers, &one_level(), filter, &rays);
         let t = compare(
             &tris,
             filter,
@@ -809,7 +815,7 @@ fn offset_ray_origin_is_bit_exact() {
     let src = wgsl::compose(&[
         kernel::PREAMBLE,
         &traverse::bindings(0, 3),
-        wgsl::TRAVERSE,
+        &one_level(),
         Filter::All.wgsl(),
         r#"
 @compute @workgroup_size(64)
@@ -849,7 +855,7 @@ fn empty_tree_and_invalid_rays_hit_nothing() {
     let bvh = Bvh::build(&[]);
     let buffers = BvhBuffers::new(&bvh, ctx.max_storage_binding()).unwrap();
     let r = TestRay { o: Vec3::ZERO, d: Vec3::X, t_max: f32::INFINITY, t_any: f32::INFINITY };
-    let gpu = trace_gpu(&ctx, &buffers, wgsl::TRAVERSE, Filter::All, &[r]);
+    let gpu = trace_gpu(&ctx, &buffers, &one_level(), Filter::All, &[r]);
     assert!(gpu[0].hit.is_none() && !gpu[0].occluded);
     let bvh =
         Bvh::build(&[[Vec3::new(1.0, -1.0, -1.0), Vec3::new(1.0, 1.0, -1.0), Vec3::new(1.0, 0.0, 1.0)]]);
@@ -862,7 +868,7 @@ fn empty_tree_and_invalid_rays_hit_nothing() {
         TestRay { t_max: 0.0, t_any: -1.0, ..r },
         TestRay { t_max: 0.5, t_any: 0.5, ..r },
     ];
-    let gpu = trace_gpu(&ctx, &buffers, wgsl::TRAVERSE, Filter::All, &rays);
+    let gpu = trace_gpu(&ctx, &buffers, &one_level(), Filter::All, &rays);
     let (id, t, _) = gpu[0].hit.expect("the plain ray hits");
     assert_eq!((id, t), (0, 1.0));
     assert!(gpu[0].occluded);
@@ -886,7 +892,7 @@ fn negative_zero_direction_components_hit() {
             .into_iter()
             .map(|d| TestRay { o, d, t_max: f32::INFINITY, t_any: f32::INFINITY })
             .collect();
-    for (r, g) in rays.iter().zip(trace_gpu(&ctx, &buffers, wgsl::TRAVERSE, Filter::All, &rays)) {
+    for (r, g) in rays.iter().zip(trace_gpu(&ctx, &buffers, &one_level(), Filter::All, &rays)) {
         assert_eq!(g.hit.map(|h| h.1), Some(1.0), "closest hit along {:?}", r.d);
         assert!(g.occluded, "any hit along {:?}", r.d);
     }
@@ -895,7 +901,7 @@ fn negative_zero_direction_components_hit() {
 /// The generated WGSL structs have the bytes of accel's `#[repr(C)]` ones (naga reflection).
 #[test]
 fn wgsl_structs_match_accel_layout() {
-    let src = wgsl::compose(&[&traverse::bindings(0, 0), wgsl::TRAVERSE, Filter::All.wgsl()]);
+    let src = wgsl::compose(&[&traverse::bindings(0, 0), &one_level(), Filter::All.wgsl()]);
     furnace_tests::layout::assert_gpu_struct::<GpuCwbvhNode>(&src);
     furnace_tests::layout::assert_gpu_struct::<GpuTriangle>(&src);
 }
