@@ -1,6 +1,6 @@
 //! [`CpuRenderer`]: the path tracer.
 
-use furnace_accel::{InstanceHit, offset_scale_of_bounds};
+use furnace_accel::{Hit, offset_scale_of_bounds};
 use furnace_brdf::iridescence::ThinFilm;
 use furnace_brdf::{HitBsdf, LayeredParams, SpecularOptions};
 use furnace_render::layout::DIM_PIXEL;
@@ -450,7 +450,7 @@ impl CpuRenderer {
         }
     }
 
-    fn closest_hit(&self, origin: Vec3, direction: Vec3) -> Option<InstanceHit> {
+    fn closest_hit(&self, origin: Vec3, direction: Vec3) -> Option<(Hit, u32)> {
         if self.any_alpha {
             let seed = if self.any_blended { blend_seed(origin, direction) } else { 0 };
             self.accel

@@ -3,7 +3,7 @@
 //! ([`super::lights`]), and the scattered ray that continues the path.
 
 use super::lights::Vertex;
-use super::{CpuRenderer, Shading, WORLD, absorption, bsdf};
+use super::{CpuRenderer, Shading, absorption, bsdf};
 use furnace_accel::offset_ray_origin_scaled;
 use furnace_brdf::spectrum::{dispersed_ior, sample_wavelength};
 use furnace_brdf::{Frame, HitBsdf};
@@ -80,9 +80,8 @@ impl CpuRenderer {
                 self.escape(&mut path);
                 break;
             };
-            let hit_instance = hit.instance.unwrap_or(WORLD);
-            let instance = hit.instance.and_then(|i| scene.instancing.instances.get(i as usize));
-            let hit = hit.hit;
+            let (hit, hit_instance) = hit;
+            let instance = self.instance(hit_instance);
             let material_index = self.triangle_materials[hit.triangle as usize] as usize;
             let material = &scene.materials[material_index];
             // Materials with textures or vertex colours are evaluated at the hit's attributes;
