@@ -252,6 +252,20 @@ impl PackedScene {
                 g.triangle_count()
             )));
         }
+        let traversal = (BvhBuffers::new(bvh, limit)?, None, bvh.depth());
+        Self::with_traversal(scene, camera, (settings, sampler), traversal, limit)
+    }
+
+    /// The rest of a packed scene around its traversal's buffers (`bvh_words`, `instance_words`
+    /// and the deepest BVH's depth): the frame's constants, the scene's, the lights' and the
+    /// environment's words.
+    fn with_traversal(
+        scene: &Scene,
+        camera: &Camera,
+        (settings, sampler): (RenderSettings, AnySampler),
+        (bvh_words, instance_words, bvh_depth): (BvhBuffers, Option<crate::traverse::InstanceBuffers>, usize),
+        limit: u64,
+    ) -> Result<Self, GpuError> {
         let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
         let scene_emitters = Emitters::new(scene);
         let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
@@ -260,10 +274,10 @@ impl PackedScene {
             sampler,
             base: frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref()),
             features,
-            bvh_depth: bvh.depth(),
-            triangles: g.triangles.len(),
-            bvh_words: BvhBuffers::new(bvh, limit)?,
-            instance_words: None,
+            bvh_depth,
+            triangles: scene.geometry.triangles.len(),
+            bvh_words,
+            instance_words,
             scene_words: SceneBuffers::new(scene, limit)?,
             point_lights: point_light_records(scene),
             emitter_words: emitter_buffer_words(scene, scene_emitters.as_ref(), features),
@@ -308,23 +322,8 @@ impl PackedScene {
         drop(two);
         let bvh_words =
             std::mem::replace(&mut words.bvh, BvhBuffers { nodes: Vec::new(), triangles: Vec::new() });
-        let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
-        let scene_emitters = Emitters::new(scene);
-        let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
-        Ok(Self {
-            settings,
-            sampler,
-            base: frame_params_with(scene, camera, &settings, sampler_params, scene_emitters.as_ref()),
-            features,
-            bvh_depth: words.depth,
-            triangles: g.triangles.len(),
-            bvh_words,
-            scene_words: SceneBuffers::new(scene, limit)?,
-            point_lights: point_light_records(scene),
-            emitter_words: emitter_buffer_words(scene, scene_emitters.as_ref(), features),
-            environment: environment_buffer_words(scene, &settings, limit)?,
-            instance_words: Some(words),
-        })
+        let depth = words.depth;
+        Self::with_traversal(scene, camera, (settings, sampler), (bvh_words, Some(words), depth), limit)
     }
 
     /// The largest upload limit of `contexts` ([`PackedScene::new`]'s `limit`): a device with a
