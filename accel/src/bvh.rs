@@ -270,17 +270,6 @@ impl Bvh {
         Some(it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v))))
     }
 
-    /// Bytes held for the queries: nodes (as built, and decoded for the CPU traversal where
-    /// they are), triangles in leaf order with their ids, and the CPU's leaf blocks.
-    pub fn bytes(&self) -> usize {
-        let nodes = match &self.tree {
-            Tree::Empty => 0,
-            Tree::Cwbvh(b, wide) => b.nodes.len() * 80 + wide.len() * size_of::<WideNode>(),
-            Tree::Bvh2(b) => b.nodes.len() * size_of::<obvhs::bvh2::node::Bvh2Node>(),
-        };
-        nodes + self.triangles.len() * 52 + self.blocks.len() * size_of::<Tri4>()
-    }
-
     /// Number of triangles given to the builder (including skipped ones).
     pub fn input_count(&self) -> usize {
         self.input_count
@@ -796,7 +785,7 @@ fn safe_recip(x: f32) -> f32 {
 /// never see `0 · ∞ = NaN` (`2^100` times any box extent and quantisation step stays finite in
 /// `f32`); one vector division (the same IEEE quotient per lane).
 #[inline(always)]
-fn safe_recip3(d: Vec3A) -> Vec3A {
+pub(crate) fn safe_recip3(d: Vec3A) -> Vec3A {
     const TINY: f32 = 7.888_609e-31; // 2^-100
     const HUGE: f32 = 1.267_650_6e30; // 2^100
     let tiny = d.abs().cmplt(Vec3A::splat(TINY));

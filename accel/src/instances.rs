@@ -19,6 +19,7 @@ use obvhs::{aabb::Aabb, ploc::PlocBuilder};
 use rayon::prelude::*;
 use std::ops::Range;
 
+use crate::bvh::safe_recip3;
 use crate::{BuildOptions, Bvh, Hit};
 
 /// A node of the TLAS, 32 bytes: its box, and either its two children (`count` 0, the first at
@@ -65,7 +66,6 @@ pub struct TwoLevel {
     meshes: Vec<(Bvh, u32)>,
     placements: Vec<Placement>,
     nodes: Vec<TlasNode>,
-    unique_triangles: usize,
 }
 
 /// The box padding: a fraction of the box's extent plus of its largest coordinate, so that the
@@ -98,7 +98,6 @@ impl TwoLevel {
             || (!world.is_empty()).then(|| build(&world)),
             || meshes.par_iter().map(|r| (build(r), r.start)).collect::<Vec<_>>(),
         );
-        let unique_triangles = world.len() + meshes.iter().map(ExactSizeIterator::len).sum::<usize>();
         let bounds: Vec<Option<(Vec3, Vec3)>> = blas.iter().map(|(b, _)| b.bounds()).collect();
         let mut aabbs = Vec::with_capacity(instances.len());
         let mut kept = Vec::with_capacity(instances.len());
@@ -126,7 +125,7 @@ impl TwoLevel {
             kept.push(index as u32);
         }
         let nodes = tlas(&aabbs, &kept);
-        Self { world: world_bvh, meshes: blas, placements, nodes, unique_triangles }
+        Self { world: world_bvh, meshes: blas, placements, nodes }
     }
 
     /// The TLAS nodes, root first (none without instances).
@@ -148,18 +147,6 @@ impl TwoLevel {
     /// Each mesh's BVH with the id of its first triangle.
     pub fn meshes(&self) -> &[(Bvh, u32)] {
         &self.meshes
-    }
-
-    /// Triangles stored: the world ones and each mesh's once.
-    pub fn unique_triangles(&self) -> usize {
-        self.unique_triangles
-    }
-
-    /// Bytes of the trees and triangles held for the CPU queries (the meshes' BVHs, their
-    /// triangles in leaf order, the TLAS and the instances).
-    pub fn bytes(&self) -> usize {
-        let bvh = self.world.iter().chain(self.meshes.iter().map(|(b, _)| b)).map(Bvh::bytes).sum::<usize>();
-        bvh + self.nodes.len() * size_of::<TlasNode>() + self.placements.len() * size_of::<Placement>()
     }
 
     /// The closest hit of `origin + t·dir`, `0 < t < t_max`, over the world triangles and every
@@ -244,7 +231,7 @@ impl TwoLevel {
         if self.nodes.is_empty() || !(origin.is_finite() && dir.is_finite()) || dir == Vec3::ZERO {
             return false;
         }
-        let inv = dir.map(safe_recip);
+        let inv = Vec3::from(safe_recip3(dir.into()));
         let mut stack = [0u32; 64];
         let mut top = 0usize;
         let mut node = 0u32;
@@ -340,13 +327,6 @@ fn enter(node: &TlasNode, origin: Vec3, inv: Vec3, t_max: f32) -> Option<f32> {
 
 /// γ₃ = 3ε/(1 − 3ε), ε = 2⁻²⁴ (pbrt's `gamma(3)`).
 const GAMMA3: f32 = 3.0 * 5.960_464_5e-8 / (1.0 - 3.0 * 5.960_464_5e-8);
-
-/// 1/x, with ±0 mapped to a large finite value of its sign (so that `0 · (1/x)` stays 0, not
-/// NaN, in the slab test).
-#[inline(always)]
-fn safe_recip(x: f32) -> f32 {
-    if x == 0.0 { 1.267_650_6e30_f32.copysign(x) } else { 1.0 / x }
-}
 
 /// The TLAS over `aabbs` (the boxes of instances `ids`): obvhs's PLOC builder, as 32-byte
 /// nodes whose leaves name their instance.

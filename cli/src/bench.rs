@@ -364,10 +364,10 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     }
     crate::env::apply(&mut scene, &a.environment)?;
     if a.flatten {
-        if scene.stats().instanced_triangles > furnace_scene::MAX_TRIANGLES {
+        let placed = scene.stats().instanced_triangles;
+        if placed > furnace_scene::MAX_TRIANGLES {
             return Err(format!(
-                "--flatten: {} placed triangles, more than the {} a scene may store",
-                scene.stats().instanced_triangles,
+                "--flatten: {placed} placed triangles, more than the {} a scene may store",
                 furnace_scene::MAX_TRIANGLES
             ));
         }

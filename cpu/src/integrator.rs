@@ -199,12 +199,6 @@ impl CpuRenderer {
         })
     }
 
-    /// Bytes of the acceleration structure the renderer traces against (trees and triangles
-    /// in leaf order: one BVH, or one per shared mesh under a TLAS of the instances).
-    pub fn accel_bytes(&self) -> usize {
-        self.accel.bytes()
-    }
-
     /// [`CpuRenderer::new`] through the scene's [`Scene::default_camera`] (its first camera, or a
     /// view framing its geometry).
     ///

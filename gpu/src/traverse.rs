@@ -243,6 +243,15 @@ impl GpuInstance {
     }
 }
 
+/// [`GpuError::TooLarge`] when a buffer of `bytes` exceeds the binding limit `max_binding`.
+fn check_binding(what: &str, bytes: usize, max_binding: u64) -> Result<(), GpuError> {
+    if bytes as u64 > max_binding {
+        Err(GpuError::TooLarge { what: what.into(), bytes: bytes as u64, limit: max_binding })
+    } else {
+        Ok(())
+    }
+}
+
 /// The two-level traversal's extra read-only bindings: `tlas_nodes`, `instances`.
 pub fn instance_binding_list() -> Vec<Binding> {
     vec![Binding::read("tlas_nodes", "array<TlasNode>"), Binding::read("instances", "array<Instance>")]
@@ -253,13 +262,10 @@ pub fn instance_declarations() -> String {
     wgsl_struct::<TlasNode>(false) + &wgsl_struct::<GpuInstance>(false)
 }
 
-/// A scene's meshes and instances as the words of the WGSL two-level traversal: every mesh's
-/// CWBVH in one node buffer and one triangle buffer (nodes and triangle slots renumbered, ids
-/// the caller's), the TLAS and the instances.
+/// A scene's instances as the words of the WGSL two-level traversal: the TLAS and the instances
+/// (every mesh's CWBVH goes into the [`BvhBuffers`] [`InstanceBuffers::new`] returns beside).
 #[derive(Debug, Clone, PartialEq)]
 pub struct InstanceBuffers {
-    /// The meshes' BVHs, as [`BvhBuffers`].
-    pub bvh: BvhBuffers,
     /// `tlas_nodes`: 8 words per node, root first.
     pub tlas: Vec<u32>,
     /// `instances`: [`GpuInstance`]s.
@@ -271,7 +277,8 @@ pub struct InstanceBuffers {
 impl InstanceBuffers {
     /// Packs `two` (built over meshes only: its world part, if any, must be placed as an instance
     /// of its own) with each instance's `world_from_object` and blend-seed mix, checking each
-    /// buffer against `max_binding` bytes.
+    /// buffer against `max_binding` bytes: every mesh's CWBVH in one node and one triangle buffer
+    /// (nodes and triangle slots renumbered, ids the caller's), and the TLAS and instances.
     ///
     /// # Errors
     /// [`GpuError::TooLarge`] for a buffer beyond `max_binding`.
@@ -282,7 +289,7 @@ impl InstanceBuffers {
         two: &TwoLevel,
         placements: &[(glam::Affine3A, u32)],
         max_binding: u64,
-    ) -> Result<Self, GpuError> {
+    ) -> Result<(BvhBuffers, Self), GpuError> {
         assert!(two.world().is_none(), "place the world triangles as an instance of their own");
         let mut nodes: Vec<GpuCwbvhNode> = Vec::new();
         let mut tris: Vec<GpuTriangle> = Vec::new();
@@ -309,22 +316,9 @@ impl InstanceBuffers {
                 GpuInstance::new(world, root, end, seed_mix)
             })
             .collect();
-        let check = |what: String, bytes: usize| {
-            if bytes as u64 > max_binding {
-                Err(GpuError::TooLarge { what, bytes: bytes as u64, limit: max_binding })
-            } else {
-                Ok(())
-            }
-        };
-        check(format!("the BVH node buffer ({} nodes)", nodes.len()), size_of_val(nodes.as_slice()))?;
-        check(
-            format!("the BVH triangle buffer ({} triangle slots)", tris.len()),
-            size_of_val(tris.as_slice()),
-        )?;
-        check(
-            format!("the instance buffer ({} instances)", instances.len()),
-            size_of_val(instances.as_slice()),
-        )?;
+        let bvh = BvhBuffers::from_parts(&nodes, &tris, max_binding)?;
+        let what = format!("the instance buffer ({} instances)", instances.len());
+        check_binding(&what, size_of_val(instances.as_slice()), max_binding)?;
         let tlas: Vec<u32> = if two.tlas_nodes().is_empty() {
             // No instance has a box: a root leaf of instance 0 (a zero instance when there is
             // none, whose zero direction no traversal takes).
@@ -332,12 +326,8 @@ impl InstanceBuffers {
         } else {
             bytemuck::cast_slice(two.tlas_nodes()).to_vec()
         };
-        let nodes: Vec<u32> =
-            if nodes.is_empty() { vec![0; NODE_WORDS] } else { bytemuck::cast_slice(&nodes).to_vec() };
-        let triangles: Vec<u32> =
-            if tris.is_empty() { vec![0; TRIANGLE_WORDS] } else { bytemuck::cast_slice(&tris).to_vec() };
         let instances = if instances.is_empty() { vec![bytemuck::Zeroable::zeroed()] } else { instances };
-        Ok(Self { bvh: BvhBuffers { nodes, triangles }, tlas, instances, depth })
+        Ok((bvh, Self { tlas, instances, depth }))
     }
 
     /// The two extra buffers in binding order (TLAS nodes, instances).
@@ -378,21 +368,24 @@ impl BvhBuffers {
     /// If `bvh` was built with [`Layout::Bvh2`] but has triangles: the GPU traverses CWBVHs only
     /// (a programming error, not a property of the scene).
     pub fn new(bvh: &Bvh, max_binding: u64) -> Result<Self, GpuError> {
-        let nodes = bvh.gpu_nodes();
         let tris = bvh.gpu_triangles();
         assert!(
             bvh.layout() == Layout::Cwbvh || tris.is_empty(),
             "furnace-gpu traverses CWBVHs: build the Bvh with Layout::Cwbvh"
         );
-        let check = |what: &str, bytes: usize| {
-            if bytes as u64 > max_binding {
-                Err(GpuError::TooLarge { what: what.into(), bytes: bytes as u64, limit: max_binding })
-            } else {
-                Ok(())
-            }
-        };
-        check(&format!("the BVH node buffer ({} nodes)", nodes.len()), size_of_val(nodes))?;
-        check(&format!("the BVH triangle buffer ({} triangle slots)", tris.len()), size_of_val(tris))?;
+        Self::from_parts(bvh.gpu_nodes(), tris, max_binding)
+    }
+
+    /// The buffers of CWBVH `nodes` and their triangle slots `tris` (one tree's, or several
+    /// trees' renumbered into one), checked as [`BvhBuffers::new`] checks them.
+    fn from_parts(nodes: &[GpuCwbvhNode], tris: &[GpuTriangle], max_binding: u64) -> Result<Self, GpuError> {
+        check_binding(
+            &format!("the BVH node buffer ({} nodes)", nodes.len()),
+            size_of_val(nodes),
+            max_binding,
+        )?;
+        let what = format!("the BVH triangle buffer ({} triangle slots)", tris.len());
+        check_binding(&what, size_of_val(tris), max_binding)?;
         let nodes: Vec<u32> =
             if nodes.is_empty() { vec![0; NODE_WORDS] } else { bytemuck::cast_slice(nodes).to_vec() };
         let triangles: Vec<u32> =

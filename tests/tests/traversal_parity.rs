@@ -994,7 +994,7 @@ fn instanced_traversal_matches_the_cpu() {
         let (positions, triangles, ranges, instances) = parts;
         let two = TwoLevel::build(&positions, &triangles, 0..0, &ranges, &instances);
         let transforms: Vec<(Affine3A, u32)> = instances.iter().map(|&(_, a)| (a, 0)).collect();
-        let buffers = InstanceBuffers::new(&two, &transforms, ctx.max_storage_binding()).unwrap();
+        let (bvh, buffers) = InstanceBuffers::new(&two, &transforms, ctx.max_storage_binding()).unwrap();
         // Every instance's triangles in world space, in instance order: the reference's ids.
         let mut flat: Vec<[Vec3; 3]> = Vec::new();
         let mut offsets = Vec::new();
@@ -1029,7 +1029,7 @@ fn instanced_traversal_matches_the_cpu() {
             Filter::All.wgsl(),
             KERNEL_MAIN_INSTANCED,
         ]);
-        let [nodes, tris] = buffers.bvh.extra();
+        let [nodes, tris] = bvh.extra();
         let [tlas, inst] = buffers.extra();
         let out = kernel::run_with(
             &ctx,

@@ -84,14 +84,6 @@ impl Accel {
             Accel::TwoLevel(b) => two_level_occluded(b, origin, dir, t_max, |_, _, _| true),
         }
     }
-
-    /// Bytes the structure holds.
-    pub(super) fn bytes(&self) -> usize {
-        match self {
-            Accel::Flat(b) => b.bytes(),
-            Accel::TwoLevel(b) => b.bytes(),
-        }
-    }
 }
 
 // The two-level queries out of line: inlined, their TLAS loop made the integrator's loop larger

@@ -318,10 +318,8 @@ impl PackedScene {
             transforms.push((i.world_from_object, (k as u32).wrapping_mul(0x9e37_79b9)));
         }
         let two = furnace_accel::TwoLevel::build(&g.positions, &g.triangles, 0..0, &meshes, &placements);
-        let mut words = crate::traverse::InstanceBuffers::new(&two, &transforms, limit)?;
+        let (bvh_words, words) = crate::traverse::InstanceBuffers::new(&two, &transforms, limit)?;
         drop(two);
-        let bvh_words =
-            std::mem::replace(&mut words.bvh, BvhBuffers { nodes: Vec::new(), triangles: Vec::new() });
         let depth = words.depth;
         Self::with_traversal(scene, camera, (settings, sampler), (bvh_words, Some(words), depth), limit)
     }
