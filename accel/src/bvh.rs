@@ -3,14 +3,14 @@
 use glam::{Vec2, Vec3, Vec3A};
 use obvhs::{
     BvhBuildParams,
-    bvh2::{Bvh2, leaf_collapser::collapse, reinsertion::ReinsertionOptimizer},
-    cwbvh::{CwBvh, bvh2_to_cwbvh::bvh2_to_cwbvh},
-    ploc::PlocBuilder,
+    bvh2::Bvh2,
+    cwbvh::CwBvh,
     ray::{Ray, RayHit},
-    splits::split_aabbs_preset,
     triangle::Triangle,
 };
+use rayon::prelude::*;
 
+use crate::build::{OBVHS_STACK, build_bvh2, build_cwbvh, bvh2_depth, cwbvh_depth};
 use crate::gpu::{GpuCwbvhNode, GpuTriangle};
 use crate::traverse::{self, WideNode};
 use crate::triangle::{Tri4, TriangleHit, intersect_triangle};
@@ -177,7 +177,7 @@ impl Bvh {
     pub fn from_indexed(positions: &[Vec3], indices: &[[u32; 3]], options: BuildOptions) -> Self {
         let nan = Vec3::splat(f32::NAN);
         let soup: Vec<[Vec3; 3]> = indices
-            .iter()
+            .par_iter()
             .map(|tri| tri.map(|i| positions.get(i as usize).copied().unwrap_or(nan)))
             .collect();
         Self::build_with(&soup, options)
@@ -190,21 +190,24 @@ impl Bvh {
     /// If there are 2^32 triangles or more (ids are `u32`).
     pub fn build_with(triangles: &[[Vec3; 3]], options: BuildOptions) -> Self {
         assert!(u32::try_from(triangles.len()).is_ok(), "furnace-accel: at most 2^32 - 1 triangles");
-        let mut valid_ids = Vec::with_capacity(triangles.len());
-        let mut valid = Vec::with_capacity(triangles.len());
-        let mut max_abs = 0.0f32;
-        for (i, t) in triangles.iter().enumerate() {
-            // `max_element` ignores NaN, hence `is_finite` too.
-            let in_range = t.iter().all(|v| v.is_finite() && v.abs().max_element() <= MAX_BUILD_COORDINATE);
-            if !in_range || (t[1] - t[0]).cross(t[2] - t[0]) == Vec3::ZERO {
-                continue;
-            }
-            for v in t {
-                max_abs = max_abs.max(v.abs().max_element());
-            }
-            valid_ids.push(i as u32);
-            valid.push(Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) });
-        }
+        // In parallel, as are obvhs's PLOC build and every step below but its CWBVH conversion:
+        // serial, these loops took a tenth of a 10⁷-triangle build on two cores.
+        let (valid_ids, valid): (Vec<u32>, Vec<Triangle>) = triangles
+            .par_iter()
+            .enumerate()
+            .filter(|(_, t)| {
+                // `max_element` ignores NaN, hence `is_finite` too.
+                t.iter().all(|v| v.is_finite() && v.abs().max_element() <= MAX_BUILD_COORDINATE)
+                    && (t[1] - t[0]).cross(t[2] - t[0]) != Vec3::ZERO
+            })
+            .map(|(i, t)| {
+                (i as u32, Triangle { v0: Vec3A::from(t[0]), v1: Vec3A::from(t[1]), v2: Vec3A::from(t[2]) })
+            })
+            .unzip();
+        let max_abs = valid
+            .par_iter()
+            .map(|t| t.v0.abs().max(t.v1.abs()).max(t.v2.abs()).max_element())
+            .reduce(|| 0.0, f32::max);
         let skipped = triangles.len() - valid.len();
         let quality = options.quality.unwrap_or_else(|| BuildQuality::for_triangle_count(valid.len()));
         let mut tree = if valid.is_empty() {
@@ -225,7 +228,7 @@ impl Bvh {
             Tree::Bvh2(b) => &b.primitive_indices,
         };
         let gpu: Vec<GpuTriangle> = primitive_indices
-            .iter()
+            .par_iter()
             .map(|&k| {
                 let id = valid_ids[k as usize];
                 let [v0, v1, v2] = triangles[id as usize];
@@ -239,7 +242,7 @@ impl Bvh {
                 }
             })
             .collect();
-        let ids = gpu.iter().map(|t| t.id).collect();
+        let ids = gpu.par_iter().map(|t| t.id).collect();
         let mut blocks = Vec::new();
         if let Tree::Cwbvh(b, wide) = &mut tree
             && (b.nodes.len() <= WIDE_NODE_LIMIT || cwbvh_depth(b) >= OBVHS_STACK)
@@ -268,6 +271,28 @@ impl Bvh {
         let mut it = self.triangles.iter().flat_map(|t| t.vertices());
         let first = it.next()?;
         Some(it.fold((first, first), |(lo, hi), v| (lo.min(v), hi.max(v))))
+    }
+
+    /// Host bytes held for the queries: nodes (as built, and decoded for the CPU traversal
+    /// where they are), triangles in leaf order with their ids, and the CPU's leaf blocks.
+    pub fn bytes(&self) -> usize {
+        let nodes = match &self.tree {
+            Tree::Empty => 0,
+            Tree::Cwbvh(b, wide) => {
+                b.nodes.len() * size_of::<GpuCwbvhNode>() + wide.len() * size_of::<WideNode>()
+            }
+            Tree::Bvh2(b) => b.nodes.len() * size_of::<obvhs::bvh2::node::Bvh2Node>(),
+        };
+        nodes + self.triangles.len() * (size_of::<GpuTriangle>() + 4) + self.blocks.len() * size_of::<Tri4>()
+    }
+
+    /// Bytes of the tree as a GPU uploads it: the CWBVH nodes and the triangles in leaf order.
+    pub fn gpu_bytes(&self) -> usize {
+        let nodes = match &self.tree {
+            Tree::Cwbvh(b, _) => b.nodes.len(),
+            Tree::Empty | Tree::Bvh2(_) => 0,
+        };
+        nodes * size_of::<GpuCwbvhNode>() + self.triangles.len() * size_of::<GpuTriangle>()
     }
 
     /// Number of triangles given to the builder (including skipped ones).
@@ -616,142 +641,6 @@ fn wide_node_test_available() -> bool {
     #[cfg(not(target_arch = "x86_64"))]
     false
 }
-
-/// The BVH2 both layouts start from: obvhs's `build_*_from_tris` helpers up to their shared
-/// point (optional spatial pre-splits, PLOC, reinsertion), step for step, so that trees are
-/// the same as the helpers'.
-///
-/// The helpers are not called because in builds with debug assertions (`cargo test`) they end
-/// with obvhs's validators, which assert that a CWBVH is less than 32 levels deep
-/// (`CwBvh::validate`; obvhs's traversal stack size): a valid but deep tree, such as the one over
-/// a few thousand concentric triangles, would panic there. [`validate_if_shallow`] runs the same
-/// validators where they hold.
-fn build_ploc(triangles: &[Triangle], config: &BvhBuildParams) -> Bvh2 {
-    let mut bvh2 = if config.pre_split {
-        let mut largest_half_area = 0.0f32;
-        let mut avg_area = 0.0f32;
-        let mut aabbs: Vec<_> = triangles
-            .iter()
-            .map(|tri| {
-                let aabb = tri.aabb();
-                let half_area = aabb.half_area();
-                largest_half_area = half_area.max(largest_half_area);
-                avg_area += half_area;
-                aabb
-            })
-            .collect();
-        let mut indices: Vec<u32> = (0..triangles.len() as u32).collect();
-        avg_area /= triangles.len() as f32;
-        split_aabbs_preset(&mut aabbs, &mut indices, triangles, avg_area, largest_half_area);
-        PlocBuilder::with_capacity(aabbs.len()).build(
-            config.ploc_search_distance,
-            &aabbs,
-            indices,
-            config.sort_precision,
-            config.search_depth_threshold,
-        )
-    } else {
-        PlocBuilder::with_capacity(triangles.len()).build(
-            config.ploc_search_distance,
-            triangles,
-            (0..triangles.len() as u32).collect(),
-            config.sort_precision,
-            config.search_depth_threshold,
-        )
-    };
-    bvh2.uses_spatial_splits = config.pre_split;
-    bvh2
-}
-
-/// obvhs's `build_cwbvh_from_tris` without its debug-build validation (see [`build_ploc`]).
-fn build_cwbvh(triangles: &[Triangle], config: BvhBuildParams) -> CwBvh {
-    let mut bvh2 = build_ploc(triangles, &config);
-    ReinsertionOptimizer::default().run(&mut bvh2, config.reinsertion_batch_ratio, None);
-    let cwbvh = bvh2_to_cwbvh(&bvh2, config.max_prims_per_leaf.clamp(1, 3), true, false);
-    validate_if_shallow(triangles, &config, &mut bvh2, Some(&cwbvh));
-    cwbvh
-}
-
-/// obvhs's `build_bvh2_from_tris` without its debug-build validation (see [`build_ploc`]), and
-/// with `max_depth` (the size of obvhs's BVH2 traversal stack) made to cover the final tree.
-fn build_bvh2(triangles: &[Triangle], config: BvhBuildParams) -> Bvh2 {
-    let mut bvh2 = build_ploc(triangles, &config);
-    let mut reinsertion = ReinsertionOptimizer::default();
-    reinsertion.run(&mut bvh2, config.reinsertion_batch_ratio, None);
-    collapse(&mut bvh2, config.max_prims_per_leaf.clamp(1, 255), config.collapse_traversal_cost);
-    reinsertion.run(
-        &mut bvh2,
-        config.reinsertion_batch_ratio * config.post_collapse_reinsertion_batch_ratio_multiplier,
-        None,
-    );
-    validate_if_shallow(triangles, &config, &mut bvh2, None);
-    bvh2
-}
-
-/// Makes `bvh2.max_depth` cover the tree, then, in builds with debug assertions, runs obvhs's
-/// validators as its builder helpers do, where their depth assertion holds: on a CWBVH of
-/// fewer than [`OBVHS_STACK`] levels (and its BVH2), the CWBVH one only where its absolute
-/// tolerance holds (coordinates within ±2¹⁶). Deeper trees are valid input and are
-/// traversed correctly; they are only not checked by obvhs's recursive validators.
-fn validate_if_shallow(
-    triangles: &[Triangle],
-    config: &BvhBuildParams,
-    bvh2: &mut Bvh2,
-    cwbvh: Option<&CwBvh>,
-) {
-    // obvhs sizes the BVH2 traversal stack (`fast_stack!`) from `max_depth`, and its validator
-    // asserts `depth < max_depth`; PLOC sets it, but reinsertion can deepen the tree.
-    let depth = bvh2_depth(bvh2);
-    bvh2.max_depth = bvh2.max_depth.max(depth + 1);
-    if cfg!(debug_assertions) && cwbvh.is_none_or(|c| cwbvh_depth(c) < OBVHS_STACK) {
-        bvh2.validate(triangles, false, config.pre_split);
-        // The CWBVH validator compares quantisation origins with their parent's bounds to an
-        // absolute 1e-5, which f32 rounding exceeds once coordinates reach ~2^20 in a tree that
-        // also holds small boxes (measured: a triangle of 2^20 among 300 of size 0.2 failed it
-        // in 5 of 72 builds, of 2^24 in 48; `tests/degenerate.rs::huge_triangles_are_skipped_not_a_panic`
-        // checks such trees against brute force instead).
-        let within = |t: &Triangle| [t.v0, t.v1, t.v2].iter().all(|v| v.abs().max_element() <= 65_536.0);
-        if let Some(c) = cwbvh
-            && triangles.iter().all(within)
-        {
-            c.validate(triangles, false);
-        }
-    }
-}
-
-/// The number of node levels of a BVH2 (a lone leaf root: 1), without recursion.
-fn bvh2_depth(bvh2: &Bvh2) -> usize {
-    let mut deepest = 0;
-    let mut stack = vec![(0usize, 1usize)];
-    while let Some((index, depth)) = stack.pop() {
-        let Some(node) = bvh2.nodes.get(index) else { continue };
-        deepest = deepest.max(depth);
-        if !node.is_leaf() {
-            let first = node.first_index as usize;
-            stack.push((first, depth + 1));
-            stack.push((first + 1, depth + 1));
-        }
-    }
-    deepest
-}
-
-/// The number of node levels of a CWBVH (a root with only leaf children: 1), without recursion.
-fn cwbvh_depth(cwbvh: &CwBvh) -> usize {
-    let mut deepest = 0;
-    let mut stack = vec![(0usize, 1usize)];
-    while let Some((index, depth)) = stack.pop() {
-        let Some(node) = cwbvh.nodes.get(index) else { continue };
-        deepest = deepest.max(depth);
-        for k in 0..node.imask.count_ones() as usize {
-            stack.push((node.child_base_idx as usize + k, depth + 1));
-        }
-    }
-    deepest
-}
-
-/// obvhs's CWBVH traversal stack size (`cwbvh::TRAVERSAL_STACK_SIZE`): its validator asserts a
-/// depth below it, and its traversal loses hits in trees deeper than it.
-const OBVHS_STACK: usize = 32;
 
 /// Largest CWBVH (in nodes) traversed with decoded [`WideNode`]s (256 bytes each, so 4 MiB
 /// here); larger trees keep obvhs's 80-byte nodes and node test. Decoding cuts the node test's

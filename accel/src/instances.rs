@@ -68,6 +68,99 @@ pub struct TwoLevel {
     nodes: Vec<TlasNode>,
 }
 
+/// A scene's acceleration structure: one [`Bvh`] over world-space triangles when no mesh is
+/// placed by an instance, else a [`TwoLevel`]. Built once, it can serve several users of the
+/// same scene (a probe before rendering, then the renderer).
+pub enum SceneAccel {
+    /// One BVH over every triangle.
+    Flat(Bvh),
+    /// World triangles and instanced meshes.
+    TwoLevel(TwoLevel),
+}
+
+/// What a [`SceneAccel`] takes, in bytes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct AccelBytes {
+    /// The BVHs on the host ([`Bvh::bytes`]).
+    pub bvh: usize,
+    /// The instances' placements (transforms) and the TLAS nodes on the host.
+    pub instances: usize,
+    /// The BVHs as a GPU uploads them ([`Bvh::gpu_bytes`]).
+    pub gpu_bvh: usize,
+    /// The TLAS nodes as a GPU uploads them (its instance records are the GPU integrator's).
+    pub gpu_tlas: usize,
+}
+
+impl SceneAccel {
+    /// [`TwoLevel::build`] when `instances` is not empty; otherwise one BVH over all of
+    /// `triangles` (`world` and `meshes` are then ignored) with the default options.
+    ///
+    /// # Panics
+    /// As [`TwoLevel::build`].
+    pub fn build(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        world: Range<u32>,
+        meshes: &[Range<u32>],
+        instances: &[(u32, Affine3A)],
+    ) -> Self {
+        if instances.is_empty() {
+            Self::Flat(Bvh::from_indexed(positions, triangles, BuildOptions::default()))
+        } else {
+            Self::TwoLevel(TwoLevel::build(positions, triangles, world, meshes, instances))
+        }
+    }
+
+    /// Whether this structure was built for a store of `triangles` triangles placed by
+    /// `instances` instances (a cheap check that it belongs to a scene, not a proof).
+    pub fn fits(&self, triangles: usize, instances: usize) -> bool {
+        match self {
+            Self::Flat(b) => instances == 0 && b.input_count() == triangles,
+            Self::TwoLevel(t) => {
+                let stored = t.world.as_ref().map_or(0, Bvh::input_count)
+                    + t.meshes.iter().map(|(b, _)| b.input_count()).sum::<usize>();
+                instances > 0 && t.placements.len() == instances && stored <= triangles
+            }
+        }
+    }
+
+    /// The bytes the structure holds on the host and those a GPU uploads of it.
+    pub fn bytes(&self) -> AccelBytes {
+        let bvhs: Vec<&Bvh> = match self {
+            Self::Flat(b) => vec![b],
+            Self::TwoLevel(t) => t.world.iter().chain(t.meshes.iter().map(|(b, _)| b)).collect(),
+        };
+        let (placements, tlas) = match self {
+            Self::Flat(_) => (0, 0),
+            Self::TwoLevel(t) => {
+                (t.placements.len() * size_of::<Placement>(), t.nodes.len() * size_of::<TlasNode>())
+            }
+        };
+        AccelBytes {
+            bvh: bvhs.iter().map(|b| b.bytes()).sum(),
+            instances: placements + tlas,
+            gpu_bvh: bvhs.iter().map(|b| b.gpu_bytes()).sum(),
+            gpu_tlas: tlas,
+        }
+    }
+
+    /// The closest hit of `origin + t·dir`, `0 < t < t_max`, with its instance.
+    pub fn closest_hit(&self, origin: Vec3, dir: Vec3, t_max: f32) -> Option<InstanceHit> {
+        match self {
+            Self::Flat(b) => b.closest_hit(origin, dir, t_max).map(|hit| InstanceHit { hit, instance: None }),
+            Self::TwoLevel(t) => t.closest_hit(origin, dir, t_max),
+        }
+    }
+
+    /// Whether any triangle lies along `origin + t·dir`, `0 < t < t_max`.
+    pub fn occluded(&self, origin: Vec3, dir: Vec3, t_max: f32) -> bool {
+        match self {
+            Self::Flat(b) => b.occluded(origin, dir, t_max),
+            Self::TwoLevel(t) => t.occluded(origin, dir, t_max),
+        }
+    }
+}
+
 /// The box padding: a fraction of the box's extent plus of its largest coordinate, so that the
 /// transformed corners' rounding (a few ULPs) cannot cut a triangle off.
 const PAD: f32 = 1e-5;

@@ -68,7 +68,9 @@
 //! assert!(!bvh.occluded_masked(p, Vec3::Y, 10.0, |id, _uv| id != 1));
 //! ```
 
+mod build;
 mod bvh;
+mod convert;
 mod gpu;
 mod instances;
 mod offset;
@@ -77,7 +79,7 @@ mod triangle;
 
 pub use bvh::{BuildOptions, BuildQuality, Bvh, CULL_SLACK, Hit, Layout, MAX_BUILD_COORDINATE};
 pub use gpu::{GpuCwbvhNode, GpuTriangle};
-pub use instances::{InstanceHit, TlasNode, TwoLevel};
+pub use instances::{AccelBytes, InstanceHit, SceneAccel, TlasNode, TwoLevel};
 pub use offset::{
     FLOAT_SCALE, INT_SCALE, ORIGIN, offset_ray_origin, offset_ray_origin_scaled, offset_scale,
     offset_scale_of_bounds,
