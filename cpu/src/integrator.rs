@@ -1,6 +1,6 @@
 //! [`CpuRenderer`]: the path tracer.
 
-use furnace_accel::{Hit, offset_scale_of_bounds};
+use furnace_accel::{Hit, SceneAccel, offset_scale_of_bounds};
 use furnace_brdf::iridescence::ThinFilm;
 use furnace_brdf::{HitBsdf, LayeredParams, SpecularOptions};
 use furnace_render::layout::DIM_PIXEL;
@@ -22,7 +22,7 @@ mod accel;
 mod lights;
 mod path;
 
-use accel::{Accel, WORLD};
+use accel::{Trace, Tracer, WORLD};
 use lights::SunDisc;
 
 /// A scene prepared for rendering through one camera: its BVH, per-triangle material indices,
@@ -34,7 +34,7 @@ pub struct CpuRenderer {
     scene: Arc<Scene>,
     settings: RenderSettings,
     film: Film,
-    accel: Accel,
+    accel: SceneAccel,
     sampler: AnySampler,
     camera: Camera,
     /// The camera's rays for the settings' image size.
@@ -133,9 +133,39 @@ impl CpuRenderer {
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
         let scene = scene.into();
+        // The sampler's error before the build.
+        AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
+        let accel = Self::accel_for(&scene);
+        Self::with_accel(scene, camera, settings, accel)
+    }
+
+    /// The acceleration structure [`CpuRenderer::new`] builds for `scene`: built once by a
+    /// caller that also traces rays before rendering (the CLI's default-light probe), it is
+    /// given to [`CpuRenderer::with_accel`] instead of built twice.
+    pub fn accel_for(scene: &Scene) -> SceneAccel {
+        accel::scene_accel(scene)
+    }
+
+    /// [`CpuRenderer::new`] with the structure of [`CpuRenderer::accel_for`] already built.
+    ///
+    /// # Errors
+    /// As [`CpuRenderer::new`]; [`RenderError::Device`] if `accel` was not built for this
+    /// scene's triangles and instances.
+    pub fn with_accel(
+        scene: impl Into<Arc<Scene>>,
+        camera: &Camera,
+        settings: RenderSettings,
+        accel: SceneAccel,
+    ) -> Result<Self, RenderError> {
+        let scene = scene.into();
         let sampler = AnySampler::new(settings.sampler, settings.seed, settings.sample_count)?;
         let g = &scene.geometry;
-        let accel = Accel::new(&scene);
+        if !accel.fits(g.triangle_count(), scene.instancing.instances.len()) {
+            return Err(RenderError::Device(
+                "the acceleration structure given was not built for this scene's triangles and instances"
+                    .into(),
+            ));
+        }
         let triangle_materials = (0..g.triangle_count()).map(|t| scene.triangle_material(t) as u32).collect();
         let any_alpha = scene.materials.iter().any(|m| m.alpha_mode != AlphaMode::Opaque);
         let any_blended = scene.materials.iter().any(|m| m.alpha_mode == AlphaMode::Blend);
@@ -390,7 +420,14 @@ impl CpuRenderer {
         let [ux, uy] = self.sampler.value_2d(pixel, index, DIM_PIXEL);
         let film_point = Vec2::new(x as f32 + ux, y as f32 + uy);
         let ray = self.rays.generate(film_point);
-        self.trace(pixel, index, ray.origin, ray.direction, aov)
+        match &self.accel {
+            SceneAccel::Flat(accel) => {
+                Tracer { renderer: self, accel }.trace(pixel, index, ray.origin, ray.direction, aov)
+            }
+            SceneAccel::TwoLevel(accel) => {
+                Tracer { renderer: self, accel }.trace(pixel, index, ray.origin, ray.direction, aov)
+            }
+        }
     }
 
     /// `Geometry::shading_normal` over the pre-decoded normals (same arithmetic, same bits),
@@ -443,7 +480,9 @@ impl CpuRenderer {
             }
         }
     }
+}
 
+impl<A: Trace> Tracer<'_, A> {
     fn closest_hit(&self, origin: Vec3, direction: Vec3) -> Option<(Hit, u32)> {
         if self.any_alpha {
             let seed = if self.any_blended { blend_seed(origin, direction) } else { 0 };

@@ -30,3 +30,30 @@ fn one_and_two_threads_give_identical_films() {
         assert!(one.to_rgb_f32().iter().any(|&v| v > 0.0), "{sampler}: the image is not black");
     }
 }
+
+/// A structure built before the renderer (`CpuRenderer::accel_for`, as the CLI's default-light
+/// probe does) renders the same film as the renderer's own, for a flat and an instanced scene;
+/// one built for another scene is refused, not traced.
+#[test]
+fn a_structure_built_before_renders_the_same_and_a_foreign_one_is_refused() {
+    let settings = RenderSettings { width: 24, height: 16, bounces: 3, seed: 3, ..Default::default() };
+    let flat = furnace_scene::builtin::cornell_box().expect("the built-in Cornell box");
+    let forest = furnace_scene::builtin::forest(3, 1);
+    for scene in [&flat, &forest] {
+        let camera = scene.default_camera();
+        let own = CpuRenderer::new(scene.clone(), &camera, settings).expect("renderer");
+        let given = CpuRenderer::with_accel(scene.clone(), &camera, settings, CpuRenderer::accel_for(scene))
+            .expect("the scene's own structure");
+        let render = |r: &CpuRenderer| {
+            let mut film = r.new_film();
+            r.render_into(&mut film, 0, 2).expect("render");
+            film
+        };
+        assert_eq!(render(&own), render(&given), "{}", scene.name);
+    }
+    for (scene, other) in [(&flat, &forest), (&forest, &flat)] {
+        let foreign = CpuRenderer::accel_for(other);
+        let r = CpuRenderer::with_accel(scene.clone(), &scene.default_camera(), settings, foreign);
+        assert!(r.is_err(), "{} took {}'s structure", scene.name, other.name);
+    }
+}

@@ -3,7 +3,7 @@
 //! weights of both strategies
 //! ([`furnace_render::LightSampling`], [`furnace_render::EnvSampling`]).
 
-use super::CpuRenderer;
+use super::accel::{Trace, Tracer};
 use furnace_brdf::{Frame, HitBsdf};
 use furnace_render::LightSampling;
 use furnace_render::layout::{
@@ -85,7 +85,7 @@ impl Vertex<'_> {
     }
 }
 
-impl CpuRenderer {
+impl<A: Trace> Tracer<'_, A> {
     /// The lights gathered at a non-delta scattering event (throughput included): a shadow ray
     /// to each delta sun, point and spot light, and one light sample each of the emitters, sun
     /// discs and environment (next-event estimation).

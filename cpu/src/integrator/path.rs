@@ -2,8 +2,9 @@
 //! hits (AOVs, absorption, emission), the BSDF there and its light samples
 //! ([`super::lights`]), and the scattered ray that continues the path.
 
+use super::accel::{Trace, Tracer};
 use super::lights::Vertex;
-use super::{CpuRenderer, Shading, absorption, bsdf};
+use super::{Shading, absorption, bsdf};
 use furnace_accel::offset_ray_origin_scaled;
 use furnace_brdf::spectrum::{dispersed_ior, sample_wavelength};
 use furnace_brdf::{Frame, HitBsdf};
@@ -48,7 +49,7 @@ struct Path {
     wavelength: Option<f32>,
 }
 
-impl CpuRenderer {
+impl<A: Trace> Tracer<'_, A> {
     /// The path tracing loop: radiance arriving at `origin` from direction `-direction`. With
     /// `aov`, what the first ray hits is written there (it is left as it is for a miss).
     pub(super) fn trace(
