@@ -81,9 +81,10 @@ pub fn module_with_stack_size(size: u32) -> String {
 }
 
 /// [`crate::wgsl::TRAVERSE`] as a shader without instances composes it: the one-level
-/// traversal (the trace counters' blocks kept, the two-level `INSTANCES` code left out).
+/// traversal (the trace counters' blocks kept; the two-level `INSTANCES` code and the second
+/// triangle binding's `SPLIT_TRIANGLES` left out).
 pub fn one_level() -> String {
-    crate::wgsl::select(crate::wgsl::TRAVERSE, |name| name != "INSTANCES")
+    crate::wgsl::select(crate::wgsl::TRAVERSE, |name| name != "INSTANCES" && name != "SPLIT_TRIANGLES")
 }
 
 /// The declarations of the two storage buffers the traversal reads, at `@group(group)`,
@@ -341,6 +342,13 @@ pub fn binding_list() -> Vec<Binding> {
     vec![Binding::read("bvh_nodes", "array<CwbvhNode>"), Binding::read("bvh_triangles", "array<Triangle>")]
 }
 
+/// The second triangle binding of a tree whose triangle slots do not fit one
+/// ([`BvhBuffers::is_split`]; composed with `SPLIT_TRIANGLES`), bound right after
+/// [`binding_list`]'s.
+pub fn split_binding() -> Binding {
+    Binding::read("bvh_triangles_high", "array<Triangle>")
+}
+
 /// A CWBVH as the `u32` words of the two storage buffers of the WGSL traversal: the bytes of
 /// [`Bvh::gpu_nodes`] and [`Bvh::gpu_triangles`], unchanged (both are `Pod` with 4-byte
 /// fields, so the words are their little-endian bytes: exactly what a storage buffer holds).
@@ -350,6 +358,9 @@ pub struct BvhBuffers {
     pub nodes: Vec<u32>,
     /// `bvh_triangles`: [`TRIANGLE_WORDS`] words per triangle slot, in leaf order.
     pub triangles: Vec<u32>,
+    /// `bvh_triangles_high`: the slots after `triangles`' when they do not fit one binding
+    /// (empty otherwise; the traversal then composes no second binding, `SPLIT_TRIANGLES`).
+    pub triangles_high: Vec<u32>,
 }
 
 impl BvhBuffers {
@@ -384,13 +395,18 @@ impl BvhBuffers {
             size_of_val(nodes),
             max_binding,
         )?;
-        let what = format!("the BVH triangle buffer ({} triangle slots)", tris.len());
-        check_binding(&what, size_of_val(tris), max_binding)?;
+        // Triangle slots beyond one binding go to a second one: the triangle buffer is the
+        // largest per triangle (48 bytes), and a 4 GiB binding holds 8.9·10⁷ of them.
+        let per_binding = (max_binding / size_of::<GpuTriangle>() as u64).max(1) as usize;
+        let (low, high) = tris.split_at(tris.len().min(per_binding));
+        let what = format!("the BVH triangle buffer ({} triangle slots, in two bindings)", tris.len());
+        check_binding(&what, size_of_val(low), max_binding)?;
+        check_binding(&what, size_of_val(high), max_binding)?;
         let nodes: Vec<u32> =
             if nodes.is_empty() { vec![0; NODE_WORDS] } else { bytemuck::cast_slice(nodes).to_vec() };
         let triangles: Vec<u32> =
-            if tris.is_empty() { vec![0; TRIANGLE_WORDS] } else { bytemuck::cast_slice(tris).to_vec() };
-        Ok(BvhBuffers { nodes, triangles })
+            if low.is_empty() { vec![0; TRIANGLE_WORDS] } else { bytemuck::cast_slice(low).to_vec() };
+        Ok(BvhBuffers { nodes, triangles, triangles_high: bytemuck::cast_slice(high).to_vec() })
     }
 
     /// Number of nodes in [`Self::nodes`].
@@ -398,13 +414,19 @@ impl BvhBuffers {
         self.nodes.len() / NODE_WORDS
     }
 
-    /// Number of triangle slots in [`Self::triangles`].
+    /// Number of triangle slots in [`Self::triangles`] and [`Self::triangles_high`].
     pub fn triangle_count(&self) -> usize {
-        self.triangles.len() / TRIANGLE_WORDS
+        (self.triangles.len() + self.triangles_high.len()) / TRIANGLE_WORDS
+    }
+
+    /// Whether the triangle slots take two bindings (`SPLIT_TRIANGLES`).
+    pub fn is_split(&self) -> bool {
+        !self.triangles_high.is_empty()
     }
 
     /// Both buffers in binding order (nodes, triangles), e.g. for the test kernels of `furnace-tests`
-    /// with [`bindings`]`(0, 3)`.
+    /// with [`bindings`]`(0, 3)` (a split tree's second triangle binding is
+    /// [`Self::triangles_high`], bound after them with [`split_binding`]).
     pub fn extra(&self) -> [&[u32]; 2] {
         [&self.nodes, &self.triangles]
     }
@@ -447,13 +469,22 @@ mod tests {
             GpuError::TooLarge { bytes: 80, limit: 40, what } => assert!(what.contains("node"), "{what}"),
             e => panic!("unexpected {e:?}"),
         }
-        match BvhBuffers::new(&bvh, 100).unwrap_err() {
-            GpuError::TooLarge { bytes: 192, limit: 100, what } => {
+        // 48-byte slots: a 100-byte binding holds two, the other two go to the second binding;
+        // an 80-byte one holds one, and the other three (144 bytes) fit no binding.
+        let split = BvhBuffers::new(&bvh, 100).unwrap();
+        assert!(split.is_split());
+        assert_eq!(
+            (split.triangles.len(), split.triangles_high.len()),
+            (2 * TRIANGLE_WORDS, 2 * TRIANGLE_WORDS)
+        );
+        assert_eq!(split.triangle_count(), 4);
+        match BvhBuffers::new(&bvh, 80).unwrap_err() {
+            GpuError::TooLarge { bytes: 144, limit: 80, what } => {
                 assert!(what.contains("triangle"), "{what}")
             }
             e => panic!("unexpected {e:?}"),
         }
-        assert!(BvhBuffers::new(&bvh, 192).is_ok());
+        assert!(!BvhBuffers::new(&bvh, 192).unwrap().is_split());
     }
 
     /// One group per level below the root; a root alone still gets one entry; deep trees are

@@ -133,6 +133,9 @@ pub fn binding_table(precision: FilmPrecision, features: SceneFeatures) -> Bindi
     let mut bindings = vec![params];
     bindings.extend(precision.binding_list());
     bindings.extend(traverse::binding_list());
+    if features.split_triangles {
+        bindings.push(traverse::split_binding());
+    }
     if features.instances {
         bindings.extend(traverse::instance_binding_list());
     }
@@ -263,6 +266,9 @@ pub struct SceneFeatures {
     /// Shared meshes placed by instances (the two-level traversal: the TLAS and the instances
     /// bound, hits carried to world space by their instance).
     pub instances: bool,
+    /// The BVH's triangle slots take two bindings (more than one binding holds:
+    /// [`crate::traverse::BvhBuffers::is_split`]); set by the packing, not by the scene.
+    pub split_triangles: bool,
     /// The passes count what they trace ([`GpuRenderer::set_count_rays`]: rays, BVH nodes and
     /// triangles per invocation, added to the ray counter at its end). Not a property of the
     /// scene: the counting kernel is a variant of its own, so that rendering pays nothing for it.
@@ -313,6 +319,7 @@ impl SceneFeatures {
             anisotropy: scene.materials.iter().any(|m| m.anisotropy.is_some()),
             dispersion: scene.disperses(),
             instances: !scene.instancing.is_empty(),
+            split_triangles: false,
             trace_counters: false,
         }
     }
@@ -377,6 +384,7 @@ impl SceneFeatures {
             "ANISOTROPY" => self.anisotropy,
             "DISPERSION" => self.transmission && self.dispersion,
             "INSTANCES" => self.instances,
+            "SPLIT_TRIANGLES" => self.split_triangles,
             "LOBE_ESTIMATES" => self.enabled("LAYERS") || self.enabled("DIFFUSE_TRANSMISSION"),
             "QUEUED_POINT_LIGHTS" => self.point_lights_queued() > 0,
             "ONE_POINT_LIGHT" => self.point_lights && self.one_point_light,

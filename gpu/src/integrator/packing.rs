@@ -268,7 +268,10 @@ impl PackedScene {
     ) -> Result<Self, GpuError> {
         let sampler_params = SamplerParams::new(settings.sampler, settings.seed, settings.sample_count)?;
         let scene_emitters = Emitters::new(scene);
-        let features = SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some());
+        let features = SceneFeatures {
+            split_triangles: bvh_words.is_split(),
+            ..SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some())
+        };
         Ok(Self {
             settings,
             sampler,
@@ -334,7 +337,11 @@ impl PackedScene {
     /// where the scene was packed for a larger one).
     pub(super) fn check_limit(&self, limit: u64) -> Result<(), GpuError> {
         let [nodes, tris] = self.bvh_words.extra();
-        let mut buffers: Vec<(&str, &[u32])> = vec![("BVH node", nodes), ("BVH triangle", tris)];
+        let mut buffers: Vec<(&str, &[u32])> = vec![
+            ("BVH node", nodes),
+            ("BVH triangle", tris),
+            ("BVH triangle (second)", &self.bvh_words.triangles_high),
+        ];
         if let Some(inst) = &self.instance_words {
             let [tlas, instances] = inst.extra();
             buffers.push(("TLAS node", tlas));

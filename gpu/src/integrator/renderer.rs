@@ -115,7 +115,26 @@ impl GpuRenderer {
         camera: &Camera,
         settings: RenderSettings,
     ) -> Result<Self, GpuError> {
-        let packed = PackedScene::new(scene, bvh, camera, settings, ctx.upload_limit())?;
+        let limit = ctx.upload_limit();
+        Self::with_bvh_within(ctx, scene, bvh, camera, settings, limit)
+    }
+
+    /// [`GpuRenderer::with_bvh`] with every buffer packed within `limit` bytes (the device's own
+    /// limit is [`GpuContext::upload_limit`]; a smaller one exercises the packing of large
+    /// scenes on small ones: the BVH's triangle slots beyond one binding go to a second).
+    ///
+    /// # Errors
+    /// As [`GpuRenderer::with_bvh`]; [`GpuError::TooLarge`] for a buffer over `limit` that
+    /// cannot be split.
+    pub fn with_bvh_within(
+        ctx: GpuContext,
+        scene: &Scene,
+        bvh: &Bvh,
+        camera: &Camera,
+        settings: RenderSettings,
+        limit: u64,
+    ) -> Result<Self, GpuError> {
+        let packed = PackedScene::new(scene, bvh, camera, settings, limit.min(ctx.upload_limit()))?;
         Self::with_packed(ctx, &packed)
     }
 
@@ -130,6 +149,9 @@ impl GpuRenderer {
         let [nodes, tris] = packed.bvh_words.extra();
         let mut bvh =
             vec![storage_buffer(&ctx, "bvh nodes", nodes)?, storage_buffer(&ctx, "bvh triangles", tris)?];
+        if packed.bvh_words.is_split() {
+            bvh.push(storage_buffer(&ctx, "bvh triangles (second)", &packed.bvh_words.triangles_high)?);
+        }
         if let Some(inst) = &packed.instance_words {
             let [tlas, instances] = inst.extra();
             bvh.push(storage_buffer(&ctx, "tlas nodes", tlas)?);
@@ -261,6 +283,7 @@ impl GpuRenderer {
         let scene_emitters = Emitters::new(scene);
         let features = SceneFeatures {
             trace_counters: self.features.trace_counters,
+            split_triangles: self.features.split_triangles,
             ..SceneFeatures::with_emitters(scene, &settings, scene_emitters.is_some())
         };
         let old = self.settings;

@@ -25,6 +25,8 @@
 //
 //   @group(G) @binding(B0) var<storage, read> bvh_nodes: array<CwbvhNode>;
 //   @group(G) @binding(B1) var<storage, read> bvh_triangles: array<Triangle>;
+//   with SPLIT_TRIANGLES (slots beyond one binding's size):
+//   @group(G) @binding(B2) var<storage, read> bvh_triangles_high: array<Triangle>;
 //   fn hit_filter(triangle_id: u32, u: f32, v: f32) -> bool { ... }  // alpha masks; true = solid
 //
 // `hit_filter` is called only for candidates closer than the closest accepted hit so far (for
@@ -303,12 +305,27 @@ struct TrvState {
     done: bool,
 }
 
+// #if SPLIT_TRIANGLES
+/// Triangle slot `slot`: in the first binding up to its length, then in the second.
+fn trv_triangle(slot: u32) -> Triangle {
+    let low = arrayLength(&bvh_triangles);
+    if slot < low {
+        return bvh_triangles[slot];
+    }
+    return bvh_triangles_high[slot - low];
+}
+// #endif
+
 /// Tests triangle slot `slot` and updates the state (accel's `visit` closures).
 fn trv_leaf(st: ptr<function, TrvState>, o: vec3<f32>, d: vec3<f32>, slot: u32) {
     // #if TRACE_COUNTERS
     trace_stats.triangles += 1u;
     // #endif
+    // #if SPLIT_TRIANGLES
+    let tri = trv_triangle(slot);
+    // #else
     let tri = bvh_triangles[slot];
+    // #endif
     let h = trv_intersect_triangle(o, d, tri.v0, tri.v1, tri.v2, (*st).t_tri);
     // #if INSTANCES
     // The hit filter's shading (a sheet's normal) is the instance's.
