@@ -2,6 +2,7 @@
 //! ([`open`]) for `furnace render`, `chart`, `bench` and the tests; `--gpus` ([`open_gpus`])
 //! for one render on several GPUs.
 
+use furnace_accel::SceneAccel;
 use furnace_cpu::CpuRenderer;
 use furnace_gpu::{AdapterChoice, GpuContext, GpuError, GpuRenderer, MultiGpuRenderer};
 use furnace_render::{CancelFlag, Film, Integrator, RenderError, RenderSettings};
@@ -128,13 +129,16 @@ pub fn open_gpus(
     scene: Arc<Scene>,
     camera: &Camera,
     settings: RenderSettings,
+    accel: Option<SceneAccel>,
 ) -> Result<Backend, RenderError> {
     if let [one] = indices {
         if std::env::var_os("FURNACE_LOSE_GPU").is_some() {
             eprintln!("warning: FURNACE_LOSE_GPU is ignored: it loses a device of a render on several GPUs");
         }
-        return open(BackendChoice::Gpu, Some(&one.to_string()), scene, camera, settings);
+        return open(BackendChoice::Gpu, Some(&one.to_string()), scene, camera, settings, accel);
     }
+    // Several devices pack the scene once from a BVH of their own: the probe's is freed first.
+    drop(accel);
     let fault = lose_gpu_from_env()?;
     // An adapter that refuses a device is left out, as one that fails later would be.
     let mut contexts = Vec::new();
@@ -185,9 +189,10 @@ pub fn open_chosen(
     scene: Arc<Scene>,
     camera: &Camera,
     settings: RenderSettings,
+    accel: Option<SceneAccel>,
 ) -> Result<Backend, String> {
     let Some(set) = gpus else {
-        return open(choice, adapter, scene, camera, settings).map_err(|e| e.to_string());
+        return open(choice, adapter, scene, camera, settings, accel).map_err(|e| e.to_string());
     };
     if choice == BackendChoice::Cpu {
         return Err("--gpus renders on GPUs: it cannot be combined with --backend cpu".into());
@@ -201,7 +206,7 @@ pub fn open_chosen(
             );
         }
     }
-    let mut backend = open_gpus(&indices, scene, camera, settings).map_err(|e| e.to_string())?;
+    let mut backend = open_gpus(&indices, scene, camera, settings, accel).map_err(|e| e.to_string())?;
     for line in backend.take_retirements() {
         eprintln!("warning: {line}");
     }
@@ -221,7 +226,10 @@ pub enum Backend {
 }
 
 /// Opens the integrator that `choice` and `adapter` ask for on `scene` seen through `camera`,
-/// with an empty film.
+/// with an empty film. `accel`, the scene's structure as [`CpuRenderer::accel_for`] builds it
+/// (by the default light's probe, `env::apply` of the binary), is taken instead of building it
+/// again: by the CPU integrator always, by the GPU one when it is one BVH (an instanced scene's
+/// GPU layout differs, and is built anew).
 ///
 /// # Errors
 /// The GPU's ([`gpu_context`], upload, pipeline) and the sampler's (a fixed-N sampler without
@@ -232,10 +240,20 @@ pub fn open(
     scene: Arc<Scene>,
     camera: &Camera,
     settings: RenderSettings,
+    accel: Option<SceneAccel>,
 ) -> Result<Backend, RenderError> {
-    match gpu_context(choice, adapter)? {
-        Some(ctx) => Ok(Backend::Gpu(Box::new(GpuRenderer::new(ctx, &scene, camera, settings)?))),
-        None => Ok(Backend::Cpu(Box::new(CpuRenderer::new(scene, camera, settings)?))),
+    match (gpu_context(choice, adapter)?, accel) {
+        (Some(ctx), Some(SceneAccel::Flat(bvh))) if scene.instancing.is_empty() => {
+            Ok(Backend::Gpu(Box::new(GpuRenderer::with_bvh(ctx, &scene, &bvh, camera, settings)?)))
+        }
+        (Some(ctx), accel) => {
+            drop(accel);
+            Ok(Backend::Gpu(Box::new(GpuRenderer::new(ctx, &scene, camera, settings)?)))
+        }
+        (None, Some(accel)) => {
+            Ok(Backend::Cpu(Box::new(CpuRenderer::with_accel(scene, camera, settings, accel)?)))
+        }
+        (None, None) => Ok(Backend::Cpu(Box::new(CpuRenderer::new(scene, camera, settings)?))),
     }
 }
 
@@ -338,7 +356,7 @@ mod tests {
         let settings = RenderSettings { width: 8, height: 8, russian_roulette: true, ..Default::default() };
         let scene = builtin::cornell_box().unwrap();
         let camera = scene.default_camera();
-        open(BackendChoice::Cpu, None, Arc::new(scene), &camera, settings).unwrap()
+        open(BackendChoice::Cpu, None, Arc::new(scene), &camera, settings, None).unwrap()
     }
 
     /// The film's bits: sums, counts and rejections (`==` on `f64` would let −0 equal +0).

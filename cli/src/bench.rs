@@ -33,6 +33,21 @@ const ESTIMATE: (f64, u32) = (4096.0, 16);
 /// paths, enough for rays per sample within a few percent.
 const ESTIMATE_SOFTWARE: (f64, u32) = (1024.0, 4);
 
+/// The time to the first frame in its parts, in seconds: making the scene (load or generate),
+/// building its structure (a CPU render's, or a GPU render's without instances: one BVH or, on
+/// the CPU, the BVHs and TLAS), the default light's probe (rays through that structure), opening
+/// the backend (the rest: on the GPU the upload and pipeline, and an instanced scene's BVHs and
+/// TLAS; on the CPU the lights' and materials' tables) and the first pass (with what the driver
+/// does at a pipeline's first dispatch).
+#[derive(Debug, Clone, Copy)]
+struct FirstFrame {
+    scene: f64,
+    bvh: f64,
+    probe: f64,
+    open: f64,
+    pass: f64,
+}
+
 /// One benchmark's results.
 #[derive(Debug, Clone)]
 struct Report {
@@ -58,7 +73,7 @@ struct Report {
     seconds: f64,
     time_to_first_frame_s: f64,
     /// Its parts: the scene made, the backend opened, the first pass.
-    first_frame: [f64; 3],
+    first_frame: FirstFrame,
     rays: Rays,
     gpu: Option<GpuMemory>,
     profile: Option<GpuProfile>,
@@ -247,11 +262,16 @@ impl Report {
             "memory: {} triangles stored, {} in the image, {} instances; host peak {host}{gpu}",
             self.triangles, self.placed, self.instances
         );
-        let [scene, open, pass] = self.first_frame;
-        let parts = if self.backend == "cpu" { "the BVH" } else { "BVH, upload, pipeline" };
+        let FirstFrame { scene, bvh, probe, open, pass } = self.first_frame;
+        let parts = match (self.backend, self.instances) {
+            ("cpu", _) => "lights, materials, film",
+            (_, 0) => "upload, pipeline",
+            _ => "BVHs, TLAS, upload, pipeline",
+        };
         let _ = writeln!(
             s,
-            "first frame: scene {scene:.2} s, {} opened {open:.2} s ({parts}), first pass {pass:.2} s",
+            "first frame: scene {scene:.2} s, BVH {bvh:.2} s, default-light probe {probe:.2} s, {} opened \
+             {open:.2} s ({parts}), first pass {pass:.2} s",
             self.backend
         );
         s.push_str(&self.profile_lines());
@@ -302,9 +322,9 @@ impl Report {
             "rays_counted": self.rays_note(),
             "ms_per_frame": finite(Some(self.ms_per_frame())),
             "time_to_first_frame_s": finite(Some(self.time_to_first_frame_s)),
-            "first_frame_scene_s": finite(Some(self.first_frame[0])),
-            "first_frame_open_s": finite(Some(self.first_frame[1])),
-            "first_frame_pass_s": finite(Some(self.first_frame[2])),
+            "first_frame_scene_s": finite(Some(self.first_frame.scene)),
+            "first_frame_open_s": finite(Some(self.first_frame.open)),
+            "first_frame_pass_s": finite(Some(self.first_frame.pass)),
             "gpu_bytes_per_triangle": finite(g.map(|g| g.bytes_per_triangle)),
             "gpu_bvh_bytes_per_triangle": finite(g.map(|g| g.bvh_bytes as f64 / self.triangles.max(1) as f64)),
             "gpu_scene_bytes": g.map(|g| g.scene_bytes),
@@ -323,6 +343,9 @@ impl Report {
             "gpus_collect_seconds": finite(self.load.as_ref().map(|(l, _)| l.collect_seconds)),
             "gpus_one_collection_seconds": finite(self.load.as_ref().map(|(_, c)| *c)),
         });
+        // Beside the macro's list, which is at its recursion limit.
+        value["first_frame_bvh_s"] = serde_json::json!(finite(Some(self.first_frame.bvh)));
+        value["first_frame_probe_s"] = serde_json::json!(finite(Some(self.first_frame.probe)));
         value["gpus"] = serde_json::json!(devices);
         value["placed_triangles"] = serde_json::json!(self.placed);
         value["instances"] = serde_json::json!(self.instances);
@@ -362,7 +385,6 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
-    crate::env::apply(&mut scene, &a.environment)?;
     if a.flatten {
         let placed = scene.stats().instanced_triangles;
         if placed > furnace_scene::MAX_TRIANGLES {
@@ -373,6 +395,16 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         }
         scene = scene.flattened();
     }
+    // The scene's structure, built here to time it apart from the rest of opening, for the
+    // default light's probe and then the backend, which takes it (the GPU builds an instanced
+    // scene's layout of its own, in opening).
+    let building = Instant::now();
+    let mut accel = (a.backend == backend::BackendChoice::Cpu || scene.instancing.is_empty())
+        .then(|| furnace_cpu::CpuRenderer::accel_for(&scene));
+    let bvh_seconds = building.elapsed().as_secs_f64();
+    let probing = Instant::now();
+    crate::env::apply(&mut scene, &a.environment, &mut accel)?;
+    let probe_seconds = probing.elapsed().as_secs_f64();
     let camera = scene.default_camera();
     let (width, height) = match (a.width, a.height, &a.scene) {
         // The issue's reference size for the Cornell box.
@@ -404,6 +436,7 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
         scene.clone(),
         &camera,
         settings,
+        accel,
     )?;
     let adapter = adapter_name(&mut engine);
     let open_seconds = opening.elapsed().as_secs_f64();
@@ -417,7 +450,14 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     let time_to_first_frame_s = start.elapsed().as_secs_f64();
     // The first frame's parts: making the scene, opening the backend (BVH, upload, pipeline)
     // and the first pass (with what the driver does at a pipeline's first dispatch).
-    let first_frame = [scene_seconds, open_seconds, time_to_first_frame_s - scene_seconds - open_seconds];
+    let pass_seconds = time_to_first_frame_s - scene_seconds - bvh_seconds - probe_seconds - open_seconds;
+    let first_frame = FirstFrame {
+        scene: scene_seconds,
+        bvh: bvh_seconds,
+        probe: probe_seconds,
+        open: open_seconds,
+        pass: pass_seconds,
+    };
     let per_pass = warm_up(&mut engine, a, &settings)?;
     let measured = measure(&mut engine, a)?;
     let (rays, gpu, profile, load) =

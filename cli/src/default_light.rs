@@ -17,9 +17,8 @@
 //! third as well as the studio; a rule on the lights' level ranks them the wrong way round
 //! (docs/environment.md, "The default light", tabulates both).
 
-use furnace_accel::{
-    BuildOptions, BuildQuality, Bvh, InstanceHit, TwoLevel, offset_ray_origin_scaled, offset_scale_of_bounds,
-};
+use furnace_accel::{InstanceHit, SceneAccel, offset_ray_origin_scaled, offset_scale_of_bounds};
+use furnace_cpu::CpuRenderer;
 use furnace_scene::{Projection, Scene};
 use glam::{Vec2, Vec3};
 
@@ -61,15 +60,18 @@ pub struct Decision {
     pub why: Why,
 }
 
-/// The rule (see the module's documentation) for `scene`, which has no environment of its own.
-pub fn decide(scene: &Scene) -> Decision {
+/// The rule (see the module's documentation) for `scene`, which has no environment of its own,
+/// tracing the probe's rays through `accel` when it holds a structure, else
+/// building the one the CPU renderer would ([`CpuRenderer::accel_for`]) into it: the renderer
+/// opened after takes it instead of building its own, so a scene's BVH is built once.
+pub fn decide_with(scene: &Scene, accel: &mut Option<SceneAccel>) -> Decision {
     if !scene.has_own_light() {
         return Decision { studio: true, why: Why::NoLight };
     }
     if scene.sky() != Vec3::ZERO {
         return Decision { studio: false, why: Why::Sky };
     }
-    let open = openness(scene);
+    let open = openness(scene, accel.get_or_insert_with(|| CpuRenderer::accel_for(scene)));
     if open >= OPEN_THRESHOLD {
         Decision { studio: true, why: Why::Open(open) }
     } else {
@@ -117,29 +119,11 @@ impl Decision {
 /// the fraction that hit no triangle: 1 for a convex object in empty space, 0 inside a closed
 /// room, 1 when the camera sees nothing. A fixed pattern ([`PROBE_WIDTH`] pixel centres,
 /// [`PROBE_RAYS`] Hammersley directions each), so the same scene always measures the same.
-/// Alpha masks and transmission are not looked at: every triangle blocks.
-pub fn openness(scene: &Scene) -> f32 {
+/// Alpha masks and transmission are not looked at: every triangle blocks. The rays are traced
+/// through `accel`, the scene's structure ([`CpuRenderer::accel_for`]).
+pub fn openness(scene: &Scene, accel: &SceneAccel) -> f32 {
     let g = &scene.geometry;
-    // The fastest build: the probe traces a hundred thousand rays, the tree is dropped after.
-    let options = BuildOptions { quality: Some(BuildQuality::Fastest), ..BuildOptions::default() };
     let inst = &scene.instancing;
-    let (bvh, two) = if inst.is_empty() {
-        (Some(Bvh::from_indexed(&g.positions, &g.triangles, options)), None)
-    } else {
-        let placements: Vec<_> = inst.instances.iter().map(|i| (i.mesh, i.world_from_object)).collect();
-        let world = 0..inst.world_triangles;
-        (None, Some(TwoLevel::build(&g.positions, &g.triangles, world, &inst.meshes, &placements)))
-    };
-    let closest = |o: Vec3, d: Vec3| match (&bvh, &two) {
-        (Some(b), _) => b.closest_hit(o, d, f32::INFINITY).map(|hit| InstanceHit { hit, instance: None }),
-        (None, Some(t)) => t.closest_hit(o, d, f32::INFINITY),
-        (None, None) => None,
-    };
-    let occluded = |o: Vec3, d: Vec3| match (&bvh, &two) {
-        (Some(b), _) => b.occluded(o, d, f32::INFINITY),
-        (None, Some(t)) => t.occluded(o, d, f32::INFINITY),
-        (None, None) => false,
-    };
     let (lo, hi) = scene.bounds();
     let scale = offset_scale_of_bounds(lo, hi);
     let camera = scene.default_camera();
@@ -155,7 +139,11 @@ pub fn openness(scene: &Scene) -> f32 {
     for y in 0..height {
         for x in 0..width {
             let ray = rays.generate(Vec2::new(x as f32 + 0.5, y as f32 + 0.5));
-            let Some(InstanceHit { hit, instance }) = closest(ray.origin, ray.direction) else { continue };
+            let Some(InstanceHit { hit, instance }) =
+                accel.closest_hit(ray.origin, ray.direction, f32::INFINITY)
+            else {
+                continue;
+            };
             let Some(mut vertices) = g.triangle(hit.triangle as usize) else { continue };
             if let Some(i) = instance.and_then(|i| inst.instances.get(i as usize)) {
                 vertices = vertices.map(|v| i.point(v));
@@ -180,7 +168,7 @@ pub fn openness(scene: &Scene) -> f32 {
                 let u2 = (i.reverse_bits() as f32 / 4_294_967_296.0 + turn).fract();
                 let (r, phi) = (u1.sqrt(), std::f32::consts::TAU * u2);
                 let d = t1 * (r * phi.cos()) + t2 * (r * phi.sin()) + n * (1.0 - u1).max(0.0).sqrt();
-                if !occluded(origin, d) {
+                if !accel.occluded(origin, d, f32::INFINITY) {
                     escaped += 1;
                 }
             }
@@ -245,7 +233,7 @@ mod tests {
     #[test]
     fn a_box_around_the_light_is_enclosed_a_plane_in_space_is_open() {
         let room = lit(&cube(&[4]), Vec3::new(0.0, 0.0, 0.9));
-        let d = decide(&room);
+        let d = decide_with(&room, &mut None);
         let Why::Enclosed(o) = d.why else { panic!("{d:?}") };
         assert!(!d.studio && o < 0.3, "{o}");
         let floor = [[
@@ -255,7 +243,7 @@ mod tests {
             Vec3::new(1.0, -1.0, -1.0),
         ]];
         let plane = lit(&floor, Vec3::new(0.0, 2.0, 3.0));
-        let d = decide(&plane);
+        let d = decide_with(&plane, &mut None);
         assert_eq!(d, Decision { studio: true, why: Why::Open(1.0) }, "nothing above a plane blocks a ray");
     }
 
@@ -269,7 +257,7 @@ mod tests {
         let mut flips = 0;
         let mut studio = false;
         for open in [&[4][..], &[4, 0], &[4, 0, 1], &[4, 0, 1, 2], &[4, 0, 1, 2, 5]] {
-            let d = decide(&lit(&cube(open), eye));
+            let d = decide_with(&lit(&cube(open), eye), &mut None);
             let o = match d.why {
                 Why::Open(o) | Why::Enclosed(o) => o,
                 other => panic!("{other:?}"),
@@ -287,12 +275,16 @@ mod tests {
     #[test]
     fn no_light_gets_the_studio_and_a_sky_keeps_the_scene_as_it_is() {
         let mut scene = builtin::cornell_box().unwrap();
-        assert_eq!(decide(&scene), Decision { studio: false, why: Why::Sky }, "the built-in box has a sky");
+        assert_eq!(
+            decide_with(&scene, &mut None),
+            Decision { studio: false, why: Why::Sky },
+            "the built-in box has a sky"
+        );
         scene.lights.clear();
         for m in &mut scene.materials {
             m.emissive = Vec3::ZERO;
         }
-        assert_eq!(decide(&scene), Decision { studio: true, why: Why::NoLight });
+        assert_eq!(decide_with(&scene, &mut None), Decision { studio: true, why: Why::NoLight });
     }
 
     #[test]

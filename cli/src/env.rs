@@ -5,6 +5,7 @@
 
 use crate::args::{EnvArg, EnvArgs, Switch};
 use crate::default_light::Decision;
+use furnace_accel::SceneAccel;
 use furnace_render::{EnvSampling, LightSampling};
 use furnace_scene::{Environment, EnvironmentMap, Scene};
 use std::sync::Arc;
@@ -27,15 +28,16 @@ pub enum Applied {
 ///
 /// # Errors
 /// As [`apply_resumed`].
-pub fn apply(scene: &mut Scene, e: &EnvArgs) -> Result<Applied, String> {
-    apply_resumed(scene, e, None)
+pub fn apply(scene: &mut Scene, e: &EnvArgs, accel: &mut Option<SceneAccel>) -> Result<Applied, String> {
+    apply_resumed(scene, e, None, accel)
 }
 
 /// Sets the scene's environment from `e` (the scene's own when `--env` is not given; else the
-/// default light's decision, [`crate::default_light::decide`]), scaled, turned and shown as `e`
+/// default light's decision, [`crate::default_light::decide_with`]), scaled, turned and shown as `e`
 /// says. `resumed` is, for a render being continued, its file's record of the decision
 /// (`Some(None)`: a file written before the rule), which is followed instead of measuring
-/// again. Prints to stderr one `note:` line when the rule adds the studio to a new render (why,
+/// again. The rule's probe traces rays through `accel`, building the scene's structure there
+/// when it holds none (for the renderer to take: [`furnace_cli::backend::open`]). Prints to stderr one `note:` line when the rule adds the studio to a new render (why,
 /// and `--env none`) and a `warning:` line for a map's warning or options that have no environment to act
 /// on (also with `--quiet`: they say what the image shows).
 ///
@@ -46,6 +48,7 @@ pub fn apply_resumed(
     scene: &mut Scene,
     e: &EnvArgs,
     resumed: Option<Option<&str>>,
+    accel: &mut Option<SceneAccel>,
 ) -> Result<Applied, String> {
     let mut ruled = None;
     let map = match &e.env {
@@ -71,7 +74,7 @@ pub fn apply_resumed(
                         furnace_post::printable_excerpt(&v)
                     )
                 })?,
-                None => crate::default_light::decide(scene),
+                None => crate::default_light::decide_with(scene, accel),
             };
             ruled = Some(decision);
             decision.studio.then(|| {
@@ -171,7 +174,7 @@ mod tests {
         let mut scene = builtin::cornell_box().unwrap();
         let hash = scene.content_hash();
         let sky = Decision { studio: false, why: crate::default_light::Why::Sky };
-        assert_eq!(apply(&mut scene, &args(None)).unwrap(), Applied::Rule(sky));
+        assert_eq!(apply(&mut scene, &args(None), &mut None).unwrap(), Applied::Rule(sky));
         assert!(scene.environment().is_none());
         assert_eq!(scene.content_hash(), hash);
     }
@@ -187,11 +190,11 @@ mod tests {
         let mut dark = scene.clone();
         let e = EnvArgs { env_rotation: Some(90.0), env_visible: Some(Switch::Off), ..args(None) };
         let studio = Decision { studio: true, why: crate::default_light::Why::NoLight };
-        assert_eq!(apply(&mut scene, &e).unwrap(), Applied::Rule(studio));
+        assert_eq!(apply(&mut scene, &e, &mut None).unwrap(), Applied::Rule(studio));
         let env = scene.environment().unwrap();
         assert_eq!((env.intensity, env.visible), (1.0, false));
         assert!((env.rotation - std::f32::consts::FRAC_PI_2).abs() < 1e-7);
-        assert_eq!(apply(&mut dark, &args(Some(EnvArg::None))).unwrap(), Applied::None);
+        assert_eq!(apply(&mut dark, &args(Some(EnvArg::None)), &mut None).unwrap(), Applied::None);
         assert!(dark.environment().is_none());
     }
 
@@ -199,11 +202,11 @@ mod tests {
     fn options_scale_the_given_map_and_a_missing_file_is_named() {
         let mut scene = builtin::cornell_box().unwrap();
         let e = EnvArgs { env_intensity: Some(0.5), ..args(Some(EnvArg::Studio)) };
-        assert_eq!(apply(&mut scene, &e).unwrap(), Applied::Given);
+        assert_eq!(apply(&mut scene, &e, &mut None).unwrap(), Applied::Given);
         assert_eq!(scene.environment().unwrap().intensity, 0.5);
         assert!(scene.sun().is_some(), "the scene's sun stays");
         let e = args(Some(EnvArg::File("no/such.hdr".into())));
-        let err = apply(&mut scene, &e).unwrap_err();
+        let err = apply(&mut scene, &e, &mut None).unwrap_err();
         assert!(err.starts_with("no/such.hdr: "), "{err}");
     }
 

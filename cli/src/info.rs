@@ -162,21 +162,14 @@ fn describe(scene: &Scene) -> String {
                 s.instance_bytes
             ),
         );
-        line(
-            "memory",
-            format!(
-                "cpu: {} bytes of geometry, a BVH per mesh under a TLAS of the instances; gpu: the instances \
-                 copied into world space, {} triangles{}",
-                s.geometry_bytes + s.instance_bytes,
-                s.instanced_triangles,
-                if s.instanced_triangles > furnace_scene::MAX_TRIANGLES {
-                    format!(": more than the {} it holds, the CPU renders it", furnace_scene::MAX_TRIANGLES)
-                } else {
-                    String::new()
-                }
-            ),
-        );
     }
+    // The structure the renderers trace (the default light's probe builds it too, when it runs).
+    let mut accel = None;
+    let decision =
+        scene.environment().is_none().then(|| crate::default_light::decide_with(scene, &mut accel));
+    let accel = accel.unwrap_or_else(|| furnace_cpu::CpuRenderer::accel_for(scene));
+    line("memory", memory(scene, &accel.bytes()));
+    drop(accel);
     line("vertices", s.vertices.to_string());
     line("dropped", format!("{} zero-area triangles (they cannot be hit)", s.dropped_triangles));
     line("materials", format!("{} (including glTF's default material)", s.materials));
@@ -208,21 +201,20 @@ fn describe(scene: &Scene) -> String {
             ),
         );
     }
-    if scene.environment().is_none() {
-        let d = crate::default_light::decide(scene);
-        if d.why != crate::default_light::Why::Sky {
-            let text = if d.studio {
-                let none = if scene.has_own_light() { "its own lights alone" } else { "none" };
-                format!(
-                    "studio: `furnace render` adds the built-in studio environment: {} (--env none for {none}, \
-                     --env FILE for another map)",
-                    d.reason()
-                )
-            } else {
-                format!("none: {} (--env studio or --env FILE to add one)", d.reason())
-            };
-            line("default light", text);
-        }
+    if let Some(d) = decision
+        && d.why != crate::default_light::Why::Sky
+    {
+        let text = if d.studio {
+            let none = if scene.has_own_light() { "its own lights alone" } else { "none" };
+            format!(
+                "studio: `furnace render` adds the built-in studio environment: {} (--env none for {none}, \
+                 --env FILE for another map)",
+                d.reason()
+            )
+        } else {
+            format!("none: {} (--env studio or --env FILE to add one)", d.reason())
+        };
+        line("default light", text);
     }
     if scene.cameras.is_empty() {
         let camera = describe_camera(&scene.default_camera());
@@ -248,6 +240,45 @@ fn describe(scene: &Scene) -> String {
         out.push_str(&format!("  warning: {w}\n"));
     }
     out
+}
+
+/// The memory line: the bytes the scene takes on the host (its arrays, the BVHs, the instances
+/// with their transforms and TLAS) and on a GPU (the packed scene, the BVHs, the TLAS and the
+/// instance records), each per stored triangle and per instance. The GPU's film and path
+/// buffers, which depend on the image size, are not counted (`furnace bench` reports all).
+fn memory(scene: &Scene, a: &furnace_accel::AccelBytes) -> String {
+    let s = scene.stats();
+    let mib = |b: usize| b as f64 / 1_048_576.0;
+    let per = |b: usize, n: usize| b as f64 / n.max(1) as f64;
+    let instances = s.instances;
+    let gpu_scene = furnace_gpu::scene::SceneBuffers::new(scene, u64::MAX).map(|b| b.bytes() as usize);
+    // The GPU places the world triangles by an identity instance of their own.
+    let gpu_records = if instances == 0 {
+        0
+    } else {
+        (instances + usize::from(scene.instancing.world_triangles > 0))
+            * size_of::<furnace_gpu::traverse::GpuInstance>()
+    };
+    let per_instance = |b: usize| {
+        if instances == 0 { String::new() } else { format!(", {:.0} per instance", per(b, instances)) }
+    };
+    let host_instances = s.instance_bytes + a.instances;
+    let host = format!(
+        "host {:.1} MiB ({:.1} bytes per stored triangle with its BVH{})",
+        mib(s.geometry_bytes + a.bvh + host_instances),
+        per(s.geometry_bytes + a.bvh, s.triangles),
+        per_instance(host_instances)
+    );
+    let gpu = match gpu_scene {
+        Ok(scene_bytes) => format!(
+            "GPU {:.1} MiB ({:.1} bytes per stored triangle with its BVH{}) and the film",
+            mib(scene_bytes + a.gpu_bvh + a.gpu_tlas + gpu_records),
+            per(scene_bytes + a.gpu_bvh, s.triangles),
+            per_instance(a.gpu_tlas + gpu_records)
+        ),
+        Err(e) => format!("GPU: {e}"),
+    };
+    format!("{host}; {gpu}")
 }
 
 #[cfg(test)]

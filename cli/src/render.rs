@@ -5,6 +5,7 @@ use crate::interrupt::Interrupt;
 use crate::outputs::{Look, check_outputs, output_paths, write_outputs};
 use crate::resume;
 use crate::shared::{Outcome, image_size};
+use furnace_accel::SceneAccel;
 use furnace_cli::backend::{self, BackendChoice};
 use furnace_post::{ExrWithState, Metadata, read_exr_with_state};
 use furnace_render::{Budget, Film, Integrator, RenderSettings, SAMPLER_LAYOUT_VERSION, Session, Stop};
@@ -74,6 +75,8 @@ pub(crate) struct Prepared {
     pub scene: Scene,
     pub view: Camera,
     pub saved: Option<Saved>,
+    /// The scene's structure, when the default light's probe built it (for the backend).
+    pub accel: Option<SceneAccel>,
 }
 
 /// Reads the file to resume (filling the settings not given), loads the scene, applies
@@ -133,7 +136,9 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
     // A resumed render follows its record of the default light (a file without one was made
     // before the rule: the rule of then), so that the same scene is rebuilt.
     let recorded = resumed.as_ref().map(|f| f.metadata.extra.get(resume::DEFAULT_LIGHT).map(String::as_str));
-    let default_light = match crate::env::apply_resumed(&mut scene, &args.environment, recorded)? {
+    let mut accel = None;
+    let default_light = match crate::env::apply_resumed(&mut scene, &args.environment, recorded, &mut accel)?
+    {
         crate::env::Applied::Rule(d) => Some(d.record()),
         _ => None,
     };
@@ -184,7 +189,7 @@ pub(crate) fn prepare(a: &RenderArgs, command: &str) -> Result<Prepared, String>
         }
         None => None,
     };
-    Ok(Prepared { job, scene, view, saved })
+    Ok(Prepared { job, scene, view, saved, accel })
 }
 
 /// `--samples A..B` against `--spp N` (the whole render's count): N defaults to B for a
@@ -213,7 +218,7 @@ fn check_samples(args: &mut RenderArgs) -> Result<(), String> {
 }
 
 pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
-    let Prepared { job, scene, view, saved } = prepare(a, "render")?;
+    let Prepared { job, scene, view, saved, accel } = prepare(a, "render")?;
     let a = &job.args;
     check_outputs(&a.out, a.denoise)?;
     let (width, height) = (job.settings.width, job.settings.height);
@@ -264,6 +269,7 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         Arc::new(scene),
         &view,
         settings,
+        accel,
     )?;
     if let Some(film) = &film {
         backend.set_film(film).map_err(|e| e.to_string())?;

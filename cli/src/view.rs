@@ -33,7 +33,7 @@ pub fn run(v: &ViewArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     if a.checkpoint.is_some() {
         return Err("--checkpoint is for `furnace render`; the viewer saves with Ctrl+S".into());
     }
-    let Prepared { job, scene, view, saved } = prepare(a, "view")?;
+    let Prepared { job, scene, view, saved, accel } = prepare(a, "view")?;
     let a = &job.args;
     if let Some(range) = a.samples {
         let what = match &a.resume {
@@ -71,7 +71,14 @@ pub fn run(v: &ViewArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
         }
     }
     let start = std::time::Instant::now();
-    let renderer = GpuRenderer::new(ctx, &scene, &view, job.settings).map_err(|e| e.to_string())?;
+    // The default light's probe built a flat scene's BVH: the renderer takes it.
+    let renderer = match accel {
+        Some(furnace_accel::SceneAccel::Flat(bvh)) if scene.instancing.is_empty() => {
+            GpuRenderer::with_bvh(ctx, &scene, &bvh, &view, job.settings)
+        }
+        _ => GpuRenderer::new(ctx, &scene, &view, job.settings),
+    }
+    .map_err(|e| e.to_string())?;
     if !a.quiet {
         eprintln!(
             "{}: {} triangles; scene uploaded, BVH built and pipeline compiled in {:.2} s",

@@ -209,6 +209,12 @@ fn info_lists_the_extensions_the_file_uses() {
         text.contains("instancing      1 meshes stored once (12 triangles), placed by 125 instances"),
         "{text}"
     );
+    // Memory on each backend, per stored triangle and per instance.
+    let memory = text.lines().find(|l| l.starts_with("memory ")).unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        memory.contains("host ") && memory.contains("GPU ") && memory.matches("per instance").count() == 2,
+        "{text}"
+    );
     assert!(text.contains("extensions      1 "), "{text}");
     assert!(text.contains("  EXT_mesh_gpu_instancing           used, honoured\n"), "{text}");
     let o = furnace(&["info", &data("Box/glTF-Binary/Box.glb")]);
@@ -924,7 +930,10 @@ fn bench_cpu_prints_json_with_every_field() {
     assert_eq!(v["scene"], "cbox");
     // The first frame's parts add up to it (to the JSON's float printing).
     let part = |k: &str| v[k].as_f64().filter(|x| *x >= 0.0).unwrap_or_else(|| panic!("{k}: {v}"));
-    let parts = part("first_frame_scene_s") + part("first_frame_open_s") + part("first_frame_pass_s");
+    let parts = ["scene", "bvh", "probe", "open", "pass"]
+        .map(|p| part(&format!("first_frame_{p}_s")))
+        .iter()
+        .sum::<f64>();
     assert!((parts - part("time_to_first_frame_s")).abs() < 1e-9, "{v}");
     assert_eq!((v["width"].as_u64(), v["height"].as_u64()), (Some(32), Some(32)));
     assert_eq!((v["spp"].as_u64(), v["bounces"].as_u64()), (Some(4), Some(4)));

@@ -32,8 +32,8 @@ fn make_backend(study: &Study, c: &Config, n: Option<u32>) -> Result<(Backend, O
     };
     let camera = study.scene.default_camera();
     let adapter = if choice == BackendChoice::Gpu { study.args.adapter.as_deref() } else { None };
-    let mut backend =
-        backend::open(choice, adapter, study.scene.clone(), &camera, settings).map_err(|e| e.to_string())?;
+    let mut backend = backend::open(choice, adapter, study.scene.clone(), &camera, settings, None)
+        .map_err(|e| e.to_string())?;
     // Untimed warm-up passes, then discarded: the first passes of a process pay costs that are
     // not the method's — the driver compiling the pipeline on first dispatch, rayon starting
     // its threads, and above all an idle GPU's clocks ramping up (a 1-spp warm-up is too short

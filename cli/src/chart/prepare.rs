@@ -28,7 +28,7 @@ pub(super) fn prepare(a: &ChartArgs) -> Result<Study, String> {
     for w in &scene.warnings {
         eprintln!("warning: {}: {w}", scene.name);
     }
-    crate::env::apply(&mut scene, &a.environment)?;
+    crate::env::apply(&mut scene, &a.environment, &mut None)?;
     let (reference, compensated) = load_references(a)?;
     let recorded_bounces = check_recorded(a, &reference, compensated.as_ref(), &scene, &scene_name)?;
     let masking = study_masking(a, &reference, compensated.as_ref());
