@@ -239,3 +239,36 @@ fn instanced_scenes_render_alike_on_both_backends() {
         }
     }
 }
+
+/// A BVH whose triangle slots do not fit one binding takes two (`SPLIT_TRIANGLES`): forced here
+/// by packing a flattened one-plant forest within a limit of 70 % of its triangle buffer (above
+/// its vertex buffer, the next largest), the film is the
+/// same to the bit as the one binding's (the same triangles, tested in the same order), and the
+/// split composes the second binding only then.
+#[test]
+fn triangles_over_one_binding_render_the_same_from_two() {
+    if furnace_tests::gpu::test_context().is_none() {
+        eprintln!("no GPU adapter (not even a software one): skipped");
+        return;
+    }
+    let scene = furnace_scene::builtin::forest(1, 0).flattened();
+    let g = &scene.geometry;
+    let bvh =
+        furnace_accel::Bvh::from_indexed(&g.positions, &g.triangles, furnace_accel::BuildOptions::default());
+    let slots = bvh.gpu_triangles().len() as u64 * size_of::<furnace_accel::GpuTriangle>() as u64;
+    let settings = RenderSettings { width: 32, height: 24, bounces: 3, ..RenderSettings::default() };
+    let camera = scene.default_camera();
+    let render = |limit: u64| {
+        let ctx = furnace_tests::gpu::test_context().expect("the adapter found above");
+        let mut r = furnace_gpu::GpuRenderer::with_bvh_within(ctx, &scene, &bvh, &camera, settings, limit)
+            .unwrap_or_else(|e| panic!("limit {limit}: {e}"));
+        r.render_pass(0, 2).unwrap();
+        (r.film().unwrap(), r.bvh_bytes())
+    };
+    let (one, one_bytes) = render(u64::MAX);
+    let (two, two_bytes) = render(slots * 7 / 10);
+    assert!(one.to_rgb_f32().iter().any(|&v| v > 0.0), "the image is not black");
+    let bits = |f: &furnace_render::Film| f.to_rgb_f32().iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&one), bits(&two), "the split film differs");
+    assert_eq!(one_bytes, two_bytes, "the same bytes in two bindings");
+}

@@ -91,3 +91,42 @@ fn instanced_and_flattened_scenes_render_alike_on_the_cpu() {
         }
     }
 }
+
+/// The GPU bytes `furnace info` states for a scene's BVH ([`furnace_accel::AccelBytes`], from the
+/// CPU's structure, without a device) are the bytes the GPU integrator uploads for a flat scene,
+/// and for an instanced one its BVHs and TLAS less the identity instance's two TLAS nodes and
+/// the instance records (the GPU places its world triangles by an instance of their own). A
+/// test of the statement, not of a speed: exact bytes.
+#[test]
+fn the_stated_gpu_bvh_bytes_are_those_uploaded() {
+    let settings = RenderSettings { width: 8, height: 8, ..RenderSettings::default() };
+    let flat = furnace_scene::builtin::cornell_box().unwrap();
+    let forest = furnace_scene::builtin::forest(4, 2);
+    for scene in [&flat, &forest] {
+        let stated = CpuRenderer::accel_for(scene).bytes();
+        let Some(ctx) = furnace_tests::gpu::test_context() else {
+            eprintln!("no GPU adapter (not even a software one): skipped");
+            return;
+        };
+        let gpu = furnace_gpu::GpuRenderer::new(ctx, scene, &scene.default_camera(), settings).unwrap();
+        let instances = scene.instancing.instances.len();
+        let records = if instances == 0 {
+            0
+        } else {
+            (instances + usize::from(scene.instancing.world_triangles > 0))
+                * size_of::<furnace_gpu::traverse::GpuInstance>()
+        };
+        // One more TLAS leaf (the world's identity instance) adds a leaf and an inner node.
+        let world_nodes = if instances > 0 && scene.instancing.world_triangles > 0 {
+            2 * size_of::<furnace_accel::TlasNode>()
+        } else {
+            0
+        };
+        assert_eq!(
+            gpu.bvh_bytes() as usize,
+            stated.gpu_bvh + stated.gpu_tlas + world_nodes + records,
+            "{}: {stated:?}",
+            scene.name
+        );
+    }
+}

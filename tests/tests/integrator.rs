@@ -375,6 +375,7 @@ fn frame_params_layout_matches_wgsl() {
                 one_point_light: !light_bvh,
                 // The two-level traversal, with every feature and with them all but a few.
                 instances: true,
+                split_triangles: light_bvh,
             },
         ));
     }

@@ -156,7 +156,7 @@ impl Filter {
 /// The one-level traversal module as the tests compose it: the trace counters kept, the
 /// two-level (`INSTANCES`) code left out.
 fn one_level() -> String {
-    wgsl::select(wgsl::TRAVERSE, |name| name != "INSTANCES")
+    furnace_gpu::traverse::one_level()
 }
 
 const KERNEL_MAIN: &str = r#"
@@ -752,6 +752,7 @@ fn deep_tree_overflows_the_default_stack_without_losing_hits() {
     let buffers = BvhBuffers {
         nodes: bytemuck::cast_slice(&nodes).to_vec(),
         triangles: bytemuck::cast_slice(&triangles).to_vec(),
+        triangles_high: Vec::new(),
     };
     let mut rng = Rng(6);
     let rays: Vec<TestRay> = (0..4_096)
