@@ -33,6 +33,22 @@ pub enum GpuError {
         /// The adapter's limit.
         limit: u64,
     },
+    /// A render that needs more memory than the device has room for, found before anything is
+    /// allocated ([`crate::memory::check_fits`]).
+    #[error(
+        "the render needs {} of GPU memory, more than the {} there is room for ({detail}): render it on the CPU, \
+         or with fewer triangles or a smaller film",
+        crate::memory::gib(*needed),
+        crate::memory::gib(*available)
+    )]
+    OutOfDeviceMemory {
+        /// Bytes the render would allocate.
+        needed: u64,
+        /// Bytes there is room for.
+        available: u64,
+        /// The largest parts and the device's memory, in words.
+        detail: String,
+    },
     /// Something in the scene this integrator does not render.
     #[error("{0}")]
     Unsupported(String),

@@ -147,6 +147,20 @@ impl GpuFilm {
         Self::with_parts(ctx, width, height, precision, false, false)
     }
 
+    /// The device bytes of a film [`GpuFilm::with_parts`] makes with these arguments (the display
+    /// buffer [`GpuFilm::enable_display`] may add aside).
+    pub fn device_bytes(
+        width: u32,
+        height: u32,
+        precision: FilmPrecision,
+        aovs: bool,
+        adaptive: bool,
+    ) -> u64 {
+        let pixels = u64::from(width) * u64::from(height);
+        let sum = pixels * precision.sum_bytes_per_pixel();
+        sum + pixels * 8 + if aovs { 2 * sum } else { 0 } + if adaptive { pixels * 4 } else { 0 }
+    }
+
     /// [`GpuFilm::new`], also summing the first-hit AOVs when `aovs` (a third buffer of 64 bytes
     /// per pixel for `F64`, 32 for `F32Pass`), and with adaptive sampling's convergence marks
     /// when `adaptive` (4 bytes per pixel; the squared luminances are the sums' `w`).

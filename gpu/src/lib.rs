@@ -40,6 +40,7 @@ pub mod context;
 pub mod display;
 pub mod film;
 pub mod integrator;
+pub mod memory;
 pub mod multi;
 pub mod present;
 pub mod sampling;

@@ -193,6 +193,39 @@ fn a_scene_over_the_binding_limit_is_too_large() {
     assert_too_large(r, &format!("the scene's vertex buffer ({nv} vertices)"), nv * 16, limit);
 }
 
+#[test]
+fn device_memory_is_read_and_the_upload_weighed_against_it() {
+    let Some(ctx) = test_context() else { return };
+    if ctx.info.backend == wgpu::Backend::Vulkan {
+        let m = ctx.memory().expect("a Vulkan device states its heaps");
+        eprintln!("{}: {m:?}", ctx.describe());
+        // Any Vulkan device has at least 64 MiB; the room cannot exceed the heap.
+        assert!(m.heap >= 64 << 20 && m.available() > 0 && m.available() <= m.heap, "{m:?}");
+    }
+    let precision = FilmPrecision::for_context(&ctx);
+    let scene = builtin::forest(4, 2);
+    let settings = RenderSettings { width: 16, height: 8, ..RenderSettings::default() };
+    let r = GpuRenderer::new(ctx, &scene, &scene.default_camera(), settings).unwrap();
+    let parts = r.memory_parts().to_vec();
+    let part = |name: &str| parts.iter().find(|(n, _)| *n == name).map(|p| p.1).expect(name);
+    // Uploaded buffers are padded to at least 16 bytes each: 5 for the two-level BVH, 12 more for
+    // the scene's geometry, materials, lights and environment.
+    assert!(part("BVH").abs_diff(r.bvh_bytes()) <= 5 * 16, "{parts:?} against {}", r.bvh_bytes());
+    let scene_parts = part("geometry and materials") + part("lights") + part("environment");
+    assert!(scene_parts + 12 * 16 >= r.scene_bytes(), "{parts:?} against {}", r.scene_bytes());
+    assert_eq!(part("film"), 16 * 8 * (precision.sum_bytes_per_pixel() + 8));
+    // One byte less room than the render needs: refused, naming its largest part.
+    let needed: u64 = parts.iter().map(|p| p.1).sum();
+    let small = furnace_gpu::memory::DeviceMemory { heap: needed - 1, free: None };
+    match furnace_gpu::memory::check_fits(&parts, small, "a small device") {
+        Err(e @ GpuError::OutOfDeviceMemory { needed: n, .. }) => {
+            assert_eq!(n, needed);
+            assert!(e.to_string().contains("BVH"), "{e}");
+        }
+        other => panic!("expected OutOfDeviceMemory, got {other:?}"),
+    }
+}
+
 /// What [`oom_child`] prints before its result.
 const OOM_TAG: &str = "oom child: ";
 

@@ -115,6 +115,8 @@ pub struct GpuRenderer {
     bytes_per_triangle: f64,
     bvh_bytes: u64,
     scene_bytes: u64,
+    /// The device memory weighed before the upload, part by part (the film as first made).
+    memory_parts: Vec<(&'static str, u64)>,
     ray_counter: wgpu::Buffer,
     /// How passes are cut into dispatches.
     sizing: DispatchSizing,

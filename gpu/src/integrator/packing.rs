@@ -333,9 +333,8 @@ impl PackedScene {
         contexts.into_iter().map(GpuContext::upload_limit).max().unwrap_or(u64::MAX)
     }
 
-    /// [`GpuError::TooLarge`] for the first buffer over `limit` bytes (a device's own limit,
-    /// where the scene was packed for a larger one).
-    pub(super) fn check_limit(&self, limit: u64) -> Result<(), GpuError> {
+    /// Every buffer the scene uploads, named as a [`GpuError::TooLarge`] names it.
+    fn buffers(&self) -> Vec<(&'static str, &[u32])> {
         let [nodes, tris] = self.bvh_words.extra();
         let mut buffers: Vec<(&str, &[u32])> = vec![
             ("BVH node", nodes),
@@ -357,8 +356,33 @@ impl PackedScene {
             bytemuck::cast_slice(&self.scene_words.diffuse_transmission),
         ));
         buffers.push(("scene anisotropy", bytemuck::cast_slice(&self.scene_words.anisotropy)));
+        buffers.push(("point light", bytemuck::cast_slice(&self.point_lights)));
         buffers.extend(self.emitter_words.as_deref().map(|w| ("emitter", w)));
         buffers.extend(self.environment.iter().map(|(label, w)| (*label, w.as_slice())));
+        buffers
+    }
+
+    /// The device memory the render takes, part by part: the acceleration structure, the
+    /// scene's geometry and materials, its lights, its environment, and the film `film` bytes.
+    pub(super) fn device_parts(&self, film: u64) -> Vec<(&'static str, u64)> {
+        let mut parts = vec![("BVH", 0), ("geometry and materials", 0), ("lights", 0), ("environment", 0)];
+        for (what, words) in self.buffers() {
+            let part = match what {
+                w if w.starts_with("BVH") || w.starts_with("TLAS") || w == "instance" => 0,
+                w if w.starts_with("scene") => 1,
+                "point light" | "emitter" => 2,
+                _ => 3,
+            };
+            parts[part].1 += size_of_val(words) as u64;
+        }
+        parts.push(("film", film));
+        parts
+    }
+
+    /// [`GpuError::TooLarge`] for the first buffer over `limit` bytes (a device's own limit,
+    /// where the scene was packed for a larger one).
+    pub(super) fn check_limit(&self, limit: u64) -> Result<(), GpuError> {
+        let buffers = self.buffers();
         for (what, words) in buffers {
             let bytes = size_of_val(words) as u64;
             if bytes > limit {

@@ -82,7 +82,8 @@ impl GpuRenderer {
     ///
     /// # Errors
     /// The sampler's (fixed-N samplers need `sample_count`), [`GpuError::TooLarge`] when a
-    /// buffer exceeds the adapter's limits, [`GpuError::Unsupported`] for more than one
+    /// buffer exceeds the adapter's limits, [`GpuError::OutOfDeviceMemory`] when all of them
+    /// exceed its memory (both before anything is allocated), [`GpuError::Unsupported`] for more than one
     /// directional light, or a pipeline error.
     pub fn new(
         ctx: GpuContext,
@@ -142,10 +143,18 @@ impl GpuRenderer {
     /// devices rendering one scene pack it once and each uploads the same words.
     ///
     /// # Errors
-    /// A device error, or a pipeline error.
+    /// [`GpuError::OutOfDeviceMemory`] before anything is allocated when the scene and film
+    /// need more than the device has room for, a device error, or a pipeline error.
     pub(crate) fn with_packed(ctx: GpuContext, packed: &PackedScene) -> Result<Self, GpuError> {
         packed.check_limit(ctx.upload_limit())?;
         let PackedScene { settings, sampler, base, features, bvh_depth, triangles, .. } = *packed;
+        let precision = FilmPrecision::for_context(&ctx);
+        let (w, h) = (settings.width, settings.height);
+        let film = GpuFilm::device_bytes(w, h, precision, settings.aovs, settings.adaptive.is_some());
+        let memory_parts = packed.device_parts(film);
+        if let Some(memory) = ctx.memory() {
+            crate::memory::check_fits(&memory_parts, memory, &ctx.info.name)?;
+        }
         let [nodes, tris] = packed.bvh_words.extra();
         let mut bvh =
             vec![storage_buffer(&ctx, "bvh nodes", nodes)?, storage_buffer(&ctx, "bvh triangles", tris)?];
@@ -177,7 +186,6 @@ impl GpuRenderer {
             .iter()
             .map(|(label, w)| storage_buffer(&ctx, label, w))
             .collect::<Result<Vec<_>, _>>()?;
-        let precision = FilmPrecision::for_context(&ctx);
         let film = film_for(&ctx, &settings, precision)?;
         let stack_size = crate::traverse::stack_size_for(bvh_depth);
         let group_size = group_size_for(&ctx, features);
@@ -190,6 +198,7 @@ impl GpuRenderer {
             scene_bytes: gpu_scene.bytes
                 + emitters.as_ref().map_or(0, wgpu::Buffer::size)
                 + environment.iter().map(wgpu::Buffer::size).sum::<u64>(),
+            memory_parts,
             ray_counter,
             ctx,
             settings,
@@ -334,6 +343,13 @@ impl GpuRenderer {
     /// Bytes of the BVH on the GPU (nodes and triangle references).
     pub fn bvh_bytes(&self) -> u64 {
         self.bvh_bytes
+    }
+
+    /// The device memory its scene and film take, part by part (the BVH, geometry and
+    /// materials, lights, environment, film), as weighed against the device's memory before
+    /// the upload ([`crate::memory::check_fits`]).
+    pub fn memory_parts(&self) -> &[(&'static str, u64)] {
+        &self.memory_parts
     }
 
     /// Node groups the traversal stack holds: as many as the uploaded tree has levels below its
