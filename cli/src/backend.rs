@@ -225,6 +225,14 @@ pub enum Backend {
     Gpus(Box<MultiGpuRenderer>),
 }
 
+/// Whether [`open`] on `choice` may take the structure [`CpuRenderer::accel_for`] builds for
+/// `scene`: the CPU integrator takes any, the GPU one a single BVH only (an instanced scene's GPU
+/// layout is its own). With [`BackendChoice::Auto`] the device is not known yet: a scene
+/// without instances is worth building for either.
+pub fn takes_prebuilt(choice: BackendChoice, scene: &Scene) -> bool {
+    choice == BackendChoice::Cpu || scene.instancing.is_empty()
+}
+
 /// Opens the integrator that `choice` and `adapter` ask for on `scene` seen through `camera`,
 /// with an empty film. `accel`, the scene's structure as [`CpuRenderer::accel_for`] builds it
 /// (by the default light's probe, `env::apply` of the binary), is taken instead of building it
@@ -243,17 +251,34 @@ pub fn open(
     accel: Option<SceneAccel>,
 ) -> Result<Backend, RenderError> {
     match (gpu_context(choice, adapter)?, accel) {
-        (Some(ctx), Some(SceneAccel::Flat(bvh))) if scene.instancing.is_empty() => {
-            Ok(Backend::Gpu(Box::new(GpuRenderer::with_bvh(ctx, &scene, &bvh, camera, settings)?)))
-        }
-        (Some(ctx), accel) => {
-            drop(accel);
-            Ok(Backend::Gpu(Box::new(GpuRenderer::new(ctx, &scene, camera, settings)?)))
-        }
+        (Some(ctx), accel) => Ok(Backend::Gpu(Box::new(gpu_renderer(ctx, &scene, camera, settings, accel)?))),
         (None, Some(accel)) => {
             Ok(Backend::Cpu(Box::new(CpuRenderer::with_accel(scene, camera, settings, accel)?)))
         }
         (None, None) => Ok(Backend::Cpu(Box::new(CpuRenderer::new(scene, camera, settings)?))),
+    }
+}
+
+/// The GPU integrator on `ctx`, taking `accel` where it is the scene's one BVH
+/// ([`takes_prebuilt`]) and building its own structure otherwise.
+///
+/// # Errors
+/// The GPU's (upload, pipeline) and the sampler's.
+pub fn gpu_renderer(
+    ctx: GpuContext,
+    scene: &Scene,
+    camera: &Camera,
+    settings: RenderSettings,
+    accel: Option<SceneAccel>,
+) -> Result<GpuRenderer, GpuError> {
+    match accel {
+        Some(SceneAccel::Flat(bvh)) if takes_prebuilt(BackendChoice::Gpu, scene) => {
+            GpuRenderer::with_bvh(ctx, scene, &bvh, camera, settings)
+        }
+        accel => {
+            drop(accel);
+            GpuRenderer::new(ctx, scene, camera, settings)
+        }
     }
 }
 

@@ -399,8 +399,8 @@ pub fn run(a: &BenchArgs) -> Result<(), String> {
     // default light's probe and then the backend, which takes it (the GPU builds an instanced
     // scene's layout of its own, in opening).
     let building = Instant::now();
-    let mut accel = (a.backend == backend::BackendChoice::Cpu || scene.instancing.is_empty())
-        .then(|| furnace_cpu::CpuRenderer::accel_for(&scene));
+    let mut accel =
+        backend::takes_prebuilt(a.backend, &scene).then(|| furnace_cpu::CpuRenderer::accel_for(&scene));
     let bvh_seconds = building.elapsed().as_secs_f64();
     let probing = Instant::now();
     crate::env::apply(&mut scene, &a.environment, &mut accel)?;

@@ -168,7 +168,7 @@ fn describe(scene: &Scene) -> String {
     let decision =
         scene.environment().is_none().then(|| crate::default_light::decide_with(scene, &mut accel));
     let accel = accel.unwrap_or_else(|| furnace_cpu::CpuRenderer::accel_for(scene));
-    line("memory", memory(scene, &accel.bytes()));
+    line("memory", memory(scene, &s, &accel.bytes()));
     drop(accel);
     line("vertices", s.vertices.to_string());
     line("dropped", format!("{} zero-area triangles (they cannot be hit)", s.dropped_triangles));
@@ -246,8 +246,7 @@ fn describe(scene: &Scene) -> String {
 /// with their transforms and TLAS) and on a GPU (the packed scene, the BVHs, the TLAS and the
 /// instance records), each per stored triangle and per instance. The GPU's film and path
 /// buffers, which depend on the image size, are not counted (`furnace bench` reports all).
-fn memory(scene: &Scene, a: &furnace_accel::AccelBytes) -> String {
-    let s = scene.stats();
+fn memory(scene: &Scene, s: &furnace_scene::SceneStats, a: &furnace_accel::AccelBytes) -> String {
     let mib = |b: usize| b as f64 / 1_048_576.0;
     let per = |b: usize, n: usize| b as f64 / n.max(1) as f64;
     let instances = s.instances;

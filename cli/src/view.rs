@@ -7,7 +7,7 @@ use crate::outputs::{Look, output_paths, write_outputs};
 use crate::render::{Job, Prepared, prepare};
 use crate::resume;
 use crate::shared::Outcome;
-use furnace_gpu::{AdapterChoice, GpuContext, GpuRenderer};
+use furnace_gpu::{AdapterChoice, GpuContext};
 use furnace_render::RenderSettings;
 use furnace_scene::Scene;
 use furnace_view::{CameraPose, SaveRequest, ScriptSource, ViewConfig, ViewHost};
@@ -72,13 +72,8 @@ pub fn run(v: &ViewArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     }
     let start = std::time::Instant::now();
     // The default light's probe built a flat scene's BVH: the renderer takes it.
-    let renderer = match accel {
-        Some(furnace_accel::SceneAccel::Flat(bvh)) if scene.instancing.is_empty() => {
-            GpuRenderer::with_bvh(ctx, &scene, &bvh, &view, job.settings)
-        }
-        _ => GpuRenderer::new(ctx, &scene, &view, job.settings),
-    }
-    .map_err(|e| e.to_string())?;
+    let renderer = furnace_cli::backend::gpu_renderer(ctx, &scene, &view, job.settings, accel)
+        .map_err(|e| e.to_string())?;
     if !a.quiet {
         eprintln!(
             "{}: {} triangles; scene uploaded, BVH built and pipeline compiled in {:.2} s",
