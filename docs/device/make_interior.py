@@ -5,9 +5,13 @@ room (12 x 4 x 10 m, 0.5 m quads, three windows in the +x wall), the same grid o
 same materials (Lambert = specular 0, the metal = GGX alpha 0.1 with F = 1, given to Mitsuba as
 `roughconductor`), camera and delta sun (irradiance (1000, 950, 850), black sky).
 
-    python3 make_interior.py OUT_DIR [N_TRIANGLES] [--width W --height H --bounces B]
+    python3 make_interior.py OUT_DIR [N_TRIANGLES] [--width W --height H --bounces B] [--lamps]
 
-writes OUT_DIR/interior_N.gltf + .bin (numpy only). furnace renders it as
+writes OUT_DIR/interior_N.gltf + .bin (numpy only). With --lamps, OUT_DIR/lit_room_N.gltf: the
+same room lit also from inside, where the light is complicated: twelve ceiling panels (each 1 x 0.5 m
+in 4 x 2 quads, 192 emissive triangles, radiance 10 x (1, 0.97, 0.9)), a 10 m strip along the
+back wall (40 quads, 80 emissive triangles, radiance 30 x (1, 0.5, 0.2)), and two point lamps
+(15 x (1, 0.85, 0.6) W/sr); every emitter one-sided, the references' convention. furnace renders it as
 `furnace bench --scene OUT_DIR/interior_N.gltf --masking separable --compensation off --bounces B`,
 Mitsuba with `render_ref.py interior_N cuda_ad_rgb SPP PASSES` (max_depth B + 1).
 """
@@ -24,8 +28,23 @@ WINDOWS = [((-4.0, -2.5), (1.0, 3.0)), ((-1.0, 1.0), (1.0, 3.0)), ((2.5, 4.0), (
 CELL = 0.5
 
 
-def interior(target):
+PANEL, STRIP = 7, 8   # the emitters' material indices (after the room's seven)
+
+
+def interior(target, lamps=False):
     pos, nrm, tris, mats = [], [], [], []
+
+    def quads(origin, u, v, nu, nv, normal, material):
+        """An nu x nv grid of quads spanning origin + [0, 1] u + [0, 1] v, facing u x v."""
+        origin, u, v = map(np.asarray, (origin, u, v))
+        for j in range(nv):
+            for i in range(nu):
+                base = len(pos)
+                for s, t in ((i, j), (i + 1, j), (i + 1, j + 1), (i, j + 1)):
+                    pos.append(origin + s / nu * u + t / nv * v)
+                    nrm.append(normal)
+                tris.extend([(base, base + 1, base + 2), (base, base + 2, base + 3)])
+                mats.extend([material, material])
 
     def wall(origin, u, v, normal, material, keep):
         origin, u, v = map(np.asarray, (origin, u, v))
@@ -40,7 +59,11 @@ def interior(target):
                 for s, t in ((s0, t0), (s1, t0), (s1, t1), (s0, t1)):
                     pos.append(origin + s * u + t * v)
                     nrm.append(normal)
-                tris.extend([(base, base + 1, base + 2), (base, base + 2, base + 3)])
+                # Wound so that the front face (u x v) is the side `normal` faces.
+                if np.dot(np.cross(u, v), normal) > 0:
+                    tris.extend([(base, base + 1, base + 2), (base, base + 2, base + 3)])
+                else:
+                    tris.extend([(base, base + 2, base + 1), (base, base + 3, base + 2)])
                 mats.extend([material, material])
 
     hx, hz, y1 = ROOM[0] / 2, ROOM[2] / 2, ROOM[1]
@@ -57,6 +80,15 @@ def interior(target):
         z = z0 + s
         return not any(za < z < zb and ya < t < yb for (za, zb), (ya, yb) in WINDOWS)
     wall((x1, 0, z0), Z * ROOM[2], Y * y1, -X, 0, outside_windows)
+
+    if lamps:
+        # Ceiling panels 1 cm below the ceiling, facing down (X x Z = -Y); a strip 2.5 m above
+        # the floor on the back wall, facing into the room (X x Y = +Z), 1 cm off it.
+        for a in range(4):
+            for b in range(3):
+                cx, cz = x0 + (a + 0.5) * ROOM[0] / 4, z0 + (b + 0.5) * ROOM[2] / 3
+                quads((cx - 0.5, y1 - 0.01, cz - 0.25), X * 1.0, Z * 0.5, 4, 2, -Y, PANEL)
+        quads((-5.0, 2.5, z0 + 0.01), X * 10.0, Y * 0.06, 40, 1, Z, STRIP)
 
     remaining = max(0, target - len(tris))
     if remaining > 0:
@@ -124,6 +156,8 @@ def main():
     args = sys.argv[1:]
     opts = {"--width": 1920, "--height": 1440, "--bounces": 6}
     rest = []
+    lamps = "--lamps" in args
+    args = [a for a in args if a != "--lamps"]
     while args:
         a = args.pop(0)
         if a in opts:
@@ -132,8 +166,8 @@ def main():
             rest.append(a)
     out = rest[0]
     target = int(float(rest[1])) if len(rest) > 1 else 20000
-    pos, nrm, tris, mats, (x0, x1, z0, z1) = interior(target)
-    name = f"interior_{len(tris)}"
+    pos, nrm, tris, mats, (x0, x1, z0, z1) = interior(target, lamps)
+    name = f"{'lit_room' if lamps else 'interior'}_{len(tris)}"
     os.makedirs(out, exist_ok=True)
     lambert = lambda c, n: {"name": n, "pbrMetallicRoughness": {"baseColorFactor": c + [1.0], "metallicFactor": 0.0,
                             "roughnessFactor": 1.0}, "doubleSided": True,
@@ -146,6 +180,16 @@ def main():
                   "roughnessFactor": math.sqrt(0.1)}, "doubleSided": True,
                   "extras": {"mitsuba": {"type": "roughconductor", "distribution": "ggx",
                              "alpha": 0.1, "sample_visible": True, "specular_reflectance": [1.0, 1.0, 1.0]}}}]
+
+    def emitter(name, colour, strength):
+        m = lambert([0.0, 0.0, 0.0], name)
+        m["emissiveFactor"] = colour
+        m["extensions"]["KHR_materials_emissive_strength"] = {"emissiveStrength": strength}
+        m["extras"]["emission"] = "one-sided: front face (the side the normal points to) only"
+        return m
+
+    if lamps:
+        materials += [emitter("panel", [1.0, 0.97, 0.9], 10.0), emitter("strip", [1.0, 0.5, 0.2], 30.0)]
     blob = bytearray()
     accessors, views, meshes, nodes = [], [], [], []
 
@@ -180,12 +224,17 @@ def main():
     nodes.append({"name": "sun", "rotation": look_at(np.zeros(3), sun, up=(0, 0, 1)),
                   "extensions": {"KHR_lights_punctual": {"light": 0}},
                   "extras": {"direction_of_travel": sun.tolist()}})
+    lights = [{"name": "sun", "type": "directional", "color": [1.0, 0.95, 0.85], "intensity": 1000.0}]
+    if lamps:
+        for k, p in enumerate(([-3.0, 2.2, 2.0], [3.0, 2.2, -2.0])):
+            nodes.append({"name": f"lamp{k}", "translation": p, "extensions": {"KHR_lights_punctual": {"light": k + 1}}})
+            lights.append({"name": f"lamp{k}", "type": "point", "color": [1.0, 0.85, 0.6], "intensity": 15.0})
     w, h, b = opts["--width"], opts["--height"], opts["--bounces"]
     gltf = {
         "asset": {"version": "2.0", "generator": "furnace docs/device/make_interior.py"},
-        "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_specular"],
-        "extensions": {"KHR_lights_punctual": {"lights": [
-            {"name": "sun", "type": "directional", "color": [1.0, 0.95, 0.85], "intensity": 1000.0}]}},
+        "extensionsUsed": ["KHR_lights_punctual", "KHR_materials_specular"]
+        + (["KHR_materials_emissive_strength"] if lamps else []),
+        "extensions": {"KHR_lights_punctual": {"lights": lights}},
         "scene": 0,
         "scenes": [{"name": name, "nodes": list(range(len(nodes))), "extras": {
             "background_radiance_rgb": [0.0, 0.0, 0.0],

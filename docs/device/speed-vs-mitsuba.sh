@@ -11,8 +11,9 @@
 # binary's: the before/after check of a change (the same samples: expect ±1 %).
 #
 # SCENES   names among: cbox256 cbox cbox_area cbox_many_lights cbox_point cbox_sun_disc
-#          envmap_spheres glass_box glass_absorb interior (default: all but interior, which needs
-#          .dev/sc/interior_19880.* from make_interior.py)
+#          envmap_spheres glass_box glass_absorb interior lit_room (default: all but the two rooms,
+#          which need .dev/sc/interior_19880.* and .dev/sc/lit_room_20152.* from make_interior.py,
+#          the second with --lamps)
 # SPP (256), ROUNDS (3), SAMPLER (random: Mitsuba's independent sampler; sobol is furnace's
 # default), WIDTH x HEIGHT (1920 x 1080; cbox256 is 256², the interior 1920 x 1440 at 6 bounces),
 # MITSUBA=0 skips Mitsuba.
@@ -32,7 +33,8 @@ configs=("cbox256|cbox|cbox|256x256|4" "cbox|cbox|cbox|${w}x$h|4"
   "cbox_point|$SC/cbox_point.gltf|cbox_point|${w}x$h|4" "cbox_sun_disc|$SC/cbox_sun_disc.gltf|cbox_sun_disc|${w}x$h|4"
   "envmap_spheres|$SC/envmap_spheres.gltf|envmap_spheres|${w}x$h|4"
   "glass_box|$SC/glass_box.gltf|glass_box|${w}x$h|8" "glass_absorb|$SC/glass_absorb.gltf|glass_absorb|${w}x$h|8"
-  "interior|$SC/interior_19880.gltf|interior_19880|1920x1440|6")
+  "interior|$SC/interior_19880.gltf|interior_19880|1920x1440|6"
+  "lit_room|$SC/lit_room_20152.gltf|lit_room_20152|1920x1440|6")
 want=" ${SCENES:-cbox256 cbox cbox_area cbox_many_lights cbox_point cbox_sun_disc envmap_spheres glass_box glass_absorb} "
 rows=/tmp/rows.txt; : > $rows
 for c in "${configs[@]}"; do

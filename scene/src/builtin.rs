@@ -110,7 +110,7 @@ pub fn sunlit_interior(target_triangles: u32) -> Scene {
     let half = INTERIOR_ROOM * Vec3::new(0.5, 1.0, 0.5);
     let cell = 0.5f32;
     // One wall: a grid of quads over the rectangle `origin + s·u + t·v`, s ∈ [0, su], t ∈ [0, sv],
-    // facing `normal`; `keep(s, t)` (centre of a cell, in metres along u and v) drops window cells.
+    // facing `normal` (shading normal and winding both); `keep(s, t)` (centre of a cell, in metres along u and v) drops window cells.
     let mut wall =
         |origin: Vec3, u: Vec3, v: Vec3, normal: Vec3, material: u32, keep: &dyn Fn(f32, f32) -> bool| {
             let (su, sv) = (u.length(), v.length());
@@ -127,8 +127,14 @@ pub fn sunlit_interior(target_triangles: u32) -> Scene {
                         g.positions.push(origin + s * u + t * v);
                         g.normals.push(oct_encode(normal));
                     }
-                    g.triangles.push([base, base + 1, base + 2]);
-                    g.triangles.push([base, base + 2, base + 3]);
+                    // Wound so that the front face (u × v) is the side `normal` faces.
+                    if u.cross(v).dot(normal) > 0.0 {
+                        g.triangles.push([base, base + 1, base + 2]);
+                        g.triangles.push([base, base + 2, base + 3]);
+                    } else {
+                        g.triangles.push([base, base + 2, base + 1]);
+                        g.triangles.push([base, base + 3, base + 2]);
+                    }
                     g.triangle_materials.extend([material, material]);
                 }
             }

@@ -168,6 +168,36 @@ fn ray_triangle(o: Vec3, d: Vec3, [a, b, c]: [Vec3; 3]) -> Option<f32> {
     (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && t > 1e-4).then_some(t)
 }
 
+/// Triangles of `scene` wound against their own shading normals (at the centroid).
+fn wound_against_normals(scene: &furnace_scene::Scene) -> Vec<usize> {
+    let g = &scene.geometry;
+    (0..g.triangle_count())
+        .filter(|&t| {
+            let [a, b, c] = g.triangle(t).expect("in range");
+            g.shading_normal(t, 1.0 / 3.0, 1.0 / 3.0).is_some_and(|n| (b - a).cross(c - a).dot(n) < 0.0)
+        })
+        .collect()
+}
+
+#[test]
+fn built_in_scenes_are_wound_as_their_normals_face() {
+    let scenes = [
+        builtin::cornell_box().unwrap(),
+        builtin::furnace_sphere(builtin::lambert(Vec3::ONE), 16),
+        builtin::forest(3, 1),
+    ];
+    for scene in &scenes {
+        let bad = wound_against_normals(scene);
+        assert!(
+            bad.is_empty(),
+            "{}: {} triangles wound against their normals, e.g. {:?}",
+            scene.name,
+            bad.len(),
+            &bad[..bad.len().min(4)]
+        );
+    }
+}
+
 #[test]
 fn sunlit_interior_has_the_requested_size_and_lets_the_sun_in_only_through_windows() {
     let shell = builtin::sunlit_interior(0);
@@ -180,7 +210,12 @@ fn sunlit_interior_has_the_requested_size_and_lets_the_sun_in_only_through_windo
         let half = builtin::INTERIOR_ROOM * glam::Vec3::new(0.5, 1.0, 0.5);
         for t in 0..n {
             let [a, b, c] = s.geometry.triangle(t).expect("in range");
-            assert!((b - a).cross(c - a).length() > 0.0, "target {target}: triangle {t} is degenerate");
+            let front = (b - a).cross(c - a);
+            assert!(front.length() > 0.0, "target {target}: triangle {t} is degenerate");
+            // Wound as its normals face (a double-sided surface seen from its back is shaded with
+            // the normal reversed: a floor wound downwards renders black from inside the room).
+            let n = s.geometry.shading_normal(t, 1.0 / 3.0, 1.0 / 3.0).expect("normals");
+            assert!(front.dot(n) > 0.0, "target {target}: triangle {t} is wound against its normal {n}");
             for p in [a, b, c] {
                 // 1e-4 m: f32 rounding of the wall positions.
                 assert!(p.abs().cmple(half + 1e-4).all() && p.y >= -1e-4, "{p} outside the room");
