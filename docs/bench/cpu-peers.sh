@@ -6,7 +6,11 @@
 #   FURNACE=target/release/furnace bash docs/bench/cpu-peers.sh
 #
 # FURNACE    the furnace binary (default target/release/furnace)
-# SCENES     reference scenes (default: all eight; names as in ../shared/references/README.md)
+# SCENES     reference scenes (default: all eight; names as in ../shared/references/README.md), or
+#            lit_room_20152: make_interior.py's light-heavy room (--lamps), with no reference in
+#            ../shared: Mitsuba's of REF_SPP (default 4096) samples is made once at the render's
+#            size into REFS (default .dev/refs); its size in the file is 1920×1440, DIV=6 is 320×240
+# FURNACE_FLAGS  more flags for furnace's render (e.g. "--light-selection power")
 # SPP        samples per pixel for every renderer (default 64)
 # DIV        render at the reference's size / DIV (default 1; DIV=4 is a quick end-to-end check:
 #            the reference is then averaged over DIV×DIV blocks)
@@ -32,6 +36,7 @@ root=$(cd "$(dirname "$0")/../.." && pwd)
 shared=$(cd "${SHARED:-$root/../shared}" && pwd)
 furnace=$(realpath "${FURNACE:-$root/target/release/furnace}")
 bpy_python=${BPY_PYTHON:-/work/wt/bpy-venv/bin/python}
+refs=${REFS:-$root/.dev/refs}
 spp=${SPP:-64}
 div=${DIV:-1}
 only=" ${ONLY:-furnace mitsuba cycles} "
@@ -71,20 +76,40 @@ for s in $scenes; do
     cbox) dir=cbox ;;
     envmap_spheres) dir=envmap ;;
     glass_*) dir=glass ;;
+    lit_room_*) dir= ;;
     *) dir=lights ;;
   esac
-  cp "$shared/references/$dir/$s".* "$work/"
+  if [ -z "$dir" ]; then
+    # make_interior.py's target of 2·10⁴ triangles gives lit_room_20152.
+    python "$root/docs/device/make_interior.py" "$work" 2e4 --lamps > /dev/null
+    [ -f "$work/$s.gltf" ] || { echo "$s: make_interior.py wrote $(ls "$work"/lit_room_*.gltf)"; exit 1; }
+  else
+    cp "$shared/references/$dir/$s".* "$work/"
+  fi
   if [ "$s" = envmap_spheres ]; then cp "$shared/references/envmap/${s}_env.exr" "$work/"; fi
   read -r w0 h0 bounces < <(python -c "import json; r = json.load(open('$work/$s.gltf'))['scenes'][0]['extras']['render']; print(r['width'], r['height'], r['max_bounces_equivalent'])")
   w=$((w0 / div)); h=$((h0 / div))
   ref=$shared/references/$dir/${s}_ref_bounces$bounces
+  if [ -z "$dir" ]; then
+    # No reference in ../shared: Mitsuba's, made here once at this size (REF_SPP samples).
+    ref=$refs/${s}_ref_bounces${bounces}_${w}x$h
+    if [ ! -f "$ref.exr" ]; then
+      mkdir -p "$refs"
+      ORACLE_SCENES=$work ORACLE_OUT=$work ORACLE_RESULTS=$work ORACLE_SIZE=${w}x$h WAIT_IDLE=0 \
+        python "$shared/oracle/render_ref.py" "$s" llvm_ad_rgb 64 $((${REF_SPP:-4096} / 64)) \
+        --max-depth=$((bounces + 1)) > "$work/reference.log" 2>&1 || { tail -3 "$work/reference.log"; exit 1; }
+      made=$work/${s}_maxdepth$((bounces + 1))_llvm_ad_rgb_${REF_SPP:-4096}spp
+      cp "$made.exr" "$ref.exr"; cp "${made}_stderr.exr" "${ref}_stderr.exr"
+    fi
+  fi
   for round in $(seq "${ROUNDS:-1}"); do
     if [[ $only == *" furnace "* ]]; then
+      # shellcheck disable=SC2086
       "$furnace" render "$work/$s.gltf" --backend cpu --width "$w" --height "$h" --spp "$spp" \
         --bounces "$bounces" --sampler "${SAMPLER:-sobol}" --masking separable --compensation off \
-        --out "$work/furnace" > "$work/furnace.log" 2>&1 || { tail -3 "$work/furnace.log"; exit 1; }
+        ${FURNACE_FLAGS:-} --out "$work/furnace" > "$work/furnace.log" 2>&1 || { tail -3 "$work/furnace.log"; exit 1; }
       rate=$(grep -oE '[0-9.]+ Msamples/s\)' "$work/furnace.log" | tail -1 | cut -d' ' -f1)
-      score "$s" "furnace CPU (${SAMPLER:-sobol})" "$rate" "$work/furnace.exr"
+      score "$s" "furnace CPU (${SAMPLER:-sobol}${FURNACE_FLAGS:+ $FURNACE_FLAGS})" "$rate" "$work/furnace.exr"
     fi
     if [[ $only == *" mitsuba "* ]]; then
       # Mitsuba renders passes of at most 64 spp: the largest such divisor of SPP.

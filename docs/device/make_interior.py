@@ -11,7 +11,8 @@ writes OUT_DIR/interior_N.gltf + .bin (numpy only). With --lamps, OUT_DIR/lit_ro
 same room lit also from inside, where the light is complicated: twelve ceiling panels (each 1 x 0.5 m
 in 4 x 2 quads, 192 emissive triangles, radiance 10 x (1, 0.97, 0.9)), a 10 m strip along the
 back wall (40 quads, 80 emissive triangles, radiance 30 x (1, 0.5, 0.2)), and two point lamps
-(15 x (1, 0.85, 0.6) W/sr); every emitter one-sided, the references' convention. furnace renders it as
+(15 x (1, 0.85, 0.6) W/sr), the sun ten times lower (irradiance 100 x (1, 0.95, 0.85)) so that
+the room's own lights matter as much; every emitter one-sided, the references' convention. furnace renders it as
 `furnace bench --scene OUT_DIR/interior_N.gltf --masking separable --compensation off --bounces B`,
 Mitsuba with `render_ref.py interior_N cuda_ad_rgb SPP PASSES` (max_depth B + 1).
 """
@@ -224,7 +225,9 @@ def main():
     nodes.append({"name": "sun", "rotation": look_at(np.zeros(3), sun, up=(0, 0, 1)),
                   "extensions": {"KHR_lights_punctual": {"light": 0}},
                   "extras": {"direction_of_travel": sun.tolist()}})
-    lights = [{"name": "sun", "type": "directional", "color": [1.0, 0.95, 0.85], "intensity": 1000.0}]
+    # The lit room's sun is low (100 W/m²): the room's own lights then give as much light as it.
+    sun_e = 100.0 if lamps else 1000.0
+    lights = [{"name": "sun", "type": "directional", "color": [1.0, 0.95, 0.85], "intensity": sun_e}]
     if lamps:
         for k, p in enumerate(([-3.0, 2.2, 2.0], [3.0, 2.2, -2.0])):
             nodes.append({"name": f"lamp{k}", "translation": p, "extensions": {"KHR_lights_punctual": {"light": k + 1}}})
