@@ -17,6 +17,11 @@ const BVH_BYTES_PER_TRIANGLE: u64 = 256;
 /// the 8-bit PNG.
 const OUTPUT_IMAGE_BYTES_PER_PIXEL: u64 = 3 * 12 + 3;
 
+/// Host bytes per instance: its transforms (object to world, world to object, the normal
+/// matrix), its mesh and mirror flag, and its share of the TLAS (`furnace info` states 320 for
+/// the built-in forest).
+const INSTANCE_BYTES: u64 = 320;
+
 /// Memory left to plan with: what the render may still allocate is at most this share of what
 /// is free (the rest: the allocator's fragmentation, the threads' stacks, libraries, the page
 /// cache the written files need).
@@ -27,13 +32,15 @@ const USABLE_SHARE: f64 = 0.9;
 pub struct Plan {
     /// Each part's name and bytes.
     pub parts: Vec<(&'static str, u64)>,
+    /// The scene's stored triangles (a mesh placed by several instances counted once).
+    pub triangles: usize,
 }
 
 impl Plan {
     /// The plan of a render with `settings` of a scene of `triangles` triangles; `cpu`: on the
     /// CPU integrator (which adds its pass buffer and builds its BVH on the host; a GPU keeps
     /// its film in its own memory, but the host reads it back to write it).
-    pub fn new(settings: &RenderSettings, triangles: usize, cpu: bool) -> Self {
+    pub fn new(settings: &RenderSettings, triangles: usize, instances: usize, cpu: bool) -> Self {
         let pixels = u64::from(settings.width) * u64::from(settings.height);
         let film = pixels * Film::bytes_per_pixel(settings);
         let mut parts = vec![("film", film)];
@@ -41,13 +48,14 @@ impl Plan {
             parts.push(("pass buffer", CpuRenderer::pass_buffer_bytes(settings)));
         }
         parts.push(("BVH", triangles as u64 * BVH_BYTES_PER_TRIANGLE));
+        parts.push(("instances", instances as u64 * INSTANCE_BYTES));
         // The film read back (a copy), the EXR's 32-bit channels, the images.
         let channels = 4 * furnace_post::state_channel_count(settings.aovs, settings.adaptive.is_some());
         parts.push((
             "writing the EXR and PNG",
             pixels * (Film::bytes_per_pixel(settings) + channels + OUTPUT_IMAGE_BYTES_PER_PIXEL),
         ));
-        Self { parts }
+        Self { parts, triangles }
     }
 
     /// All parts.
@@ -69,14 +77,25 @@ impl Plan {
         }
         let pixels = u64::from(settings.width) * u64::from(settings.height);
         let per_pixel = self.total() / pixels.max(1);
-        let mut change = String::from("lower --width/--height");
+        let scene_bytes: u64 =
+            self.parts.iter().filter(|(n, _)| matches!(*n, "BVH" | "instances")).map(|(_, b)| b).sum();
+        let mut change = if scene_bytes * 2 > self.total() {
+            // The scene, not the image, is what does not fit.
+            format!(
+                "the scene's {} stored triangles are the most of it: render it on a machine with more \
+                 memory, or with fewer triangles (a mesh repeated as glTF instances is stored once)",
+                self.triangles
+            )
+        } else {
+            format!("lower --width/--height (about {per_pixel} bytes per pixel)")
+        };
         if settings.aovs {
             change.push_str(", or render without --aovs/--denoise");
         }
         let under = if limit.is_empty() { String::new() } else { format!(" under {limit}") };
         Err(format!(
             "a {}×{} render needs about {} of memory ({parts}) but {} are free{under} ({} usable): \
-             {change} (about {per_pixel} bytes per pixel)",
+             {change}",
             settings.width,
             settings.height,
             gb(self.total()),
@@ -159,7 +178,7 @@ mod tests {
     #[test]
     fn a_large_render_is_refused_with_its_sizes() {
         let settings = RenderSettings { width: 8192, height: 8192, ..Default::default() };
-        let plan = Plan::new(&settings, 0, true);
+        let plan = Plan::new(&settings, 0, 0, true);
         let per_pixel = plan.total() as f64 / (8192.0 * 8192.0);
         assert!((140.0..=170.0).contains(&per_pixel), "{per_pixel} bytes per pixel");
         let err = plan.check(&settings, 8_000_000_000, "the cgroup's memory limit").unwrap_err();
@@ -174,10 +193,22 @@ mod tests {
     fn aovs_and_adaptive_sampling_cost_more_and_say_so() {
         let plain = RenderSettings { width: 1024, height: 1024, ..Default::default() };
         let aovs = RenderSettings { aovs: true, ..plain };
-        let (p, a) = (Plan::new(&plain, 0, true).total(), Plan::new(&aovs, 0, true).total());
+        let (p, a) = (Plan::new(&plain, 0, 0, true).total(), Plan::new(&aovs, 0, 0, true).total());
         assert!(a > 2 * p, "AOVs: {a} vs {p}");
-        let err = Plan::new(&aovs, 0, true).check(&aovs, 100_000_000, "").unwrap_err();
+        let err = Plan::new(&aovs, 0, 0, true).check(&aovs, 100_000_000, "").unwrap_err();
         assert!(err.contains("--aovs"), "{err}");
+    }
+
+    /// A scene of 10⁸ stored triangles and 10⁵ instances at 1080p: the BVH is the most of it
+    /// (25.6 GB), so the message names the scene and what to change about it, not the image.
+    #[test]
+    fn a_scene_too_large_is_refused_naming_the_scene() {
+        let settings = RenderSettings { width: 1920, height: 1080, ..Default::default() };
+        let plan = Plan::new(&settings, 100_000_000, 100_000, true);
+        let err = plan.check(&settings, 24_000_000_000, "").unwrap_err();
+        assert!(err.contains("BVH 25.60 GB") && err.contains("instances 0.03 GB"), "{err}");
+        assert!(err.contains("100000000 stored triangles") && !err.contains("--width"), "{err}");
+        assert!(plan.check(&settings, 40_000_000_000, "").is_ok());
     }
 
     #[test]

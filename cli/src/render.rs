@@ -254,7 +254,8 @@ pub fn run(a: &RenderArgs, interrupt: &Interrupt) -> Result<Outcome, String> {
     }
     // Memory planned before the BVH is built and the film allocated.
     let on_cpu = a.backend != BackendChoice::Gpu;
-    let plan = crate::memory::Plan::new(&settings, scene.geometry.triangle_count(), on_cpu);
+    let instances = scene.instancing.instances.len();
+    let plan = crate::memory::Plan::new(&settings, scene.geometry.triangle_count(), instances, on_cpu);
     if let Some((free, limit)) = crate::memory::free_memory() {
         plan.check(&settings, free, limit)?;
     }
