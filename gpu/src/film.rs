@@ -135,6 +135,13 @@ pub enum DisplaySource<'a> {
     },
 }
 
+/// Bytes per pixel of the sample counts (`vec2<u32>`).
+const COUNT_BYTES_PER_PIXEL: u64 = 8;
+/// Bytes per pixel of the convergence marks (a `u32`).
+const CONVERGED_BYTES_PER_PIXEL: u64 = 4;
+/// AOV sums per pixel, each the size of the colour sum (albedo and depth, normal and hits).
+const AOV_SUMS: u64 = 2;
+
 impl GpuFilm {
     /// A zeroed film of `width × height` pixels; [`GpuError::TooLarge`] if a buffer would exceed
     /// the adapter's storage binding limit.
@@ -158,7 +165,9 @@ impl GpuFilm {
     ) -> u64 {
         let pixels = u64::from(width) * u64::from(height);
         let sum = pixels * precision.sum_bytes_per_pixel();
-        sum + pixels * 8 + if aovs { 2 * sum } else { 0 } + if adaptive { pixels * 4 } else { 0 }
+        sum + pixels * COUNT_BYTES_PER_PIXEL
+            + if aovs { AOV_SUMS * sum } else { 0 }
+            + if adaptive { pixels * CONVERGED_BYTES_PER_PIXEL } else { 0 }
     }
 
     /// [`GpuFilm::new`], also summing the first-hit AOVs when `aovs` (a third buffer of 64 bytes
@@ -185,7 +194,7 @@ impl GpuFilm {
                 limit,
             });
         }
-        let aov_bytes = 2 * sum_bytes;
+        let aov_bytes = AOV_SUMS * sum_bytes;
         if aovs && aov_bytes > limit {
             return Err(GpuError::TooLarge {
                 what: format!("the AOVs of a {width}×{height} film"),
@@ -212,9 +221,9 @@ impl GpuFilm {
             height,
             precision,
             sum: make("film sum", sum_bytes),
-            count: make("film count", pixels * 8),
+            count: make("film count", pixels * COUNT_BYTES_PER_PIXEL),
             aov: aovs.then(|| make("film aov", aov_bytes)),
-            converged: adaptive.then(|| make("film converged", pixels * 4)),
+            converged: adaptive.then(|| make("film converged", pixels * CONVERGED_BYTES_PER_PIXEL)),
             host,
             display: None,
             squares_valid: true,
